@@ -1,0 +1,128 @@
+/* SPDX-License-Identifier: MIT */
+#define _POSIX_C_SOURCE 200809L
+#include "atomic_file.h"
+
+#include "error.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <libgen.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+int glint_atomic_tmpname(const char *path, char *tmp, size_t n)
+{
+	int fd;
+
+	if ((size_t)snprintf(tmp, n, "%s.tmp.XXXXXX", path) >= n)
+		return glint_error_set(ENAMETOOLONG, "%s: path too long",
+				       path);
+	fd = mkstemp(tmp);
+	if (fd < 0)
+		return glint_error_set(errno, "%s: cannot create a file here: %s",
+				       path, strerror(errno));
+	close(fd);
+	return 0;
+}
+
+static int fsync_dir_of(const char *path)
+{
+	char buf[4096];
+	int fd, ret = 0;
+
+	snprintf(buf, sizeof(buf), "%s", path);
+	fd = open(dirname(buf), O_RDONLY | O_DIRECTORY);
+	if (fd < 0)
+		return 0; /* nothing to sync against; rename already done */
+	if (fsync(fd) < 0 && errno != EINVAL)
+		ret = glint_error_set(errno, "%s: fsync of directory: %s",
+				      path, strerror(errno));
+	close(fd);
+	return ret;
+}
+
+int glint_atomic_rename(const char *tmp, const char *path)
+{
+	int fd = open(tmp, O_RDONLY);
+
+	if (fd < 0 || fsync(fd) < 0) {
+		int e = errno;
+		if (fd >= 0)
+			close(fd);
+		unlink(tmp);
+		return glint_error_set(e, "%s: fsync: %s", tmp, strerror(e));
+	}
+	close(fd);
+	if (rename(tmp, path) < 0) {
+		int e = errno;
+		unlink(tmp);
+		return glint_error_set(e, "%s: rename into place: %s", path,
+				       strerror(e));
+	}
+	return fsync_dir_of(path);
+}
+
+int glint_atomic_open(struct glint_atomic_file *af, const char *path)
+{
+	int ret;
+
+	memset(af, 0, sizeof(*af));
+	if ((size_t)snprintf(af->final_path, sizeof(af->final_path), "%s",
+			     path) >= sizeof(af->final_path))
+		return glint_error_set(ENAMETOOLONG, "%s: path too long",
+				       path);
+	ret = glint_atomic_tmpname(path, af->tmp_path, sizeof(af->tmp_path));
+	if (ret < 0)
+		return ret;
+	af->fp = fopen(af->tmp_path, "wb");
+	if (!af->fp) {
+		int e = errno;
+		unlink(af->tmp_path);
+		return glint_error_set(e, "%s: %s", af->tmp_path,
+				       strerror(e));
+	}
+	return 0;
+}
+
+int glint_atomic_commit(struct glint_atomic_file *af)
+{
+	int failed = ferror(af->fp);
+	int e = errno;
+
+	if (fclose(af->fp) != 0 && !failed) {
+		failed = 1;
+		e = errno;
+	}
+	af->fp = NULL;
+	if (failed) {
+		unlink(af->tmp_path);
+		return glint_error_set(e ? e : EIO, "%s: write failed: %s",
+				       af->final_path, strerror(e ? e : EIO));
+	}
+	return glint_atomic_rename(af->tmp_path, af->final_path);
+}
+
+void glint_atomic_abort(struct glint_atomic_file *af)
+{
+	if (af->fp)
+		fclose(af->fp);
+	af->fp = NULL;
+	if (af->tmp_path[0])
+		unlink(af->tmp_path);
+}
+
+int glint_atomic_write_file(const char *path, const void *data, size_t n)
+{
+	struct glint_atomic_file af;
+	int ret = glint_atomic_open(&af, path);
+
+	if (ret < 0)
+		return ret;
+	if (fwrite(data, 1, n, af.fp) != n) {
+		int e = errno;
+		glint_atomic_abort(&af);
+		return glint_error_set(e ? e : EIO, "%s: write failed", path);
+	}
+	return glint_atomic_commit(&af);
+}

@@ -1,0 +1,40 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_CORE_ATOMIC_FILE_H
+#define GLINT_CORE_ATOMIC_FILE_H
+
+/*
+ * Files that are either wholly old or wholly new after a power cut: write to
+ * a temporary file beside the target, fsync it, rename it over the target,
+ * fsync the directory.
+ */
+
+#include <stdio.h>
+
+struct glint_atomic_file {
+	char final_path[4096];
+	char tmp_path[4096];
+	FILE *fp; /* open for writing until commit/abort */
+};
+
+/* Create the temporary file for `path`; af->fp is ready for writing. */
+int glint_atomic_open(struct glint_atomic_file *af, const char *path);
+
+/* Flush, fsync, close, rename over the target, fsync the directory. */
+int glint_atomic_commit(struct glint_atomic_file *af);
+
+/* Close and remove the temporary file; the target is left untouched. */
+void glint_atomic_abort(struct glint_atomic_file *af);
+
+/*
+ * For libraries that write a named file themselves: reserve a temporary
+ * name next to `path` (the file exists, empty) in tmp (size n).
+ */
+int glint_atomic_tmpname(const char *path, char *tmp, size_t n);
+
+/* fsync tmp, rename it to path and fsync the directory; unlinks on error. */
+int glint_atomic_rename(const char *tmp, const char *path);
+
+/* Write a whole buffer atomically. */
+int glint_atomic_write_file(const char *path, const void *data, size_t n);
+
+#endif

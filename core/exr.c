@@ -1,0 +1,407 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * OpenEXR through the OpenEXRCore C API.  What the C core of this OpenEXR
+ * version cannot decode (DWAA/DWAB) is handed to exr_cxx.cpp, which uses the
+ * C++ library behind a C interface.
+ */
+#include "atomic_file.h"
+#include "error.h"
+#include "exr_cxx.h"
+#include "formats.h"
+
+#include <Imath/half.h>
+#include <OpenEXR/openexr.h>
+
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+/* The C core reports errors through a callback; keep the last one. */
+static _Thread_local char exr_last_msg[512];
+
+static void exr_error_cb(exr_const_context_t ctx, exr_result_t code,
+			 const char *msg)
+{
+	(void)ctx;
+	snprintf(exr_last_msg, sizeof(exr_last_msg), "%s (%s)", msg,
+		 exr_get_error_code_as_string(code));
+}
+
+static int exr_fail(const char *path, const char *what, exr_result_t rv)
+{
+	int code = rv == EXR_ERR_OUT_OF_MEMORY ? ENOMEM : EINVAL;
+
+	if (rv == EXR_ERR_FILE_ACCESS)
+		code = ENOENT;
+	return glint_error_set(code, "%s: %s: %s", path, what,
+			       exr_last_msg[0] ? exr_last_msg :
+						 exr_get_default_error_message(rv));
+}
+
+/* Channel index 0..2 for R, G, B, 3 for Y (luminance), -1 for others. */
+static int channel_slot(const char *name)
+{
+	const char *base = strrchr(name, '.');
+
+	base = base ? base + 1 : name;
+	if (!strcmp(base, "R") || !strcmp(base, "r") || !strcmp(base, "red"))
+		return 0;
+	if (!strcmp(base, "G") || !strcmp(base, "g") || !strcmp(base, "green"))
+		return 1;
+	if (!strcmp(base, "B") || !strcmp(base, "b") || !strcmp(base, "blue"))
+		return 2;
+	if (!strcmp(base, "Y") || !strcmp(base, "y"))
+		return 3;
+	return -1;
+}
+
+/*
+ * Point the decoder's channels at rows [y0, y0 + h) and columns
+ * [x0, x0 + w) of img.  Y goes to the R plane and is copied later.
+ */
+static void bind_channels(exr_decode_pipeline_t *dec, struct glint_image *img,
+			  int x0, int y0)
+{
+	for (int c = 0; c < dec->channel_count; c++) {
+		exr_coding_channel_info_t *ch = &dec->channels[c];
+		int slot = channel_slot(ch->channel_name);
+
+		if (slot < 0) {
+			ch->decode_to_ptr = NULL;
+			continue;
+		}
+		if (slot == 3)
+			slot = 0;
+		ch->decode_to_ptr = (uint8_t *)(glint_image_px(img, x0, y0) +
+						slot);
+		ch->user_pixel_stride = 3 * sizeof(float);
+		ch->user_line_stride = img->width * 3 * sizeof(float);
+		ch->user_data_type = EXR_PIXEL_FLOAT;
+		ch->user_bytes_per_element = sizeof(float);
+	}
+}
+
+static exr_result_t decode_chunk(exr_context_t ctx, exr_decode_pipeline_t *dec,
+				 const exr_chunk_info_t *cinfo, int *first,
+				 struct glint_image *img, int x0, int y0)
+{
+	exr_result_t rv;
+
+	if (*first)
+		rv = exr_decoding_initialize(ctx, 0, cinfo, dec);
+	else
+		rv = exr_decoding_update(ctx, 0, cinfo, dec);
+	if (rv != EXR_ERR_SUCCESS)
+		return rv;
+	bind_channels(dec, img, x0, y0);
+	if (*first) {
+		rv = exr_decoding_choose_default_routines(ctx, 0, dec);
+		if (rv != EXR_ERR_SUCCESS)
+			return rv;
+		*first = 0;
+	}
+	return exr_decoding_run(ctx, 0, dec);
+}
+
+static exr_result_t read_scanlines(exr_context_t ctx,
+				   const exr_attr_box2i_t *dw,
+				   struct glint_image *img, int *failed_y)
+{
+	exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
+	exr_result_t rv;
+	int32_t lines;
+	int first = 1;
+
+	rv = exr_get_scanlines_per_chunk(ctx, 0, &lines);
+	if (rv != EXR_ERR_SUCCESS)
+		return rv;
+	for (int y = dw->min.y; y <= dw->max.y; y += lines) {
+		exr_chunk_info_t cinfo;
+
+		*failed_y = y;
+		rv = exr_read_scanline_chunk_info(ctx, 0, y, &cinfo);
+		if (rv != EXR_ERR_SUCCESS)
+			break;
+		rv = decode_chunk(ctx, &dec, &cinfo, &first, img, 0,
+				  cinfo.start_y - dw->min.y);
+		if (rv != EXR_ERR_SUCCESS)
+			break;
+	}
+	exr_decoding_destroy(ctx, &dec);
+	return rv;
+}
+
+static exr_result_t read_tiles(exr_context_t ctx, struct glint_image *img,
+			       int *failed_y)
+{
+	exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
+	int32_t tw, th, lw, lh;
+	exr_result_t rv;
+	int first = 1;
+
+	rv = exr_get_tile_sizes(ctx, 0, 0, 0, &tw, &th);
+	if (rv == EXR_ERR_SUCCESS)
+		rv = exr_get_level_sizes(ctx, 0, 0, 0, &lw, &lh);
+	if (rv != EXR_ERR_SUCCESS)
+		return rv;
+	int nx = (lw + tw - 1) / tw, ny = (lh + th - 1) / th;
+	/* Level 0 is the full-resolution image for every level mode. */
+	for (int ty = 0; ty < ny && rv == EXR_ERR_SUCCESS; ty++) {
+		for (int tx = 0; tx < nx; tx++) {
+			exr_chunk_info_t cinfo;
+
+			*failed_y = ty * (int)th;
+			rv = exr_read_tile_chunk_info(ctx, 0, tx, ty, 0, 0,
+						      &cinfo);
+			if (rv != EXR_ERR_SUCCESS)
+				break;
+			rv = decode_chunk(ctx, &dec, &cinfo, &first, img,
+					  tx * (int)tw, ty * (int)th);
+			if (rv != EXR_ERR_SUCCESS)
+				break;
+		}
+	}
+	exr_decoding_destroy(ctx, &dec);
+	return rv;
+}
+
+/* Which of R, G, B, Y the part has; error when it has none usable. */
+static int check_channels(exr_context_t ctx, const char *path, int *has_y)
+{
+	const exr_attr_chlist_t *chl;
+	int found[4] = { 0 };
+	exr_result_t rv = exr_get_channels(ctx, 0, &chl);
+
+	if (rv != EXR_ERR_SUCCESS)
+		return exr_fail(path, "reading the channel list", rv);
+	for (int i = 0; i < chl->num_channels; i++) {
+		const exr_attr_chlist_entry_t *e = &chl->entries[i];
+		int slot = channel_slot(e->name.str);
+
+		if (slot < 0)
+			continue;
+		if (e->x_sampling != 1 || e->y_sampling != 1)
+			return glint_error_set(
+				EINVAL,
+				"%s: channel %s is subsampled (%dx%d): "
+				"expected full-resolution R, G, B or Y",
+				path, e->name.str, e->x_sampling,
+				e->y_sampling);
+		found[slot] = 1;
+	}
+	if (found[0] && found[1] && found[2]) {
+		*has_y = 0;
+		return 0;
+	}
+	if (found[3]) {
+		*has_y = 1;
+		return 0;
+	}
+	return glint_error_set(EINVAL,
+			       "%s: has %d channels but not R, G and B (or Y)",
+			       path, chl->num_channels);
+}
+
+static int exr_read_core(const char *path, struct glint_image **out)
+{
+	exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+	exr_context_t ctx = NULL;
+	exr_attr_box2i_t dw;
+	exr_storage_t storage;
+	exr_compression_t comp;
+	struct glint_image *img = NULL;
+	int has_y = 0, failed_y = 0, ret;
+	exr_result_t rv;
+
+	init.error_handler_fn = exr_error_cb;
+	exr_last_msg[0] = '\0';
+	rv = exr_start_read(&ctx, path, &init);
+	if (rv != EXR_ERR_SUCCESS) {
+		ret = exr_fail(path, "not a readable OpenEXR file", rv);
+		goto out;
+	}
+	rv = exr_get_storage(ctx, 0, &storage);
+	if (rv == EXR_ERR_SUCCESS)
+		rv = exr_get_data_window(ctx, 0, &dw);
+	if (rv == EXR_ERR_SUCCESS)
+		rv = exr_get_compression(ctx, 0, &comp);
+	if (rv != EXR_ERR_SUCCESS) {
+		ret = exr_fail(path, "reading the header", rv);
+		goto out;
+	}
+	if (storage != EXR_STORAGE_SCANLINE && storage != EXR_STORAGE_TILED) {
+		ret = glint_error_set(EINVAL,
+				      "%s: deep EXR data: expected a flat "
+				      "scanline or tiled image",
+				      path);
+		goto out;
+	}
+	if (comp == EXR_COMPRESSION_DWAA || comp == EXR_COMPRESSION_DWAB) {
+		ret = 1; /* C core cannot decode: caller falls back */
+		goto out;
+	}
+	ret = check_channels(ctx, path, &has_y);
+	if (ret < 0)
+		goto out;
+	img = glint_image_new(dw.max.x - dw.min.x + 1, dw.max.y - dw.min.y + 1);
+	if (!img) {
+		ret = glint_error_prefix(EINVAL, "%s: data window", path);
+		goto out;
+	}
+	if (storage == EXR_STORAGE_SCANLINE)
+		rv = read_scanlines(ctx, &dw, img, &failed_y);
+	else
+		rv = read_tiles(ctx, img, &failed_y);
+	if (rv == EXR_ERR_FEATURE_NOT_IMPLEMENTED) {
+		ret = 1;
+		goto out;
+	}
+	if (rv != EXR_ERR_SUCCESS) {
+		char what[64];
+		snprintf(what, sizeof(what), "pixel data near row %d",
+			 failed_y);
+		ret = exr_fail(path, what, rv);
+		goto out;
+	}
+	if (has_y) {
+		size_t n = (size_t)img->width * img->height;
+		for (size_t i = 0; i < n; i++)
+			img->data[3 * i + 1] = img->data[3 * i + 2] =
+				img->data[3 * i];
+	}
+	*out = img;
+	img = NULL;
+	ret = 0;
+out:
+	glint_image_free(img);
+	if (ctx)
+		exr_finish(&ctx);
+	return ret;
+}
+
+int glint_exr_read(const char *path, struct glint_image **out)
+{
+	int ret;
+
+	*out = NULL;
+	if (access(path, R_OK) < 0)
+		return glint_error_set(errno, "%s: cannot open: %s", path,
+				       strerror(errno));
+	ret = exr_read_core(path, out);
+	if (ret <= 0)
+		return ret;
+	return glint_exr_read_cxx(path, out);
+}
+
+static int encode_rows(exr_context_t ctx, int part, const uint8_t *base,
+		       int pixel_stride, int width, int height,
+		       exr_pixel_type_t type)
+{
+	exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
+	exr_result_t rv = EXR_ERR_SUCCESS;
+	int32_t lines;
+	int first = 1;
+
+	rv = exr_get_scanlines_per_chunk(ctx, part, &lines);
+	for (int y = 0; y < height && rv == EXR_ERR_SUCCESS; y += lines) {
+		exr_chunk_info_t cinfo;
+
+		rv = exr_write_scanline_chunk_info(ctx, part, y, &cinfo);
+		if (rv != EXR_ERR_SUCCESS)
+			break;
+		if (first)
+			rv = exr_encoding_initialize(ctx, part, &cinfo, &enc);
+		else
+			rv = exr_encoding_update(ctx, part, &cinfo, &enc);
+		if (rv != EXR_ERR_SUCCESS)
+			break;
+		for (int c = 0; c < enc.channel_count; c++) {
+			exr_coding_channel_info_t *ch = &enc.channels[c];
+			int slot = channel_slot(ch->channel_name);
+			size_t elem = type == EXR_PIXEL_HALF ? 2 : 4;
+
+			ch->encode_from_ptr = base + ((size_t)y * width * 3 +
+						      (size_t)slot) * elem;
+			ch->user_pixel_stride = pixel_stride;
+			ch->user_line_stride = pixel_stride * width;
+			ch->user_data_type = type;
+			ch->user_bytes_per_element = (int16_t)elem;
+		}
+		if (first) {
+			rv = exr_encoding_choose_default_routines(ctx, part,
+								  &enc);
+			first = 0;
+			if (rv != EXR_ERR_SUCCESS)
+				break;
+		}
+		rv = exr_encoding_run(ctx, part, &enc);
+	}
+	exr_encoding_destroy(ctx, &enc);
+	return rv;
+}
+
+int glint_exr_write(const char *path, const struct glint_image *img, int half)
+{
+	exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+	exr_pixel_type_t type = half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT;
+	static const char *names[3] = { "R", "G", "B" };
+	exr_context_t ctx = NULL;
+	uint16_t *halfbuf = NULL;
+	const uint8_t *base = (const uint8_t *)img->data;
+	char tmp[4096];
+	int part, ret;
+	exr_result_t rv;
+
+	ret = glint_atomic_tmpname(path, tmp, sizeof(tmp));
+	if (ret < 0)
+		return ret;
+	if (half) {
+		size_t n = (size_t)img->width * img->height * 3;
+		halfbuf = malloc(n * sizeof(uint16_t));
+		if (!halfbuf) {
+			ret = glint_error_set(ENOMEM, "%s: out of memory",
+					      path);
+			goto err;
+		}
+		for (size_t i = 0; i < n; i++)
+			halfbuf[i] = imath_float_to_half(img->data[i]);
+		base = (const uint8_t *)halfbuf;
+	}
+	init.error_handler_fn = exr_error_cb;
+	exr_last_msg[0] = '\0';
+	rv = exr_start_write(&ctx, tmp, EXR_WRITE_FILE_DIRECTLY, &init);
+	if (rv == EXR_ERR_SUCCESS)
+		rv = exr_add_part(ctx, "rgb", EXR_STORAGE_SCANLINE, &part);
+	if (rv == EXR_ERR_SUCCESS)
+		rv = exr_initialize_required_attr_simple(
+			ctx, part, img->width, img->height,
+			EXR_COMPRESSION_ZIP);
+	for (int c = 0; c < 3 && rv == EXR_ERR_SUCCESS; c++)
+		rv = exr_add_channel(ctx, part, names[c], type,
+				     EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+	if (rv == EXR_ERR_SUCCESS)
+		rv = exr_write_header(ctx);
+	if (rv == EXR_ERR_SUCCESS)
+		rv = encode_rows(ctx, part, base, half ? 6 : 12, img->width,
+				 img->height, type);
+	if (rv != EXR_ERR_SUCCESS) {
+		ret = exr_fail(path, "writing", rv);
+		goto err;
+	}
+	rv = exr_finish(&ctx);
+	ctx = NULL;
+	if (rv != EXR_ERR_SUCCESS) {
+		ret = exr_fail(path, "finishing", rv);
+		goto err;
+	}
+	free(halfbuf);
+	return glint_atomic_rename(tmp, path);
+err:
+	if (ctx)
+		exr_finish(&ctx);
+	unlink(tmp);
+	free(halfbuf);
+	return ret;
+}

@@ -1,0 +1,23 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_CORE_EXR_CXX_H
+#define GLINT_CORE_EXR_CXX_H
+
+/*
+ * Fallback EXR reader on OpenEXR's C++ library, for compressions the C core
+ * of OpenEXR 3.1 cannot decode (DWAA, DWAB).  Same contract as
+ * glint_exr_read(); never throws.
+ */
+
+#include "image.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+int glint_exr_read_cxx(const char *path, struct glint_image **out);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,39 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_CORE_FORMATS_H
+#define GLINT_CORE_FORMATS_H
+
+/*
+ * Individual image formats.  Readers return a new image in *out (caller
+ * frees); writers are atomic (see atomic_file.h).  Every error message names
+ * the file and what was wrong.
+ */
+
+#include "image.h"
+
+/* OpenEXR through the OpenEXRCore C API; RGB or Y channels, any of half,
+ * float or uint; scanline or tiled (level 0); DWAA/DWAB fall back to the
+ * C++ library (exr_cxx.cpp). */
+int glint_exr_read(const char *path, struct glint_image **out);
+/* ZIP-compressed scanline EXR with R, G, B as 32-bit float or half. */
+int glint_exr_write(const char *path, const struct glint_image *img, int half);
+
+/* Radiance RGBE (.hdr), flat or new-style RLE scanlines, -Y H +X W. */
+int glint_rgbe_read(const char *path, struct glint_image **out);
+int glint_rgbe_write(const char *path, const struct glint_image *img);
+
+/* Portable float map, colour ("PF") or grey ("Pf"), either endianness. */
+int glint_pfm_read(const char *path, struct glint_image **out);
+int glint_pfm_write(const char *path, const struct glint_image *img);
+
+/*
+ * 8-bit sRGB PNG preview.  Tone map: v' = clamp(v * 2^exposure, 0, 1), then
+ * the sRGB transfer function (IEC 61966-2-1).  A NaN exposure means "auto":
+ * the 99th percentile of the non-zero luminances is mapped to 0.9.
+ */
+int glint_png_write(const char *path, const struct glint_image *img,
+		    double exposure);
+
+/* Exposure (stops) that the auto rule above picks for img. */
+double glint_png_auto_exposure(const struct glint_image *img);
+
+#endif

@@ -1,0 +1,145 @@
+/* SPDX-License-Identifier: MIT */
+#include "image.h"
+
+#include "error.h"
+#include "formats.h"
+
+#include <ctype.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Large enough for any real sensor or probe, small enough to be sane. */
+#define GLINT_IMAGE_MAX_DIM 65536
+
+struct glint_image *glint_image_new(int width, int height)
+{
+	struct glint_image *img;
+
+	if (width <= 0 || height <= 0 || width > GLINT_IMAGE_MAX_DIM ||
+	    height > GLINT_IMAGE_MAX_DIM) {
+		glint_error_set(EINVAL,
+				"image size %dx%d: expected 1..%d on each side",
+				width, height, GLINT_IMAGE_MAX_DIM);
+		return NULL;
+	}
+	img = calloc(1, sizeof(*img));
+	if (!img)
+		goto err_oom;
+	img->data = calloc((size_t)width * height * 3, sizeof(float));
+	if (!img->data)
+		goto err_data;
+	img->width = width;
+	img->height = height;
+	return img;
+
+err_data:
+	free(img);
+err_oom:
+	glint_error_set(ENOMEM, "out of memory for a %dx%d image", width,
+			height);
+	return NULL;
+}
+
+void glint_image_free(struct glint_image *img)
+{
+	if (!img)
+		return;
+	free(img->data);
+	free(img);
+}
+
+struct glint_image *glint_image_dup(const struct glint_image *img)
+{
+	struct glint_image *r = glint_image_new(img->width, img->height);
+
+	if (r)
+		memcpy(r->data, img->data,
+		       (size_t)img->width * img->height * 3 * sizeof(float));
+	return r;
+}
+
+int glint_image_check_finite(const struct glint_image *img, const char *what,
+			     int nonneg)
+{
+	size_t n = (size_t)img->width * img->height * 3, bad = 0, first = 0;
+
+	for (size_t i = 0; i < n; i++) {
+		float v = img->data[i];
+		if (!isfinite(v) || (nonneg && v < 0)) {
+			if (!bad)
+				first = i;
+			bad++;
+		}
+	}
+	if (!bad)
+		return 0;
+	static const char chan[] = "RGB";
+	size_t px = first / 3;
+	return glint_error_set(
+		EINVAL,
+		"%s: pixel (%zu, %zu) channel %c is %g: expected a finite%s "
+		"value (%zu bad values in all)",
+		what, px % img->width, px / img->width, chan[first % 3],
+		(double)img->data[first], nonneg ? ", non-negative" : "", bad);
+}
+
+const char *glint_path_ext(const char *path, char *buf, size_t n)
+{
+	const char *dot = strrchr(path, '.');
+	const char *slash = strrchr(path, '/');
+	size_t i = 0;
+
+	if (!dot || (slash && dot < slash) || n == 0) {
+		if (n)
+			buf[0] = '\0';
+		return buf;
+	}
+	for (dot++; *dot && i + 1 < n; dot++)
+		buf[i++] = (char)tolower((unsigned char)*dot);
+	buf[i] = '\0';
+	return buf;
+}
+
+int glint_image_read(const char *path, struct glint_image **out)
+{
+	char ext[16];
+
+	*out = NULL;
+	glint_path_ext(path, ext, sizeof(ext));
+	if (!strcmp(ext, "exr"))
+		return glint_exr_read(path, out);
+	if (!strcmp(ext, "hdr") || !strcmp(ext, "pic") || !strcmp(ext, "rgbe"))
+		return glint_rgbe_read(path, out);
+	if (!strcmp(ext, "pfm"))
+		return glint_pfm_read(path, out);
+	return glint_error_set(EINVAL,
+			       "%s: unknown image extension '.%s': expected "
+			       ".exr, .hdr, .pic or .pfm",
+			       path, ext);
+}
+
+int glint_image_write(const char *path, const struct glint_image *img,
+		      const struct glint_write_opts *opts)
+{
+	static const struct glint_write_opts defaults = { .auto_expose = 1 };
+	char ext[16];
+
+	if (!opts)
+		opts = &defaults;
+	glint_path_ext(path, ext, sizeof(ext));
+	if (!strcmp(ext, "exr"))
+		return glint_exr_write(path, img, opts->exr_half);
+	if (!strcmp(ext, "hdr") || !strcmp(ext, "pic"))
+		return glint_rgbe_write(path, img);
+	if (!strcmp(ext, "pfm"))
+		return glint_pfm_write(path, img);
+	if (!strcmp(ext, "png"))
+		return glint_png_write(path, img,
+				       opts->auto_expose ? NAN : opts->exposure);
+	return glint_error_set(EINVAL,
+			       "%s: unknown image extension '.%s': expected "
+			       ".exr, .hdr, .pfm or .png",
+			       path, ext);
+}

@@ -1,0 +1,64 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_CORE_IMAGE_H
+#define GLINT_CORE_IMAGE_H
+
+/*
+ * The one image type: linear, scene-referred float RGB, interleaved,
+ * row-major, row 0 at the top.  Pixel (x, y) covers [x, x+1) x [y, y+1) in
+ * image coordinates; its centre is (x + 0.5, y + 0.5).
+ */
+
+#include <stddef.h>
+
+struct glint_image {
+	int width;
+	int height;
+	float *data; /* width * height * 3 floats, owned by the image */
+};
+
+/*
+ * Allocate a zeroed width x height image.  Returns NULL (with a message) on
+ * a bad size or when out of memory.  Free with glint_image_free().
+ */
+struct glint_image *glint_image_new(int width, int height);
+void glint_image_free(struct glint_image *img);
+struct glint_image *glint_image_dup(const struct glint_image *img);
+
+static inline float *glint_image_px(const struct glint_image *img, int x,
+				    int y)
+{
+	return img->data + ((size_t)y * img->width + x) * 3;
+}
+
+/*
+ * Check that every value is finite (and >= 0 when nonneg is set).  On
+ * failure the message names `what`, the first bad pixel, its channel and
+ * value, and how many values are bad.  Returns 0 or -EINVAL.
+ */
+int glint_image_check_finite(const struct glint_image *img, const char *what,
+			     int nonneg);
+
+/*
+ * Read an image, choosing the format from the file extension (.exr, .hdr,
+ * .pic, .pfm).  On success *out holds a new image the caller frees.
+ */
+int glint_image_read(const char *path, struct glint_image **out);
+
+/* Options for glint_image_write(). */
+struct glint_write_opts {
+	int exr_half;	  /* EXR: store half floats instead of 32-bit */
+	double exposure;  /* PNG: linear scale 2^exposure before the curve */
+	int auto_expose;  /* PNG: choose exposure from the image (see png.h) */
+};
+
+/*
+ * Write an image atomically (temp file, fsync, rename), choosing the format
+ * from the extension (.exr, .hdr, .pfm, .png).  opts may be NULL.
+ */
+int glint_image_write(const char *path, const struct glint_image *img,
+		      const struct glint_write_opts *opts);
+
+/* Lower-case extension of path without the dot, or "" (static storage). */
+const char *glint_path_ext(const char *path, char *buf, size_t n);
+
+#endif

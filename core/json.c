@@ -1,0 +1,187 @@
+/* SPDX-License-Identifier: MIT */
+#include "json.h"
+
+#include "error.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+int glint_json_load(const char *path, json_t **out)
+{
+	json_error_t err;
+
+	*out = json_load_file(path, JSON_REJECT_DUPLICATES, &err);
+	if (!*out)
+		return glint_error_set(EINVAL, "%s:%d:%d: %s", path, err.line,
+				       err.column, err.text);
+	if (!json_is_object(*out)) {
+		json_decref(*out);
+		*out = NULL;
+		return glint_error_set(EINVAL,
+				       "%s: expected a JSON object at the top",
+				       path);
+	}
+	return 0;
+}
+
+static void key_path(char *buf, size_t n, const char *where, const char *key)
+{
+	if (where && where[0])
+		snprintf(buf, n, "%s.%s", where, key);
+	else
+		snprintf(buf, n, "%s", key);
+}
+
+static void range_text(char *buf, size_t n, struct glint_range r)
+{
+	if (isinf(r.hi))
+		snprintf(buf, n, "a number %s %g", r.lo_open ? ">" : ">=",
+			 r.lo);
+	else
+		snprintf(buf, n, "a number in %c%g, %g%c", r.lo_open ? '(' : '[',
+			 r.lo, r.hi, r.hi_open ? ')' : ']');
+}
+
+static int in_range(double v, struct glint_range r)
+{
+	if (!isfinite(v))
+		return 0;
+	if (r.lo_open ? !(v > r.lo) : !(v >= r.lo))
+		return 0;
+	return r.hi_open ? v < r.hi : v <= r.hi;
+}
+
+static int bad_value(const char *file, const char *kp, json_t *v,
+		     const char *expected)
+{
+	char *s = v ? json_dumps(v, JSON_ENCODE_ANY | JSON_COMPACT) : NULL;
+	int ret = glint_error_set(EINVAL, "%s: %s = %s: expected %s", file, kp,
+				  s ? s : "?", expected);
+	free(s);
+	return ret;
+}
+
+static int missing(const char *file, const char *kp, const char *expected)
+{
+	return glint_error_set(EINVAL, "%s: %s is missing: expected %s", file,
+			       kp, expected);
+}
+
+int glint_json_number(const char *file, const char *where, json_t *obj,
+		      const char *key, int required, struct glint_range range,
+		      double *out)
+{
+	char kp[256], exp[96];
+	json_t *v = json_object_get(obj, key);
+
+	key_path(kp, sizeof(kp), where, key);
+	range_text(exp, sizeof(exp), range);
+	if (!v)
+		return required ? missing(file, kp, exp) : 0;
+	if (!json_is_number(v) || !in_range(json_number_value(v), range))
+		return bad_value(file, kp, v, exp);
+	*out = json_number_value(v);
+	return 0;
+}
+
+int glint_json_int(const char *file, const char *where, json_t *obj,
+		   const char *key, int required, int lo, int hi, int *out)
+{
+	char kp[256], exp[96];
+	json_t *v = json_object_get(obj, key);
+
+	key_path(kp, sizeof(kp), where, key);
+	snprintf(exp, sizeof(exp), "an integer in [%d, %d]", lo, hi);
+	if (!v)
+		return required ? missing(file, kp, exp) : 0;
+	if (!json_is_integer(v) || json_integer_value(v) < lo ||
+	    json_integer_value(v) > hi)
+		return bad_value(file, kp, v, exp);
+	*out = (int)json_integer_value(v);
+	return 0;
+}
+
+int glint_json_numbers(const char *file, const char *where, json_t *obj,
+		       const char *key, int required, int n,
+		       struct glint_range range, double *out)
+{
+	char kp[256], exp[160], r[96];
+	json_t *v = json_object_get(obj, key);
+
+	key_path(kp, sizeof(kp), where, key);
+	range_text(r, sizeof(r), range);
+	snprintf(exp, sizeof(exp), "an array of %d numbers, each %s", n, r);
+	if (!v)
+		return required ? missing(file, kp, exp) : 0;
+	if (!json_is_array(v) || (int)json_array_size(v) != n)
+		return bad_value(file, kp, v, exp);
+	for (int i = 0; i < n; i++) {
+		json_t *e = json_array_get(v, (size_t)i);
+		if (!json_is_number(e) || !in_range(json_number_value(e), range))
+			return bad_value(file, kp, v, exp);
+	}
+	for (int i = 0; i < n; i++)
+		out[i] = json_number_value(json_array_get(v, (size_t)i));
+	return 0;
+}
+
+int glint_json_string(const char *file, const char *where, json_t *obj,
+		      const char *key, int required, const char **out)
+{
+	char kp[256];
+	json_t *v = json_object_get(obj, key);
+
+	key_path(kp, sizeof(kp), where, key);
+	if (!v)
+		return required ? missing(file, kp, "a string") : 0;
+	if (!json_is_string(v) || json_string_length(v) == 0)
+		return bad_value(file, kp, v, "a non-empty string");
+	*out = json_string_value(v);
+	return 0;
+}
+
+int glint_json_object(const char *file, const char *where, json_t *obj,
+		      const char *key, int required, json_t **out)
+{
+	char kp[256];
+	json_t *v = json_object_get(obj, key);
+
+	key_path(kp, sizeof(kp), where, key);
+	*out = NULL;
+	if (!v)
+		return required ? missing(file, kp, "an object") : 0;
+	if (!json_is_object(v))
+		return bad_value(file, kp, v, "an object");
+	*out = v;
+	return 0;
+}
+
+int glint_json_known_keys(const char *file, const char *where, json_t *obj,
+			  const char *const *known)
+{
+	const char *key;
+	json_t *v;
+
+	json_object_foreach(obj, key, v)
+	{
+		int ok = 0;
+		for (const char *const *k = known; *k; k++)
+			ok |= !strcmp(*k, key);
+		if (!ok) {
+			char kp[256], list[512] = "";
+			key_path(kp, sizeof(kp), where, key);
+			for (const char *const *k = known; *k; k++) {
+				strncat(list, *k, sizeof(list) - strlen(list) - 1);
+				if (k[1])
+					strncat(list, ", ",
+						sizeof(list) - strlen(list) - 1);
+			}
+			return glint_error_set(EINVAL,
+					       "%s: %s: unknown key: expected "
+					       "one of %s",
+					       file, kp, list);
+		}
+	}
+	return 0;
+}

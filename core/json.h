@@ -1,0 +1,47 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_CORE_JSON_H
+#define GLINT_CORE_JSON_H
+
+/*
+ * Validated reads from JSON documents parsed by jansson.  Every failure names
+ * the file, the dotted key path, the value seen and what was expected, e.g.
+ *   scene.json: camera.focal_length_mm = -5: expected a number in (0, 10000]
+ */
+
+#include <jansson.h>
+
+/* Parse a file; errors carry "file:line:column". Caller json_decref()s. */
+int glint_json_load(const char *path, json_t **out);
+
+/* Bounds for numbers: lo/hi inclusive unless the *_open flag is set. */
+struct glint_range {
+	double lo, hi;
+	int lo_open, hi_open;
+};
+
+/*
+ * Read obj[key] as a number inside range.  If the key is absent: when
+ * `required` it is an error, else *out keeps its value.  `where` is the
+ * dotted path of obj ("" for the root) and `file` the document's name.
+ */
+int glint_json_number(const char *file, const char *where, json_t *obj,
+		      const char *key, int required, struct glint_range range,
+		      double *out);
+int glint_json_int(const char *file, const char *where, json_t *obj,
+		   const char *key, int required, int lo, int hi, int *out);
+/* An array of exactly n numbers, each inside range. */
+int glint_json_numbers(const char *file, const char *where, json_t *obj,
+		       const char *key, int required, int n,
+		       struct glint_range range, double *out);
+/* A string; *out points into obj and lives as long as obj. */
+int glint_json_string(const char *file, const char *where, json_t *obj,
+		      const char *key, int required, const char **out);
+/* An object; *out is borrowed (NULL if absent and not required). */
+int glint_json_object(const char *file, const char *where, json_t *obj,
+		      const char *key, int required, json_t **out);
+
+/* Reject keys not in the NULL-terminated list `known` (catches typos). */
+int glint_json_known_keys(const char *file, const char *where, json_t *obj,
+			  const char *const *known);
+
+#endif

@@ -1,0 +1,120 @@
+/* SPDX-License-Identifier: MIT */
+#define _POSIX_C_SOURCE 200809L
+#include "log.h"
+
+#include <jansson.h>
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+#include <unistd.h>
+
+static enum glint_log_mode log_mode = GLINT_LOG_HUMAN;
+
+void glint_log_set_mode(enum glint_log_mode mode)
+{
+	log_mode = mode;
+}
+
+enum glint_log_mode glint_log_get_mode(void)
+{
+	return log_mode;
+}
+
+double glint_now(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void log_v(const char *level, const char *fmt, va_list ap)
+{
+	char msg[2048];
+
+	vsnprintf(msg, sizeof(msg), fmt, ap);
+	if (log_mode == GLINT_LOG_JSON) {
+		json_t *o = json_pack("{s:s,s:s}", "level", level, "msg", msg);
+		char *s = json_dumps(o, JSON_COMPACT);
+		fprintf(stderr, "%s\n", s);
+		free(s);
+		json_decref(o);
+	} else {
+		fprintf(stderr, "glint: %s%s\n",
+			level[0] == 'e' ? "error: " : "", msg);
+	}
+}
+
+void glint_log_info(const char *fmt, ...)
+{
+	va_list ap;
+
+	if (log_mode == GLINT_LOG_QUIET)
+		return;
+	va_start(ap, fmt);
+	log_v("info", fmt, ap);
+	va_end(ap);
+}
+
+void glint_log_error(const char *fmt, ...)
+{
+	va_list ap;
+
+	va_start(ap, fmt);
+	log_v("error", fmt, ap);
+	va_end(ap);
+}
+
+static void progress_draw(struct glint_progress *p, long done)
+{
+	double t = glint_now() - p->t0;
+	double frac = p->total > 0 ? (double)done / (double)p->total : 1;
+	int bar = (int)(frac * 30);
+	char b[31];
+
+	for (int i = 0; i < 30; i++)
+		b[i] = i < bar ? '#' : '.';
+	b[30] = '\0';
+	double eta = frac > 0.01 ? t / frac - t : 0;
+	fprintf(stderr, "\r%-10s [%s] %5.1f%%  %5.1fs  eta %5.1fs ",
+		p->label, b, 100 * frac, t, eta);
+	fflush(stderr);
+}
+
+void glint_progress_start(struct glint_progress *p, const char *label,
+			  long total)
+{
+	p->label = label;
+	p->total = total;
+	atomic_init(&p->done, 0);
+	atomic_init(&p->drawing, 0);
+	p->t0 = glint_now();
+	p->last_draw = 0;
+	p->enabled = log_mode == GLINT_LOG_HUMAN && isatty(STDERR_FILENO);
+}
+
+void glint_progress_add(struct glint_progress *p, long n)
+{
+	long done = atomic_fetch_add(&p->done, n) + n;
+
+	if (!p->enabled)
+		return;
+	/* One thread draws at a time, at most ten times a second. */
+	if (atomic_exchange(&p->drawing, 1))
+		return;
+	double t = glint_now();
+	if (t - p->last_draw > 0.1 || done == p->total) {
+		p->last_draw = t;
+		progress_draw(p, done);
+	}
+	atomic_store(&p->drawing, 0);
+}
+
+void glint_progress_finish(struct glint_progress *p)
+{
+	if (!p->enabled)
+		return;
+	fprintf(stderr, "\r%*s\r", 72, "");
+	fflush(stderr);
+}

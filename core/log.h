@@ -1,0 +1,48 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_CORE_LOG_H
+#define GLINT_CORE_LOG_H
+
+/*
+ * Logs and progress on stderr.  Human mode: plain lines, and a live progress
+ * bar only when stderr is a terminal.  JSON mode: one JSON object per line
+ * ({"level":..,"msg":..}), no progress bar; for scripts.  Quiet: errors only.
+ */
+
+#include "error.h"
+
+#include <stdatomic.h>
+
+enum glint_log_mode {
+	GLINT_LOG_HUMAN,
+	GLINT_LOG_JSON,
+	GLINT_LOG_QUIET,
+};
+
+void glint_log_set_mode(enum glint_log_mode mode);
+enum glint_log_mode glint_log_get_mode(void);
+
+void glint_log_info(const char *fmt, ...) GLINT_PRINTF(1, 2);
+void glint_log_error(const char *fmt, ...) GLINT_PRINTF(1, 2);
+
+/* Seconds on a monotonic clock. */
+double glint_now(void);
+
+struct glint_progress {
+	const char *label;
+	long total;
+	atomic_long done;
+	atomic_int drawing;
+	double t0;
+	double last_draw;
+	int enabled;
+};
+
+/* Start a progress indicator of `total` units (drawn only on a TTY). */
+void glint_progress_start(struct glint_progress *p, const char *label,
+			  long total);
+/* Add n finished units; safe from any thread. */
+void glint_progress_add(struct glint_progress *p, long n);
+/* Clear the bar. */
+void glint_progress_finish(struct glint_progress *p);
+
+#endif

@@ -1,0 +1,110 @@
+/* SPDX-License-Identifier: MIT */
+/* 8-bit sRGB PNG previews through libpng; tone map stated in formats.h. */
+#include "atomic_file.h"
+#include "error.h"
+#include "formats.h"
+#include "vec.h"
+
+#include <png.h>
+
+#include <math.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+static int cmp_float(const void *a, const void *b)
+{
+	float x = *(const float *)a, y = *(const float *)b;
+	return (x > y) - (x < y);
+}
+
+double glint_png_auto_exposure(const struct glint_image *img)
+{
+	size_t n = (size_t)img->width * img->height, k = 0;
+	float *lum = malloc(n * sizeof(float));
+	double ev = 0;
+
+	if (!lum)
+		return 0;
+	for (size_t i = 0; i < n; i++) {
+		const float *p = img->data + 3 * i;
+		double l = rgb_luminance(p[0], p[1], p[2]);
+		if (l > 0 && isfinite(l))
+			lum[k++] = (float)l;
+	}
+	if (k) {
+		qsort(lum, k, sizeof(float), cmp_float);
+		double p99 = lum[(size_t)(0.99 * (double)(k - 1))];
+		ev = log2(0.9 / p99);
+	}
+	free(lum);
+	return ev;
+}
+
+static uint8_t srgb8(double v)
+{
+	if (!(v > 0))
+		return 0;
+	if (v >= 1)
+		return 255;
+	v = v <= 0.0031308 ? 12.92 * v : 1.055 * pow(v, 1 / 2.4) - 0.055;
+	return (uint8_t)lrint(v * 255.0);
+}
+
+int glint_png_write(const char *path, const struct glint_image *img,
+		    double exposure)
+{
+	struct glint_atomic_file af;
+	png_structp png = NULL;
+	png_infop info = NULL;
+	uint8_t *row;
+	int ret;
+
+	if (isnan(exposure))
+		exposure = glint_png_auto_exposure(img);
+	double scale = exp2(exposure);
+	row = malloc((size_t)img->width * 3);
+	if (!row)
+		return glint_error_set(ENOMEM, "%s: out of memory", path);
+	ret = glint_atomic_open(&af, path);
+	if (ret < 0) {
+		free(row);
+		return ret;
+	}
+	png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+	if (png)
+		info = png_create_info_struct(png);
+	if (!png || !info) {
+		ret = glint_error_set(ENOMEM, "%s: libpng setup failed", path);
+		goto err;
+	}
+	if (setjmp(png_jmpbuf(png))) {
+		ret = glint_error_set(EIO, "%s: libpng failed while writing",
+				      path);
+		goto err;
+	}
+	png_init_io(png, af.fp);
+	png_set_IHDR(png, info, (png_uint_32)img->width,
+		     (png_uint_32)img->height, 8, PNG_COLOR_TYPE_RGB,
+		     PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+		     PNG_FILTER_TYPE_DEFAULT);
+	png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+	png_write_info(png, info);
+	for (int y = 0; y < img->height; y++) {
+		const float *p = glint_image_px(img, 0, y);
+		for (int i = 0; i < img->width * 3; i++)
+			row[i] = srgb8(p[i] * scale);
+		png_write_row(png, row);
+	}
+	png_write_end(png, info);
+	png_destroy_write_struct(&png, &info);
+	free(row);
+	return glint_atomic_commit(&af);
+err:
+	if (png)
+		png_destroy_write_struct(&png, info ? &info : NULL);
+	free(row);
+	glint_atomic_abort(&af);
+	return ret;
+}

@@ -9,6 +9,7 @@
 #include <libgen.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 int glint_atomic_tmpname(const char *path, char *tmp, size_t n)
@@ -22,6 +23,10 @@ int glint_atomic_tmpname(const char *path, char *tmp, size_t n)
 	if (fd < 0)
 		return glint_error_set(errno, "%s: cannot create a file here: %s",
 				       path, strerror(errno));
+	/* mkstemp makes 0600; give the file the mode open() would. */
+	mode_t mask = umask(0);
+	umask(mask);
+	fchmod(fd, 0666 & ~mask);
 	close(fd);
 	return 0;
 }

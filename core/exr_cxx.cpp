@@ -1,11 +1,11 @@
 // SPDX-License-Identifier: MIT
 // The one C++ file of core/: OpenEXR's C++ RgbaInputFile for what the C core
 // cannot decode.  Exceptions never cross into C.
-#include "exr_cxx.h"
-
 extern "C" {
 #include "error.h"
+#include "image.h"
 }
+#include "exr_cxx.h"
 
 #include <OpenEXR/ImfArray.h>
 #include <OpenEXR/ImfRgbaFile.h>

@@ -1,0 +1,44 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_CMD_CMD_H
+#define GLINT_CMD_CMD_H
+
+/* The glint command: a thin layer over the libraries. */
+
+#include <jansson.h>
+
+/* Exit codes shared by every command. */
+enum {
+	GLINT_EXIT_OK = 0,
+	GLINT_EXIT_FAIL = 1,  /* bad input or a failure while working */
+	GLINT_EXIT_USAGE = 2, /* bad command line */
+};
+
+struct glint_cmd {
+	const char *name;
+	const char *summary;
+	int (*run)(int argc, char **argv);
+	void (*help)(void);
+};
+
+int cmd_render(int argc, char **argv);
+void cmd_render_help(void);
+int cmd_demo(int argc, char **argv);
+void cmd_demo_help(void);
+int cmd_convert(int argc, char **argv);
+void cmd_convert_help(void);
+
+/* Folder of glint's own data (embedded env map, Table 1). */
+const char *glint_data_dir(void);
+
+/* Report the current error (human or JSON) and return GLINT_EXIT_FAIL. */
+int cmd_fail(const char *cmd);
+/* Print a usage error and return GLINT_EXIT_USAGE. */
+int cmd_usage_error(const char *cmd, const char *fmt, ...);
+/* Print a JSON result on stdout (consumes obj). */
+void cmd_print_json(json_t *obj);
+
+/* Parse a positive int option value; -1 on error (message printed). */
+int cmd_parse_int(const char *cmd, const char *opt, const char *val, int lo,
+		  int hi, int *out);
+
+#endif

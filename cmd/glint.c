@@ -1,0 +1,120 @@
+/* SPDX-License-Identifier: MIT */
+#include "cmd.h"
+
+#include "core/error.h"
+#include "core/log.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#ifndef GLINT_VERSION
+#define GLINT_VERSION "dev"
+#endif
+
+static const struct glint_cmd commands[] = {
+	{ "demo", "render a Table-1 material on the simulated rig (no "
+		  "arguments needed)",
+	  cmd_demo, cmd_demo_help },
+	{ "render", "render a sphere of a material under an environment map",
+	  cmd_render, cmd_render_help },
+	{ "convert", "convert an image between EXR, HDR, PFM (and PNG out)",
+	  cmd_convert, cmd_convert_help },
+};
+
+#define NCOMMANDS (sizeof(commands) / sizeof(commands[0]))
+
+const char *glint_data_dir(void)
+{
+	const char *env = getenv("GLINT_DATA_DIR");
+	return env && env[0] ? env : GLINT_DATA_DIR;
+}
+
+int cmd_fail(const char *cmd)
+{
+	glint_log_error("%s: %s", cmd, glint_error_msg());
+	return GLINT_EXIT_FAIL;
+}
+
+int cmd_usage_error(const char *cmd, const char *fmt, ...)
+{
+	char msg[512];
+	va_list ap;
+
+	va_start(ap, fmt);
+	vsnprintf(msg, sizeof(msg), fmt, ap);
+	va_end(ap);
+	fprintf(stderr, "glint %s: %s\nTry 'glint %s --help'.\n", cmd, msg,
+		cmd);
+	return GLINT_EXIT_USAGE;
+}
+
+void cmd_print_json(json_t *obj)
+{
+	char *s = json_dumps(obj, JSON_INDENT(2) | JSON_REAL_PRECISION(9));
+	printf("%s\n", s);
+	free(s);
+	json_decref(obj);
+}
+
+int cmd_parse_int(const char *cmd, const char *opt, const char *val, int lo,
+		  int hi, int *out)
+{
+	char *end;
+	long v = strtol(val, &end, 10);
+
+	if (!val[0] || *end || v < lo || v > hi) {
+		cmd_usage_error(cmd, "%s '%s': expected an integer in [%d, %d]",
+				opt, val, lo, hi);
+		return -1;
+	}
+	*out = (int)v;
+	return 0;
+}
+
+static void usage(FILE *fp)
+{
+	fprintf(fp,
+		"usage: glint <command> [options]\n"
+		"\n"
+		"glint measures a material's appearance from one HDR photo of "
+		"a sphere of it\nand one HDR photo of a mirror-ball light "
+		"probe.\n\ncommands:\n");
+	for (size_t i = 0; i < NCOMMANDS; i++)
+		fprintf(fp, "  %-10s %s\n", commands[i].name,
+			commands[i].summary);
+	fprintf(fp, "\n'glint <command> --help' describes each command.\n"
+		    "Common options: --json (machine-readable output), "
+		    "--quiet.\n");
+}
+
+int main(int argc, char **argv)
+{
+	if (argc < 2) {
+		usage(stderr);
+		return GLINT_EXIT_USAGE;
+	}
+	if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") ||
+	    !strcmp(argv[1], "help")) {
+		if (argc > 2 && strcmp(argv[1], "help") == 0) {
+			for (size_t i = 0; i < NCOMMANDS; i++)
+				if (!strcmp(commands[i].name, argv[2])) {
+					commands[i].help();
+					return GLINT_EXIT_OK;
+				}
+		}
+		usage(stdout);
+		return GLINT_EXIT_OK;
+	}
+	if (!strcmp(argv[1], "--version")) {
+		printf("glint %s\n", GLINT_VERSION);
+		return GLINT_EXIT_OK;
+	}
+	for (size_t i = 0; i < NCOMMANDS; i++)
+		if (!strcmp(commands[i].name, argv[1]))
+			return commands[i].run(argc - 1, argv + 1);
+	fprintf(stderr, "glint: unknown command '%s'\n\n", argv[1]);
+	usage(stderr);
+	return GLINT_EXIT_USAGE;
+}

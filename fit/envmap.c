@@ -1,0 +1,232 @@
+/* SPDX-License-Identifier: MIT */
+#include "envmap.h"
+
+#include "core/error.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+void glint_envmap_dir_to_uv(struct vec3 d, double *u, double *v)
+{
+	double y = d.y < -1 ? -1 : d.y > 1 ? 1 : d.y;
+	double phi = atan2(d.x, -d.z);
+
+	*u = 0.5 + phi / (2 * M_PI);
+	*v = acos(y) / M_PI;
+}
+
+struct vec3 glint_envmap_uv_to_dir(double u, double v)
+{
+	double phi = 2 * M_PI * (u - 0.5), theta = M_PI * v;
+	double s = sin(theta);
+
+	return v3(s * sin(phi), cos(theta), -s * cos(phi));
+}
+
+/*
+ * Sampling weight of texel (i, j): the mean of the bilinear interpolant over
+ * the texel (a separable [1, 6, 1] / 8 filter of the luminance), times
+ * sin(theta).  Weighting by the texel alone would give the neighbours of a
+ * small bright source (the sun) a tiny pdf while the bilinear lookup still
+ * returns half its radiance there: fireflies.  With the filter, radiance /
+ * pdf stays bounded.
+ */
+static double texel_weight(const struct glint_image *img, int i, int j)
+{
+	static const double k[3] = { 1.0 / 8, 6.0 / 8, 1.0 / 8 };
+	int w = img->width, h = img->height;
+	double sum = 0;
+
+	for (int dy = -1; dy <= 1; dy++) {
+		int y = j + dy < 0 ? 0 : j + dy >= h ? h - 1 : j + dy;
+		for (int dx = -1; dx <= 1; dx++) {
+			int x = ((i + dx) % w + w) % w;
+			const float *p = glint_image_px(img, x, y);
+			sum += k[dx + 1] * k[dy + 1] *
+			       rgb_luminance(p[0], p[1], p[2]);
+		}
+	}
+	return sum * sin(M_PI * (j + 0.5) / h);
+}
+
+static int build_tables(struct glint_envmap *env)
+{
+	int w = env->img->width, h = env->img->height;
+
+	env->marginal = calloc((size_t)h + 1, sizeof(double));
+	env->cond = calloc((size_t)h * (w + 1), sizeof(double));
+	if (!env->marginal || !env->cond)
+		return glint_error_set(ENOMEM,
+				       "out of memory for the env map's "
+				       "sampling tables");
+	for (int j = 0; j < h; j++) {
+		double *c = env->cond + (size_t)j * (w + 1);
+		for (int i = 0; i < w; i++)
+			c[i + 1] = c[i] + texel_weight(env->img, i, j);
+		env->marginal[j + 1] = env->marginal[j] + c[w];
+	}
+	env->total = env->marginal[h];
+	return 0;
+}
+
+int glint_envmap_new(struct glint_image *img, const double rot_deg[3],
+		     double scale, const char *what, struct glint_envmap **out)
+{
+	struct glint_envmap *env;
+	int ret;
+
+	*out = NULL;
+	ret = glint_image_check_finite(img, what, 1);
+	if (ret < 0)
+		goto err_img;
+	if (img->width < 2 || img->height < 1) {
+		ret = glint_error_set(EINVAL,
+				      "%s: %dx%d is too small for a lat-long "
+				      "map",
+				      what, img->width, img->height);
+		goto err_img;
+	}
+	if (!(scale > 0) || !isfinite(scale)) {
+		ret = glint_error_set(EINVAL,
+				      "%s: radiance scale %g: expected > 0",
+				      what, scale);
+		goto err_img;
+	}
+	env = calloc(1, sizeof(*env));
+	if (!env) {
+		ret = glint_error_set(ENOMEM, "out of memory");
+		goto err_img;
+	}
+	env->img = img;
+	env->scale = scale;
+	env->rot = m3_rotation_xyz_deg(rot_deg ? rot_deg[0] : 0,
+				       rot_deg ? rot_deg[1] : 0,
+				       rot_deg ? rot_deg[2] : 0);
+	ret = build_tables(env);
+	if (ret < 0) {
+		glint_envmap_free(env);
+		return ret;
+	}
+	*out = env;
+	return 0;
+err_img:
+	glint_image_free(img);
+	return ret;
+}
+
+int glint_envmap_load(const char *path, const double rot_deg[3], double scale,
+		      struct glint_envmap **out)
+{
+	struct glint_image *img;
+	int ret = glint_image_read(path, &img);
+
+	*out = NULL;
+	if (ret < 0)
+		return ret;
+	return glint_envmap_new(img, rot_deg, scale, path, out);
+}
+
+void glint_envmap_free(struct glint_envmap *env)
+{
+	if (!env)
+		return;
+	glint_image_free(env->img);
+	free(env->marginal);
+	free(env->cond);
+	free(env);
+}
+
+void glint_envmap_lookup(const struct glint_envmap *env, struct vec3 d,
+			 double rgb[3])
+{
+	const struct glint_image *img = env->img;
+	int w = img->width, h = img->height;
+	double u, v;
+
+	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
+	double x = u * w - 0.5, y = v * h - 0.5;
+	double fx = floor(x), fy = floor(y);
+	double tx = x - fx, ty = y - fy;
+	int x0 = (int)fx, y0 = (int)fy;
+	int x1 = x0 + 1, y1 = y0 + 1;
+
+	/* Wrap around in azimuth, clamp at the poles. */
+	x0 = ((x0 % w) + w) % w;
+	x1 = ((x1 % w) + w) % w;
+	y0 = y0 < 0 ? 0 : y0 >= h ? h - 1 : y0;
+	y1 = y1 < 0 ? 0 : y1 >= h ? h - 1 : y1;
+	const float *a = glint_image_px(img, x0, y0);
+	const float *b = glint_image_px(img, x1, y0);
+	const float *c = glint_image_px(img, x0, y1);
+	const float *e = glint_image_px(img, x1, y1);
+	for (int k = 0; k < 3; k++)
+		rgb[k] = env->scale *
+			 ((1 - ty) * ((1 - tx) * a[k] + tx * b[k]) +
+			  ty * ((1 - tx) * c[k] + tx * e[k]));
+}
+
+/* Index i with cdf[i] <= x < cdf[i + 1] among n intervals. */
+static int cdf_find(const double *cdf, int n, double x)
+{
+	int lo = 0, hi = n - 1;
+
+	while (lo < hi) {
+		int mid = (lo + hi + 1) / 2;
+		if (cdf[mid] <= x)
+			lo = mid;
+		else
+			hi = mid - 1;
+	}
+	/* Skip zero-width intervals that a search may land on. */
+	while (lo < n - 1 && cdf[lo + 1] <= cdf[lo])
+		lo++;
+	return lo;
+}
+
+double glint_envmap_sample(const struct glint_envmap *env, double u1,
+			   double u2, struct vec3 *dir)
+{
+	int w = env->img->width, h = env->img->height;
+
+	if (!(env->total > 0)) {
+		*dir = v3(0, 1, 0);
+		return 0;
+	}
+	double x = u1 * env->total;
+	int j = cdf_find(env->marginal, h, x);
+	double row_w = env->marginal[j + 1] - env->marginal[j];
+	double fv = row_w > 0 ? (x - env->marginal[j]) / row_w : 0.5;
+	const double *c = env->cond + (size_t)j * (w + 1);
+	double y = u2 * c[w];
+	int i = cdf_find(c, w, y);
+	double cell = c[i + 1] - c[i];
+	double fu = cell > 0 ? (y - c[i]) / cell : 0.5;
+	double u = (i + fu) / w, v = (j + fv) / h;
+	double s = sin(M_PI * v);
+
+	*dir = m3_mul(&env->rot, glint_envmap_uv_to_dir(u, v));
+	if (!(s > 0) || !(cell > 0))
+		return 0;
+	/* Density over (u, v) is cell * W * H / total; dA = 2 pi^2 sin. */
+	return cell * w * h / env->total / (2 * M_PI * M_PI * s);
+}
+
+double glint_envmap_pdf(const struct glint_envmap *env, struct vec3 d)
+{
+	int w = env->img->width, h = env->img->height;
+	double u, v;
+
+	if (!(env->total > 0))
+		return 0;
+	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
+	int i = (int)(u * w), j = (int)(v * h);
+	i = i < 0 ? 0 : i >= w ? w - 1 : i;
+	j = j < 0 ? 0 : j >= h ? h - 1 : j;
+	double s = sin(M_PI * v);
+	const double *c = env->cond + (size_t)j * (w + 1);
+	double cell = c[i + 1] - c[i];
+	if (!(s > 0))
+		return 0;
+	return cell * w * h / env->total / (2 * M_PI * M_PI * s);
+}

@@ -1,0 +1,64 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_FIT_ENVMAP_H
+#define GLINT_FIT_ENVMAP_H
+
+/*
+ * Distant light as a lat-long (equirectangular) RGB radiance map.
+ *
+ * Map convention (docs/conventions.md): +Y is up; a map direction
+ * d = (x, y, z) has polar angle theta = acos(y) from +Y and azimuth
+ * phi = atan2(x, -z); it is stored at u = 0.5 + phi / (2 pi),
+ * v = theta / pi (u across, v down; texel (i, j) is centred at
+ * ((i + 0.5) / W, (j + 0.5) / H)).  So the centre of the image is the -Z
+ * direction, the default camera's view direction.  A rotation R takes map
+ * directions to world directions: L_world(d) = scale * map(R^T d).
+ */
+
+#include "core/image.h"
+#include "core/vec.h"
+
+struct glint_envmap {
+	struct glint_image *img; /* owned */
+	struct mat3 rot;	 /* world from map */
+	double scale;		 /* radiance multiplier */
+	/* Importance sampling by luminance * sin(theta) (envmap.c): */
+	double *marginal; /* H + 1 entries, CDF over rows */
+	double *cond;	  /* H * (W + 1) entries, CDF over columns per row */
+	double total;	  /* sum of the weights */
+};
+
+/*
+ * Take ownership of img (a lat-long map, width >= 2 height) and build the
+ * sampling tables.  rot_deg = rotation about X, then Y, then Z (degrees,
+ * m3_rotation_xyz_deg).  Fails on NaN/Inf or negative radiance, naming the
+ * pixel; `what` names the source in messages.  img is freed on failure.
+ */
+int glint_envmap_new(struct glint_image *img, const double rot_deg[3],
+		     double scale, const char *what, struct glint_envmap **out);
+/* Read a map from an image file and build it (see glint_envmap_new). */
+int glint_envmap_load(const char *path, const double rot_deg[3], double scale,
+		      struct glint_envmap **out);
+void glint_envmap_free(struct glint_envmap *env);
+
+/* Map-space direction <-> (u, v) in [0, 1]^2. */
+void glint_envmap_dir_to_uv(struct vec3 d, double *u, double *v);
+struct vec3 glint_envmap_uv_to_dir(double u, double v);
+
+/* Bilinear radiance seen along world direction d (unit). */
+void glint_envmap_lookup(const struct glint_envmap *env, struct vec3 d,
+			 double rgb[3]);
+
+/*
+ * Sample a world direction with density proportional to the weight of the
+ * texel containing it (luminance of the bilinear interpolant averaged over
+ * the texel, times sin theta; uniform inside a texel).
+ * Returns the exact solid-angle pdf of that direction (0 if the map is black)
+ * and fills *dir; u1, u2 in [0, 1).
+ */
+double glint_envmap_sample(const struct glint_envmap *env, double u1,
+			   double u2, struct vec3 *dir);
+
+/* The pdf glint_envmap_sample() has for world direction d. */
+double glint_envmap_pdf(const struct glint_envmap *env, struct vec3 d);
+
+#endif

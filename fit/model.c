@@ -1,0 +1,149 @@
+/* SPDX-License-Identifier: MIT */
+#include "model.h"
+
+#include "core/error.h"
+#include "core/json.h"
+
+#include <stdio.h>
+#include <string.h>
+
+static const struct glint_model_ops *const registry[] = {
+	&glint_model_lambert,
+	&glint_model_torrance_sparrow,
+};
+
+#define NMODELS (sizeof(registry) / sizeof(registry[0]))
+
+const struct glint_model_ops *glint_model_find(const char *name)
+{
+	for (size_t i = 0; i < NMODELS; i++)
+		if (!strcmp(registry[i]->name, name))
+			return registry[i];
+	return NULL;
+}
+
+const char *glint_model_names(void)
+{
+	static char buf[256];
+
+	if (!buf[0]) {
+		for (size_t i = 0; i < NMODELS; i++) {
+			strncat(buf, registry[i]->name,
+				sizeof(buf) - strlen(buf) - 1);
+			if (i + 1 < NMODELS)
+				strncat(buf, ", ", sizeof(buf) - strlen(buf) - 1);
+		}
+	}
+	return buf;
+}
+
+int glint_material_from_json(const char *file, const char *where, json_t *obj,
+			     const struct glint_model_ops **model,
+			     double *params)
+{
+	const struct glint_model_ops *m;
+	const char *name = NULL;
+	const char *known[GLINT_MAX_PARAMS + 3] = { "model", "name" };
+	int nk = 2, ret;
+
+	ret = glint_json_string(file, where, obj, "model", 1, &name);
+	if (ret < 0)
+		return ret;
+	m = glint_model_find(name);
+	if (!m)
+		return glint_error_set(EINVAL,
+				       "%s: %s%smodel = \"%s\": expected one "
+				       "of %s",
+				       file, where, where[0] ? "." : "", name,
+				       glint_model_names());
+	for (int i = 0; i < m->nparams; i++) {
+		const struct glint_param *pi = &m->params[i];
+		struct glint_range r = { pi->lo, pi->hi, 0, 0 };
+
+		params[i] = pi->def;
+		if (pi->json_index < 0) {
+			ret = glint_json_number(file, where, obj, pi->json_key,
+						0, r, &params[i]);
+		} else if (pi->json_index == 0) {
+			double v[3] = { params[i], m->params[i + 1].def,
+					m->params[i + 2].def };
+			ret = glint_json_numbers(file, where, obj,
+						 pi->json_key, 0, 3, r, v);
+			params[i] = v[0];
+			params[i + 1] = v[1];
+			params[i + 2] = v[2];
+			i += 2;
+		}
+		if (ret < 0)
+			return ret;
+		if (nk == 2 || strcmp(known[nk - 1], pi->json_key))
+			known[nk++] = pi->json_key;
+	}
+	known[nk] = NULL;
+	ret = glint_json_known_keys(file, where, obj, known);
+	if (ret < 0)
+		return ret;
+	*model = m;
+	return 0;
+}
+
+int glint_material_load(const char *path, const char *entry,
+			const struct glint_model_ops **model, double *params)
+{
+	json_t *root, *list;
+	int ret = glint_json_load(path, &root);
+
+	if (ret < 0)
+		return ret;
+	if (!entry) {
+		ret = glint_material_from_json(path, "", root, model, params);
+		goto out;
+	}
+	list = json_object_get(root, "materials");
+	if (!json_is_array(list)) {
+		ret = glint_error_set(EINVAL,
+				      "%s: no \"materials\" array: expected a "
+				      "Table-1 style file to pick '%s' from",
+				      path, entry);
+		goto out;
+	}
+	for (size_t i = 0; i < json_array_size(list); i++) {
+		json_t *e = json_array_get(list, i);
+		json_t *n = json_object_get(e, "name");
+		if (json_is_string(n) && !strcmp(json_string_value(n), entry)) {
+			char where[64];
+			snprintf(where, sizeof(where), "materials[%zu]", i);
+			ret = glint_material_from_json(path, where, e, model,
+						       params);
+			goto out;
+		}
+	}
+	ret = glint_error_set(ENOENT, "%s: no material named '%s'", path,
+			      entry);
+out:
+	json_decref(root);
+	return ret;
+}
+
+json_t *glint_material_to_json(const struct glint_model_ops *model,
+			       const double *params)
+{
+	json_t *o = json_object();
+
+	json_object_set_new(o, "model", json_string(model->name));
+	for (int i = 0; i < model->nparams; i++) {
+		const struct glint_param *pi = &model->params[i];
+		if (pi->json_index < 0) {
+			json_object_set_new(o, pi->json_key,
+					    json_real(params[i]));
+			continue;
+		}
+		json_t *a = json_object_get(o, pi->json_key);
+		if (!a) {
+			a = json_array();
+			json_object_set_new(o, pi->json_key, a);
+		}
+		json_array_append_new(a, json_real(params[i]));
+	}
+	return o;
+}

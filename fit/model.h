@@ -1,0 +1,75 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_FIT_MODEL_H
+#define GLINT_FIT_MODEL_H
+
+/*
+ * Appearance models behind one interface.  A model is a static const ops
+ * table; adding one is one file plus a line in model.c's registry.
+ *
+ * Directions are in the local shading frame (normal = +z), unit length,
+ * pointing away from the surface: wo towards the viewer, wi towards the
+ * light.  Parameter vectors are plain double arrays laid out as `params`.
+ */
+
+#include "core/vec.h"
+
+#include <jansson.h>
+
+#define GLINT_MAX_PARAMS 16
+
+struct glint_param {
+	const char *name;     /* "diffuse.r", "roughness", ... */
+	const char *json_key; /* key in material JSON ("diffuse") */
+	int json_index;	      /* component of an RGB array, -1 for scalars */
+	double lo, hi;	      /* bounds (inclusive) */
+	double def;	      /* default / initial value */
+};
+
+struct glint_model_ops {
+	/* Name used in material files and on the command line. */
+	const char *name;
+	/* The conventions, stated for params.json and the docs. */
+	const char *conventions;
+	/* Number of parameters and their descriptions. */
+	int nparams;
+	const struct glint_param *params;
+	/* BRDF value f(wo, wi), RGB, per steradian; 0 below the surface. */
+	void (*eval)(const double *p, struct vec3 wo, struct vec3 wi,
+		     double f[3]);
+	/* Draw wi for wo from three uniforms; returns its solid-angle pdf,
+	 * 0 if no direction was produced. */
+	double (*sample)(const double *p, struct vec3 wo, const double u[3],
+			 struct vec3 *wi);
+	/* The pdf sample() has for wi. */
+	double (*pdf)(const double *p, struct vec3 wo, struct vec3 wi);
+};
+
+extern const struct glint_model_ops glint_model_lambert;
+extern const struct glint_model_ops glint_model_torrance_sparrow;
+
+/* Cosine-weighted direction about +z from two uniforms; returns its pdf. */
+double glint_sample_cosine(const double u[2], struct vec3 *wi);
+
+/* Model by name, or NULL. */
+const struct glint_model_ops *glint_model_find(const char *name);
+/* "lambert, torrance-sparrow" for messages (static storage). */
+const char *glint_model_names(void);
+
+/*
+ * A material document: {"model": NAME, <json_key>: value or [r, g, b], ...}
+ * (the shape of ../shared/data/paper-table1.json entries; "name" is allowed).
+ * Missing parameters take their defaults; values outside the bounds are
+ * errors naming file, key and bounds.
+ */
+int glint_material_from_json(const char *file, const char *where, json_t *obj,
+			     const struct glint_model_ops **model,
+			     double *params);
+/* Read a material file, or one entry of a Table-1 style file when `entry`
+ * is not NULL (matched against "materials"[].name). */
+int glint_material_load(const char *path, const char *entry,
+			const struct glint_model_ops **model, double *params);
+/* The material as JSON (same shape as read). Caller json_decref()s. */
+json_t *glint_material_to_json(const struct glint_model_ops *model,
+			       const double *params);
+
+#endif

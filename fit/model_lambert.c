@@ -1,0 +1,53 @@
+/* SPDX-License-Identifier: MIT */
+/* Lambertian reflection: f = albedo / pi. */
+#include "model.h"
+
+static const struct glint_param lambert_params[] = {
+	{ "diffuse.r", "diffuse", 0, 0, 1, 0.5 },
+	{ "diffuse.g", "diffuse", 1, 0, 1, 0.5 },
+	{ "diffuse.b", "diffuse", 2, 0, 1, 0.5 },
+};
+
+static void lambert_eval(const double *p, struct vec3 wo, struct vec3 wi,
+			 double f[3])
+{
+	int up = wo.z > 0 && wi.z > 0;
+
+	for (int c = 0; c < 3; c++)
+		f[c] = up ? p[c] / M_PI : 0;
+}
+
+double glint_sample_cosine(const double u[2], struct vec3 *wi)
+{
+	double r = sqrt(u[0]), phi = 2 * M_PI * u[1];
+	double z = sqrt(fmax(0, 1 - u[0]));
+
+	*wi = v3(r * cos(phi), r * sin(phi), z);
+	return z / M_PI;
+}
+
+static double lambert_sample(const double *p, struct vec3 wo,
+			     const double u[3], struct vec3 *wi)
+{
+	(void)p;
+	if (!(wo.z > 0))
+		return 0;
+	return glint_sample_cosine(u + 1, wi);
+}
+
+static double lambert_pdf(const double *p, struct vec3 wo, struct vec3 wi)
+{
+	(void)p;
+	return wo.z > 0 && wi.z > 0 ? wi.z / M_PI : 0;
+}
+
+const struct glint_model_ops glint_model_lambert = {
+	.name = "lambert",
+	.conventions = "Lambertian: f = diffuse / pi per channel; diffuse is "
+		       "the hemispherical albedo in [0, 1].",
+	.nparams = 3,
+	.params = lambert_params,
+	.eval = lambert_eval,
+	.sample = lambert_sample,
+	.pdf = lambert_pdf,
+};

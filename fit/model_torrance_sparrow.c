@@ -1,0 +1,113 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * Torrance-Sparrow, parameterised as in Joshi & Jensen's Table 1: RGB
+ * diffuse, RGB specular, roughness, index of refraction.
+ *
+ *   f = kd / pi + ks D(h) G F(i.h) / (4 (n.i)(n.o))
+ *
+ * D: Beckmann with roughness = RMS microfacet slope m; G: the V-cavity
+ * shadowing/masking of Torrance & Sparrow (1967) in Cook & Torrance's form;
+ * F: exact unpolarised dielectric Fresnel with the given ior.
+ */
+#include "microfacet.h"
+#include "model.h"
+
+enum { KD = 0, KS = 3, ROUGH = 6, IOR = 7 };
+
+static const struct glint_param ts_params[] = {
+	{ "diffuse.r", "diffuse", 0, 0, 1, 0.5 },
+	{ "diffuse.g", "diffuse", 1, 0, 1, 0.5 },
+	{ "diffuse.b", "diffuse", 2, 0, 1, 0.5 },
+	{ "specular.r", "specular", 0, 0, 1, 0.5 },
+	{ "specular.g", "specular", 1, 0, 1, 0.5 },
+	{ "specular.b", "specular", 2, 0, 1, 0.5 },
+	{ "roughness", "roughness", -1, 1e-4, 1, 0.075 },
+	{ "ior", "ior", -1, 1, 5, 1.5 },
+};
+
+static void ts_eval(const double *p, struct vec3 wo, struct vec3 wi,
+		    double f[3])
+{
+	if (!(wo.z > 0 && wi.z > 0)) {
+		f[0] = f[1] = f[2] = 0;
+		return;
+	}
+	struct vec3 h = v3_norm(v3_add(wo, wi));
+	double oh = v3_dot(wo, h);
+	double s = glint_beckmann_d(h.z, p[ROUGH]) *
+		   glint_vcavity_g(h.z, wo.z, wi.z, oh) *
+		   glint_fresnel_dielectric(oh, p[IOR]) / (4 * wi.z * wo.z);
+
+	for (int c = 0; c < 3; c++)
+		f[c] = p[KD + c] / M_PI + p[KS + c] * s;
+}
+
+/* Probability of sampling the specular lobe for this wo. */
+static double spec_prob(const double *p, struct vec3 wo)
+{
+	double d = rgb_luminance(p[KD], p[KD + 1], p[KD + 2]);
+	double s = rgb_luminance(p[KS], p[KS + 1], p[KS + 2]) *
+		   glint_fresnel_dielectric(wo.z, p[IOR]);
+
+	if (s <= 0)
+		return d > 0 ? 0 : 0.5;
+	if (d <= 0)
+		return 1;
+	double ps = s / (s + d);
+	return ps < 0.05 ? 0.05 : ps > 0.95 ? 0.95 : ps;
+}
+
+static double spec_pdf(const double *p, struct vec3 wo, struct vec3 wi)
+{
+	struct vec3 h = v3_norm(v3_add(wo, wi));
+	double oh = v3_dot(wo, h);
+
+	if (!(oh > 0))
+		return 0;
+	return glint_beckmann_d(h.z, p[ROUGH]) * h.z / (4 * oh);
+}
+
+static double ts_pdf(const double *p, struct vec3 wo, struct vec3 wi)
+{
+	if (!(wo.z > 0 && wi.z > 0))
+		return 0;
+	double ps = spec_prob(p, wo);
+	return ps * spec_pdf(p, wo, wi) + (1 - ps) * wi.z / M_PI;
+}
+
+static double ts_sample(const double *p, struct vec3 wo, const double u[3],
+			struct vec3 *wi)
+{
+	if (!(wo.z > 0))
+		return 0;
+	if (u[0] < spec_prob(p, wo)) {
+		/* Beckmann normal with density D(h) cos(h). */
+		double m = p[ROUGH];
+		double tan2 = -m * m * log(1 - u[1]);
+		double ch = 1 / sqrt(1 + tan2), sh = sqrt(fmax(0, 1 - ch * ch));
+		double phi = 2 * M_PI * u[2];
+		struct vec3 h = v3(sh * cos(phi), sh * sin(phi), ch);
+		double oh = v3_dot(wo, h);
+		*wi = v3_sub(v3_scale(h, 2 * oh), wo);
+	} else {
+		glint_sample_cosine(u + 1, wi);
+	}
+	if (!(wi->z > 0))
+		return 0;
+	return ts_pdf(p, wo, *wi);
+}
+
+const struct glint_model_ops glint_model_torrance_sparrow = {
+	.name = "torrance-sparrow",
+	.conventions =
+		"Torrance-Sparrow: f = diffuse/pi + specular*D*G*F/(4 cos_i "
+		"cos_o). D = Beckmann, roughness = RMS microfacet slope m: "
+		"D = exp(-tan^2(t_h)/m^2)/(pi m^2 cos^4(t_h)). G = V-cavity "
+		"min(1, 2(n.h)(n.o)/(o.h), 2(n.h)(n.i)/(o.h)). F = exact "
+		"unpolarised dielectric Fresnel at cos = o.h with index ior.",
+	.nparams = 8,
+	.params = ts_params,
+	.eval = ts_eval,
+	.sample = ts_sample,
+	.pdf = ts_pdf,
+};

@@ -1,0 +1,226 @@
+/* SPDX-License-Identifier: MIT */
+#include "render.h"
+
+#include "sampling.h"
+
+#include "core/error.h"
+#include "core/parallel.h"
+
+#include <math.h>
+#include <string.h>
+
+static struct vec3 hvec(const float f[3])
+{
+	return v3(f[0], f[1], f[2]);
+}
+
+static struct vec3 to_local(struct vec3 v, struct vec3 t, struct vec3 b,
+			    struct vec3 n)
+{
+	return v3(v3_dot(v, t), v3_dot(v, b), v3_dot(v, n));
+}
+
+static struct vec3 to_world(struct vec3 v, struct vec3 t, struct vec3 b,
+			    struct vec3 n)
+{
+	return v3_add(v3_add(v3_scale(t, v.x), v3_scale(b, v.y)),
+		      v3_scale(n, v.z));
+}
+
+/* A light path from the hit along world direction wi: visible? */
+static int visible(struct glint_tracer *tracer, const struct glint_hit *h,
+		   struct vec3 n, struct vec3 wi)
+{
+	if (!tracer)
+		return 1;
+	struct vec3 o = v3_add(hvec(h->p), v3_scale(n, 1e-6));
+	return !glint_tracer_occluded(tracer, o, wi, 1e-6, INFINITY);
+}
+
+void glint_shade_hit(const struct glint_hit *h, uint32_t seed,
+		     struct glint_tracer *tracer,
+		     const struct glint_envmap *env,
+		     const struct glint_model_ops *model, const double *params,
+		     int nl, int nb, double rgb[3])
+{
+	struct vec3 n = hvec(h->n), t, b;
+	struct vec3 wo_w = v3_scale(hvec(h->d), -1);
+	double f[3], le[3];
+
+	rgb[0] = rgb[1] = rgb[2] = 0;
+	v3_frame(n, &t, &b);
+	struct vec3 wo = to_local(wo_w, t, b, n);
+	if (!(wo.z > 0))
+		return;
+	/* Env-map samples; balance heuristic weight nl pdf_l/(nl pdf_l +
+	 * nb pdf_b) folded into the estimator's denominator. */
+	for (int k = 0; k < nl; k++) {
+		double u[2];
+		struct vec3 wi_w;
+		glint_hammersley((uint32_t)k, (uint32_t)nl, seed, u);
+		double pl = glint_envmap_sample(env, u[0], u[1], &wi_w);
+		struct vec3 wi = to_local(wi_w, t, b, n);
+		if (!(pl > 0) || !(wi.z > 0))
+			continue;
+		model->eval(params, wo, wi, f);
+		if (f[0] + f[1] + f[2] <= 0)
+			continue;
+		if (!visible(tracer, h, n, wi_w))
+			continue;
+		double pb = nb ? model->pdf(params, wo, wi) : 0;
+		double w = wi.z / (nl * pl + nb * pb);
+		glint_envmap_lookup(env, wi_w, le);
+		for (int c = 0; c < 3; c++)
+			rgb[c] += f[c] * le[c] * w;
+	}
+	for (int k = 0; k < nb; k++) {
+		double u[3];
+		struct vec3 wi;
+		glint_hammersley((uint32_t)k, (uint32_t)nb, seed ^ 0x68e31da4u,
+				 u + 1);
+		u[0] = glint_u01(glint_hash3(seed, (uint32_t)k, 0xb5297a4du));
+		double pb = model->sample(params, wo, u, &wi);
+		if (!(pb > 0) || !(wi.z > 0))
+			continue;
+		struct vec3 wi_w = to_world(wi, t, b, n);
+		model->eval(params, wo, wi, f);
+		if (f[0] + f[1] + f[2] <= 0)
+			continue;
+		if (!visible(tracer, h, n, wi_w))
+			continue;
+		double pl = nl ? glint_envmap_pdf(env, wi_w) : 0;
+		double w = wi.z / (nl * pl + nb * pb);
+		glint_envmap_lookup(env, wi_w, le);
+		for (int c = 0; c < 3; c++)
+			rgb[c] += f[c] * le[c] * w;
+	}
+}
+
+struct shade_job {
+	const struct glint_gbuffer *gb;
+	struct glint_tracer *tracer;
+	const struct glint_envmap *env;
+	const struct glint_model_ops *model;
+	const double *params;
+	const struct glint_shade_opts *opts;
+	struct glint_image *out, *coverage;
+};
+
+static void shade_rows(void *ctx, int y0, int y1, int thread)
+{
+	struct shade_job *job = ctx;
+	const struct glint_gbuffer *gb = job->gb;
+	int spp = gb->spp;
+
+	(void)thread;
+	glint_thread_ftz();
+	for (int y = y0; y < y1; y++) {
+		for (int x = 0; x < gb->width; x++) {
+			size_t pix = (size_t)y * gb->width + x;
+			const struct glint_hit *hs = gb->hits + pix * spp;
+			double sum[3] = { 0, 0, 0 }, rgb[3];
+			int hits = 0;
+			for (int s = 0; s < spp; s++) {
+				const struct glint_hit *h = &hs[s];
+				if (h->geom < 0) {
+					if (!job->opts->background)
+						continue;
+					glint_envmap_lookup(job->env, hvec(h->d),
+							    rgb);
+				} else {
+					hits++;
+					glint_shade_hit(
+						h,
+						glint_hash32((uint32_t)(pix * spp +
+									s)),
+						job->tracer, job->env,
+						job->model, job->params,
+						job->opts->light_samples,
+						job->opts->brdf_samples, rgb);
+				}
+				for (int c = 0; c < 3; c++)
+					sum[c] += rgb[c];
+			}
+			float *o = glint_image_px(job->out, x, y);
+			for (int c = 0; c < 3; c++)
+				o[c] = (float)(sum[c] / spp);
+			if (job->coverage) {
+				float *cv = glint_image_px(job->coverage, x, y);
+				cv[0] = cv[1] = cv[2] = (float)hits / spp;
+			}
+		}
+		if (job->opts->progress)
+			glint_progress_add(job->opts->progress, 1);
+	}
+}
+
+int glint_render_shade(const struct glint_gbuffer *gb,
+		       struct glint_tracer *tracer,
+		       const struct glint_envmap *env,
+		       const struct glint_model_ops *model, const double *params,
+		       const struct glint_shade_opts *opts,
+		       struct glint_image *out, struct glint_image *coverage)
+{
+	struct shade_job job = { gb,  tracer, env,	model,
+				 params, opts,	 out, coverage };
+
+	if (out->width != gb->width || out->height != gb->height ||
+	    (coverage && (coverage->width != gb->width ||
+			  coverage->height != gb->height)))
+		return glint_error_set(EINVAL,
+				       "render target %dx%d: expected %dx%d",
+				       out->width, out->height, gb->width,
+				       gb->height);
+	if (opts->light_samples < 0 || opts->brdf_samples < 0 ||
+	    opts->light_samples + opts->brdf_samples == 0)
+		return glint_error_set(EINVAL,
+				       "light samples %d, BRDF samples %d: "
+				       "expected >= 0 and not both 0",
+				       opts->light_samples, opts->brdf_samples);
+	if (tracer && glint_tracer_is_convex(tracer))
+		job.tracer = NULL;
+	glint_parallel_for(gb->height, 2, opts->nthreads, shade_rows, &job);
+	return 0;
+}
+
+int glint_renderer_init(struct glint_renderer *r,
+			const struct glint_scene *scene, int nthreads,
+			struct glint_progress *progress)
+{
+	int ret;
+
+	memset(r, 0, sizeof(*r));
+	r->scene = *scene;
+	ret = glint_envmap_load(scene->env_path, scene->env_rotation,
+				scene->env_scale, &r->env);
+	if (ret < 0)
+		return ret;
+	ret = glint_tracer_new(&r->tracer);
+	if (!ret)
+		ret = glint_tracer_add_sphere(r->tracer, scene->sphere_centre,
+					      scene->sphere_radius,
+					      GLINT_SPHERE_USER);
+	if (!ret)
+		ret = glint_tracer_commit(r->tracer);
+	if (ret < 0)
+		goto err;
+	double t0 = glint_now();
+	ret = glint_tracer_primary(r->tracer, &scene->cam, scene->spp, nthreads,
+				   progress, &r->gb);
+	r->trace_seconds = glint_now() - t0;
+	if (ret < 0)
+		goto err;
+	return 0;
+err:
+	glint_renderer_release(r);
+	return ret;
+}
+
+void glint_renderer_release(struct glint_renderer *r)
+{
+	glint_gbuffer_free(&r->gb);
+	glint_tracer_free(r->tracer);
+	glint_envmap_free(r->env);
+	r->tracer = NULL;
+	r->env = NULL;
+}

@@ -1,0 +1,66 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_FIT_RENDER_H
+#define GLINT_FIT_RENDER_H
+
+/*
+ * Shading of a traced G-buffer under a distant environment map:
+ *   L_o(x, wo) = integral of L_env(wi) f(wo, wi) cos(theta_i) dwi,
+ * estimated with multiple importance sampling (balance heuristic) of
+ * env-map samples and BRDF samples, on fixed deterministic sample sets
+ * (the same inputs always give the same image).  Only direct light from the
+ * map: the sample is the only object.  Shadow rays are traced only when the
+ * scene is not a single convex sphere.
+ */
+
+#include "envmap.h"
+#include "model.h"
+#include "scene.h"
+#include "tracer.h"
+
+#include "core/image.h"
+#include "core/log.h"
+
+struct glint_shade_opts {
+	int light_samples; /* env-map samples per hit */
+	int brdf_samples;  /* BRDF samples per hit */
+	int background;	   /* misses show the env map (else black) */
+	int nthreads;	   /* 0 = all CPUs */
+	struct glint_progress *progress; /* may be NULL; counts rows */
+};
+
+/*
+ * Shade gb into out (gb->width x gb->height, allocated by the caller).
+ * coverage, if not NULL, receives the fraction of each pixel's samples that
+ * hit the sample (same value in R, G, B).  tracer is used for shadow rays
+ * and may be NULL for a convex scene.
+ */
+int glint_render_shade(const struct glint_gbuffer *gb,
+		       struct glint_tracer *tracer,
+		       const struct glint_envmap *env,
+		       const struct glint_model_ops *model, const double *params,
+		       const struct glint_shade_opts *opts,
+		       struct glint_image *out, struct glint_image *coverage);
+
+/* Radiance estimate for one hit (exposed for tests). */
+void glint_shade_hit(const struct glint_hit *h, uint32_t seed,
+		     struct glint_tracer *tracer,
+		     const struct glint_envmap *env,
+		     const struct glint_model_ops *model, const double *params,
+		     int nl, int nb, double rgb[3]);
+
+/* Everything a render needs, built from a scene. */
+struct glint_renderer {
+	struct glint_scene scene;
+	struct glint_envmap *env;
+	struct glint_tracer *tracer;
+	struct glint_gbuffer gb;
+	double trace_seconds;
+};
+
+/* Load the env map, build the tracer, trace the primary rays. */
+int glint_renderer_init(struct glint_renderer *r,
+			const struct glint_scene *scene, int nthreads,
+			struct glint_progress *progress);
+void glint_renderer_release(struct glint_renderer *r);
+
+#endif

@@ -1,0 +1,55 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_FIT_SAMPLING_H
+#define GLINT_FIT_SAMPLING_H
+
+/* Deterministic sample sequences: the same inputs give the same numbers. */
+
+#include <stdint.h>
+
+/* A well-mixed 32-bit hash (lowbias32 by C. Wellons). */
+static inline uint32_t glint_hash32(uint32_t x)
+{
+	x ^= x >> 16;
+	x *= 0x7feb352dU;
+	x ^= x >> 15;
+	x *= 0x846ca68bU;
+	x ^= x >> 16;
+	return x;
+}
+
+static inline uint32_t glint_hash3(uint32_t a, uint32_t b, uint32_t c)
+{
+	return glint_hash32(a ^ glint_hash32(b ^ glint_hash32(c)));
+}
+
+/* Uniform in [0, 1) from a hash. */
+static inline double glint_u01(uint32_t h)
+{
+	return (h >> 8) * (1.0 / 16777216.0);
+}
+
+/* Van der Corput radical inverse in base 2. */
+static inline double glint_radical2(uint32_t i)
+{
+	i = (i << 16) | (i >> 16);
+	i = ((i & 0x00ff00ffU) << 8) | ((i & 0xff00ff00U) >> 8);
+	i = ((i & 0x0f0f0f0fU) << 4) | ((i & 0xf0f0f0f0U) >> 4);
+	i = ((i & 0x33333333U) << 2) | ((i & 0xccccccccU) >> 2);
+	i = ((i & 0x55555555U) << 1) | ((i & 0xaaaaaaaaU) >> 1);
+	return i * (1.0 / 4294967296.0);
+}
+
+/*
+ * Point k of n of a 2-D Hammersley set, toroidally shifted by a per-sequence
+ * random offset (Cranley-Patterson rotation) seeded by `seed`.
+ */
+static inline void glint_hammersley(uint32_t k, uint32_t n, uint32_t seed,
+				    double u[2])
+{
+	double a = (k + 0.5) / n + glint_u01(glint_hash32(seed));
+	double b = glint_radical2(k) + glint_u01(glint_hash32(seed ^ 0x9e3779b9U));
+	u[0] = a - (int)a;
+	u[1] = b - (int)b;
+}
+
+#endif

@@ -1,0 +1,38 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_FIT_SCENE_H
+#define GLINT_FIT_SCENE_H
+
+/*
+ * A scene file (JSON, docs/scene.md): camera, sphere, environment map and
+ * render settings.  Lengths in metres except where a key says _mm or _um;
+ * angles in degrees; pixel coordinates with (0, 0) the top-left corner.
+ */
+
+#include "camera.h"
+
+#define GLINT_PATH_MAX 4096
+
+struct glint_scene {
+	struct glint_camera cam;
+	struct vec3 sphere_centre; /* metres, world */
+	double sphere_radius;	   /* metres */
+	char env_path[GLINT_PATH_MAX]; /* resolved against the scene's dir */
+	double env_rotation[3];	       /* degrees about X, Y, Z */
+	double env_scale;
+	int spp;	   /* primary samples per pixel */
+	int light_samples; /* env-map samples per hit */
+	int brdf_samples;  /* BRDF samples per hit */
+};
+
+/* Defaults: see docs/scene.md. */
+void glint_scene_defaults(struct glint_scene *s);
+
+/* Parse and validate a scene file; messages name the key and bounds. */
+int glint_scene_load(const char *path, struct glint_scene *s);
+
+/* Parse from an already loaded document; `dir` resolves relative paths. */
+struct json_t;
+int glint_scene_from_json(const char *file, const char *dir,
+			  struct json_t *root, struct glint_scene *s);
+
+#endif

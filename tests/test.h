@@ -1,0 +1,89 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_TESTS_TEST_H
+#define GLINT_TESTS_TEST_H
+
+/*
+ * Minimal test helpers: each CHECK prints the numbers it saw and counts a
+ * failure; a test program returns 1 if any check failed, 77 to skip.
+ */
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+static int test_failures;
+static int test_checks;
+
+#define CHECK(cond, ...)                                                    \
+	do {                                                                \
+		test_checks++;                                              \
+		if (!(cond)) {                                              \
+			fprintf(stderr, "%s:%d: CHECK(%s) failed: ",        \
+				__FILE__, __LINE__, #cond);                 \
+			fprintf(stderr, __VA_ARGS__);                       \
+			fputc('\n', stderr);                                \
+			test_failures++;                                    \
+		}                                                           \
+	} while (0)
+
+#define CHECK_NEAR(a, b, tol, what)                                         \
+	CHECK(fabs((double)(a) - (double)(b)) <= (tol),                     \
+	      "%s: got %.9g, expected %.9g +- %.3g", what, (double)(a),     \
+	      (double)(b), (double)(tol))
+
+/* An error message must contain each of the given fragments. */
+#define CHECK_MSG(msg, frag)                                                \
+	CHECK(strstr((msg), (frag)) != NULL, "message '%s' lacks '%s'",    \
+	      (msg), (frag))
+
+#define RUN(fn)                                                             \
+	do {                                                                \
+		int before = test_failures;                                 \
+		fn();                                                       \
+		fprintf(stderr, "%s %s\n",                                  \
+			test_failures == before ? "ok  " : "FAIL", #fn);    \
+	} while (0)
+
+static inline int test_result(void)
+{
+	fprintf(stderr, "%d checks, %d failed\n", test_checks, test_failures);
+	return test_failures ? 1 : 0;
+}
+
+/* Path of a file in ../shared/data, or NULL (and a note) if absent. */
+static inline const char *shared_file(const char *rel)
+{
+	static char buf[4096];
+	snprintf(buf, sizeof(buf), "%s/%s", GLINT_SHARED_DATA, rel);
+	if (access(buf, R_OK) != 0)
+		return NULL;
+	return buf;
+}
+
+/* A scratch directory for the test's files (removed by the OS's tmp). */
+static inline const char *test_tmpdir(void)
+{
+	static char dir[256];
+	if (!dir[0]) {
+		snprintf(dir, sizeof(dir), "%s/glint-test-XXXXXX",
+			 getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp");
+		if (!mkdtemp(dir)) {
+			perror("mkdtemp");
+			exit(1);
+		}
+	}
+	return dir;
+}
+
+static inline const char *tmp_path(const char *name)
+{
+	static char buf[8][512];
+	static int k;
+	k = (k + 1) % 8;
+	snprintf(buf[k], sizeof(buf[k]), "%s/%s", test_tmpdir(), name);
+	return buf[k];
+}
+
+#endif

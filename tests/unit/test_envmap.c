@@ -1,0 +1,189 @@
+/* SPDX-License-Identifier: MIT */
+/* Environment map: lookup, rotation, importance sampling and its pdf. */
+#include "chisq.h"
+#include "test.h"
+
+#include "core/error.h"
+#include "fit/envmap.h"
+#include "fit/sampling.h"
+
+/* A synthetic map with a small bright "sun", a sky gradient, dark ground. */
+static struct glint_envmap *make_env(int w, int h, const double rot[3])
+{
+	struct glint_image *img = glint_image_new(w, h);
+	struct glint_envmap *env;
+	for (int y = 0; y < h; y++)
+		for (int x = 0; x < w; x++) {
+			float *p = glint_image_px(img, x, y);
+			double v = (y + 0.5) / h;
+			p[0] = (float)(v < 0.5 ? 1.0 - v : 0.1);
+			p[1] = (float)(v < 0.5 ? 0.8 : 0.05 * (x % 3));
+			p[2] = (float)(v < 0.5 ? 1.5 : 0.02);
+		}
+	for (int c = 0; c < 3; c++)
+		glint_image_px(img, w / 3, h / 4)[c] = 500;
+	if (glint_envmap_new(img, rot, 1.0, "synthetic", &env) < 0)
+		return NULL;
+	return env;
+}
+
+static void test_uv_dir(void)
+{
+	struct vec3 d = glint_envmap_uv_to_dir(0.5, 0.5);
+	CHECK_NEAR(d.z, -1, 1e-12, "u=v=0.5 is -Z");
+	d = glint_envmap_uv_to_dir(0.5, 0.0);
+	CHECK_NEAR(d.y, 1, 1e-12, "v=0 is +Y");
+	d = glint_envmap_uv_to_dir(0.75, 0.5);
+	CHECK_NEAR(d.x, 1, 1e-12, "u=0.75 is +X");
+	for (int i = 0; i < 100; i++) {
+		double u = glint_u01(glint_hash32(i)), v = glint_u01(
+							      glint_hash32(i + 999));
+		double u2, v2;
+		glint_envmap_dir_to_uv(glint_envmap_uv_to_dir(u, v), &u2, &v2);
+		CHECK(fabs(u - u2) < 1e-9 && fabs(v - v2) < 1e-9,
+		      "uv round trip (%g,%g) -> (%g,%g)", u, v, u2, v2);
+	}
+}
+
+static void test_lookup(void)
+{
+	double zero[3] = { 0, 0, 0 }, rgb[3];
+	struct glint_envmap *env = make_env(64, 32, zero);
+	/* At a texel centre the bilinear lookup returns the texel. */
+	struct vec3 d = glint_envmap_uv_to_dir((64 / 3 + 0.5) / 64,
+					       (32 / 4 + 0.5) / 32);
+	glint_envmap_lookup(env, d, rgb);
+	CHECK_NEAR(rgb[0], 500, 1e-3, "texel centre");
+	/* Halfway between two texels: their mean. */
+	d = glint_envmap_uv_to_dir((64 / 3 + 1.0) / 64, (32 / 4 + 0.5) / 32);
+	glint_envmap_lookup(env, d, rgb);
+	float *a = glint_image_px(env->img, 64 / 3 + 1, 32 / 4);
+	CHECK_NEAR(rgb[2], (500 + a[2]) / 2, 1e-3, "bilinear midpoint");
+	glint_envmap_free(env);
+
+	/* A rotated map seen along R d equals the plain map along d. */
+	double rot[3] = { 20, -70, 35 };
+	struct glint_envmap *plain = make_env(64, 32, zero);
+	struct glint_envmap *turned = make_env(64, 32, rot);
+	for (int i = 0; i < 200; i++) {
+		struct vec3 dd = glint_envmap_uv_to_dir(
+			glint_u01(glint_hash32(3 * i)),
+			glint_u01(glint_hash32(3 * i + 1)));
+		double p1[3], p2[3];
+		glint_envmap_lookup(plain, dd, p1);
+		glint_envmap_lookup(turned, m3_mul(&turned->rot, dd), p2);
+		CHECK(fabs(p1[0] - p2[0]) < 1e-6 * (1 + p1[0]),
+		      "rotation: %g vs %g", p1[0], p2[0]);
+	}
+	glint_envmap_free(plain);
+	glint_envmap_free(turned);
+}
+
+/* The pdf integrates to 1 over the sphere (midpoint rule in u, v). */
+static void test_pdf_integrates(void)
+{
+	double rot[3] = { 10, 40, 0 };
+	struct glint_envmap *env = make_env(64, 32, rot);
+	int n = 512, m = 256;
+	double sum = 0;
+	for (int j = 0; j < m; j++) {
+		double v = (j + 0.5) / m, s = sin(M_PI * v);
+		for (int i = 0; i < n; i++) {
+			struct vec3 d = m3_mul(&env->rot, glint_envmap_uv_to_dir(
+								  (i + 0.5) / n, v));
+			sum += glint_envmap_pdf(env, d) * s;
+		}
+	}
+	sum *= (2 * M_PI / n) * (M_PI / m);
+	CHECK_NEAR(sum, 1.0, 2e-3, "integral of the pdf over the sphere");
+	glint_envmap_free(env);
+}
+
+/* Samples return the pdf glint_envmap_pdf gives, and their histogram
+ * over texels matches the pdf (chi-square). */
+static void test_sampling_histogram(void)
+{
+	double rot[3] = { 0, 30, 0 };
+	int w = 32, h = 16, ns = 200000;
+	struct glint_envmap *env = make_env(w, h, rot);
+	double *obs = calloc((size_t)w * h, sizeof(double));
+	double *expc = calloc((size_t)w * h, sizeof(double));
+	int mismatched = 0;
+
+	for (int k = 0; k < ns; k++) {
+		struct vec3 d;
+		double u1 = glint_u01(glint_hash32(2 * k + 1));
+		double u2 = glint_u01(glint_hash32(2 * k + 7777));
+		double pdf = glint_envmap_sample(env, u1, u2, &d);
+		double p2 = glint_envmap_pdf(env, d);
+		if (fabs(pdf - p2) > 1e-6 * pdf)
+			mismatched++;
+		double u, v;
+		glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
+		int i = (int)(u * w), j = (int)(v * h);
+		i = i >= w ? w - 1 : i;
+		j = j >= h ? h - 1 : j;
+		obs[j * w + i] += 1;
+	}
+	/* Expected count per texel: ns * integral of the pdf over it. */
+	for (int j = 0; j < h; j++)
+		for (int i = 0; i < w; i++) {
+			double acc = 0;
+			for (int b = 0; b < 8; b++)
+				for (int a = 0; a < 8; a++) {
+					double u = (i + (a + 0.5) / 8) / w;
+					double v = (j + (b + 0.5) / 8) / h;
+					struct vec3 d = m3_mul(
+						&env->rot,
+						glint_envmap_uv_to_dir(u, v));
+					acc += glint_envmap_pdf(env, d) *
+					       sin(M_PI * v);
+				}
+			expc[j * w + i] = ns * acc / 64 * (2 * M_PI / w) *
+					  (M_PI / h);
+		}
+	int dof;
+	double p = chisq_test(obs, expc, w * h, &dof);
+	CHECK(mismatched == 0, "%d samples whose pdf differs from pdf()",
+	      mismatched);
+	CHECK(p > 1e-3, "chi-square p-value %g (dof %d)", p, dof);
+	free(obs);
+	free(expc);
+	glint_envmap_free(env);
+}
+
+static void test_bad_maps(void)
+{
+	struct glint_envmap *env;
+	struct glint_image *img = glint_image_new(8, 4);
+	glint_image_px(img, 2, 1)[2] = NAN;
+	CHECK(glint_envmap_new(img, NULL, 1, "nan.hdr", &env) == -EINVAL,
+	      "NaN map accepted");
+	CHECK_MSG(glint_error_msg(), "nan.hdr: pixel (2, 1) channel B");
+	img = glint_image_new(8, 4);
+	glint_image_px(img, 0, 0)[0] = -1;
+	CHECK(glint_envmap_new(img, NULL, 1, "neg.hdr", &env) == -EINVAL,
+	      "negative radiance accepted");
+	CHECK_MSG(glint_error_msg(), "non-negative");
+	/* An all-black map is legal; sampling reports pdf 0. */
+	img = glint_image_new(8, 4);
+	CHECK(glint_envmap_new(img, NULL, 1, "black", &env) == 0, "%s",
+	      glint_error_msg());
+	struct vec3 d;
+	CHECK(glint_envmap_sample(env, 0.3, 0.3, &d) == 0,
+	      "black map sampled with pdf > 0");
+	glint_envmap_free(env);
+	CHECK(glint_envmap_load("/no/such/map.hdr", NULL, 1, &env) < 0,
+	      "missing map loaded");
+	CHECK_MSG(glint_error_msg(), "/no/such/map.hdr");
+}
+
+int main(void)
+{
+	RUN(test_uv_dir);
+	RUN(test_lookup);
+	RUN(test_pdf_integrates);
+	RUN(test_sampling_histogram);
+	RUN(test_bad_maps);
+	return test_result();
+}

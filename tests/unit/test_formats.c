@@ -1,0 +1,420 @@
+/* SPDX-License-Identifier: MIT */
+/* Image formats: round trips, the DWAB fallback, and bad input. */
+#include "test.h"
+
+#include "core/error.h"
+#include "core/formats.h"
+#include "core/image.h"
+
+#include <OpenEXR/openexr.h>
+#include <dirent.h>
+#include <png.h>
+#include <stdint.h>
+
+/* A test card over 7 decades, with exact zeros. */
+static struct glint_image *card(int w, int h)
+{
+	struct glint_image *img = glint_image_new(w, h);
+	for (int y = 0; y < h; y++)
+		for (int x = 0; x < w; x++) {
+			float *p = glint_image_px(img, x, y);
+			p[0] = (float)(1e-3 * pow(10, 7.0 * x / w));
+			p[1] = (float)((x + y) % 5 == 0 ? 0 : 0.01 * (y + 1));
+			p[2] = (float)(0.5 + 0.25 * sin(x * 0.3 + y));
+		}
+	return img;
+}
+
+static double max_rel_err(const struct glint_image *a,
+			  const struct glint_image *b, double floor)
+{
+	double worst = 0;
+	for (size_t i = 0; i < (size_t)a->width * a->height * 3; i++) {
+		double d = fabs(a->data[i] - b->data[i]) /
+			   fmax(fabs(a->data[i]), floor);
+		worst = fmax(worst, d);
+	}
+	return worst;
+}
+
+static void test_exr_float_roundtrip(void)
+{
+	struct glint_image *a = card(97, 61), *b = NULL;
+	const char *p = tmp_path("f.exr");
+	CHECK(glint_exr_write(p, a, 0) == 0, "%s", glint_error_msg());
+	CHECK(glint_image_read(p, &b) == 0, "%s", glint_error_msg());
+	if (b) {
+		CHECK(b->width == 97 && b->height == 61, "%dx%d", b->width,
+		      b->height);
+		CHECK(memcmp(a->data, b->data, 97 * 61 * 3 * 4) == 0,
+		      "float EXR round trip is not exact");
+	}
+	glint_image_free(a);
+	glint_image_free(b);
+}
+
+static void test_exr_half_roundtrip(void)
+{
+	struct glint_image *a = card(64, 40), *b = NULL;
+	const char *p = tmp_path("h.exr");
+	CHECK(glint_exr_write(p, a, 1) == 0, "%s", glint_error_msg());
+	CHECK(glint_image_read(p, &b) == 0, "%s", glint_error_msg());
+	/* Half has an 11-bit significand: relative error <= 2^-11 for
+	 * normal values (>= 6.1e-5); below that the spacing is 6e-8. */
+	if (b)
+		CHECK(max_rel_err(a, b, 6.1e-5) <= 1.0 / 2048 + 1e-9,
+		      "half round trip error %g",
+		      max_rel_err(a, b, 6.1e-5));
+	glint_image_free(a);
+	glint_image_free(b);
+}
+
+/* Write a tiled, ZIP-compressed EXR with the C API (tiles 16x16). */
+static int write_tiled(const char *path, const struct glint_image *img)
+{
+	exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+	exr_context_t ctx;
+	exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
+	int part, first = 1;
+	const char *names[3] = { "B", "G", "R" };
+	const int slot[3] = { 2, 1, 0 };
+
+	if (exr_start_write(&ctx, path, EXR_WRITE_FILE_DIRECTLY, &init))
+		return -1;
+	exr_add_part(ctx, "tiled", EXR_STORAGE_TILED, &part);
+	exr_initialize_required_attr_simple(ctx, part, img->width, img->height,
+					    EXR_COMPRESSION_ZIP);
+	exr_set_tile_descriptor(ctx, part, 16, 16, EXR_TILE_ONE_LEVEL,
+				EXR_TILE_ROUND_DOWN);
+	for (int c = 0; c < 3; c++)
+		exr_add_channel(ctx, part, names[c], EXR_PIXEL_FLOAT,
+				EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+	if (exr_write_header(ctx))
+		return -1;
+	int nx = (img->width + 15) / 16, ny = (img->height + 15) / 16;
+	for (int ty = 0; ty < ny; ty++)
+		for (int tx = 0; tx < nx; tx++) {
+			exr_chunk_info_t ci;
+			exr_write_tile_chunk_info(ctx, part, tx, ty, 0, 0, &ci);
+			if (first)
+				exr_encoding_initialize(ctx, part, &ci, &enc);
+			else
+				exr_encoding_update(ctx, part, &ci, &enc);
+			for (int c = 0; c < enc.channel_count; c++) {
+				int s = 0;
+				for (int k = 0; k < 3; k++)
+					if (!strcmp(enc.channels[c].channel_name,
+						    names[k]))
+						s = slot[k];
+				enc.channels[c].encode_from_ptr =
+					(const uint8_t *)(glint_image_px(
+								  img, tx * 16,
+								  ty * 16) +
+							  s);
+				enc.channels[c].user_pixel_stride = 12;
+				enc.channels[c].user_line_stride =
+					12 * img->width;
+				enc.channels[c].user_data_type =
+					EXR_PIXEL_FLOAT;
+				enc.channels[c].user_bytes_per_element = 4;
+			}
+			if (first)
+				exr_encoding_choose_default_routines(ctx, part,
+								     &enc);
+			first = 0;
+			if (exr_encoding_run(ctx, part, &enc))
+				return -1;
+		}
+	exr_encoding_destroy(ctx, &enc);
+	return exr_finish(&ctx) ? -1 : 0;
+}
+
+static void test_exr_tiled_read(void)
+{
+	struct glint_image *a = card(50, 37), *b = NULL;
+	const char *p = tmp_path("tiled.exr");
+	CHECK(write_tiled(p, a) == 0, "could not write the tiled test file");
+	CHECK(glint_image_read(p, &b) == 0, "%s", glint_error_msg());
+	if (b)
+		CHECK(b->width == 50 && b->height == 37 &&
+			      !memcmp(a->data, b->data, 50 * 37 * 12),
+		      "tiled read differs (%dx%d)", b->width, b->height);
+	glint_image_free(a);
+	glint_image_free(b);
+}
+
+/* Blender's studio light map (CC0), DWAB-compressed: C core can't. */
+static void test_exr_dwab(void)
+{
+	struct glint_image *img = NULL;
+	const char *p = GLINT_TEST_DATA "/studio_dwab.exr";
+	CHECK(glint_image_read(p, &img) == 0, "%s", glint_error_msg());
+	if (!img)
+		return;
+	CHECK(img->width == 1024 && img->height == 512, "size %dx%d",
+	      img->width, img->height);
+	double sum = 0, mx = 0;
+	int bad = 0;
+	for (size_t i = 0; i < (size_t)img->width * img->height * 3; i++) {
+		bad += !isfinite(img->data[i]);
+		sum += img->data[i];
+		mx = fmax(mx, img->data[i]);
+	}
+	double mean = sum / (img->width * img->height * 3.0);
+	CHECK(bad == 0, "%d non-finite values", bad);
+	CHECK(mean > 0.01 && mean < 100 && mx > 2 * mean,
+	      "implausible radiance: mean %g max %g", mean, mx);
+	glint_image_free(img);
+}
+
+static void test_rgbe_roundtrip(void)
+{
+	int widths[2] = { 123, 5 }; /* RLE scanlines, and flat (< 8) */
+	for (int k = 0; k < 2; k++) {
+		struct glint_image *a = card(widths[k], 17), *b = NULL;
+		const char *p = tmp_path("r.hdr");
+		CHECK(glint_rgbe_write(p, a) == 0, "%s", glint_error_msg());
+		CHECK(glint_image_read(p, &b) == 0, "%s", glint_error_msg());
+		if (!b)
+			continue;
+		/* RGBE: 8-bit mantissa shared by the pixel's largest
+		 * channel; error <= 1/256 of that channel (+ half a step). */
+		double worst = 0;
+		for (int i = 0; i < widths[k] * 17; i++) {
+			const float *pa = a->data + 3 * i, *pb = b->data + 3 * i;
+			double m = fmax(pa[0], fmax(pa[1], pa[2]));
+			for (int c = 0; c < 3; c++)
+				worst = fmax(worst, fabs(pa[c] - pb[c]) / m);
+		}
+		CHECK(worst <= 1.0 / 256, "width %d: RGBE error %g of max",
+		      widths[k], worst);
+		glint_image_free(a);
+		glint_image_free(b);
+	}
+}
+
+static void test_pfm_roundtrip(void)
+{
+	struct glint_image *a = card(31, 7), *b = NULL;
+	const char *p = tmp_path("x.pfm");
+	CHECK(glint_pfm_write(p, a) == 0, "%s", glint_error_msg());
+	CHECK(glint_image_read(p, &b) == 0, "%s", glint_error_msg());
+	if (b)
+		CHECK(!memcmp(a->data, b->data, 31 * 7 * 12),
+		      "PFM round trip is not exact");
+	glint_image_free(b);
+
+	/* Big-endian grey map written by hand: rows bottom to top. */
+	FILE *fp = fopen(tmp_path("be.pfm"), "wb");
+	fprintf(fp, "Pf\n2 2\n1.0\n");
+	float v[4] = { 1, 2, 3, 4 };
+	for (int i = 0; i < 4; i++) {
+		uint8_t *q = (uint8_t *)&v[i];
+		fputc(q[3], fp);
+		fputc(q[2], fp);
+		fputc(q[1], fp);
+		fputc(q[0], fp);
+	}
+	fclose(fp);
+	CHECK(glint_image_read(tmp_path("be.pfm"), &b) == 0, "%s",
+	      glint_error_msg());
+	if (b) {
+		CHECK(glint_image_px(b, 0, 1)[0] == 1 &&
+			      glint_image_px(b, 1, 0)[2] == 4,
+		      "big-endian grey PFM read wrong: %g %g",
+		      glint_image_px(b, 0, 1)[0], glint_image_px(b, 1, 0)[2]);
+	}
+	glint_image_free(a);
+	glint_image_free(b);
+}
+
+static void test_png_tonemap(void)
+{
+	struct glint_image *a = glint_image_new(4, 2);
+	png_image pi;
+	uint8_t buf[4 * 2 * 3];
+
+	for (int i = 0; i < 8; i++) {
+		float *p = a->data + 3 * i;
+		p[0] = p[1] = p[2] = (float)(i * 0.125);
+	}
+	CHECK(glint_png_write(tmp_path("t.png"), a, 1.0) == 0, "%s",
+	      glint_error_msg());
+	memset(&pi, 0, sizeof(pi));
+	pi.version = PNG_IMAGE_VERSION;
+	CHECK(png_image_begin_read_from_file(&pi, tmp_path("t.png")),
+	      "libpng cannot read our PNG");
+	pi.format = PNG_FORMAT_RGB;
+	CHECK(png_image_finish_read(&pi, NULL, buf, 0, NULL),
+	      "libpng cannot decode our PNG");
+	/* Pixel 2: 0.25 * 2^1 = 0.5 linear -> sRGB 0.7354 -> 188. */
+	CHECK(buf[2 * 3] == 188, "0.5 linear gave %d, expected 188",
+	      buf[2 * 3]);
+	/* Pixel 5: 0.625 * 2 clips to 255. */
+	CHECK(buf[5 * 3] == 255, "clipped value gave %d", buf[5 * 3]);
+	CHECK(buf[0] == 0, "black gave %d", buf[0]);
+	glint_image_free(a);
+}
+
+static long file_size(const char *p)
+{
+	FILE *fp = fopen(p, "rb");
+	fseek(fp, 0, SEEK_END);
+	long n = ftell(fp);
+	fclose(fp);
+	return n;
+}
+
+static void copy_prefix(const char *src, const char *dst, long n)
+{
+	FILE *in = fopen(src, "rb"), *out = fopen(dst, "wb");
+	for (long i = 0; i < n; i++) {
+		int c = fgetc(in);
+		if (c == EOF)
+			break;
+		fputc(c, out);
+	}
+	fclose(in);
+	fclose(out);
+}
+
+static void scribble(const char *p, long at, int n)
+{
+	FILE *fp = fopen(p, "r+b");
+	fseek(fp, at, SEEK_SET);
+	for (int i = 0; i < n; i++)
+		fputc(0xA5 ^ (i * 37), fp);
+	fclose(fp);
+}
+
+static void expect_read_error(const char *p, const char *frag)
+{
+	struct glint_image *img = NULL;
+	int ret = glint_image_read(p, &img);
+	CHECK(ret < 0 && img == NULL, "reading %s succeeded", p);
+	CHECK_MSG(glint_error_msg(), p);
+	if (frag)
+		CHECK_MSG(glint_error_msg(), frag);
+	glint_image_free(img);
+}
+
+static void test_bad_exr(void)
+{
+	struct glint_image *a = card(128, 128);
+	const char *good = tmp_path("good.exr");
+	glint_exr_write(good, a, 0);
+	long n = file_size(good);
+
+	copy_prefix(good, tmp_path("trunc.exr"), n * 6 / 10);
+	expect_read_error(tmp_path("trunc.exr"), NULL);
+	copy_prefix(good, tmp_path("hdr.exr"), 40);
+	expect_read_error(tmp_path("hdr.exr"), NULL);
+	copy_prefix(good, tmp_path("corrupt.exr"), n);
+	scribble(tmp_path("corrupt.exr"), n / 2, 200);
+	expect_read_error(tmp_path("corrupt.exr"), NULL);
+	FILE *fp = fopen(tmp_path("text.exr"), "w");
+	fputs("this is not an EXR file at all\n", fp);
+	fclose(fp);
+	expect_read_error(tmp_path("text.exr"), "not a readable OpenEXR");
+	expect_read_error(tmp_path("missing.exr"), "cannot open");
+	glint_image_free(a);
+}
+
+static void test_bad_rgbe(void)
+{
+	struct glint_image *a = card(100, 20);
+	const char *good = tmp_path("good.hdr");
+	glint_rgbe_write(good, a);
+	long n = file_size(good);
+
+	copy_prefix(good, tmp_path("trunc.hdr"), n - 300);
+	expect_read_error(tmp_path("trunc.hdr"), "truncated in pixel row");
+	copy_prefix(good, tmp_path("nores.hdr"), 30);
+	expect_read_error(tmp_path("nores.hdr"), NULL);
+	/* A run length of 0 right after the first scanline header. */
+	copy_prefix(good, tmp_path("rle.hdr"), n);
+	long hdr = n;
+	{
+		FILE *fp = fopen(good, "rb");
+		char line[256];
+		while (fgets(line, sizeof(line), fp))
+			if (line[0] == '-') {
+				hdr = ftell(fp);
+				break;
+			}
+		fclose(fp);
+	}
+	FILE *fp = fopen(tmp_path("rle.hdr"), "r+b");
+	fseek(fp, hdr + 4, SEEK_SET);
+	fputc(0, fp);
+	fclose(fp);
+	expect_read_error(tmp_path("rle.hdr"), "corrupt run length");
+	fp = fopen(tmp_path("xyz.hdr"), "w");
+	fputs("#?RADIANCE\nFORMAT=32-bit_rle_xyze\n\n-Y 2 +X 2\n", fp);
+	fclose(fp);
+	expect_read_error(tmp_path("xyz.hdr"), "FORMAT=32-bit_rle_rgbe");
+	glint_image_free(a);
+}
+
+static void test_bad_pfm(void)
+{
+	struct glint_image *a = card(20, 20);
+	glint_pfm_write(tmp_path("g.pfm"), a);
+	copy_prefix(tmp_path("g.pfm"), tmp_path("t.pfm"),
+		    file_size(tmp_path("g.pfm")) - 10);
+	expect_read_error(tmp_path("t.pfm"), "truncated");
+	FILE *fp = fopen(tmp_path("h.pfm"), "w");
+	fputs("P6\n2 2\n255\n", fp);
+	fclose(fp);
+	expect_read_error(tmp_path("h.pfm"), "bad PFM header");
+	glint_image_free(a);
+}
+
+static void test_nonfinite(void)
+{
+	struct glint_image *a = card(8, 8);
+	glint_image_px(a, 3, 2)[1] = NAN;
+	glint_image_px(a, 5, 5)[0] = INFINITY;
+	CHECK(glint_image_check_finite(a, "probe.exr", 0) == -EINVAL,
+	      "NaN not caught");
+	CHECK_MSG(glint_error_msg(), "probe.exr: pixel (3, 2) channel G");
+	CHECK_MSG(glint_error_msg(), "2 bad values");
+	glint_image_free(a);
+}
+
+static void test_write_errors(void)
+{
+	struct glint_image *a = card(8, 8);
+	CHECK(glint_image_write("/nonexistent-dir/x.exr", a, NULL) < 0,
+	      "write into a missing folder succeeded");
+	CHECK_MSG(glint_error_msg(), "/nonexistent-dir/x.exr");
+	CHECK(glint_image_write(tmp_path("x.tiff"), a, NULL) < 0,
+	      "unknown extension accepted");
+	CHECK_MSG(glint_error_msg(), "unknown image extension");
+	/* No temporary files are left behind. */
+	DIR *d = opendir(test_tmpdir());
+	struct dirent *e;
+	int leftovers = 0;
+	while ((e = readdir(d)))
+		leftovers += strstr(e->d_name, ".tmp.") != NULL;
+	closedir(d);
+	CHECK(leftovers == 0, "%d temporary files left", leftovers);
+	glint_image_free(a);
+}
+
+int main(void)
+{
+	RUN(test_exr_float_roundtrip);
+	RUN(test_exr_half_roundtrip);
+	RUN(test_exr_tiled_read);
+	RUN(test_exr_dwab);
+	RUN(test_rgbe_roundtrip);
+	RUN(test_pfm_roundtrip);
+	RUN(test_png_tonemap);
+	RUN(test_bad_exr);
+	RUN(test_bad_rgbe);
+	RUN(test_bad_pfm);
+	RUN(test_nonfinite);
+	RUN(test_write_errors);
+	return test_result();
+}

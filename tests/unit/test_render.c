@@ -1,0 +1,352 @@
+/* SPDX-License-Identifier: MIT */
+/* Tracer and shading: furnace tests, silhouettes, camera geometry. */
+#include "quadrature.h"
+#include "test.h"
+
+#include "core/error.h"
+#include "fit/render.h"
+
+static struct glint_envmap *constant_env(double l)
+{
+	struct glint_image *img = glint_image_new(16, 8);
+	struct glint_envmap *env = NULL;
+	for (int i = 0; i < 16 * 8 * 3; i++)
+		img->data[i] = (float)l;
+	glint_envmap_new(img, NULL, 1, "constant", &env);
+	return env;
+}
+
+/* Camera at the origin looking down -Z; fpx pixels of focal length. */
+static void make_camera(struct glint_camera *cam, int w, int h, double fpx,
+			double fnum, double focus)
+{
+	double pitch = 1e-5;
+	glint_camera_init(cam, w, h, fpx * pitch, pitch, fnum, focus,
+			  v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
+}
+
+struct setup {
+	struct glint_camera cam;
+	struct glint_tracer *t;
+	struct glint_gbuffer gb;
+};
+
+static void setup_sphere(struct setup *s, struct vec3 c, double r, int spp)
+{
+	glint_tracer_new(&s->t);
+	glint_tracer_add_sphere(s->t, c, r, GLINT_SPHERE_USER);
+	glint_tracer_commit(s->t);
+	CHECK(glint_tracer_primary(s->t, &s->cam, spp, 0, NULL, &s->gb) == 0,
+	      "%s", glint_error_msg());
+}
+
+static void teardown(struct setup *s)
+{
+	glint_gbuffer_free(&s->gb);
+	glint_tracer_free(s->t);
+}
+
+/* Lambertian sphere under constant radiance L renders kd L. */
+static void test_furnace_lambert(void)
+{
+	struct setup s;
+	struct glint_envmap *env = constant_env(0.7);
+	double kd[3] = { 0.2, 0.5, 0.8 };
+	make_camera(&s.cam, 48, 48, 60, 0, 0);
+	setup_sphere(&s, v3(0, 0, -3), 1, 4);
+	struct glint_image *img = glint_image_new(48, 48);
+	struct glint_image *cov = glint_image_new(48, 48);
+
+	/* Cosine sampling alone is exact for this integrand. */
+	struct glint_shade_opts o = { .light_samples = 0, .brdf_samples = 8 };
+	glint_render_shade(&s.gb, s.t, env, &glint_model_lambert, kd, &o, img,
+			   cov);
+	int covered = 0, bad = 0;
+	for (int i = 0; i < 48 * 48; i++) {
+		if (cov->data[3 * i] < 1)
+			continue;
+		covered++;
+		for (int c = 0; c < 3; c++)
+			bad += fabs(img->data[3 * i + c] - kd[c] * 0.7) > 1e-5;
+	}
+	CHECK(covered > 300 && bad == 0,
+	      "BRDF sampling: %d of %d covered pixels off kd L", bad, covered);
+
+	/* Multiple importance sampling: unbiased, small noise. */
+	o = (struct glint_shade_opts){ .light_samples = 32,
+				       .brdf_samples = 32 };
+	glint_render_shade(&s.gb, s.t, env, &glint_model_lambert, kd, &o, img,
+			   cov);
+	double sum[3] = { 0 }, worst = 0;
+	for (int i = 0; i < 48 * 48; i++) {
+		if (cov->data[3 * i] < 1)
+			continue;
+		for (int c = 0; c < 3; c++) {
+			sum[c] += img->data[3 * i + c];
+			worst = fmax(worst, fabs(img->data[3 * i + c] /
+							 (kd[c] * 0.7) -
+						 1));
+		}
+	}
+	for (int c = 0; c < 3; c++)
+		CHECK_NEAR(sum[c] / covered, kd[c] * 0.7, 2e-3 * kd[c],
+			   "MIS mean over covered pixels");
+	CHECK(worst < 0.03, "MIS worst pixel off by %.3g", worst);
+	glint_image_free(img);
+	glint_image_free(cov);
+	glint_envmap_free(env);
+	teardown(&s);
+}
+
+/* Torrance-Sparrow in a white furnace: the renderer's Monte Carlo
+ * estimate matches an independent quadrature of the BRDF, and no pixel
+ * exceeds 1. */
+static void test_furnace_ts(void)
+{
+	struct setup s;
+	struct glint_envmap *env = constant_env(1.0);
+	double p[8] = { 0, 0, 0, 1, 1, 1, 0.2, 2.34 };
+	make_camera(&s.cam, 40, 40, 50, 0, 0);
+	setup_sphere(&s, v3(0, 0, -3), 1, 1);
+	double worst = 0;
+	int checked = 0;
+	for (int y = 4; y < 40; y += 5)
+		for (int x = 4; x < 40; x += 5) {
+			const struct glint_hit *h = &s.gb.hits[y * 40 + x];
+			if (h->geom < 0)
+				continue;
+			struct vec3 n = v3(h->n[0], h->n[1], h->n[2]), t, b;
+			struct vec3 wo = v3(-h->d[0], -h->d[1], -h->d[2]);
+			v3_frame(n, &t, &b);
+			struct vec3 wl = v3(v3_dot(wo, t), v3_dot(wo, b),
+					    v3_dot(wo, n));
+			double mc[3], q[3];
+			glint_shade_hit(h, 1234u + x * 7 + y, NULL, env,
+					&glint_model_torrance_sparrow, p, 512,
+					512, mc);
+			albedo_quadrature(&glint_model_torrance_sparrow, p, wl,
+					  q);
+			worst = fmax(worst, fabs(mc[0] - q[0]) / q[0]);
+			CHECK(fabs(mc[0] - q[0]) <= 0.02 * q[0] + 1e-4,
+			      "pixel (%d,%d) cos_o %.3f: MC %g, quadrature %g",
+			      x, y, wl.z, mc[0], q[0]);
+			checked++;
+		}
+	fprintf(stderr, "  %d pixels, worst relative difference %.4f\n",
+		checked, worst);
+
+	struct glint_image *img = glint_image_new(40, 40);
+	double q[8] = { 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.1, 5 };
+	struct glint_shade_opts o = { .light_samples = 32, .brdf_samples = 32 };
+	glint_render_shade(&s.gb, s.t, env, &glint_model_torrance_sparrow, q,
+			   &o, img, NULL);
+	double mx = 0;
+	for (int i = 0; i < 40 * 40 * 3; i++)
+		mx = fmax(mx, img->data[i]);
+	/* Misses see the furnace itself (1.0); the sphere must not glow. */
+	CHECK(mx <= 1.0 + 1e-6, "furnace pixel %g > 1", mx);
+	glint_image_free(img);
+	glint_envmap_free(env);
+	teardown(&s);
+}
+
+static int inside_ellipse(const struct glint_ellipse *e, double x, double y)
+{
+	double dx = x - e->cx, dy = y - e->cy;
+	double c = cos(e->angle), s = sin(e->angle);
+	double u = c * dx + s * dy, v = -s * dx + c * dy;
+	return (u * u) / (e->a * e->a) + (v * v) / (e->b * e->b) <= 1;
+}
+
+/* Coverage = fraction of a pixel's samples on the sphere. */
+static void coverage(struct setup *s, double *cov)
+{
+	int n = s->cam.width * s->cam.height;
+	for (int i = 0; i < n; i++) {
+		int hits = 0;
+		for (int k = 0; k < s->gb.spp; k++)
+			hits += s->gb.hits[(size_t)i * s->gb.spp + k].geom >= 0;
+		cov[i] = (double)hits / s->gb.spp;
+	}
+}
+
+static void test_silhouette(void)
+{
+	struct setup s;
+	struct vec3 c = v3(0.45, -0.3, -2.2), back;
+	double r = 0.25;
+	struct glint_ellipse e;
+	int w = 200, h = 150;
+	make_camera(&s.cam, w, h, 260, 0, 0);
+	CHECK(glint_camera_sphere_ellipse(&s.cam, c, r, &e) == 0, "%s",
+	      glint_error_msg());
+	CHECK(e.a > e.b * 1.01, "off-axis silhouette should be elongated: "
+				"a %g b %g",
+	      e.a, e.b);
+	/* The circle (centre, tangential radius) gives back the centre. */
+	glint_camera_sphere_from_circle(&s.cam, e.cx, e.cy, e.b, r, &back);
+	CHECK(v3_len(v3_sub(back, c)) < 1e-9, "circle -> 3-D off by %g m",
+	      v3_len(v3_sub(back, c)));
+
+	setup_sphere(&s, c, r, 256);
+	double *cov = calloc((size_t)w * h, sizeof(double));
+	coverage(&s, cov);
+	double area = 0, mx = 0, my = 0;
+	int wrong_in = 0, wrong_out = 0;
+	for (int y = 0; y < h; y++)
+		for (int x = 0; x < w; x++) {
+			double v = cov[y * w + x];
+			area += v;
+			mx += v * (x + 0.5);
+			my += v * (y + 0.5);
+			int corners = inside_ellipse(&e, x, y) +
+				      inside_ellipse(&e, x + 1, y) +
+				      inside_ellipse(&e, x, y + 1) +
+				      inside_ellipse(&e, x + 1, y + 1);
+			if (corners == 4 && v != 1)
+				wrong_in++;
+			/* Outside with a margin: a pixel whose centre lies
+			 * more than a pixel beyond the ellipse. */
+			struct glint_ellipse big = e;
+			big.a += 1.5;
+			big.b += 1.5;
+			if (!inside_ellipse(&big, x + 0.5, y + 0.5) && v != 0)
+				wrong_out++;
+		}
+	double exact = M_PI * e.a * e.b;
+	/* The centroid of the silhouette is the ellipse's centre. */
+	CHECK(fabs(area - exact) < 1e-3 * exact,
+	      "silhouette area %.3f px^2, ellipse %.3f", area, exact);
+	CHECK(fabs(mx / area - e.cx) < 0.02 && fabs(my / area - e.cy) < 0.02,
+	      "centroid (%.4f, %.4f), ellipse centre (%.4f, %.4f)",
+	      mx / area, my / area, e.cx, e.cy);
+	CHECK(wrong_in == 0 && wrong_out == 0,
+	      "%d inner pixels not covered, %d outer pixels covered", wrong_in,
+	      wrong_out);
+	free(cov);
+	teardown(&s);
+}
+
+static int partial_pixels(struct setup *s)
+{
+	int n = s->cam.width * s->cam.height, k = 0;
+	double *cov = calloc((size_t)n, sizeof(double));
+	coverage(s, cov);
+	for (int i = 0; i < n; i++)
+		k += cov[i] > 0.02 && cov[i] < 0.98;
+	free(cov);
+	return k;
+}
+
+/* Thin lens: in focus the silhouette is sharp; defocus blurs it. */
+static void test_thin_lens(void)
+{
+	struct setup a, b;
+	struct vec3 c = v3(0, 0, -2);
+	/* Focal length 150 px * 10 um = 1.5 mm at N = 0.025: a lens of
+	 * radius 3 cm.  The silhouette lies at sqrt(2^2 - 0.25^2) = 1.984 m;
+	 * focused at 1 m its blur circle is about 150 * 0.06 * (1 - 1/1.984)
+	 * = 4.5 px wide. */
+	make_camera(&a.cam, 80, 80, 150, 0.025, 1.984);
+	make_camera(&b.cam, 80, 80, 150, 0.025, 1.0);
+	CHECK_NEAR(a.cam.aperture_radius, 0.03, 1e-12, "aperture radius");
+	setup_sphere(&a, c, 0.25, 64);
+	setup_sphere(&b, c, 0.25, 64);
+	int sharp = partial_pixels(&a), blurred = partial_pixels(&b);
+	CHECK(blurred > 3 * sharp, "partial pixels: in focus %d, defocused %d",
+	      sharp, blurred);
+	teardown(&a);
+	teardown(&b);
+}
+
+/* Icosphere mesh (convex, flat faces) through the shadow-ray path. */
+static void test_mesh_furnace(void)
+{
+	struct setup s;
+	struct glint_envmap *env = constant_env(0.5);
+	double t = (1 + sqrt(5)) / 2, kd[3] = { 0.6, 0.6, 0.6 };
+	float v[12 * 3] = { -1, (float)t, 0, 1, (float)t, 0, -1, (float)-t, 0,
+			    1, (float)-t, 0, 0, -1, (float)t, 0, 1, (float)t,
+			    0, -1, (float)-t, 0, 1, (float)-t, (float)t, 0, -1,
+			    (float)t, 0, 1, (float)-t, 0, -1, (float)-t, 0, 1 };
+	uint32_t f[20 * 3] = { 0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11,
+			       1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6, 7, 1, 8,
+			       3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9,
+			       4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1 };
+	for (int i = 0; i < 12; i++)
+		v[3 * i + 2] -= 8; /* move it to z = -8 */
+	make_camera(&s.cam, 32, 32, 40, 0, 0);
+	glint_tracer_new(&s.t);
+	CHECK(glint_tracer_add_mesh(s.t, v, 12, f, 20) == 0, "%s",
+	      glint_error_msg());
+	glint_tracer_commit(s.t);
+	CHECK(!glint_tracer_is_convex(s.t), "a mesh is not the convex case");
+	glint_tracer_primary(s.t, &s.cam, 1, 0, NULL, &s.gb);
+	struct glint_image *img = glint_image_new(32, 32);
+	struct glint_shade_opts o = { .light_samples = 0, .brdf_samples = 16 };
+	glint_render_shade(&s.gb, s.t, env, &glint_model_lambert, kd, &o, img,
+			   NULL);
+	int hits = 0, bad = 0;
+	for (int i = 0; i < 32 * 32; i++) {
+		if (s.gb.hits[i].geom < 0)
+			continue;
+		hits++;
+		bad += fabs(img->data[3 * i] - 0.3) > 1e-4;
+	}
+	CHECK(hits > 50 && bad == 0, "%d of %d mesh pixels off kd L", bad,
+	      hits);
+	/* A ray from inside towards a face is occluded. */
+	CHECK(glint_tracer_occluded(s.t, v3(0, 0, -8), v3(0, 0, 1), 0, 100),
+	      "occlusion from the centre");
+	CHECK(!glint_tracer_occluded(s.t, v3(0, 0, 0), v3(0, 0, 1), 0, 100),
+	      "ray away from the mesh occluded");
+	uint32_t badtri[3] = { 0, 1, 99 };
+	CHECK(glint_tracer_add_mesh(s.t, v, 12, badtri, 1) < 0,
+	      "out-of-range index accepted");
+	CHECK_MSG(glint_error_msg(), "uses vertex 99");
+	glint_image_free(img);
+	glint_envmap_free(env);
+	teardown(&s);
+}
+
+/* Same inputs, any thread count: the same image, bit for bit. */
+static void test_deterministic(void)
+{
+	struct setup s;
+	struct glint_envmap *env = constant_env(1.0);
+	glint_image_px(env->img, 3, 2)[0] = 50; /* something to sample */
+	glint_envmap_free(env);
+	struct glint_image *m = glint_image_new(16, 8);
+	for (int i = 0; i < 16 * 8 * 3; i++)
+		m->data[i] = (float)(1 + (i % 7));
+	glint_envmap_new(m, NULL, 1, "m", &env);
+	double p[8] = { 0.3, 0.2, 0.1, 0.4, 0.4, 0.4, 0.1, 1.6 };
+	make_camera(&s.cam, 24, 24, 30, 0, 0);
+	setup_sphere(&s, v3(0, 0, -3), 1, 4);
+	struct glint_image *a = glint_image_new(24, 24),
+			   *b = glint_image_new(24, 24);
+	struct glint_shade_opts o = { .light_samples = 8, .brdf_samples = 8,
+				      .background = 1, .nthreads = 1 };
+	glint_render_shade(&s.gb, s.t, env, &glint_model_torrance_sparrow, p,
+			   &o, a, NULL);
+	o.nthreads = 3;
+	glint_render_shade(&s.gb, s.t, env, &glint_model_torrance_sparrow, p,
+			   &o, b, NULL);
+	CHECK(!memcmp(a->data, b->data, 24 * 24 * 12),
+	      "images differ between 1 and 3 threads");
+	glint_image_free(a);
+	glint_image_free(b);
+	glint_envmap_free(env);
+	teardown(&s);
+}
+
+int main(void)
+{
+	RUN(test_furnace_lambert);
+	RUN(test_furnace_ts);
+	RUN(test_silhouette);
+	RUN(test_thin_lens);
+	RUN(test_mesh_furnace);
+	RUN(test_deterministic);
+	return test_result();
+}

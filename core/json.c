@@ -35,7 +35,9 @@ static void key_path(char *buf, size_t n, const char *where, const char *key)
 
 static void range_text(char *buf, size_t n, struct glint_range r)
 {
-	if (isinf(r.hi))
+	if (isinf(r.hi) && isinf(r.lo))
+		snprintf(buf, n, "finite");
+	else if (isinf(r.hi))
 		snprintf(buf, n, "a number %s %g", r.lo_open ? ">" : ">=",
 			 r.lo);
 	else
@@ -72,11 +74,12 @@ int glint_json_number(const char *file, const char *where, json_t *obj,
 		      const char *key, int required, struct glint_range range,
 		      double *out)
 {
-	char kp[256], exp[96];
+	char kp[256], exp[96], r[80];
 	json_t *v = json_object_get(obj, key);
 
 	key_path(kp, sizeof(kp), where, key);
-	range_text(exp, sizeof(exp), range);
+	range_text(r, sizeof(r), range);
+	snprintf(exp, sizeof(exp), "%s", strcmp(r, "finite") ? r : "a finite number");
 	if (!v)
 		return required ? missing(file, kp, exp) : 0;
 	if (!json_is_number(v) || !in_range(json_number_value(v), range))
@@ -111,7 +114,11 @@ int glint_json_numbers(const char *file, const char *where, json_t *obj,
 
 	key_path(kp, sizeof(kp), where, key);
 	range_text(r, sizeof(r), range);
-	snprintf(exp, sizeof(exp), "an array of %d numbers, each %s", n, r);
+	if (!strcmp(r, "finite"))
+		snprintf(exp, sizeof(exp), "an array of %d finite numbers", n);
+	else
+		snprintf(exp, sizeof(exp), "an array of %d numbers, each %s", n,
+			 r);
 	if (!v)
 		return required ? missing(file, kp, exp) : 0;
 	if (!json_is_array(v) || (int)json_array_size(v) != n)

@@ -31,7 +31,9 @@ struct glint_envmap {
  * Take ownership of img (a lat-long map, width >= 2 height) and build the
  * sampling tables.  rot_deg = rotation about X, then Y, then Z (degrees,
  * m3_rotation_xyz_deg).  Fails on NaN/Inf or negative radiance, naming the
- * pixel; `what` names the source in messages.  img is freed on failure.
+ * pixel; negatives within 1 % of the mean (lossy-compression ringing) are
+ * clamped to 0.  `what` names the source in messages.  img is freed on
+ * failure.
  */
 int glint_envmap_new(struct glint_image *img, const double rot_deg[3],
 		     double scale, const char *what, struct glint_envmap **out);

@@ -295,6 +295,29 @@ int glint_exr_read(const char *path, struct glint_image **out)
 	return glint_exr_read_cxx(path, out);
 }
 
+/*
+ * OpenEXRCore 3.1.5 stores zlib output that is exactly as large as the
+ * packed data as if it were compressed, but readers take a chunk whose
+ * stored size equals its unpacked size as raw: rare chunks come back as
+ * garbage (upstream issue #2306, fixed in 2026 by PR #2307; seen here on a
+ * 64x48 render).  Store such chunks raw, as the fixed library does.
+ */
+typedef exr_result_t (*exr_compress_fn)(exr_encode_pipeline_t *);
+
+static exr_result_t compress_or_store(exr_encode_pipeline_t *enc)
+{
+	exr_compress_fn zip = (exr_compress_fn)enc->encoding_user_data;
+	exr_result_t rv = zip(enc);
+
+	if (rv == EXR_ERR_SUCCESS && enc->compressed_bytes >= enc->packed_bytes &&
+	    enc->compressed_buffer != enc->packed_buffer) {
+		memcpy(enc->compressed_buffer, enc->packed_buffer,
+		       enc->packed_bytes);
+		enc->compressed_bytes = enc->packed_bytes;
+	}
+	return rv;
+}
+
 static int encode_rows(exr_context_t ctx, int part, const uint8_t *base,
 		       int pixel_stride, int width, int height,
 		       exr_pixel_type_t type)
@@ -335,6 +358,10 @@ static int encode_rows(exr_context_t ctx, int part, const uint8_t *base,
 			first = 0;
 			if (rv != EXR_ERR_SUCCESS)
 				break;
+			if (enc.compress_fn) {
+				enc.encoding_user_data = (void *)enc.compress_fn;
+				enc.compress_fn = compress_or_store;
+			}
 		}
 		rv = exr_encoding_run(ctx, part, &enc);
 	}

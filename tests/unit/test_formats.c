@@ -69,6 +69,26 @@ static void test_exr_half_roundtrip(void)
 	glint_image_free(b);
 }
 
+/* A 64x48 render whose ZIP chunk compresses to exactly its packed size:
+ * OpenEXRCore 3.1.5 wrote it corrupt (upstream #2306) before exr.c's
+ * compress_or_store() work-around. */
+static void test_exr_zip_equal_size(void)
+{
+	struct glint_image *a = NULL, *b = NULL;
+	const char *p = tmp_path("zip.exr");
+	CHECK(glint_image_read(GLINT_TEST_DATA "/zip_equal_size.pfm", &a) == 0,
+	      "%s", glint_error_msg());
+	if (!a)
+		return;
+	CHECK(glint_exr_write(p, a, 0) == 0, "%s", glint_error_msg());
+	CHECK(glint_image_read(p, &b) == 0, "%s", glint_error_msg());
+	if (b)
+		CHECK(!memcmp(a->data, b->data, 64 * 48 * 12),
+		      "ZIP chunk of incompressible data corrupted");
+	glint_image_free(a);
+	glint_image_free(b);
+}
+
 /* Write a tiled, ZIP-compressed EXR with the C API (tiles 16x16). */
 static int write_tiled(const char *path, const struct glint_image *img)
 {
@@ -406,6 +426,7 @@ int main(void)
 {
 	RUN(test_exr_float_roundtrip);
 	RUN(test_exr_half_roundtrip);
+	RUN(test_exr_zip_equal_size);
 	RUN(test_exr_tiled_read);
 	RUN(test_exr_dwab);
 	RUN(test_rgbe_roundtrip);

@@ -1,0 +1,107 @@
+#!/usr/bin/env bash
+# The glint command as a user meets it: help, exit codes, one clear message
+# per bad input, and nothing half-written when it fails.
+# usage: test_cli.sh GLINT DATA_DIR
+set -u
+glint=$1
+data=$2
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fails=0 checks=0
+
+check() { # description, command...
+	local what=$1
+	shift
+	checks=$((checks + 1))
+	if "$@"; then
+		echo "ok   $what"
+	else
+		echo "FAIL $what"
+		fails=$((fails + 1))
+	fi
+}
+
+# run EXPECTED_STATUS FRAGMENT ARGS...: status and a stderr fragment
+run() {
+	local want=$1 frag=$2
+	shift 2
+	"$glint" "$@" >"$tmp/out" 2>"$tmp/err"
+	local got=$?
+	if [ "$got" != "$want" ]; then
+		echo "  glint $*: exit $got, expected $want; stderr:" >&2
+		cat "$tmp/err" >&2
+		return 1
+	fi
+	if [ -n "$frag" ] && ! grep -qF -- "$frag" "$tmp/err"; then
+		echo "  glint $*: stderr lacks '$frag':" >&2
+		cat "$tmp/err" >&2
+		return 1
+	fi
+	return 0
+}
+
+check "glint --help lists the commands" run 0 "" --help
+check "help names render" grep -q "render" "$tmp/out"
+for c in demo render convert; do
+	check "glint $c --help" run 0 "" "$c" --help
+	check "$c help shows usage" grep -q "usage: glint $c" "$tmp/out"
+done
+check "no command: usage, exit 2" run 2 "usage: glint" 
+check "unknown command: exit 2" run 2 "unknown command 'frobnicate'" frobnicate
+check "render without a scene: exit 2" run 2 "expected one SCENE.json" render --paper copper
+check "render with a bad option value: exit 2" run 2 "--spp 'lots'" render x.json --paper copper --spp lots
+
+# A small valid scene next to a small env map.
+"$glint" convert "$data/env/venice_sunset_1k.hdr" "$tmp/env.exr" -q 2>/dev/null ||
+	"$glint" convert "$data/env/venice_sunset_1k.hdr" "$tmp/env.exr"
+cat >"$tmp/scene.json" <<JSON
+{"camera": {"width": 64, "height": 48, "focal_length_mm": 100,
+            "sensor_width_mm": 36},
+ "sphere": {"diameter_m": 0.1, "circle_px": {"cx": 32, "cy": 24, "r": 15}},
+ "environment": {"path": "env.exr", "rotation_deg": [0, 90, 0]},
+ "render": {"samples_per_pixel": 2, "light_samples": 8, "brdf_samples": 8}}
+JSON
+check "render a Table-1 material" run 0 "" render "$tmp/scene.json" --paper copper -o "$tmp/r.exr" --png "$tmp/r.png" --json
+check "render --json is JSON with the outputs" python3 -c "
+import json,sys; r=json.load(open('$tmp/out'))
+assert r['output'].endswith('r.exr') and r['width']==64 and r['material']['model']=='torrance-sparrow', r"
+check "render wrote a PNG" python3 -c "
+import sys; b=open('$tmp/r.png','rb').read(8); assert b==b'\x89PNG\r\n\x1a\n', b"
+check "render output converts back" run 0 "" convert "$tmp/r.exr" "$tmp/r.pfm"
+
+# Bad inputs: exit 1, one message naming what was wrong, no output.
+check "missing scene file" run 1 "nope.json" render "$tmp/nope.json" --paper copper -o "$tmp/x.exr"
+sed 's/"focal_length_mm": 100/"focal_length_mm": -5/' "$tmp/scene.json" >"$tmp/bad.json"
+check "out-of-range field" run 1 "camera.focal_length_mm = -5" render "$tmp/bad.json" --paper copper -o "$tmp/x.exr"
+sed 's/"diameter_m": 0.1, //' "$tmp/scene.json" >"$tmp/bad2.json"
+check "missing field" run 1 "sphere.diameter_m is missing" render "$tmp/bad2.json" --paper copper -o "$tmp/x.exr"
+check "unknown material" run 1 "no material named 'vibranium'" render "$tmp/scene.json" --paper vibranium -o "$tmp/x.exr"
+echo '{"model": "torrance-sparrow", "roughness": -1}' >"$tmp/m.json"
+check "material out of range" run 1 "roughness = -1" render "$tmp/scene.json" --material "$tmp/m.json" -o "$tmp/x.exr"
+
+# An env map with a NaN (a 2x1 PFM written by hand).
+printf 'PF\n2 1\n-1.0\n' >"$tmp/nan.pfm"
+printf '\x00\x00\x80\x3f\x00\x00\xc0\x7f\x00\x00\x80\x3f\x00\x00\x80\x3f\x00\x00\x80\x3f\x00\x00\x80\x3f' >>"$tmp/nan.pfm"
+sed 's/env.exr/nan.pfm/' "$tmp/scene.json" >"$tmp/nan.json"
+check "NaN in the env map" run 1 "nan.pfm: pixel (0, 0) channel G is nan" render "$tmp/nan.json" --paper copper -o "$tmp/x.exr"
+check "NaN image refused by convert" run 1 "channel G is nan" convert "$tmp/nan.pfm" "$tmp/x.exr"
+
+# Truncated and corrupt images.
+head -c 20000 "$data/env/venice_sunset_1k.hdr" >"$tmp/trunc.hdr"
+sed 's/env.exr/trunc.hdr/' "$tmp/scene.json" >"$tmp/trunc.json"
+check "truncated HDR env map" run 1 "trunc.hdr: truncated in pixel row" render "$tmp/trunc.json" --paper copper -o "$tmp/x.exr"
+head -c 5000 "$tmp/env.exr" >"$tmp/trunc.exr"
+check "truncated EXR" run 1 "trunc.exr" convert "$tmp/trunc.exr" "$tmp/x.pfm"
+echo "garbage" >"$tmp/garbage.exr"
+check "not an EXR" run 1 "garbage.exr: not a readable OpenEXR file" convert "$tmp/garbage.exr" "$tmp/x.pfm"
+check "unreadable path" run 1 "cannot open" convert "$tmp/no/such.hdr" "$tmp/x.pfm"
+check "no output from any failure" test ! -e "$tmp/x.exr" -a ! -e "$tmp/x.pfm"
+check "no temporary files left" bash -c "! ls '$tmp' | grep -q '\.tmp\.'"
+
+# A failed write leaves the previous file intact.
+cp "$tmp/r.exr" "$tmp/keep.exr"
+check "write into a missing folder fails" run 1 "no/dir/out.exr" render "$tmp/scene.json" --paper copper -o "$tmp/no/dir/out.exr"
+check "existing output untouched" cmp -s "$tmp/r.exr" "$tmp/keep.exr"
+
+echo "$((checks - fails)) passed, $fails failed"
+[ "$fails" = 0 ]

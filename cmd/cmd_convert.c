@@ -44,10 +44,18 @@ int cmd_convert(int argc, char **argv)
 	optind = 1;
 	while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
 		switch (c) {
-		case O_HALF: wo.exr_half = 1; break;
-		case O_JSON: json = 1; break;
-		case O_NONFINITE: nonfinite = 1; break;
-		case 'h': cmd_convert_help(); return GLINT_EXIT_OK;
+		case O_HALF:
+			wo.exr_half = 1;
+			break;
+		case O_JSON:
+			json = 1;
+			break;
+		case O_NONFINITE:
+			nonfinite = 1;
+			break;
+		case 'h':
+			cmd_convert_help();
+			return GLINT_EXIT_OK;
 		case O_EXPOSURE: {
 			char *end;
 			wo.exposure = strtod(optarg, &end);
@@ -59,7 +67,8 @@ int cmd_convert(int argc, char **argv)
 						       optarg);
 			break;
 		}
-		default: return cmd_usage_error("convert", "unknown option");
+		default:
+			return cmd_usage_error("convert", "unknown option");
 		}
 	}
 	if (json)

@@ -57,17 +57,28 @@ int cmd_demo(int argc, char **argv)
 	optind = 1;
 	while ((c = getopt_long(argc, argv, "m:o:qh", opts, NULL)) != -1) {
 		switch (c) {
-		case 'm': material = optarg; break;
-		case 'o': dir = optarg; break;
-		case O_JSON: json = 1; break;
-		case 'q': glint_log_set_mode(GLINT_LOG_QUIET); break;
-		case 'h': cmd_demo_help(); return GLINT_EXIT_OK;
+		case 'm':
+			material = optarg;
+			break;
+		case 'o':
+			dir = optarg;
+			break;
+		case O_JSON:
+			json = 1;
+			break;
+		case 'q':
+			glint_log_set_mode(GLINT_LOG_QUIET);
+			break;
+		case 'h':
+			cmd_demo_help();
+			return GLINT_EXIT_OK;
 		case O_THREADS:
 			if (cmd_parse_int("demo", "--threads", optarg, 0, 256,
 					  &job.nthreads) < 0)
 				return GLINT_EXIT_USAGE;
 			break;
-		default: return cmd_usage_error("demo", "unknown option");
+		default:
+			return cmd_usage_error("demo", "unknown option");
 		}
 	}
 	if (optind != argc)
@@ -105,8 +116,8 @@ int cmd_demo(int argc, char **argv)
 	printf("demo: %s sphere, %dx%d, rendered in %.2f s\n", material,
 	       job.scene.cam.width, job.scene.cam.height,
 	       json_real_value(json_object_get(result, "trace_seconds")) +
-		       json_real_value(json_object_get(result,
-						       "shade_seconds")));
+		       json_real_value(
+			       json_object_get(result, "shade_seconds")));
 	printf("  HDR image: %s\n  preview:   %s\n", exr, png);
 	json_decref(result);
 	return GLINT_EXIT_OK;

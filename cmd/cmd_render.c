@@ -15,42 +15,41 @@
 
 void cmd_render_help(void)
 {
-	printf(
-		"usage: glint render SCENE.json (--material FILE.json | "
-		"--paper NAME) [options]\n"
-		"\n"
-		"Render the scene's sphere of a material under the scene's "
-		"environment map\n(direct light only; multiple importance "
-		"sampling of map and BRDF).\n"
-		"\n"
-		"  --material FILE     material JSON: {\"model\": "
-		"\"torrance-sparrow\", \"diffuse\": [r,g,b], ...}\n"
-		"  --entry NAME        with --material: pick NAME from a "
-		"Table-1 style file\n"
-		"  --paper NAME        a material of the paper's Table 1 (e.g. "
-		"satin-paint, copper)\n"
-		"  -o, --output FILE   HDR output (.exr, .hdr, .pfm); default "
-		"render.exr\n"
-		"      --png FILE      8-bit sRGB preview (tone map: see "
-		"docs/conventions.md)\n"
-		"      --exposure EV   preview exposure in stops (default: "
-		"auto)\n"
-		"      --coverage FILE per-pixel fraction of samples on the "
-		"sphere\n"
-		"      --half          EXR with half floats (default 32-bit "
-		"float)\n"
-		"      --spp N         primary samples per pixel (scene "
-		"default 4)\n"
-		"      --light-samples N  env-map samples per hit (default "
-		"32)\n"
-		"      --brdf-samples N   BRDF samples per hit (default 32)\n"
-		"      --no-background black where the sphere is not\n"
-		"      --threads N     worker threads (default: all CPUs)\n"
-		"      --json          print a JSON result on stdout, logs as "
-		"JSON lines\n"
-		"  -q, --quiet         no progress or info messages\n"
-		"\nExit status: 0 done, 1 bad input or failure, 2 bad command "
-		"line.\n");
+	printf("usage: glint render SCENE.json (--material FILE.json | "
+	       "--paper NAME) [options]\n"
+	       "\n"
+	       "Render the scene's sphere of a material under the scene's "
+	       "environment map\n(direct light only; multiple importance "
+	       "sampling of map and BRDF).\n"
+	       "\n"
+	       "  --material FILE     material JSON: {\"model\": "
+	       "\"torrance-sparrow\", \"diffuse\": [r,g,b], ...}\n"
+	       "  --entry NAME        with --material: pick NAME from a "
+	       "Table-1 style file\n"
+	       "  --paper NAME        a material of the paper's Table 1 (e.g. "
+	       "satin-paint, copper)\n"
+	       "  -o, --output FILE   HDR output (.exr, .hdr, .pfm); default "
+	       "render.exr\n"
+	       "      --png FILE      8-bit sRGB preview (tone map: see "
+	       "docs/conventions.md)\n"
+	       "      --exposure EV   preview exposure in stops (default: "
+	       "auto)\n"
+	       "      --coverage FILE per-pixel fraction of samples on the "
+	       "sphere\n"
+	       "      --half          EXR with half floats (default 32-bit "
+	       "float)\n"
+	       "      --spp N         primary samples per pixel (scene "
+	       "default 4)\n"
+	       "      --light-samples N  env-map samples per hit (default "
+	       "32)\n"
+	       "      --brdf-samples N   BRDF samples per hit (default 32)\n"
+	       "      --no-background black where the sphere is not\n"
+	       "      --threads N     worker threads (default: all CPUs)\n"
+	       "      --json          print a JSON result on stdout, logs as "
+	       "JSON lines\n"
+	       "  -q, --quiet         no progress or info messages\n"
+	       "\nExit status: 0 done, 1 bad input or failure, 2 bad command "
+	       "line.\n");
 }
 
 static json_t *vec_json(struct vec3 v)
@@ -122,10 +121,10 @@ int render_job_run(const struct render_job *job, json_t **result)
 		"sphere_image_px", "cx", el.cx, "cy", el.cy, "a", el.a, "b",
 		el.b, "environment", sc->env_path, "trace_seconds",
 		r.trace_seconds, "shade_seconds", shade_s, "png_exposure_ev",
-		job->out_png ? (isnan(job->exposure) ?
-					glint_png_auto_exposure(img) :
-					job->exposure) :
-			       0.0);
+		job->out_png
+			? (isnan(job->exposure) ? glint_png_auto_exposure(img)
+						: job->exposure)
+			: 0.0);
 out:
 	glint_image_free(img);
 	glint_image_free(cov);
@@ -135,8 +134,20 @@ out:
 
 int cmd_render(int argc, char **argv)
 {
-	enum { O_PNG = 256, O_EXPOSURE, O_COVERAGE, O_HALF, O_SPP, O_LS, O_BS,
-	       O_NOBG, O_THREADS, O_JSON, O_ENTRY, O_PAPER };
+	enum {
+		O_PNG = 256,
+		O_EXPOSURE,
+		O_COVERAGE,
+		O_HALF,
+		O_SPP,
+		O_LS,
+		O_BS,
+		O_NOBG,
+		O_THREADS,
+		O_JSON,
+		O_ENTRY,
+		O_PAPER
+	};
 	static const struct option opts[] = {
 		{ "material", required_argument, NULL, 'm' },
 		{ "entry", required_argument, NULL, O_ENTRY },
@@ -156,7 +167,8 @@ int cmd_render(int argc, char **argv)
 		{ "help", no_argument, NULL, 'h' },
 		{ NULL, 0, NULL, 0 },
 	};
-	struct render_job job = { .out_exr = "render.exr", .background = 1,
+	struct render_job job = { .out_exr = "render.exr",
+				  .background = 1,
 				  .exposure = NAN };
 	const char *material = NULL, *entry = NULL, *paper = NULL;
 	int spp = 0, ls = -1, bs = -1, json = 0, c;
@@ -165,25 +177,48 @@ int cmd_render(int argc, char **argv)
 	optind = 1;
 	while ((c = getopt_long(argc, argv, "m:o:qh", opts, NULL)) != -1) {
 		switch (c) {
-		case 'm': material = optarg; break;
-		case O_ENTRY: entry = optarg; break;
-		case O_PAPER: paper = optarg; break;
-		case 'o': job.out_exr = optarg; break;
-		case O_PNG: job.out_png = optarg; break;
-		case O_COVERAGE: job.out_coverage = optarg; break;
-		case O_HALF: job.half = 1; break;
-		case O_NOBG: job.background = 0; break;
-		case O_JSON: json = 1; break;
-		case 'q': glint_log_set_mode(GLINT_LOG_QUIET); break;
-		case 'h': cmd_render_help(); return GLINT_EXIT_OK;
+		case 'm':
+			material = optarg;
+			break;
+		case O_ENTRY:
+			entry = optarg;
+			break;
+		case O_PAPER:
+			paper = optarg;
+			break;
+		case 'o':
+			job.out_exr = optarg;
+			break;
+		case O_PNG:
+			job.out_png = optarg;
+			break;
+		case O_COVERAGE:
+			job.out_coverage = optarg;
+			break;
+		case O_HALF:
+			job.half = 1;
+			break;
+		case O_NOBG:
+			job.background = 0;
+			break;
+		case O_JSON:
+			json = 1;
+			break;
+		case 'q':
+			glint_log_set_mode(GLINT_LOG_QUIET);
+			break;
+		case 'h':
+			cmd_render_help();
+			return GLINT_EXIT_OK;
 		case O_EXPOSURE: {
 			char *end;
 			job.exposure = strtod(optarg, &end);
 			if (*end || !isfinite(job.exposure))
-				return cmd_usage_error("render",
-						       "--exposure '%s': expected "
-						       "a number of stops",
-						       optarg);
+				return cmd_usage_error(
+					"render",
+					"--exposure '%s': expected "
+					"a number of stops",
+					optarg);
 			break;
 		}
 		case O_SPP:
@@ -197,8 +232,8 @@ int cmd_render(int argc, char **argv)
 				return GLINT_EXIT_USAGE;
 			break;
 		case O_BS:
-			if (cmd_parse_int("render", "--brdf-samples", optarg,
-					  0, 1 << 16, &bs) < 0)
+			if (cmd_parse_int("render", "--brdf-samples", optarg, 0,
+					  1 << 16, &bs) < 0)
 				return GLINT_EXIT_USAGE;
 			break;
 		case O_THREADS:
@@ -206,7 +241,8 @@ int cmd_render(int argc, char **argv)
 					  &job.nthreads) < 0)
 				return GLINT_EXIT_USAGE;
 			break;
-		default: return cmd_usage_error("render", "unknown option");
+		default:
+			return cmd_usage_error("render", "unknown option");
 		}
 	}
 	if (json)
@@ -248,8 +284,8 @@ int cmd_render(int argc, char **argv)
 			       job.out_png ? " and " : "",
 			       job.out_png ? job.out_png : "",
 			       job.scene.cam.width, job.scene.cam.height,
-			       json_real_value(json_object_get(result,
-							       "trace_seconds")) +
+			       json_real_value(json_object_get(
+				       result, "trace_seconds")) +
 				       json_real_value(json_object_get(
 					       result, "shade_seconds")));
 		json_decref(result);

@@ -14,8 +14,9 @@
 #endif
 
 static const struct glint_cmd commands[] = {
-	{ "demo", "render a Table-1 material on the simulated rig (no "
-		  "arguments needed)",
+	{ "demo",
+	  "render a Table-1 material on the simulated rig (no "
+	  "arguments needed)",
 	  cmd_demo, cmd_demo_help },
 	{ "render", "render a sphere of a material under an environment map",
 	  cmd_render, cmd_render_help },

@@ -17,11 +17,11 @@ int glint_atomic_tmpname(const char *path, char *tmp, size_t n)
 	int fd;
 
 	if ((size_t)snprintf(tmp, n, "%s.tmp.XXXXXX", path) >= n)
-		return glint_error_set(ENAMETOOLONG, "%s: path too long",
-				       path);
+		return glint_error_set(ENAMETOOLONG, "%s: path too long", path);
 	fd = mkstemp(tmp);
 	if (fd < 0)
-		return glint_error_set(errno, "%s: cannot create a file here: %s",
+		return glint_error_set(errno,
+				       "%s: cannot create a file here: %s",
 				       path, strerror(errno));
 	/* mkstemp makes 0600; give the file the mode open() would. */
 	mode_t mask = umask(0);
@@ -41,8 +41,8 @@ static int fsync_dir_of(const char *path)
 	if (fd < 0)
 		return 0; /* nothing to sync against; rename already done */
 	if (fsync(fd) < 0 && errno != EINVAL)
-		ret = glint_error_set(errno, "%s: fsync of directory: %s",
-				      path, strerror(errno));
+		ret = glint_error_set(errno, "%s: fsync of directory: %s", path,
+				      strerror(errno));
 	close(fd);
 	return ret;
 }
@@ -75,8 +75,7 @@ int glint_atomic_open(struct glint_atomic_file *af, const char *path)
 	memset(af, 0, sizeof(*af));
 	if ((size_t)snprintf(af->final_path, sizeof(af->final_path), "%s",
 			     path) >= sizeof(af->final_path))
-		return glint_error_set(ENAMETOOLONG, "%s: path too long",
-				       path);
+		return glint_error_set(ENAMETOOLONG, "%s: path too long", path);
 	ret = glint_atomic_tmpname(path, af->tmp_path, sizeof(af->tmp_path));
 	if (ret < 0)
 		return ret;
@@ -84,8 +83,7 @@ int glint_atomic_open(struct glint_atomic_file *af, const char *path)
 	if (!af->fp) {
 		int e = errno;
 		unlink(af->tmp_path);
-		return glint_error_set(e, "%s: %s", af->tmp_path,
-				       strerror(e));
+		return glint_error_set(e, "%s: %s", af->tmp_path, strerror(e));
 	}
 	return 0;
 }

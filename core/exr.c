@@ -36,8 +36,9 @@ static int exr_fail(const char *path, const char *what, exr_result_t rv)
 	if (rv == EXR_ERR_FILE_ACCESS)
 		code = ENOENT;
 	return glint_error_set(code, "%s: %s: %s", path, what,
-			       exr_last_msg[0] ? exr_last_msg :
-						 exr_get_default_error_message(rv));
+			       exr_last_msg[0]
+				       ? exr_last_msg
+				       : exr_get_default_error_message(rv));
 }
 
 /* Channel index 0..2 for R, G, B, 3 for Y (luminance), -1 for others. */
@@ -74,8 +75,8 @@ static void bind_channels(exr_decode_pipeline_t *dec, struct glint_image *img,
 		}
 		if (slot == 3)
 			slot = 0;
-		ch->decode_to_ptr = (uint8_t *)(glint_image_px(img, x0, y0) +
-						slot);
+		ch->decode_to_ptr =
+			(uint8_t *)(glint_image_px(img, x0, y0) + slot);
 		ch->user_pixel_stride = 3 * sizeof(float);
 		ch->user_line_stride = img->width * 3 * sizeof(float);
 		ch->user_data_type = EXR_PIXEL_FLOAT;
@@ -309,7 +310,8 @@ static exr_result_t compress_or_store(exr_encode_pipeline_t *enc)
 	exr_compress_fn zip = (exr_compress_fn)enc->encoding_user_data;
 	exr_result_t rv = zip(enc);
 
-	if (rv == EXR_ERR_SUCCESS && enc->compressed_bytes >= enc->packed_bytes &&
+	if (rv == EXR_ERR_SUCCESS &&
+	    enc->compressed_bytes >= enc->packed_bytes &&
 	    enc->compressed_buffer != enc->packed_buffer) {
 		memcpy(enc->compressed_buffer, enc->packed_buffer,
 		       enc->packed_bytes);
@@ -345,8 +347,9 @@ static int encode_rows(exr_context_t ctx, int part, const uint8_t *base,
 			int slot = channel_slot(ch->channel_name);
 			size_t elem = type == EXR_PIXEL_HALF ? 2 : 4;
 
-			ch->encode_from_ptr = base + ((size_t)y * width * 3 +
-						      (size_t)slot) * elem;
+			ch->encode_from_ptr =
+				base +
+				((size_t)y * width * 3 + (size_t)slot) * elem;
 			ch->user_pixel_stride = pixel_stride;
 			ch->user_line_stride = pixel_stride * width;
 			ch->user_data_type = type;
@@ -359,7 +362,8 @@ static int encode_rows(exr_context_t ctx, int part, const uint8_t *base,
 			if (rv != EXR_ERR_SUCCESS)
 				break;
 			if (enc.compress_fn) {
-				enc.encoding_user_data = (void *)enc.compress_fn;
+				enc.encoding_user_data =
+					(void *)enc.compress_fn;
 				enc.compress_fn = compress_or_store;
 			}
 		}
@@ -402,9 +406,9 @@ int glint_exr_write(const char *path, const struct glint_image *img, int half)
 	if (rv == EXR_ERR_SUCCESS)
 		rv = exr_add_part(ctx, "rgb", EXR_STORAGE_SCANLINE, &part);
 	if (rv == EXR_ERR_SUCCESS)
-		rv = exr_initialize_required_attr_simple(
-			ctx, part, img->width, img->height,
-			EXR_COMPRESSION_ZIP);
+		rv = exr_initialize_required_attr_simple(ctx, part, img->width,
+							 img->height,
+							 EXR_COMPRESSION_ZIP);
 	for (int c = 0; c < 3 && rv == EXR_ERR_SUCCESS; c++)
 		rv = exr_add_channel(ctx, part, names[c], type,
 				     EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);

@@ -27,8 +27,7 @@ extern "C" int glint_exr_read_cxx(const char *path, struct glint_image **out)
 			return glint_error_prefix(EINVAL, "%s: data window",
 						  path);
 		Imf::Array2D<Imf::Rgba> px(h, w);
-		file.setFrameBuffer(&px[0][0] - dw.min.x - dw.min.y * w, 1,
-				    w);
+		file.setFrameBuffer(&px[0][0] - dw.min.x - dw.min.y * w, 1, w);
 		file.readPixels(dw.min.y, dw.max.y);
 		for (int y = 0; y < h; y++) {
 			for (int x = 0; x < w; x++) {
@@ -42,11 +41,12 @@ extern "C" int glint_exr_read_cxx(const char *path, struct glint_image **out)
 		return 0;
 	} catch (const std::exception &e) {
 		glint_image_free(img);
-		return glint_error_set(EINVAL, "%s: not a readable OpenEXR file: %s",
+		return glint_error_set(EINVAL,
+				       "%s: not a readable OpenEXR file: %s",
 				       path, e.what());
 	} catch (...) {
 		glint_image_free(img);
-		return glint_error_set(EINVAL, "%s: not a readable OpenEXR file",
-				       path);
+		return glint_error_set(EINVAL,
+				       "%s: not a readable OpenEXR file", path);
 	}
 }

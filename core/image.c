@@ -136,8 +136,8 @@ int glint_image_write(const char *path, const struct glint_image *img,
 	if (!strcmp(ext, "pfm"))
 		return glint_pfm_write(path, img);
 	if (!strcmp(ext, "png"))
-		return glint_png_write(path, img,
-				       opts->auto_expose ? NAN : opts->exposure);
+		return glint_png_write(
+			path, img, opts->auto_expose ? NAN : opts->exposure);
 	return glint_error_set(EINVAL,
 			       "%s: unknown image extension '.%s': expected "
 			       ".exr, .hdr, .pfm or .png",

@@ -24,8 +24,7 @@ struct glint_image *glint_image_new(int width, int height);
 void glint_image_free(struct glint_image *img);
 struct glint_image *glint_image_dup(const struct glint_image *img);
 
-static inline float *glint_image_px(const struct glint_image *img, int x,
-				    int y)
+static inline float *glint_image_px(const struct glint_image *img, int x, int y)
 {
 	return img->data + ((size_t)y * img->width + x) * 3;
 }
@@ -46,9 +45,9 @@ int glint_image_read(const char *path, struct glint_image **out);
 
 /* Options for glint_image_write(). */
 struct glint_write_opts {
-	int exr_half;	  /* EXR: store half floats instead of 32-bit */
-	double exposure;  /* PNG: linear scale 2^exposure before the curve */
-	int auto_expose;  /* PNG: choose exposure from the image (see png.h) */
+	int exr_half;	 /* EXR: store half floats instead of 32-bit */
+	double exposure; /* PNG: linear scale 2^exposure before the curve */
+	int auto_expose; /* PNG: choose exposure from the image (see png.h) */
 };
 
 /*

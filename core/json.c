@@ -18,9 +18,8 @@ int glint_json_load(const char *path, json_t **out)
 	if (!json_is_object(*out)) {
 		json_decref(*out);
 		*out = NULL;
-		return glint_error_set(EINVAL,
-				       "%s: expected a JSON object at the top",
-				       path);
+		return glint_error_set(
+			EINVAL, "%s: expected a JSON object at the top", path);
 	}
 	return 0;
 }
@@ -38,11 +37,12 @@ static void range_text(char *buf, size_t n, struct glint_range r)
 	if (isinf(r.hi) && isinf(r.lo))
 		snprintf(buf, n, "finite");
 	else if (isinf(r.hi))
-		snprintf(buf, n, "a number %s %g", r.lo_open ? ">" : ">=",
-			 r.lo);
+		snprintf(buf, n, "a number %s %g",
+			 r.lo_open ? ">" : ">=", r.lo);
 	else
-		snprintf(buf, n, "a number in %c%g, %g%c", r.lo_open ? '(' : '[',
-			 r.lo, r.hi, r.hi_open ? ')' : ']');
+		snprintf(buf, n, "a number in %c%g, %g%c",
+			 r.lo_open ? '(' : '[', r.lo, r.hi,
+			 r.hi_open ? ')' : ']');
 }
 
 static int in_range(double v, struct glint_range r)
@@ -79,7 +79,8 @@ int glint_json_number(const char *file, const char *where, json_t *obj,
 
 	key_path(kp, sizeof(kp), where, key);
 	range_text(r, sizeof(r), range);
-	snprintf(exp, sizeof(exp), "%s", strcmp(r, "finite") ? r : "a finite number");
+	snprintf(exp, sizeof(exp), "%s",
+		 strcmp(r, "finite") ? r : "a finite number");
 	if (!v)
 		return required ? missing(file, kp, exp) : 0;
 	if (!json_is_number(v) || !in_range(json_number_value(v), range))
@@ -125,7 +126,8 @@ int glint_json_numbers(const char *file, const char *where, json_t *obj,
 		return bad_value(file, kp, v, exp);
 	for (int i = 0; i < n; i++) {
 		json_t *e = json_array_get(v, (size_t)i);
-		if (!json_is_number(e) || !in_range(json_number_value(e), range))
+		if (!json_is_number(e) ||
+		    !in_range(json_number_value(e), range))
 			return bad_value(file, kp, v, exp);
 	}
 	for (int i = 0; i < n; i++)
@@ -179,10 +181,12 @@ int glint_json_known_keys(const char *file, const char *where, json_t *obj,
 			char kp[256], list[512] = "";
 			key_path(kp, sizeof(kp), where, key);
 			for (const char *const *k = known; *k; k++) {
-				strncat(list, *k, sizeof(list) - strlen(list) - 1);
+				strncat(list, *k,
+					sizeof(list) - strlen(list) - 1);
 				if (k[1])
 					strncat(list, ", ",
-						sizeof(list) - strlen(list) - 1);
+						sizeof(list) - strlen(list) -
+							1);
 			}
 			return glint_error_set(EINVAL,
 					       "%s: %s: unknown key: expected "

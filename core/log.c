@@ -77,8 +77,8 @@ static void progress_draw(struct glint_progress *p, long done)
 		b[i] = i < bar ? '#' : '.';
 	b[30] = '\0';
 	double eta = frac > 0.01 ? t / frac - t : 0;
-	fprintf(stderr, "\r%-10s [%s] %5.1f%%  %5.1fs  eta %5.1fs ",
-		p->label, b, 100 * frac, t, eta);
+	fprintf(stderr, "\r%-10s [%s] %5.1f%%  %5.1fs  eta %5.1fs ", p->label,
+		b, 100 * frac, t, eta);
 	fflush(stderr);
 }
 

@@ -59,8 +59,9 @@ void glint_thread_ftz(void)
 int glint_parallel_for(int n, int chunk, int nthreads, glint_range_fn fn,
 		       void *ctx)
 {
-	struct pfor job = { .n = n, .chunk = chunk > 0 ? chunk : 1, .fn = fn,
-			    .ctx = ctx };
+	struct pfor job = {
+		.n = n, .chunk = chunk > 0 ? chunk : 1, .fn = fn, .ctx = ctx
+	};
 	pthread_t tid[GLINT_MAX_THREADS];
 	struct worker w[GLINT_MAX_THREADS];
 	int started = 0, ret = 0;

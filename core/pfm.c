@@ -61,7 +61,8 @@ int glint_pfm_read(const char *path, struct glint_image **out)
 	int swap = (scale < 0) != host_is_little();
 	for (int i = 0; i < h; i++) {
 		int y = h - 1 - i;
-		if (fread(row, sizeof(float) * nc, (size_t)w, fp) != (size_t)w) {
+		if (fread(row, sizeof(float) * nc, (size_t)w, fp) !=
+		    (size_t)w) {
 			ret = glint_error_set(EINVAL,
 					      "%s: truncated at stored row %d "
 					      "of %d",

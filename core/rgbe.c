@@ -25,10 +25,11 @@ struct rgbe_reader {
 static int rd_bytes(struct rgbe_reader *r, uint8_t *buf, size_t n)
 {
 	if (fread(buf, 1, n, r->fp) != n)
-		return glint_error_set(EINVAL,
-				       "%s: truncated in pixel row %d: expected "
-				       "more RGBE data",
-				       r->path, r->row);
+		return glint_error_set(
+			EINVAL,
+			"%s: truncated in pixel row %d: expected "
+			"more RGBE data",
+			r->path, r->row);
 	return 0;
 }
 
@@ -120,8 +121,7 @@ static int read_scanline(struct rgbe_reader *r, uint8_t *buf, int w)
 	return 0;
 }
 
-static int read_header(FILE *fp, const char *path, int *w, int *h,
-		       int *flip_y)
+static int read_header(FILE *fp, const char *path, int *w, int *h, int *flip_y)
 {
 	char line[512];
 	char ya[3], xa[3];
@@ -266,8 +266,9 @@ int glint_rgbe_write(const char *path, const struct glint_image *img)
 		free(row);
 		return ret;
 	}
-	fprintf(af.fp, "#?RADIANCE\n# written by glint\n"
-		       "FORMAT=32-bit_rle_rgbe\n\n-Y %d +X %d\n",
+	fprintf(af.fp,
+		"#?RADIANCE\n# written by glint\n"
+		"FORMAT=32-bit_rle_rgbe\n\n-Y %d +X %d\n",
 		img->height, w);
 	for (int y = 0; y < img->height; y++) {
 		for (int x = 0; x < w; x++)

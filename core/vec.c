@@ -16,15 +16,15 @@ static struct mat3 m3_mul_m3(const struct mat3 *a, const struct mat3 *b)
 struct mat3 m3_rotation_xyz_deg(double rx, double ry, double rz)
 {
 	double a = rx * M_PI / 180, b = ry * M_PI / 180, c = rz * M_PI / 180;
-	struct mat3 x = { { { 1, 0, 0 },
-			    { 0, cos(a), -sin(a) },
-			    { 0, sin(a), cos(a) } } };
-	struct mat3 y = { { { cos(b), 0, sin(b) },
-			    { 0, 1, 0 },
-			    { -sin(b), 0, cos(b) } } };
-	struct mat3 z = { { { cos(c), -sin(c), 0 },
-			    { sin(c), cos(c), 0 },
-			    { 0, 0, 1 } } };
+	struct mat3 x = {
+		{ { 1, 0, 0 }, { 0, cos(a), -sin(a) }, { 0, sin(a), cos(a) } }
+	};
+	struct mat3 y = {
+		{ { cos(b), 0, sin(b) }, { 0, 1, 0 }, { -sin(b), 0, cos(b) } }
+	};
+	struct mat3 z = {
+		{ { cos(c), -sin(c), 0 }, { sin(c), cos(c), 0 }, { 0, 0, 1 } }
+	};
 	struct mat3 zy = m3_mul_m3(&z, &y);
 
 	return m3_mul_m3(&zy, &x);

@@ -151,11 +151,10 @@ int glint_camera_sphere_from_circle(const struct glint_camera *cam, double cx,
 	double sa = b * cos(beta) / sqrt(f * f + b * b);
 	double dist = radius / sa;
 	double ux = rho > 0 ? dx / rho : 0, uy = rho > 0 ? -dy / rho : 0;
-	struct vec3 axis = v3_add(
-		v3_scale(cam->fwd, cos(beta)),
-		v3_scale(v3_add(v3_scale(cam->right, ux),
-				v3_scale(cam->up, uy)),
-			 sin(beta)));
+	struct vec3 axis = v3_add(v3_scale(cam->fwd, cos(beta)),
+				  v3_scale(v3_add(v3_scale(cam->right, ux),
+						  v3_scale(cam->up, uy)),
+					   sin(beta)));
 
 	*centre = v3_add(cam->pos, v3_scale(axis, dist));
 	return 0;

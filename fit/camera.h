@@ -13,10 +13,10 @@
 
 struct glint_camera {
 	int width, height;
-	double fpx;		 /* focal length in pixels */
-	double cx, cy;		 /* principal point, pixels */
-	double aperture_radius;	 /* metres; 0 = pinhole */
-	double focus_distance;	 /* metres along fwd (thin lens only) */
+	double fpx;		/* focal length in pixels */
+	double cx, cy;		/* principal point, pixels */
+	double aperture_radius; /* metres; 0 = pinhole */
+	double focus_distance;	/* metres along fwd (thin lens only) */
 	struct vec3 pos, right, up, fwd;
 };
 

@@ -91,7 +91,8 @@ static int clamp_compression_noise(struct glint_image *img, const char *what)
 			size_t px = i / 3;
 			return glint_error_set(
 				EINVAL,
-				"%s: pixel (%zu, %zu) has radiance %g: expected "
+				"%s: pixel (%zu, %zu) has radiance %g: "
+				"expected "
 				">= 0 (small negatives from lossy "
 				"compression, within 1%% of the mean %g, are "
 				"clamped)",
@@ -197,9 +198,9 @@ void glint_envmap_lookup(const struct glint_envmap *env, struct vec3 d,
 	const float *c = glint_image_px(img, x0, y1);
 	const float *e = glint_image_px(img, x1, y1);
 	for (int k = 0; k < 3; k++)
-		rgb[k] = env->scale *
-			 ((1 - ty) * ((1 - tx) * a[k] + tx * b[k]) +
-			  ty * ((1 - tx) * c[k] + tx * e[k]));
+		rgb[k] =
+			env->scale * ((1 - ty) * ((1 - tx) * a[k] + tx * b[k]) +
+				      ty * ((1 - tx) * c[k] + tx * e[k]));
 }
 
 /* Index i with cdf[i] <= x < cdf[i + 1] among n intervals. */
@@ -220,8 +221,8 @@ static int cdf_find(const double *cdf, int n, double x)
 	return lo;
 }
 
-double glint_envmap_sample(const struct glint_envmap *env, double u1,
-			   double u2, struct vec3 *dir)
+double glint_envmap_sample(const struct glint_envmap *env, double u1, double u2,
+			   struct vec3 *dir)
 {
 	int w = env->img->width, h = env->img->height;
 

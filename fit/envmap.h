@@ -57,8 +57,8 @@ void glint_envmap_lookup(const struct glint_envmap *env, struct vec3 d,
  * Returns the exact solid-angle pdf of that direction (0 if the map is black)
  * and fills *dir; u1, u2 in [0, 1).
  */
-double glint_envmap_sample(const struct glint_envmap *env, double u1,
-			   double u2, struct vec3 *dir);
+double glint_envmap_sample(const struct glint_envmap *env, double u1, double u2,
+			   struct vec3 *dir);
 
 /* The pdf glint_envmap_sample() has for world direction d. */
 double glint_envmap_pdf(const struct glint_envmap *env, struct vec3 d);

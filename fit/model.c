@@ -31,7 +31,8 @@ const char *glint_model_names(void)
 			strncat(buf, registry[i]->name,
 				sizeof(buf) - strlen(buf) - 1);
 			if (i + 1 < NMODELS)
-				strncat(buf, ", ", sizeof(buf) - strlen(buf) - 1);
+				strncat(buf, ", ",
+					sizeof(buf) - strlen(buf) - 1);
 		}
 	}
 	return buf;
@@ -67,8 +68,8 @@ int glint_material_from_json(const char *file, const char *where, json_t *obj,
 		} else if (pi->json_index == 0) {
 			double v[3] = { params[i], m->params[i + 1].def,
 					m->params[i + 2].def };
-			ret = glint_json_numbers(file, where, obj,
-						 pi->json_key, 0, 3, r, v);
+			ret = glint_json_numbers(file, where, obj, pi->json_key,
+						 0, 3, r, v);
 			params[i] = v[0];
 			params[i + 1] = v[1];
 			params[i + 2] = v[2];

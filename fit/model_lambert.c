@@ -26,8 +26,8 @@ double glint_sample_cosine(const double u[2], struct vec3 *wi)
 	return z / M_PI;
 }
 
-static double lambert_sample(const double *p, struct vec3 wo,
-			     const double u[3], struct vec3 *wi)
+static double lambert_sample(const double *p, struct vec3 wo, const double u[3],
+			     struct vec3 *wi)
 {
 	(void)p;
 	if (!(wo.z > 0))

@@ -125,14 +125,15 @@ static void shade_rows(void *ctx, int y0, int y1, int thread)
 				if (h->geom < 0) {
 					if (!job->opts->background)
 						continue;
-					glint_envmap_lookup(job->env, hvec(h->d),
-							    rgb);
+					glint_envmap_lookup(job->env,
+							    hvec(h->d), rgb);
 				} else {
 					hits++;
 					glint_shade_hit(
 						h,
-						glint_hash32((uint32_t)(pix * spp +
-									s)),
+						glint_hash32(
+							(uint32_t)(pix * spp +
+								   s)),
 						job->tracer, job->env,
 						job->model, job->params,
 						job->opts->light_samples,
@@ -157,20 +158,20 @@ static void shade_rows(void *ctx, int y0, int y1, int thread)
 int glint_render_shade(const struct glint_gbuffer *gb,
 		       struct glint_tracer *tracer,
 		       const struct glint_envmap *env,
-		       const struct glint_model_ops *model, const double *params,
+		       const struct glint_model_ops *model,
+		       const double *params,
 		       const struct glint_shade_opts *opts,
 		       struct glint_image *out, struct glint_image *coverage)
 {
-	struct shade_job job = { gb,  tracer, env,	model,
+	struct shade_job job = { gb,	 tracer, env, model,
 				 params, opts,	 out, coverage };
 
 	if (out->width != gb->width || out->height != gb->height ||
-	    (coverage && (coverage->width != gb->width ||
-			  coverage->height != gb->height)))
-		return glint_error_set(EINVAL,
-				       "render target %dx%d: expected %dx%d",
-				       out->width, out->height, gb->width,
-				       gb->height);
+	    (coverage &&
+	     (coverage->width != gb->width || coverage->height != gb->height)))
+		return glint_error_set(
+			EINVAL, "render target %dx%d: expected %dx%d",
+			out->width, out->height, gb->width, gb->height);
 	if (opts->light_samples < 0 || opts->brdf_samples < 0 ||
 	    opts->light_samples + opts->brdf_samples == 0)
 		return glint_error_set(EINVAL,

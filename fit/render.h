@@ -37,7 +37,8 @@ struct glint_shade_opts {
 int glint_render_shade(const struct glint_gbuffer *gb,
 		       struct glint_tracer *tracer,
 		       const struct glint_envmap *env,
-		       const struct glint_model_ops *model, const double *params,
+		       const struct glint_model_ops *model,
+		       const double *params,
 		       const struct glint_shade_opts *opts,
 		       struct glint_image *out, struct glint_image *coverage);
 

@@ -47,7 +47,8 @@ static inline void glint_hammersley(uint32_t k, uint32_t n, uint32_t seed,
 				    double u[2])
 {
 	double a = (k + 0.5) / n + glint_u01(glint_hash32(seed));
-	double b = glint_radical2(k) + glint_u01(glint_hash32(seed ^ 0x9e3779b9U));
+	double b =
+		glint_radical2(k) + glint_u01(glint_hash32(seed ^ 0x9e3779b9U));
 	u[0] = a - (int)a;
 	u[1] = b - (int)b;
 }

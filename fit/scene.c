@@ -23,11 +23,17 @@ static const struct glint_range any = { -INFINITY, INFINITY, 0, 0 };
 
 static int load_camera(const char *file, json_t *o, struct glint_scene *s)
 {
-	static const char *const known[] = {
-		"width", "height", "focal_length_mm", "sensor_width_mm",
-		"pixel_pitch_um", "f_number", "focus_distance_m", "position",
-		"look_at", "up", NULL
-	};
+	static const char *const known[] = { "width",
+					     "height",
+					     "focal_length_mm",
+					     "sensor_width_mm",
+					     "pixel_pitch_um",
+					     "f_number",
+					     "focus_distance_m",
+					     "position",
+					     "look_at",
+					     "up",
+					     NULL };
 	double focal = 0, sensor = 0, pitch_um = 0, fnum = 0, focus = 0;
 	double pos[3] = { 0, 0, 0 }, at[3] = { 0, 0, -1 }, up[3] = { 0, 1, 0 };
 	int w = 0, h = 0, ret;
@@ -40,12 +46,12 @@ static int load_camera(const char *file, json_t *o, struct glint_scene *s)
 		ret = glint_json_int(file, "camera", o, "height", 1, 1, 65536,
 				     &h);
 	if (!ret)
-		ret = glint_json_number(file, "camera", o, "focal_length_mm",
-					1, (struct glint_range){ 0, 1e5, 1, 0 },
+		ret = glint_json_number(file, "camera", o, "focal_length_mm", 1,
+					(struct glint_range){ 0, 1e5, 1, 0 },
 					&focal);
 	if (!ret)
-		ret = glint_json_number(file, "camera", o, "sensor_width_mm",
-					0, positive, &sensor);
+		ret = glint_json_number(file, "camera", o, "sensor_width_mm", 0,
+					positive, &sensor);
 	if (!ret)
 		ret = glint_json_number(file, "camera", o, "pixel_pitch_um", 0,
 					positive, &pitch_um);
@@ -63,7 +69,8 @@ static int load_camera(const char *file, json_t *o, struct glint_scene *s)
 		ret = glint_json_numbers(file, "camera", o, "look_at", 0, 3,
 					 any, at);
 	if (!ret)
-		ret = glint_json_numbers(file, "camera", o, "up", 0, 3, any, up);
+		ret = glint_json_numbers(file, "camera", o, "up", 0, 3, any,
+					 up);
 	if (ret < 0)
 		return ret;
 	if ((sensor > 0) == (pitch_um > 0))
@@ -79,7 +86,8 @@ static int load_camera(const char *file, json_t *o, struct glint_scene *s)
 				       file, fnum);
 	ret = glint_camera_init(&s->cam, w, h, focal * 1e-3, pitch_m, fnum,
 				focus, v3(pos[0], pos[1], pos[2]),
-				v3(at[0], at[1], at[2]), v3(up[0], up[1], up[2]));
+				v3(at[0], at[1], at[2]),
+				v3(up[0], up[1], up[2]));
 	if (ret < 0)
 		return glint_error_prefix(ret, "%s", file);
 	return 0;
@@ -159,10 +167,10 @@ static int load_env(const char *file, const char *dir, json_t *o,
 	if (!ret)
 		ret = glint_json_string(file, "environment", o, "path", 1, &p);
 	if (!ret)
-		ret = glint_json_numbers(file, "environment", o, "rotation_deg",
-					 0, 3,
-					 (struct glint_range){ -360, 360, 0, 0 },
-					 s->env_rotation);
+		ret = glint_json_numbers(
+			file, "environment", o, "rotation_deg", 0, 3,
+			(struct glint_range){ -360, 360, 0, 0 },
+			s->env_rotation);
 	if (!ret)
 		ret = glint_json_number(file, "environment", o, "scale", 0,
 					positive, &s->env_scale);
@@ -202,7 +210,7 @@ static int load_render(const char *file, json_t *o, struct glint_scene *s)
 int glint_scene_from_json(const char *file, const char *dir, json_t *root,
 			  struct glint_scene *s)
 {
-	static const char *const known[] = { "units", "camera", "sphere",
+	static const char *const known[] = { "units",	    "camera", "sphere",
 					     "environment", "render", NULL };
 	json_t *cam, *sph, *env, *rnd;
 	const char *units = NULL;

@@ -14,8 +14,8 @@
 
 struct glint_scene {
 	struct glint_camera cam;
-	struct vec3 sphere_centre; /* metres, world */
-	double sphere_radius;	   /* metres */
+	struct vec3 sphere_centre;     /* metres, world */
+	double sphere_radius;	       /* metres */
 	char env_path[GLINT_PATH_MAX]; /* resolved against the scene's dir */
 	double env_rotation[3];	       /* degrees about X, Y, Z */
 	double env_scale;

@@ -77,9 +77,26 @@ void glint_tracer_free(struct glint_tracer *t)
  * primID, geomID, instID.
  */
 enum {
-	RAY_OX, RAY_OY, RAY_OZ, RAY_TNEAR, RAY_DX, RAY_DY, RAY_DZ, RAY_TIME,
-	RAY_TFAR, RAY_MASK, RAY_ID, RAY_FLAGS, HIT_NX, HIT_NY, HIT_NZ, HIT_U,
-	HIT_V, HIT_PRIM, HIT_GEOM, HIT_INST
+	RAY_OX,
+	RAY_OY,
+	RAY_OZ,
+	RAY_TNEAR,
+	RAY_DX,
+	RAY_DY,
+	RAY_DZ,
+	RAY_TIME,
+	RAY_TFAR,
+	RAY_MASK,
+	RAY_ID,
+	RAY_FLAGS,
+	HIT_NX,
+	HIT_NY,
+	HIT_NZ,
+	HIT_U,
+	HIT_V,
+	HIT_PRIM,
+	HIT_GEOM,
+	HIT_INST
 };
 
 static inline float *lane(void *base, unsigned n, int field, unsigned i)
@@ -114,8 +131,7 @@ static double sphere_hit(const struct sphere_geom *s, const double o[3],
 	return -1;
 }
 
-static void ray_lane(void *rh, unsigned n, unsigned i, double o[3],
-		     double d[3])
+static void ray_lane(void *rh, unsigned n, unsigned i, double o[3], double d[3])
 {
 	o[0] = *lane(rh, n, RAY_OX, i);
 	o[1] = *lane(rh, n, RAY_OY, i);
@@ -239,10 +255,11 @@ int glint_tracer_add_mesh(struct glint_tracer *t, const float *verts, int nv,
 		return glint_error_set(ENOSPC, "too many geometries (max %d)",
 				       GLINT_MAX_GEOMS);
 	if (nv < 3 || nt < 1)
-		return glint_error_set(EINVAL,
-				       "mesh with %d vertices and %d triangles: "
-				       "expected at least 3 and 1",
-				       nv, nt);
+		return glint_error_set(
+			EINVAL,
+			"mesh with %d vertices and %d triangles: "
+			"expected at least 3 and 1",
+			nv, nt);
 	for (int i = 0; i < 3 * nt; i++)
 		if (tris[i] >= (uint32_t)nv)
 			return glint_error_set(EINVAL,
@@ -253,9 +270,9 @@ int glint_tracer_add_mesh(struct glint_tracer *t, const float *verts, int nv,
 	float *v = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0,
 					   RTC_FORMAT_FLOAT3, 3 * sizeof(float),
 					   (size_t)nv);
-	uint32_t *ix = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0,
-					       RTC_FORMAT_UINT3,
-					       3 * sizeof(uint32_t), (size_t)nt);
+	uint32_t *ix = rtcSetNewGeometryBuffer(
+		g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+		3 * sizeof(uint32_t), (size_t)nt);
 	memcpy(v, verts, (size_t)nv * 3 * sizeof(float));
 	memcpy(ix, tris, (size_t)nt * 3 * sizeof(uint32_t));
 	t->spheres[t->ngeom] = NULL;
@@ -395,7 +412,8 @@ static void primary_rows(void *ctx, int y0, int y1, int thread)
 				set_lane(&rh, count, o, d);
 				valid[count] = -1;
 				dst[count] = &gb->hits[((size_t)y * gb->width +
-							x) * gb->spp + s];
+							x) * gb->spp +
+						       s];
 				if (++count == 16) {
 					flush_packet(job->t, &rh, valid, count,
 						     dst);
@@ -420,9 +438,8 @@ int glint_tracer_primary(struct glint_tracer *t, const struct glint_camera *cam,
 	if (!t->committed)
 		return glint_error_set(EINVAL, "tracer used before commit");
 	if (spp < 1 || spp > 4096)
-		return glint_error_set(EINVAL,
-				       "samples per pixel %d: expected 1..4096",
-				       spp);
+		return glint_error_set(
+			EINVAL, "samples per pixel %d: expected 1..4096", spp);
 	gb->width = cam->width;
 	gb->height = cam->height;
 	gb->spp = spp;
@@ -447,10 +464,14 @@ int glint_tracer_occluded(struct glint_tracer *t, struct vec3 org,
 {
 	struct RTCIntersectContext ctx;
 	struct RTCRay r = {
-		.org_x = (float)org.x, .org_y = (float)org.y,
-		.org_z = (float)org.z, .tnear = (float)tnear,
-		.dir_x = (float)dir.x, .dir_y = (float)dir.y,
-		.dir_z = (float)dir.z, .tfar = (float)tfar,
+		.org_x = (float)org.x,
+		.org_y = (float)org.y,
+		.org_z = (float)org.z,
+		.tnear = (float)tnear,
+		.dir_x = (float)dir.x,
+		.dir_y = (float)dir.y,
+		.dir_z = (float)dir.z,
+		.tfar = (float)tfar,
 		.mask = 0xffffffffu,
 	};
 
@@ -481,9 +502,9 @@ void glint_tracer_intersect_raw(struct glint_tracer *t, const float *rays,
 		}
 		rtcIntersect16(valid, t->scene, &ctx, &rh);
 		for (int k = 0; k < m; k++)
-			hit_geom[b + k] = rh.hit.geomID[k] ==
-							  RTC_INVALID_GEOMETRY_ID ?
-						  -1 :
-						  (int32_t)rh.hit.geomID[k];
+			hit_geom[b + k] =
+				rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID
+					? -1
+					: (int32_t)rh.hit.geomID[k];
 	}
 }

@@ -35,9 +35,9 @@ int glint_tracer_is_convex(const struct glint_tracer *t);
 
 /* One primary-ray sample. */
 struct glint_hit {
-	float p[3]; /* hit point (world, m) */
-	float n[3]; /* unit shading normal, facing the ray */
-	float d[3]; /* unit ray direction */
+	float p[3];   /* hit point (world, m) */
+	float n[3];   /* unit shading normal, facing the ray */
+	float d[3];   /* unit ray direction */
 	int32_t geom; /* geometry id, -1 for a miss */
 };
 

@@ -55,8 +55,8 @@ static inline double chisq_pvalue(double x, int dof)
 }
 
 /* Chi-square p-value of observed vs expected counts over n bins. */
-static inline double chisq_test(const double *obs, const double *exp_,
-				 int n, int *dof_out)
+static inline double chisq_test(const double *obs, const double *exp_, int n,
+				int *dof_out)
 {
 	double chi = 0, po = 0, pe = 0;
 	int dof = 0;

@@ -16,34 +16,34 @@
 static int test_failures;
 static int test_checks;
 
-#define CHECK(cond, ...)                                                    \
-	do {                                                                \
-		test_checks++;                                              \
-		if (!(cond)) {                                              \
-			fprintf(stderr, "%s:%d: CHECK(%s) failed: ",        \
-				__FILE__, __LINE__, #cond);                 \
-			fprintf(stderr, __VA_ARGS__);                       \
-			fputc('\n', stderr);                                \
-			test_failures++;                                    \
-		}                                                           \
+#define CHECK(cond, ...)                                                       \
+	do {                                                                   \
+		test_checks++;                                                 \
+		if (!(cond)) {                                                 \
+			fprintf(stderr, "%s:%d: CHECK(%s) failed: ", __FILE__, \
+				__LINE__, #cond);                              \
+			fprintf(stderr, __VA_ARGS__);                          \
+			fputc('\n', stderr);                                   \
+			test_failures++;                                       \
+		}                                                              \
 	} while (0)
 
-#define CHECK_NEAR(a, b, tol, what)                                         \
-	CHECK(fabs((double)(a) - (double)(b)) <= (tol),                     \
-	      "%s: got %.9g, expected %.9g +- %.3g", what, (double)(a),     \
+#define CHECK_NEAR(a, b, tol, what)                                            \
+	CHECK(fabs((double)(a) - (double)(b)) <= (tol),                        \
+	      "%s: got %.9g, expected %.9g +- %.3g", what, (double)(a),        \
 	      (double)(b), (double)(tol))
 
 /* An error message must contain each of the given fragments. */
-#define CHECK_MSG(msg, frag)                                                \
-	CHECK(strstr((msg), (frag)) != NULL, "message '%s' lacks '%s'",    \
-	      (msg), (frag))
+#define CHECK_MSG(msg, frag)                                                   \
+	CHECK(strstr((msg), (frag)) != NULL, "message '%s' lacks '%s'", (msg), \
+	      (frag))
 
-#define RUN(fn)                                                             \
-	do {                                                                \
-		int before = test_failures;                                 \
-		fn();                                                       \
-		fprintf(stderr, "%s %s\n",                                  \
-			test_failures == before ? "ok  " : "FAIL", #fn);    \
+#define RUN(fn)                                                                \
+	do {                                                                   \
+		int before = test_failures;                                    \
+		fn();                                                          \
+		fprintf(stderr, "%s %s\n",                                     \
+			test_failures == before ? "ok  " : "FAIL", #fn);       \
 	} while (0)
 
 static inline int test_result(void)

@@ -36,8 +36,8 @@ static void test_uv_dir(void)
 	d = glint_envmap_uv_to_dir(0.75, 0.5);
 	CHECK_NEAR(d.x, 1, 1e-12, "u=0.75 is +X");
 	for (int i = 0; i < 100; i++) {
-		double u = glint_u01(glint_hash32(i)), v = glint_u01(
-							      glint_hash32(i + 999));
+		double u = glint_u01(glint_hash32(i)),
+		       v = glint_u01(glint_hash32(i + 999));
 		double u2, v2;
 		glint_envmap_dir_to_uv(glint_envmap_uv_to_dir(u, v), &u2, &v2);
 		CHECK(fabs(u - u2) < 1e-9 && fabs(v - v2) < 1e-9,
@@ -89,8 +89,9 @@ static void test_pdf_integrates(void)
 	for (int j = 0; j < m; j++) {
 		double v = (j + 0.5) / m, s = sin(M_PI * v);
 		for (int i = 0; i < n; i++) {
-			struct vec3 d = m3_mul(&env->rot, glint_envmap_uv_to_dir(
-								  (i + 0.5) / n, v));
+			struct vec3 d = m3_mul(
+				&env->rot,
+				glint_envmap_uv_to_dir((i + 0.5) / n, v));
 			sum += glint_envmap_pdf(env, d) * s;
 		}
 	}
@@ -139,8 +140,8 @@ static void test_sampling_histogram(void)
 					acc += glint_envmap_pdf(env, d) *
 					       sin(M_PI * v);
 				}
-			expc[j * w + i] = ns * acc / 64 * (2 * M_PI / w) *
-					  (M_PI / h);
+			expc[j * w + i] =
+				ns * acc / 64 * (2 * M_PI / w) * (M_PI / h);
 		}
 	int dof;
 	double p = chisq_test(obs, expc, w * h, &dof);
@@ -173,7 +174,8 @@ static void test_bad_maps(void)
 	glint_image_px(img, 0, 0)[0] = -1;
 	CHECK(glint_envmap_new(img, NULL, 1, "neg.hdr", &env) == -EINVAL,
 	      "negative radiance accepted");
-	CHECK_MSG(glint_error_msg(), "pixel (0, 0) has radiance -1: expected >= 0");
+	CHECK_MSG(glint_error_msg(),
+		  "pixel (0, 0) has radiance -1: expected >= 0");
 	/* An all-black map is legal; sampling reports pdf 0. */
 	img = glint_image_new(8, 4);
 	CHECK(glint_envmap_new(img, NULL, 1, "black", &env) == 0, "%s",

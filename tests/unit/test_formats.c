@@ -63,8 +63,7 @@ static void test_exr_half_roundtrip(void)
 	 * normal values (>= 6.1e-5); below that the spacing is 6e-8. */
 	if (b)
 		CHECK(max_rel_err(a, b, 6.1e-5) <= 1.0 / 2048 + 1e-9,
-		      "half round trip error %g",
-		      max_rel_err(a, b, 6.1e-5));
+		      "half round trip error %g", max_rel_err(a, b, 6.1e-5));
 	glint_image_free(a);
 	glint_image_free(b);
 }
@@ -123,7 +122,8 @@ static int write_tiled(const char *path, const struct glint_image *img)
 			for (int c = 0; c < enc.channel_count; c++) {
 				int s = 0;
 				for (int k = 0; k < 3; k++)
-					if (!strcmp(enc.channels[c].channel_name,
+					if (!strcmp(enc.channels[c]
+							    .channel_name,
 						    names[k]))
 						s = slot[k];
 				enc.channels[c].encode_from_ptr =
@@ -201,7 +201,8 @@ static void test_rgbe_roundtrip(void)
 		 * channel; error <= 1/256 of that channel (+ half a step). */
 		double worst = 0;
 		for (int i = 0; i < widths[k] * 17; i++) {
-			const float *pa = a->data + 3 * i, *pb = b->data + 3 * i;
+			const float *pa = a->data + 3 * i,
+				    *pb = b->data + 3 * i;
 			double m = fmax(pa[0], fmax(pa[1], pa[2]));
 			for (int c = 0; c < 3; c++)
 				worst = fmax(worst, fabs(pa[c] - pb[c]) / m);

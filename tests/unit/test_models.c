@@ -57,8 +57,8 @@ static void test_fresnel(void)
 	/* Tabulated: glass n = 1.5: 4 % at normal incidence; at Brewster's
 	 * angle (56.31 deg) Rp = 0 and Rs = 0.1479, so F = 0.0740. */
 	CHECK_NEAR(glint_fresnel_dielectric(1, 1.5), 0.04, 1e-12, "glass R0");
-	CHECK_NEAR(glint_fresnel_dielectric(cos(atan(1.5)), 1.5), 0.0740,
-		   1e-4, "glass at Brewster's angle");
+	CHECK_NEAR(glint_fresnel_dielectric(cos(atan(1.5)), 1.5), 0.0740, 1e-4,
+		   "glass at Brewster's angle");
 	CHECK_NEAR(glint_fresnel_dielectric(1, 1.0), 0, 1e-15, "n = 1");
 }
 
@@ -66,7 +66,8 @@ static void test_vcavity(void)
 {
 	CHECK_NEAR(glint_vcavity_g(1, 1, 1, 1), 1, 0, "normal incidence");
 	CHECK(glint_vcavity_g(0.9, 0.05, 0.8, 0.6) < 0.2,
-	      "grazing view is masked: %g", glint_vcavity_g(0.9, 0.05, 0.8, 0.6));
+	      "grazing view is masked: %g",
+	      glint_vcavity_g(0.9, 0.05, 0.8, 0.6));
 }
 
 static struct vec3 dir_at(double theta_deg)
@@ -135,13 +136,18 @@ static void test_ts_pdf_and_sampling(void)
 				int sub = 24;
 				for (int b = 0; b < sub; b++)
 					for (int a = 0; a < sub; a++) {
-						double z = (iz + (b + 0.5) / sub) / nz;
-						double ph = -M_PI + (ip + (a + 0.5) / sub) *
-									   2 * M_PI / nphi;
+						double z =
+							(iz + (b + 0.5) / sub) /
+							nz;
+						double ph =
+							-M_PI +
+							(ip + (a + 0.5) / sub) *
+								2 * M_PI / nphi;
 						double r = sqrt(1 - z * z);
 						acc += m->pdf(p, wo,
 							      v3(r * cos(ph),
-								 r * sin(ph), z));
+								 r * sin(ph),
+								 z));
 					}
 				double e = ns * acc / (sub * sub) / nz *
 					   (2 * M_PI / nphi);
@@ -183,19 +189,21 @@ static void test_ts_energy(void)
 	for (int r = 0; r < 4; r++)
 		for (int i = 0; i < 3; i++)
 			for (int t = 0; t <= 85; t += 17) {
-				double p[8] = { 0, 0, 0, 1, 1, 1, rough[r],
-						ior[i] };
+				double p[8] = { 0, 0, 0,	1,
+						1, 1, rough[r], ior[i] };
 				double a[3];
 				albedo_quadrature(m, p, dir_at(t), a);
 				worst = fmax(worst, a[0]);
-				CHECK(a[0] <= 1.0, "albedo %g > 1 (m %g, n %g, "
-						   "theta %d)",
+				CHECK(a[0] <= 1.0,
+				      "albedo %g > 1 (m %g, n %g, "
+				      "theta %d)",
 				      a[0], rough[r], ior[i], t);
 				/* Diffuse + specular with kd + ks = 1. */
-				double q[8] = { 0.5, 0.5, 0.5, 0.5, 0.5, 0.5,
-						rough[r], ior[i] };
+				double q[8] = { 0.5, 0.5, 0.5,	    0.5,
+						0.5, 0.5, rough[r], ior[i] };
 				albedo_quadrature(m, q, dir_at(t), a);
-				CHECK(a[0] <= 1.0, "kd=ks=0.5: albedo %g", a[0]);
+				CHECK(a[0] <= 1.0, "kd=ks=0.5: albedo %g",
+				      a[0]);
 			}
 	fprintf(stderr, "  largest specular albedo seen: %.4f\n", worst);
 }

@@ -83,9 +83,9 @@ static void test_furnace_lambert(void)
 			continue;
 		for (int c = 0; c < 3; c++) {
 			sum[c] += img->data[3 * i + c];
-			worst = fmax(worst, fabs(img->data[3 * i + c] /
-							 (kd[c] * 0.7) -
-						 1));
+			worst = fmax(
+				worst,
+				fabs(img->data[3 * i + c] / (kd[c] * 0.7) - 1));
 		}
 	}
 	for (int c = 0; c < 3; c++)
@@ -118,8 +118,8 @@ static void test_furnace_ts(void)
 			struct vec3 n = v3(h->n[0], h->n[1], h->n[2]), t, b;
 			struct vec3 wo = v3(-h->d[0], -h->d[1], -h->d[2]);
 			v3_frame(n, &t, &b);
-			struct vec3 wl = v3(v3_dot(wo, t), v3_dot(wo, b),
-					    v3_dot(wo, n));
+			struct vec3 wl =
+				v3(v3_dot(wo, t), v3_dot(wo, b), v3_dot(wo, n));
 			double mc[3], q[3];
 			glint_shade_hit(h, 1234u + x * 7 + y, NULL, env,
 					&glint_model_torrance_sparrow, p, 512,
@@ -180,8 +180,9 @@ static void test_silhouette(void)
 	make_camera(&s.cam, w, h, 260, 0, 0);
 	CHECK(glint_camera_sphere_ellipse(&s.cam, c, r, &e) == 0, "%s",
 	      glint_error_msg());
-	CHECK(e.a > e.b * 1.01, "off-axis silhouette should be elongated: "
-				"a %g b %g",
+	CHECK(e.a > e.b * 1.01,
+	      "off-axis silhouette should be elongated: "
+	      "a %g b %g",
 	      e.a, e.b);
 	/* The circle (centre, tangential radius) gives back the centre. */
 	glint_camera_sphere_from_circle(&s.cam, e.cx, e.cy, e.b, r, &back);
@@ -218,8 +219,8 @@ static void test_silhouette(void)
 	CHECK(fabs(area - exact) < 1e-3 * exact,
 	      "silhouette area %.3f px^2, ellipse %.3f", area, exact);
 	CHECK(fabs(mx / area - e.cx) < 0.02 && fabs(my / area - e.cy) < 0.02,
-	      "centroid (%.4f, %.4f), ellipse centre (%.4f, %.4f)",
-	      mx / area, my / area, e.cx, e.cy);
+	      "centroid (%.4f, %.4f), ellipse centre (%.4f, %.4f)", mx / area,
+	      my / area, e.cx, e.cy);
 	CHECK(wrong_in == 0 && wrong_out == 0,
 	      "%d inner pixels not covered, %d outer pixels covered", wrong_in,
 	      wrong_out);
@@ -265,14 +266,19 @@ static void test_mesh_furnace(void)
 	struct setup s;
 	struct glint_envmap *env = constant_env(0.5);
 	double t = (1 + sqrt(5)) / 2, kd[3] = { 0.6, 0.6, 0.6 };
-	float v[12 * 3] = { -1, (float)t, 0, 1, (float)t, 0, -1, (float)-t, 0,
-			    1, (float)-t, 0, 0, -1, (float)t, 0, 1, (float)t,
-			    0, -1, (float)-t, 0, 1, (float)-t, (float)t, 0, -1,
-			    (float)t, 0, 1, (float)-t, 0, -1, (float)-t, 0, 1 };
-	uint32_t f[20 * 3] = { 0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11,
-			       1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6, 7, 1, 8,
-			       3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9,
-			       4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1 };
+	float v[12 * 3] = { -1,	       (float)t, 0,	    1,	       (float)t,
+			    0,	       -1,	 (float)-t, 0,	       1,
+			    (float)-t, 0,	 0,	    -1,	       (float)t,
+			    0,	       1,	 (float)t,  0,	       -1,
+			    (float)-t, 0,	 1,	    (float)-t, (float)t,
+			    0,	       -1,	 (float)t,  0,	       1,
+			    (float)-t, 0,	 -1,	    (float)-t, 0,
+			    1 };
+	uint32_t f[20 * 3] = { 0,  11, 5,  0, 5, 1,  0, 1,  7, 0,  7,  10,
+			       0,  10, 11, 1, 5, 9,  5, 11, 4, 11, 10, 2,
+			       10, 7,  6,  7, 1, 8,  3, 9,  4, 3,  4,  2,
+			       3,  2,  6,  3, 6, 8,  3, 8,  9, 4,  9,  5,
+			       2,  4,  11, 6, 2, 10, 8, 6,  7, 9,  8,  1 };
 	for (int i = 0; i < 12; i++)
 		v[3 * i + 2] -= 8; /* move it to z = -8 */
 	make_camera(&s.cam, 32, 32, 40, 0, 0);
@@ -325,8 +331,10 @@ static void test_deterministic(void)
 	setup_sphere(&s, v3(0, 0, -3), 1, 4);
 	struct glint_image *a = glint_image_new(24, 24),
 			   *b = glint_image_new(24, 24);
-	struct glint_shade_opts o = { .light_samples = 8, .brdf_samples = 8,
-				      .background = 1, .nthreads = 1 };
+	struct glint_shade_opts o = { .light_samples = 8,
+				      .brdf_samples = 8,
+				      .background = 1,
+				      .nthreads = 1 };
 	glint_render_shade(&s.gb, s.t, env, &glint_model_torrance_sparrow, p,
 			   &o, a, NULL);
 	o.nthreads = 3;

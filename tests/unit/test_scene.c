@@ -16,8 +16,8 @@ static const char *write_file(const char *name, const char *text)
 	return p;
 }
 
-#define CAMERA                                                               \
-	"\"camera\": {\"width\": 640, \"height\": 480, \"focal_length_mm\": " \
+#define CAMERA                                                                 \
+	"\"camera\": {\"width\": 640, \"height\": 480, \"focal_length_mm\": "  \
 	"50, \"sensor_width_mm\": 36}"
 #define ENV "\"environment\": {\"path\": \"env.hdr\"}"
 
@@ -54,8 +54,8 @@ static void test_circle_scene(void)
 	CHECK_NEAR(s.sphere_centre.x, 0, 1e-12, "x on the axis");
 }
 
-static void expect_error(const char *name, const char *json,
-			 const char *frag1, const char *frag2)
+static void expect_error(const char *name, const char *json, const char *frag1,
+			 const char *frag2)
 {
 	struct glint_scene s;
 	const char *p = write_file(name, json);

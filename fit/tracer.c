@@ -480,16 +480,41 @@ int glint_tracer_occluded(struct glint_tracer *t, struct vec3 org,
 	return r.tfar < 0;
 }
 
+static void intersect_raw1(struct glint_tracer *t, const float *rays, int n,
+			   int32_t *hit_geom)
+{
+	struct RTCIntersectContext ctx;
+
+	rtcInitIntersectContext(&ctx);
+	for (int i = 0; i < n; i++) {
+		const float *r = rays + 6 * (size_t)i;
+		struct RTCRayHit rh = {
+			.ray = { .org_x = r[0], .org_y = r[1], .org_z = r[2],
+				 .dir_x = r[3], .dir_y = r[4], .dir_z = r[5],
+				 .tfar = INFINITY, .mask = 0xffffffffu },
+			.hit = { .geomID = RTC_INVALID_GEOMETRY_ID },
+		};
+		rtcIntersect1(t->scene, &ctx, &rh);
+		hit_geom[i] = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ?
+				      -1 :
+				      (int32_t)rh.hit.geomID;
+	}
+}
+
 void glint_tracer_intersect_raw(struct glint_tracer *t, const float *rays,
-				int n, int32_t *hit_geom)
+				int n, int32_t *hit_geom, int packet)
 {
 	_Alignas(64) struct RTCRayHit16 rh;
 	_Alignas(64) int valid[16];
 	struct RTCIntersectContext ctx;
 
+	glint_thread_ftz();
+	if (!packet) {
+		intersect_raw1(t, rays, n, hit_geom);
+		return;
+	}
 	rtcInitIntersectContext(&ctx);
 	ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-	glint_thread_ftz();
 	for (int b = 0; b < n; b += 16) {
 		int m = n - b < 16 ? n - b : 16;
 		for (int k = 0; k < 16; k++) {

@@ -63,11 +63,12 @@ int glint_tracer_occluded(struct glint_tracer *t, struct vec3 org,
 
 /*
  * Raw throughput for benchmarks: intersect n rays given as interleaved
- * origin/direction float sextuples with rtcIntersect16, writing geometry
- * ids (or -1) to hit_geom.  Single-threaded, no G-buffer work.
+ * origin/direction float sextuples with rtcIntersect16 (packet = 1) or
+ * rtcIntersect1 (packet = 0), writing geometry ids (or -1) to hit_geom.
+ * Single-threaded, no G-buffer work.
  */
 void glint_tracer_intersect_raw(struct glint_tracer *t, const float *rays,
-				int n, int32_t *hit_geom);
+				int n, int32_t *hit_geom, int packet);
 
 /* The stratified sample position s of spp in pixel (x, y): offsets in
  * [0, 1)^2 for the pixel and for the lens; deterministic. */

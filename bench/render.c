@@ -83,9 +83,9 @@ int main(int argc, char **argv)
 	int32_t *geom = malloc(n * sizeof(int32_t));
 	for (size_t i = 0; i < n; i++) {
 		for (int c = 0; c < 3; c++) {
-			rays[6 * i + c] = (float)(c == 0 ? sc.cam.pos.x :
-						  c == 1 ? sc.cam.pos.y :
-							   sc.cam.pos.z);
+			rays[6 * i + c] = (float)(c == 0   ? sc.cam.pos.x
+						  : c == 1 ? sc.cam.pos.y
+							   : sc.cam.pos.z);
 			rays[6 * i + 3 + c] = r.gb.hits[i].d[c];
 		}
 		hits += r.gb.hits[i].geom >= 0;
@@ -149,7 +149,8 @@ int main(int argc, char **argv)
 		double rate = units / med[v] / 1e6;
 		fprintf(csv, "\"%s\",%.6f,%.3f\n", names[v], med[v], rate);
 		if (v == SHADE_MT)
-			printf("%-42s %10.1f %12.2f %8s  (M shaded samples/s)\n",
+			printf("%-42s %10.1f %12.2f %8s  (M shaded "
+			       "samples/s)\n",
 			       names[v], 1e3 * med[v], rate, "");
 		else
 			printf("%-42s %10.1f %12.2f %8.2f\n", names[v],
@@ -165,15 +166,16 @@ int main(int argc, char **argv)
 	printf("peak memory: %.1f MiB\n", bench_peak_mib());
 
 	FILE *gp = fopen("bench-out/render.gp", "w");
-	fprintf(gp, "set terminal pngcairo noenhanced size 1000,520\n"
-		    "set output 'bench-out/render.png'\n"
-		    "set datafile separator ','\nset style fill solid\n"
-		    "set boxwidth 0.6\nset ylabel 'Mrays/s (median of %d)'\n"
-		    "set yrange [0:*]\nset bmargin 9\nset lmargin 18\n"
-		    "set xtics rotate by 25 right font ',9'\n"
-		    "set title 'glint render benchmark (%zu rays)'\n"
-		    "plot 'bench-out/render.csv' every ::1::6 using 0:3:"
-		    "xtic(1) with boxes notitle\n",
+	fprintf(gp,
+		"set terminal pngcairo noenhanced size 1000,520\n"
+		"set output 'bench-out/render.png'\n"
+		"set datafile separator ','\nset style fill solid\n"
+		"set boxwidth 0.6\nset ylabel 'Mrays/s (median of %d)'\n"
+		"set yrange [0:*]\nset bmargin 9\nset lmargin 18\n"
+		"set xtics rotate by 25 right font ',9'\n"
+		"set title 'glint render benchmark (%zu rays)'\n"
+		"plot 'bench-out/render.csv' every ::1::6 using 0:3:"
+		"xtic(1) with boxes notitle\n",
 		rounds, n);
 	fclose(gp);
 	if (system("command -v gnuplot >/dev/null 2>&1") == 0 &&

@@ -348,8 +348,40 @@ static void test_deterministic(void)
 	teardown(&s);
 }
 
+/* The fast per-pixel sample pattern equals glint_pixel_sample()'s, and
+ * samples stay inside their pixel. */
+static void test_sample_pattern(void)
+{
+	struct setup s;
+	int bad = 0, outside = 0;
+	make_camera(&s.cam, 20, 10, 30, 0.02, 2.5);
+	setup_sphere(&s, v3(0, 0, -3), 1, 5);
+	for (int y = 0; y < 10; y++)
+		for (int x = 0; x < 20; x++)
+			for (int k = 0; k < 5; k++) {
+				double pix[2], lens[2];
+				struct vec3 o, d;
+				glint_pixel_sample(x, y, k, 5, pix, lens);
+				outside += pix[0] < 0 || pix[0] >= 1 ||
+					   pix[1] < 0 || pix[1] >= 1;
+				glint_camera_ray(&s.cam, x + pix[0], y + pix[1],
+						 lens[0], lens[1], &o, &d);
+				const float *g =
+					s.gb.hits[(y * 20 + x) * 5 + k].d;
+				bad += fabs(g[0] - d.x) > 1e-6 ||
+				       fabs(g[1] - d.y) > 1e-6 ||
+				       fabs(g[2] - d.z) > 1e-6;
+			}
+	CHECK(bad == 0 && outside == 0,
+	      "%d G-buffer rays differ from the reference pattern, %d "
+	      "samples outside their pixel",
+	      bad, outside);
+	teardown(&s);
+}
+
 int main(void)
 {
+	RUN(test_sample_pattern);
 	RUN(test_furnace_lambert);
 	RUN(test_furnace_ts);
 	RUN(test_silhouette);

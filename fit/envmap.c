@@ -267,3 +267,35 @@ double glint_envmap_pdf(const struct glint_envmap *env, struct vec3 d)
 		return 0;
 	return cell * w * h / env->total / (2 * M_PI * M_PI * s);
 }
+
+/* Sampling density over (u, v) of texel (i, j) (wrapping i, clamping j). */
+static double uv_density(const struct glint_envmap *env, int i, int j)
+{
+	int w = env->img->width, h = env->img->height;
+
+	i = ((i % w) + w) % w;
+	j = j < 0 ? 0 : j >= h ? h - 1 : j;
+	const double *c = env->cond + (size_t)j * (w + 1);
+	return (c[i + 1] - c[i]) * w * h / env->total;
+}
+
+double glint_envmap_pdf_smooth(const struct glint_envmap *env, struct vec3 d)
+{
+	int w = env->img->width, h = env->img->height;
+	double u, v;
+
+	if (!(env->total > 0))
+		return 0;
+	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
+	double s = sin(M_PI * v);
+	if (!(s > 0))
+		return 0;
+	double x = u * w - 0.5, y = v * h - 0.5;
+	double fx = floor(x), fy = floor(y), tx = x - fx, ty = y - fy;
+	int i = (int)fx, j = (int)fy;
+	double p = (1 - ty) * ((1 - tx) * uv_density(env, i, j) +
+			       tx * uv_density(env, i + 1, j)) +
+		   ty * ((1 - tx) * uv_density(env, i, j + 1) +
+			 tx * uv_density(env, i + 1, j + 1));
+	return p / (2 * M_PI * M_PI * s);
+}

@@ -63,4 +63,12 @@ double glint_envmap_sample(const struct glint_envmap *env, double u1, double u2,
 /* The pdf glint_envmap_sample() has for world direction d. */
 double glint_envmap_pdf(const struct glint_envmap *env, struct vec3 d);
 
+/*
+ * A continuous stand-in for that pdf: the texel densities interpolated
+ * bilinearly in (u, v).  Used in multiple-importance weights where the
+ * fitter needs the estimate to vary smoothly with the parameters (weights
+ * need not be the sampling pdf to stay unbiased).
+ */
+double glint_envmap_pdf_smooth(const struct glint_envmap *env, struct vec3 d);
+
 #endif

@@ -42,6 +42,27 @@ struct glint_model_ops {
 			 struct vec3 *wi);
 	/* The pdf sample() has for wi. */
 	double (*pdf)(const double *p, struct vec3 wo, struct vec3 wi);
+
+	/*
+	 * Optional linear structure, used by the fitter: f = sum over lobes j
+	 * of albedo_j (an RGB parameter triple) times a scalar lobe b_j that
+	 * depends only on the other parameters.  nlobes = 0 when the model
+	 * is not of that form.
+	 */
+	int nlobes;
+	/* Index of each lobe's first RGB parameter. */
+	const int *lobe_param;
+	/* Whether lobe j depends on any parameter (else it is cached). */
+	const int *lobe_varies;
+	/* b_j(wo, wi) for every lobe j into b[nlobes]. */
+	void (*eval_lobes)(const double *p, struct vec3 wo, struct vec3 wi,
+			   double *b);
+	/* Sample lobe j (density ~ b_j cos where possible); returns the
+	 * pdf, 0 if no direction was produced. */
+	double (*sample_lobe)(const double *p, int j, struct vec3 wo,
+			      const double u[2], struct vec3 *wi);
+	double (*pdf_lobe)(const double *p, int j, struct vec3 wo,
+			   struct vec3 wi);
 };
 
 extern const struct glint_model_ops glint_model_lambert;

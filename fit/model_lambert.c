@@ -41,6 +41,33 @@ static double lambert_pdf(const double *p, struct vec3 wo, struct vec3 wi)
 	return wo.z > 0 && wi.z > 0 ? wi.z / M_PI : 0;
 }
 
+static const int lambert_lobe_param[1] = { 0 };
+static const int lambert_lobe_varies[1] = { 0 };
+
+static void lambert_lobes(const double *p, struct vec3 wo, struct vec3 wi,
+			  double *b)
+{
+	(void)p;
+	b[0] = wo.z > 0 && wi.z > 0 ? 1 / M_PI : 0;
+}
+
+static double lambert_sample_lobe(const double *p, int j, struct vec3 wo,
+				  const double u[2], struct vec3 *wi)
+{
+	(void)p;
+	(void)j;
+	if (!(wo.z > 0))
+		return 0;
+	return glint_sample_cosine(u, wi);
+}
+
+static double lambert_pdf_lobe(const double *p, int j, struct vec3 wo,
+			       struct vec3 wi)
+{
+	(void)j;
+	return lambert_pdf(p, wo, wi);
+}
+
 const struct glint_model_ops glint_model_lambert = {
 	.name = "lambert",
 	.conventions = "Lambertian: f = diffuse / pi per channel; diffuse is "
@@ -50,4 +77,10 @@ const struct glint_model_ops glint_model_lambert = {
 	.eval = lambert_eval,
 	.sample = lambert_sample,
 	.pdf = lambert_pdf,
+	.nlobes = 1,
+	.lobe_param = lambert_lobe_param,
+	.lobe_varies = lambert_lobe_varies,
+	.eval_lobes = lambert_lobes,
+	.sample_lobe = lambert_sample_lobe,
+	.pdf_lobe = lambert_pdf_lobe,
 };

@@ -25,6 +25,18 @@ static const struct glint_param ts_params[] = {
 	{ "ior", "ior", -1, 1, 5, 1.5 },
 };
 
+/* The specular lobe without its albedo: D G F / (4 cos_i cos_o). */
+static double ts_spec(const double *p, struct vec3 wo, struct vec3 wi)
+{
+	if (!(wo.z > 0 && wi.z > 0))
+		return 0;
+	struct vec3 h = v3_norm(v3_add(wo, wi));
+	double oh = v3_dot(wo, h);
+	return glint_beckmann_d(h.z, p[ROUGH]) *
+	       glint_vcavity_g(h.z, wo.z, wi.z, oh) *
+	       glint_fresnel_dielectric(oh, p[IOR]) / (4 * wi.z * wo.z);
+}
+
 static void ts_eval(const double *p, struct vec3 wo, struct vec3 wi,
 		    double f[3])
 {
@@ -32,11 +44,7 @@ static void ts_eval(const double *p, struct vec3 wo, struct vec3 wi,
 		f[0] = f[1] = f[2] = 0;
 		return;
 	}
-	struct vec3 h = v3_norm(v3_add(wo, wi));
-	double oh = v3_dot(wo, h);
-	double s = glint_beckmann_d(h.z, p[ROUGH]) *
-		   glint_vcavity_g(h.z, wo.z, wi.z, oh) *
-		   glint_fresnel_dielectric(oh, p[IOR]) / (4 * wi.z * wo.z);
+	double s = ts_spec(p, wo, wi);
 
 	for (int c = 0; c < 3; c++)
 		f[c] = p[KD + c] / M_PI + p[KS + c] * s;
@@ -75,26 +83,63 @@ static double ts_pdf(const double *p, struct vec3 wo, struct vec3 wi)
 	return ps * spec_pdf(p, wo, wi) + (1 - ps) * wi.z / M_PI;
 }
 
+/* Reflect wo about a Beckmann normal drawn with density D(h) cos(h);
+ * smooth in m for fixed u (common random numbers for the fitter). */
+static void sample_beckmann(double m, struct vec3 wo, const double u[2],
+			    struct vec3 *wi)
+{
+	double tan2 = -m * m * log(1 - u[0]);
+	double ch = 1 / sqrt(1 + tan2), sh = sqrt(fmax(0, 1 - ch * ch));
+	double phi = 2 * M_PI * u[1];
+	struct vec3 h = v3(sh * cos(phi), sh * sin(phi), ch);
+	double oh = v3_dot(wo, h);
+
+	*wi = v3_sub(v3_scale(h, 2 * oh), wo);
+}
+
 static double ts_sample(const double *p, struct vec3 wo, const double u[3],
 			struct vec3 *wi)
 {
 	if (!(wo.z > 0))
 		return 0;
-	if (u[0] < spec_prob(p, wo)) {
-		/* Beckmann normal with density D(h) cos(h). */
-		double m = p[ROUGH];
-		double tan2 = -m * m * log(1 - u[1]);
-		double ch = 1 / sqrt(1 + tan2), sh = sqrt(fmax(0, 1 - ch * ch));
-		double phi = 2 * M_PI * u[2];
-		struct vec3 h = v3(sh * cos(phi), sh * sin(phi), ch);
-		double oh = v3_dot(wo, h);
-		*wi = v3_sub(v3_scale(h, 2 * oh), wo);
-	} else {
+	if (u[0] < spec_prob(p, wo))
+		sample_beckmann(p[ROUGH], wo, u + 1, wi);
+	else
 		glint_sample_cosine(u + 1, wi);
-	}
 	if (!(wi->z > 0))
 		return 0;
 	return ts_pdf(p, wo, *wi);
+}
+
+static const int ts_lobe_param[2] = { KD, KS };
+static const int ts_lobe_varies[2] = { 0, 1 };
+
+static void ts_lobes(const double *p, struct vec3 wo, struct vec3 wi, double *b)
+{
+	b[0] = wo.z > 0 && wi.z > 0 ? 1 / M_PI : 0;
+	b[1] = ts_spec(p, wo, wi);
+}
+
+static double ts_pdf_lobe(const double *p, int j, struct vec3 wo,
+			  struct vec3 wi)
+{
+	if (!(wo.z > 0 && wi.z > 0))
+		return 0;
+	return j == 0 ? wi.z / M_PI : spec_pdf(p, wo, wi);
+}
+
+static double ts_sample_lobe(const double *p, int j, struct vec3 wo,
+			     const double u[2], struct vec3 *wi)
+{
+	if (!(wo.z > 0))
+		return 0;
+	if (j == 0)
+		glint_sample_cosine(u, wi);
+	else
+		sample_beckmann(p[ROUGH], wo, u, wi);
+	if (!(wi->z > 0))
+		return 0;
+	return ts_pdf_lobe(p, j, wo, *wi);
 }
 
 const struct glint_model_ops glint_model_torrance_sparrow = {
@@ -110,4 +155,10 @@ const struct glint_model_ops glint_model_torrance_sparrow = {
 	.eval = ts_eval,
 	.sample = ts_sample,
 	.pdf = ts_pdf,
+	.nlobes = 2,
+	.lobe_param = ts_lobe_param,
+	.lobe_varies = ts_lobe_varies,
+	.eval_lobes = ts_lobes,
+	.sample_lobe = ts_sample_lobe,
+	.pdf_lobe = ts_pdf_lobe,
 };

@@ -1,0 +1,361 @@
+/* SPDX-License-Identifier: MIT */
+#include "shade_cache.h"
+
+#include "sampling.h"
+
+#include "core/error.h"
+#include "core/parallel.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* One fixed env-map sample of a hit, in the hit's local frame. */
+struct env_sample {
+	float wi[3];
+	float l[3];
+	float pdf;	  /* the sampling pdf */
+	float pdf_smooth; /* continuous stand-in for the MIS weights */
+};
+
+/* One primary hit: its frame, its view direction, its sample shift. */
+struct cache_hit {
+	float t[3], b[3], n[3];
+	float wo[3]; /* local */
+	uint32_t seed;
+};
+
+struct glint_shade_cache {
+	const struct glint_model_ops *model;
+	const struct glint_envmap *env;
+	int n, spp, nl, nb, nthreads;
+	int32_t *pix;
+	struct cache_hit *hits;	 /* n * spp */
+	struct env_sample *envs; /* n * spp * nl */
+	double (*lobe_u)[2];	 /* nb fixed uniforms, shifted per hit */
+	double *static_lobes;	 /* n * nlobes * 3, constant lobes only */
+};
+
+static struct vec3 fv(const float f[3])
+{
+	return v3(f[0], f[1], f[2]);
+}
+
+static struct vec3 local_to_world(const struct cache_hit *h, struct vec3 v)
+{
+	return v3_add(v3_add(v3_scale(fv(h->t), v.x), v3_scale(fv(h->b), v.y)),
+		      v3_scale(fv(h->n), v.z));
+}
+
+/*
+ * Estimate lobe j's integral at one hit: nl env samples, nb lobe samples
+ * (uniform pairs u[k] shifted by the hit's seed), balance-heuristic
+ * weights with the smooth light pdf.  env samples come from `es`, or are
+ * drawn afresh when es is NULL (constant lobes at set-up).
+ */
+static void lobe_at_hit(const struct glint_shade_cache *c,
+			const struct cache_hit *h, const struct env_sample *es,
+			int nl, int nb, const double (*u)[2], const double *p,
+			int j, double out[3])
+{
+	const struct glint_model_ops *m = c->model;
+	struct vec3 wo = fv(h->wo);
+	double b[GLINT_MAX_PARAMS];
+	double sx = glint_u01(glint_hash32(h->seed ^ 0x2545f491u));
+	double sy = glint_u01(glint_hash32(h->seed ^ 0x9e3779b9u));
+
+	out[0] = out[1] = out[2] = 0;
+	for (int k = 0; k < nl; k++) {
+		const struct env_sample *e = &es[k];
+		struct vec3 wi = fv(e->wi);
+		m->eval_lobes(p, wo, wi, b);
+		if (b[j] <= 0)
+			continue;
+		double pb = nb ? m->pdf_lobe(p, j, wo, wi) : 0;
+		double w = b[j] * wi.z * e->pdf_smooth /
+			   (e->pdf * (nl * e->pdf_smooth + nb * pb));
+		for (int ch = 0; ch < 3; ch++)
+			out[ch] += w * e->l[ch];
+	}
+	for (int k = 0; k < nb; k++) {
+		double uu[2] = { u[k][0] + sx, u[k][1] + sy };
+		struct vec3 wi;
+		uu[0] -= uu[0] >= 1;
+		uu[1] -= uu[1] >= 1;
+		double pb = m->sample_lobe(p, j, wo, uu, &wi);
+		if (!(pb > 0))
+			continue;
+		m->eval_lobes(p, wo, wi, b);
+		if (b[j] <= 0)
+			continue;
+		struct vec3 ww = local_to_world(h, wi);
+		double ps = nl ? glint_envmap_pdf_smooth(c->env, ww) : 0;
+		double l[3];
+		glint_envmap_lookup(c->env, ww, l);
+		double w = b[j] * wi.z / (nl * ps + nb * pb);
+		for (int ch = 0; ch < 3; ch++)
+			out[ch] += w * l[ch];
+	}
+}
+
+static void draw_env_samples(const struct glint_envmap *env,
+			     const struct cache_hit *h, int nl, uint32_t salt,
+			     struct env_sample *es)
+{
+	for (int k = 0; k < nl; k++) {
+		double u[2], l[3];
+		struct vec3 d;
+		glint_hammersley((uint32_t)k, (uint32_t)nl, h->seed ^ salt, u);
+		double pdf = glint_envmap_sample(env, u[0], u[1], &d);
+		struct env_sample *e = &es[k];
+		struct vec3 wi = v3(v3_dot(d, fv(h->t)), v3_dot(d, fv(h->b)),
+				    v3_dot(d, fv(h->n)));
+		memset(e, 0, sizeof(*e));
+		if (!(pdf > 0) || !(wi.z > 0))
+			continue; /* contributes nothing: b = 0 below */
+		glint_envmap_lookup(env, d, l);
+		e->wi[0] = (float)wi.x;
+		e->wi[1] = (float)wi.y;
+		e->wi[2] = (float)wi.z;
+		for (int ch = 0; ch < 3; ch++)
+			e->l[ch] = (float)l[ch];
+		e->pdf = (float)pdf;
+		e->pdf_smooth = (float)glint_envmap_pdf_smooth(env, d);
+		/* A sample whose smooth pdf vanishes must keep its weight
+		 * finite: fall back to the sampling pdf. */
+		if (!(e->pdf_smooth > 0))
+			e->pdf_smooth = e->pdf;
+	}
+}
+
+struct setup_job {
+	struct glint_shade_cache *c;
+	int static_samples;
+	const double *p0;
+	int failed;
+};
+
+static void setup_pixels(void *ctx, int i0, int i1, int thread)
+{
+	struct setup_job *job = ctx;
+	struct glint_shade_cache *c = job->c;
+	const struct glint_model_ops *m = c->model;
+	int ns = job->static_samples;
+	struct env_sample *tmp = malloc((size_t)ns * sizeof(*tmp));
+	double(*u)[2] = malloc((size_t)ns * sizeof(*u));
+
+	(void)thread;
+	glint_thread_ftz();
+	if (!tmp || !u) {
+		job->failed = 1;
+		goto out;
+	}
+	for (int k = 0; k < ns; k++) {
+		u[k][0] = (k + 0.5) / ns;
+		u[k][1] = glint_radical2((uint32_t)k);
+	}
+	for (int i = i0; i < i1; i++) {
+		for (int s = 0; s < c->spp; s++) {
+			const struct cache_hit *h =
+				&c->hits[(size_t)i * c->spp + s];
+			draw_env_samples(c->env, h, c->nl, 0x3c6ef372u,
+					 c->envs + ((size_t)i * c->spp + s) *
+							   c->nl);
+			if (!ns)
+				continue;
+			draw_env_samples(c->env, h, ns, 0x1b873593u, tmp);
+			for (int j = 0; j < m->nlobes; j++) {
+				double a[3];
+				if (m->lobe_varies[j])
+					continue;
+				lobe_at_hit(c, h, tmp, ns, ns, u, job->p0, j,
+					    a);
+				double *dst = c->static_lobes +
+					      ((size_t)i * m->nlobes + j) * 3;
+				for (int ch = 0; ch < 3; ch++)
+					dst[ch] += a[ch] / c->spp;
+			}
+		}
+	}
+out:
+	free(tmp);
+	free(u);
+}
+
+int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
+			  int n, const struct glint_envmap *env,
+			  const struct glint_model_ops *model,
+			  const struct glint_shade_cache_opts *opts,
+			  struct glint_shade_cache **out)
+{
+	struct glint_shade_cache *c;
+	double p0[GLINT_MAX_PARAMS];
+
+	*out = NULL;
+	if (model->nlobes <= 0)
+		return glint_error_set(EINVAL,
+				       "model %s is not linear in its albedos: "
+				       "the shade cache cannot fit it",
+				       model->name);
+	if (n <= 0)
+		return glint_error_set(EINVAL, "no pixels to fit");
+	c = calloc(1, sizeof(*c));
+	if (!c)
+		return glint_error_set(ENOMEM, "out of memory");
+	c->model = model;
+	c->env = env;
+	c->n = n;
+	c->spp = gb->spp;
+	c->nl = opts->light_samples;
+	c->nb = opts->lobe_samples;
+	c->nthreads = opts->nthreads;
+	c->pix = malloc((size_t)n * sizeof(*c->pix));
+	c->hits = calloc((size_t)n * gb->spp, sizeof(*c->hits));
+	c->envs = calloc((size_t)n * gb->spp * (c->nl ? c->nl : 1),
+			 sizeof(*c->envs));
+	c->lobe_u = malloc((size_t)(c->nb ? c->nb : 1) * sizeof(*c->lobe_u));
+	c->static_lobes = calloc((size_t)n * model->nlobes * 3, sizeof(double));
+	if (!c->pix || !c->hits || !c->envs || !c->lobe_u || !c->static_lobes) {
+		glint_shade_cache_free(c);
+		return glint_error_set(ENOMEM,
+				       "out of memory for the shade cache of "
+				       "%d pixels",
+				       n);
+	}
+	memcpy(c->pix, pix, (size_t)n * sizeof(*pix));
+	for (int k = 0; k < c->nb; k++) {
+		c->lobe_u[k][0] = (k + 0.5) / c->nb;
+		c->lobe_u[k][1] = glint_radical2((uint32_t)k);
+	}
+	for (int i = 0; i < n; i++) {
+		for (int s = 0; s < gb->spp; s++) {
+			const struct glint_hit *g =
+				&gb->hits[(size_t)pix[i] * gb->spp + s];
+			struct cache_hit *h = &c->hits[(size_t)i * gb->spp + s];
+			if (g->geom < 0) {
+				glint_shade_cache_free(c);
+				return glint_error_set(
+					EINVAL,
+					"pixel %d of the fit is not wholly "
+					"on the sample",
+					pix[i]);
+			}
+			struct vec3 nn = fv(g->n), t, b;
+			struct vec3 wo = v3_scale(fv(g->d), -1);
+			v3_frame(nn, &t, &b);
+			for (int k = 0; k < 3; k++) {
+				h->t[k] = (float)(k == 0   ? t.x
+						  : k == 1 ? t.y
+							   : t.z);
+				h->b[k] = (float)(k == 0   ? b.x
+						  : k == 1 ? b.y
+							   : b.z);
+				h->n[k] = g->n[k];
+			}
+			h->wo[0] = (float)v3_dot(wo, t);
+			h->wo[1] = (float)v3_dot(wo, b);
+			h->wo[2] = (float)v3_dot(wo, nn);
+			h->seed = glint_hash32(
+				(uint32_t)(pix[i] * gb->spp + s) ^ 0x85ebca6bu);
+		}
+	}
+	for (int k = 0; k < model->nparams; k++)
+		p0[k] = model->params[k].def;
+	struct setup_job job = { c, opts->static_samples, p0, 0 };
+	glint_parallel_for(n, 64, opts->nthreads, setup_pixels, &job);
+	if (job.failed) {
+		glint_shade_cache_free(c);
+		return glint_error_set(ENOMEM, "out of memory");
+	}
+	*out = c;
+	return 0;
+}
+
+void glint_shade_cache_free(struct glint_shade_cache *c)
+{
+	if (!c)
+		return;
+	free(c->pix);
+	free(c->hits);
+	free(c->envs);
+	free(c->lobe_u);
+	free(c->static_lobes);
+	free(c);
+}
+
+int glint_shade_cache_count(const struct glint_shade_cache *c)
+{
+	return c->n;
+}
+
+const int32_t *glint_shade_cache_pixels(const struct glint_shade_cache *c)
+{
+	return c->pix;
+}
+
+struct lobes_job {
+	struct glint_shade_cache *c;
+	const double *p;
+	double *lobes;
+};
+
+static void lobes_pixels(void *ctx, int i0, int i1, int thread)
+{
+	struct lobes_job *job = ctx;
+	struct glint_shade_cache *c = job->c;
+	const struct glint_model_ops *m = c->model;
+	int nj = m->nlobes;
+
+	(void)thread;
+	glint_thread_ftz();
+	for (int i = i0; i < i1; i++) {
+		double *dst = job->lobes + (size_t)i * nj * 3;
+		memcpy(dst, c->static_lobes + (size_t)i * nj * 3,
+		       (size_t)nj * 3 * sizeof(double));
+		for (int j = 0; j < nj; j++) {
+			if (!m->lobe_varies[j])
+				continue;
+			for (int s = 0; s < c->spp; s++) {
+				size_t hi = (size_t)i * c->spp + s;
+				double a[3];
+				lobe_at_hit(c, &c->hits[hi],
+					    c->envs + hi * c->nl, c->nl, c->nb,
+					    (const double(*)[2])c->lobe_u,
+					    job->p, j, a);
+				for (int ch = 0; ch < 3; ch++)
+					dst[j * 3 + ch] += a[ch] / c->spp;
+			}
+		}
+	}
+}
+
+void glint_shade_cache_lobes(struct glint_shade_cache *c, const double *p,
+			     double *lobes)
+{
+	struct lobes_job job = { c, p, lobes };
+
+	glint_parallel_for(c->n, 32, c->nthreads, lobes_pixels, &job);
+}
+
+void glint_shade_cache_eval(struct glint_shade_cache *c, const double *p,
+			    double *rgb)
+{
+	const struct glint_model_ops *m = c->model;
+	int nj = m->nlobes;
+	double *lobes = malloc((size_t)c->n * nj * 3 * sizeof(double));
+
+	if (!lobes) {
+		memset(rgb, 0, (size_t)c->n * 3 * sizeof(double));
+		return;
+	}
+	glint_shade_cache_lobes(c, p, lobes);
+	for (int i = 0; i < c->n; i++)
+		for (int ch = 0; ch < 3; ch++) {
+			double v = 0;
+			for (int j = 0; j < nj; j++)
+				v += p[m->lobe_param[j] + ch] *
+				     lobes[((size_t)i * nj + j) * 3 + ch];
+			rgb[3 * i + ch] = v;
+		}
+	free(lobes);
+}

@@ -1,0 +1,64 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_FIT_SHADE_CACHE_H
+#define GLINT_FIT_SHADE_CACHE_H
+
+/*
+ * The fitter's fast path: trace once, re-shade only.
+ *
+ * For a model that is linear in its RGB albedos (model->nlobes > 0) a
+ * pixel's radiance is  I = sum_j albedo_j * A_j(p),  where
+ *   A_j = integral of L(wi) b_j(wo, wi; p) cos(theta_i) dwi
+ * (RGB, averaged over the pixel's primary samples).  Lobes that depend on
+ * no parameter (the diffuse one) are integrated once, with many samples.
+ * The others are re-estimated per evaluation on fixed sample sets (common
+ * random numbers): env-map samples with fixed directions, and lobe samples
+ * whose fixed uniforms are mapped through the current parameters, combined
+ * by the balance heuristic with a continuous light pdf in the weights.  So
+ * the estimate is a deterministic, continuous function of the parameters,
+ * which Levenberg-Marquardt needs.
+ *
+ * The cache holds a chosen set of pixels (e.g. the sphere's interior, or a
+ * coarse subset of it).
+ */
+
+#include "envmap.h"
+#include "model.h"
+#include "tracer.h"
+
+struct glint_shade_cache;
+
+struct glint_shade_cache_opts {
+	int light_samples;  /* fixed env samples per hit (varying lobes) */
+	int lobe_samples;   /* fixed lobe samples per hit (varying lobes) */
+	int static_samples; /* per hit and technique for constant lobes */
+	int nthreads;
+};
+
+/*
+ * Build a cache for pixels pix[0..n) (indices y * width + x of gb) that
+ * are wholly covered by the sample.  The env map and model must outlive
+ * the cache.
+ */
+int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
+			  int n, const struct glint_envmap *env,
+			  const struct glint_model_ops *model,
+			  const struct glint_shade_cache_opts *opts,
+			  struct glint_shade_cache **out);
+void glint_shade_cache_free(struct glint_shade_cache *c);
+
+int glint_shade_cache_count(const struct glint_shade_cache *c);
+const int32_t *glint_shade_cache_pixels(const struct glint_shade_cache *c);
+
+/*
+ * Lobe integrals for parameters p: lobes[(i * nlobes + j) * 3 + c] for
+ * pixel i, lobe j, channel c.  Only varying lobes are recomputed.
+ * lobes has n * nlobes * 3 doubles.
+ */
+void glint_shade_cache_lobes(struct glint_shade_cache *c, const double *p,
+			     double *lobes);
+
+/* Radiance of every cached pixel for parameters p: rgb[3 * i + c]. */
+void glint_shade_cache_eval(struct glint_shade_cache *c, const double *p,
+			    double *rgb);
+
+#endif

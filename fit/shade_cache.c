@@ -296,6 +296,7 @@ const int32_t *glint_shade_cache_pixels(const struct glint_shade_cache *c)
 struct lobes_job {
 	struct glint_shade_cache *c;
 	const double *p;
+	const int *sel; /* NULL: all pixels */
 	double *lobes;
 };
 
@@ -308,8 +309,9 @@ static void lobes_pixels(void *ctx, int i0, int i1, int thread)
 
 	(void)thread;
 	glint_thread_ftz();
-	for (int i = i0; i < i1; i++) {
-		double *dst = job->lobes + (size_t)i * nj * 3;
+	for (int k = i0; k < i1; k++) {
+		int i = job->sel ? job->sel[k] : k;
+		double *dst = job->lobes + (size_t)k * nj * 3;
 		memcpy(dst, c->static_lobes + (size_t)i * nj * 3,
 		       (size_t)nj * 3 * sizeof(double));
 		for (int j = 0; j < nj; j++) {
@@ -332,9 +334,17 @@ static void lobes_pixels(void *ctx, int i0, int i1, int thread)
 void glint_shade_cache_lobes(struct glint_shade_cache *c, const double *p,
 			     double *lobes)
 {
-	struct lobes_job job = { c, p, lobes };
+	struct lobes_job job = { c, p, NULL, lobes };
 
 	glint_parallel_for(c->n, 32, c->nthreads, lobes_pixels, &job);
+}
+
+void glint_shade_cache_lobes_sel(struct glint_shade_cache *c, const double *p,
+				 const int *sel, int nsel, double *lobes)
+{
+	struct lobes_job job = { c, p, sel, lobes };
+
+	glint_parallel_for(nsel, 32, c->nthreads, lobes_pixels, &job);
 }
 
 void glint_shade_cache_eval(struct glint_shade_cache *c, const double *p,

@@ -57,6 +57,11 @@ const int32_t *glint_shade_cache_pixels(const struct glint_shade_cache *c);
 void glint_shade_cache_lobes(struct glint_shade_cache *c, const double *p,
 			     double *lobes);
 
+/* The same for the cached pixels sel[0..nsel) only; lobes is indexed by
+ * position in sel. */
+void glint_shade_cache_lobes_sel(struct glint_shade_cache *c, const double *p,
+				 const int *sel, int nsel, double *lobes);
+
 /* Radiance of every cached pixel for parameters p: rgb[3 * i + c]. */
 void glint_shade_cache_eval(struct glint_shade_cache *c, const double *p,
 			    double *rgb);

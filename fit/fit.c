@@ -1,0 +1,855 @@
+/* SPDX-License-Identifier: MIT */
+#include "fit.h"
+
+#include "core/error.h"
+#include "core/log.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *const method_names[] = { "three-pass", "naive", "varpro" };
+
+const char *glint_fit_method_name(enum glint_fit_method m)
+{
+	return method_names[m];
+}
+
+int glint_fit_method_parse(const char *s, enum glint_fit_method *m)
+{
+	for (int i = 0; i < 3; i++)
+		if (!strcmp(s, method_names[i])) {
+			*m = (enum glint_fit_method)i;
+			return 0;
+		}
+	return glint_error_set(EINVAL,
+			       "fit method '%s': expected three-pass, naive or "
+			       "varpro",
+			       s);
+}
+
+void glint_fit_default_opts(struct glint_fit_opts *o)
+{
+	memset(o, 0, sizeof(*o));
+	o->method = GLINT_FIT_THREE_PASS;
+	o->coarse_to_fine = 1;
+	o->mask_threshold = 0.02;
+	o->max_pixels = 16384;
+	o->light_samples = 16;
+	o->lobe_samples = 16;
+	o->static_samples = 128;
+	o->max_iter = 60;
+}
+
+/* The pixels of a fit ("universe") with their photo values and weights. */
+struct fit_data {
+	int n;
+	int32_t *pix; /* image pixel index */
+	int *xy;      /* x, y pairs */
+	double *y;    /* photo, 3 per pixel */
+	double *sw;   /* sqrt of the weights, 3 per pixel */
+};
+
+/* What one LM pass optimises. */
+struct objective {
+	struct glint_renderer *r;
+	struct glint_shade_cache *cache; /* NULL: faithful full renders */
+	const struct glint_model_ops *m;
+	const struct fit_data *d;
+	const int *sel;
+	int nsel;
+	double p[GLINT_MAX_PARAMS]; /* all parameters; free ones overwritten */
+	int nfree;
+	int free_idx[GLINT_MAX_PARAMS];
+	int varpro; /* free = nonlinear only; albedos solved inside */
+	/* which parameters are lobe albedos: lobe and channel, else -1 */
+	int lobe_of[GLINT_MAX_PARAMS], chan_of[GLINT_MAX_PARAMS];
+	/* memo of lobe integrals at the nonlinear parameters memo_p */
+	double *lobes, *lobes2;
+	double memo_p[GLINT_MAX_PARAMS];
+	int memo_valid;
+	/* faithful path */
+	const struct glint_fit_opts *o;
+	struct glint_image *img;
+	int evals;
+};
+
+static int nonlinear_same(const struct objective *ob, const double *a,
+			  const double *b)
+{
+	for (int k = 0; k < ob->m->nparams; k++)
+		if (ob->lobe_of[k] < 0 && a[k] != b[k])
+			return 0;
+	return 1;
+}
+
+static void lobes_at(struct objective *ob, const double *p, double *dst)
+{
+	glint_shade_cache_lobes_sel(ob->cache, p, ob->sel, ob->nsel, dst);
+}
+
+static const double *memo_lobes(struct objective *ob, const double *p)
+{
+	if (!ob->memo_valid || !nonlinear_same(ob, p, ob->memo_p)) {
+		lobes_at(ob, p, ob->lobes);
+		memcpy(ob->memo_p, p, sizeof(ob->memo_p));
+		ob->memo_valid = 1;
+	}
+	return ob->lobes;
+}
+
+static double pixel_value(const struct objective *ob, const double *p,
+			  const double *lobes, int s, int c)
+{
+	int nj = ob->m->nlobes;
+	double v = 0;
+	for (int j = 0; j < nj; j++)
+		v += p[ob->m->lobe_param[j] + c] *
+		     lobes[((size_t)s * nj + j) * 3 + c];
+	return v;
+}
+
+/*
+ * Bounded linear least squares for the albedos of one channel, k <= 3
+ * unknowns: every assignment of each unknown to {free, lower, upper} is
+ * tried, the free ones solved from the normal equations, and the best
+ * feasible one kept (exact for a convex quadratic over a box).
+ */
+static void solve_albedos(struct objective *ob, double *p, const double *lobes,
+			  int c)
+{
+	const struct glint_model_ops *m = ob->m;
+	int nj = m->nlobes;
+	double g[3][3] = { { 0 } }, b[3] = { 0 }, yy = 0;
+
+	for (int t = 0; t < ob->nsel; t++) {
+		int s = ob->sel[t];
+		double w = ob->d->sw[3 * s + c] * ob->d->sw[3 * s + c];
+		double y = ob->d->y[3 * s + c];
+		const double *a = lobes + (size_t)t * nj * 3;
+		for (int j = 0; j < nj; j++) {
+			b[j] += w * a[j * 3 + c] * y;
+			for (int k = 0; k < nj; k++)
+				g[j][k] += w * a[j * 3 + c] * a[k * 3 + c];
+		}
+		yy += w * y * y;
+	}
+	int combos = 1;
+	for (int j = 0; j < nj; j++)
+		combos *= 3;
+	double best = INFINITY, best_a[3] = { 0 };
+	for (int code = 0; code < combos; code++) {
+		double a[3], lo[3], hi[3];
+		int st[3], fr[3], nf = 0, cc = code;
+		for (int j = 0; j < nj; j++) {
+			const struct glint_param *pi =
+				&m->params[m->lobe_param[j] + c];
+			lo[j] = pi->lo;
+			hi[j] = pi->hi;
+			st[j] = cc % 3;
+			cc /= 3;
+			a[j] = st[j] == 1 ? lo[j] : hi[j];
+			if (st[j] == 0)
+				fr[nf++] = j;
+		}
+		if (nf) {
+			/* Solve G_ff a_f = b_f - G_fb a_b by Gaussian
+			 * elimination (nf <= 3). */
+			double mm[3][4];
+			for (int u = 0; u < nf; u++) {
+				double rhs = b[fr[u]];
+				for (int j = 0; j < nj; j++)
+					if (st[j])
+						rhs -= g[fr[u]][j] * a[j];
+				for (int v = 0; v < nf; v++)
+					mm[u][v] = g[fr[u]][fr[v]];
+				mm[u][nf] = rhs;
+			}
+			int ok = 1;
+			for (int u = 0; u < nf && ok; u++) {
+				int piv = u;
+				for (int v = u + 1; v < nf; v++)
+					if (fabs(mm[v][u]) > fabs(mm[piv][u]))
+						piv = v;
+				if (fabs(mm[piv][u]) < 1e-300) {
+					ok = 0;
+					break;
+				}
+				for (int k = 0; k <= nf; k++) {
+					double tmp = mm[u][k];
+					mm[u][k] = mm[piv][k];
+					mm[piv][k] = tmp;
+				}
+				for (int v = 0; v < nf; v++) {
+					if (v == u)
+						continue;
+					double f = mm[v][u] / mm[u][u];
+					for (int k = u; k <= nf; k++)
+						mm[v][k] -= f * mm[u][k];
+				}
+			}
+			if (!ok)
+				continue;
+			for (int u = 0; u < nf; u++) {
+				double v = mm[u][nf] / mm[u][u];
+				if (v < lo[fr[u]] || v > hi[fr[u]])
+					ok = 0;
+				a[fr[u]] = v;
+			}
+			if (!ok)
+				continue;
+		}
+		double cost = yy;
+		for (int j = 0; j < nj; j++) {
+			cost -= 2 * a[j] * b[j];
+			for (int k = 0; k < nj; k++)
+				cost += a[j] * g[j][k] * a[k];
+		}
+		if (cost < best) {
+			best = cost;
+			memcpy(best_a, a, sizeof(best_a));
+		}
+	}
+	for (int j = 0; j < nj; j++)
+		p[m->lobe_param[j] + c] = best_a[j];
+}
+
+static int render_full(struct objective *ob, const double *p)
+{
+	struct glint_renderer *r = ob->r;
+	struct glint_gbuffer gb;
+	struct glint_shade_opts so = {
+		.light_samples = r->scene.light_samples,
+		.brdf_samples = r->scene.brdf_samples,
+		.nthreads = ob->o->nthreads,
+	};
+	/* The paper's way: trace and render the whole image each time. */
+	int ret = glint_tracer_primary(r->tracer, &r->scene.cam, r->scene.spp,
+				       ob->o->nthreads, NULL, &gb);
+	if (ret < 0)
+		return ret;
+	ret = glint_render_shade(&gb, r->tracer, r->env, ob->m, p, &so, ob->img,
+				 NULL);
+	glint_gbuffer_free(&gb);
+	return ret;
+}
+
+static int obj_residuals(void *ctx, const double *q, double *res)
+{
+	struct objective *ob = ctx;
+	double p[GLINT_MAX_PARAMS];
+
+	memcpy(p, ob->p, sizeof(p));
+	for (int k = 0; k < ob->nfree; k++)
+		p[ob->free_idx[k]] = q[k];
+	ob->evals++;
+	if (!ob->cache) {
+		int ret = render_full(ob, p);
+		if (ret < 0)
+			return ret;
+		for (int t = 0; t < ob->nsel; t++) {
+			int s = ob->sel[t];
+			const float *v =
+				glint_image_px(ob->img, ob->d->xy[2 * s],
+					       ob->d->xy[2 * s + 1]);
+			for (int c = 0; c < 3; c++)
+				res[3 * t + c] = ob->d->sw[3 * s + c] *
+						 (v[c] - ob->d->y[3 * s + c]);
+		}
+		return 0;
+	}
+	const double *lobes = memo_lobes(ob, p);
+	if (ob->varpro) {
+		for (int c = 0; c < 3; c++)
+			solve_albedos(ob, p, lobes, c);
+		memcpy(ob->p, p, sizeof(p)); /* keep the albedos found */
+	}
+	for (int t = 0; t < ob->nsel; t++) {
+		int s = ob->sel[t];
+		for (int c = 0; c < 3; c++)
+			res[3 * t + c] = ob->d->sw[3 * s + c] *
+					 (pixel_value(ob, p, lobes, t, c) -
+					  ob->d->y[3 * s + c]);
+	}
+	return 0;
+}
+
+/* Analytic columns for albedos, forward differences for the rest. */
+static int obj_jacobian(void *ctx, const double *q, const double *r,
+			double *jac)
+{
+	struct objective *ob = ctx;
+	int nf = ob->nfree, nj = ob->m->nlobes;
+	double p[GLINT_MAX_PARAMS];
+
+	(void)r;
+	memcpy(p, ob->p, sizeof(p));
+	for (int k = 0; k < nf; k++)
+		p[ob->free_idx[k]] = q[k];
+	const double *lobes = memo_lobes(ob, p);
+	for (int k = 0; k < nf; k++) {
+		int pk = ob->free_idx[k];
+		if (ob->lobe_of[pk] >= 0) {
+			int j = ob->lobe_of[pk], c = ob->chan_of[pk];
+			for (int t = 0; t < ob->nsel; t++) {
+				int s = ob->sel[t];
+				for (int cc = 0; cc < 3; cc++)
+					jac[(size_t)(3 * t + cc) * nf + k] =
+						cc != c ? 0
+							: ob->d->sw[3 * s + c] *
+								  lobes[((size_t)t *
+										 nj +
+									 j) * 3 +
+									c];
+			}
+			continue;
+		}
+		const struct glint_param *pi = &ob->m->params[pk];
+		double h = 1e-4 * fmax(fabs(p[pk]), 1e-2);
+		if (p[pk] + h > pi->hi)
+			h = -h;
+		double pp[GLINT_MAX_PARAMS];
+		memcpy(pp, p, sizeof(pp));
+		pp[pk] += h;
+		lobes_at(ob, pp, ob->lobes2);
+		ob->evals++;
+		for (int t = 0; t < ob->nsel; t++) {
+			int s = ob->sel[t];
+			for (int c = 0; c < 3; c++)
+				jac[(size_t)(3 * t + c) * nf + k] =
+					ob->d->sw[3 * s + c] *
+					(pixel_value(ob, p, ob->lobes2, t, c) -
+					 pixel_value(ob, p, lobes, t, c)) /
+					h;
+		}
+	}
+	return 0;
+}
+
+struct progress_ctx {
+	const struct glint_fit_opts *o;
+	const char *pass;
+};
+
+static void lm_progress(void *ctx, int iter, double cost, const double *p)
+{
+	struct progress_ctx *pc = ctx;
+	(void)p;
+	if (pc->o->progress)
+		pc->o->progress(pc->o->progress_ctx, pc->pass, iter, cost);
+}
+
+/* Run LM over the parameters `freev` of ob->p on selection sel. */
+static int run_pass(struct objective *ob, const char *name, const int *sel,
+		    int nsel, const int *freev, int varpro,
+		    struct glint_fit_result *res, struct glint_lm_result *lr)
+{
+	const struct glint_model_ops *m = ob->m;
+	double q[GLINT_MAX_PARAMS], lo[GLINT_MAX_PARAMS], hi[GLINT_MAX_PARAMS];
+	struct glint_lm_opts lo_opts;
+	struct progress_ctx pc = { ob->o, name };
+	double t0 = glint_now();
+
+	ob->sel = sel;
+	ob->nsel = nsel;
+	ob->varpro = varpro;
+	ob->memo_valid = 0;
+	ob->nfree = 0;
+	ob->evals = 0;
+	for (int k = 0; k < m->nparams; k++)
+		if (freev[k]) {
+			ob->free_idx[ob->nfree] = k;
+			q[ob->nfree] = ob->p[k];
+			lo[ob->nfree] = m->params[k].lo;
+			hi[ob->nfree] = m->params[k].hi;
+			ob->nfree++;
+		}
+	if (!ob->nfree)
+		return 0;
+	struct glint_lm_problem pr = {
+		ob->nfree,
+		3 * nsel,
+		lo,
+		hi,
+		obj_residuals,
+		ob->cache && !varpro ? obj_jacobian : NULL,
+		ob,
+	};
+	glint_lm_default_opts(&lo_opts);
+	lo_opts.max_iter = ob->o->max_iter;
+	lo_opts.progress = lm_progress;
+	lo_opts.progress_ctx = &pc;
+	int ret = glint_lm_solve(&pr, &lo_opts, q, lr);
+	if (ret < 0)
+		return ret;
+	for (int k = 0; k < ob->nfree; k++)
+		ob->p[ob->free_idx[k]] = q[k];
+	if (varpro) { /* the albedos that belong to the final q */
+		double *scratch = malloc((size_t)3 * nsel * sizeof(double));
+		if (!scratch)
+			return glint_error_set(ENOMEM, "out of memory");
+		obj_residuals(ob, q, scratch);
+		free(scratch);
+	}
+	if (res->npasses < GLINT_FIT_MAX_PASSES) {
+		struct glint_fit_pass *fp = &res->passes[res->npasses++];
+		snprintf(fp->name, sizeof(fp->name), "%s", name);
+		fp->pixels = nsel;
+		fp->iterations = lr->iterations;
+		fp->evaluations = ob->evals;
+		fp->cost0 = lr->cost0;
+		fp->cost = lr->cost;
+		fp->seconds = glint_now() - t0;
+	}
+	return 0;
+}
+
+/* Pixels wholly on the sphere, every `stride`-th row and column. */
+static int collect_pixels(const struct glint_gbuffer *gb, int stride,
+			  const struct glint_image *photo,
+			  const struct glint_image *weight, struct fit_data *d,
+			  int *interior)
+{
+	int n = 0, cap = (gb->width / stride + 1) * (gb->height / stride + 1);
+
+	*interior = 0;
+	d->pix = malloc((size_t)cap * sizeof(*d->pix));
+	d->xy = malloc((size_t)cap * 2 * sizeof(int));
+	d->y = malloc((size_t)cap * 3 * sizeof(double));
+	d->sw = malloc((size_t)cap * 3 * sizeof(double));
+	if (!d->pix || !d->xy || !d->y || !d->sw)
+		return glint_error_set(ENOMEM, "out of memory");
+	for (int y = 0; y < gb->height; y++)
+		for (int x = 0; x < gb->width; x++) {
+			size_t i = (size_t)y * gb->width + x;
+			int on = 1;
+			for (int s = 0; s < gb->spp; s++)
+				on &= gb->hits[i * gb->spp + s].geom >= 0;
+			if (!on)
+				continue;
+			(*interior)++;
+			if (x % stride || y % stride)
+				continue;
+			const float *v = glint_image_px(photo, x, y);
+			const float *w =
+				weight ? glint_image_px(weight, x, y) : NULL;
+			d->pix[n] = (int32_t)i;
+			d->xy[2 * n] = x;
+			d->xy[2 * n + 1] = y;
+			for (int c = 0; c < 3; c++) {
+				double wc = w ? w[c] : 1;
+				int ok = isfinite(v[c]) && isfinite(wc) &&
+					 wc > 0;
+				d->y[3 * n + c] = ok ? v[c] : 0;
+				d->sw[3 * n + c] = ok ? sqrt(wc) : 0;
+			}
+			n++;
+		}
+	d->n = n;
+	return 0;
+}
+
+static void free_data(struct fit_data *d)
+{
+	free(d->pix);
+	free(d->xy);
+	free(d->y);
+	free(d->sw);
+}
+
+/* Check the photo carries a signal where the sphere should be. */
+static int check_photo(const struct fit_data *d)
+{
+	double sum = 0, mx = 0;
+	int usable = 0;
+
+	for (int i = 0; i < 3 * d->n; i++) {
+		if (d->sw[i] > 0) {
+			usable++;
+			sum += d->y[i];
+			mx = fmax(mx, d->y[i]);
+		}
+	}
+	if (!usable)
+		return glint_error_set(EINVAL,
+				       "the photo has no usable pixel on the "
+				       "sphere (all saturated, invalid or "
+				       "zero-weight): nothing to fit");
+	if (!(mx > 0))
+		return glint_error_set(EINVAL,
+				       "the photo is black where the scene "
+				       "puts the sphere (%d pixels, maximum "
+				       "%g): nothing to fit",
+				       d->n, mx);
+	if (usable < d->n * 3 / 10)
+		return glint_error_set(EINVAL,
+				       "only %d of %d values on the sphere are "
+				       "usable (the rest saturated or "
+				       "invalid): expected at least 30 %%",
+				       usable, 3 * d->n);
+	return 0;
+}
+
+static int stride_for(int interior, int max_pixels)
+{
+	int s = 1;
+	while (interior / (s * s) > max_pixels)
+		s++;
+	return s;
+}
+
+static void finish_stats(struct objective *ob, const int *sel, int nsel,
+			 struct glint_fit_result *res)
+{
+	double se = 0, sy = 0;
+	int n = 0;
+	double *lobes = ob->cache ? malloc((size_t)nsel * ob->m->nlobes * 3 *
+					   sizeof(double))
+				  : NULL;
+
+	if (ob->cache && lobes)
+		glint_shade_cache_lobes_sel(ob->cache, ob->p, sel, nsel, lobes);
+	else if (!ob->cache)
+		render_full(ob, ob->p);
+	for (int t = 0; t < nsel; t++) {
+		int s = sel[t];
+		for (int c = 0; c < 3; c++) {
+			if (ob->d->sw[3 * s + c] <= 0)
+				continue;
+			double v;
+			if (lobes)
+				v = pixel_value(ob, ob->p, lobes, t, c);
+			else
+				v = glint_image_px(ob->img, ob->d->xy[2 * s],
+						   ob->d->xy[2 * s + 1])[c];
+			double e = v - ob->d->y[3 * s + c];
+			se += e * e;
+			sy += ob->d->y[3 * s + c];
+			n++;
+		}
+	}
+	free(lobes);
+	res->rmse = n ? sqrt(se / n) : NAN;
+	res->rel_rmse = n && sy > 0 ? res->rmse / (sy / n) : NAN;
+	res->pixels = nsel;
+}
+
+int glint_fit(struct glint_renderer *r, const struct glint_model_ops *model,
+	      const struct glint_image *photo, const struct glint_image *weight,
+	      const struct glint_fit_opts *o, struct glint_fit_result *res)
+{
+	const struct glint_gbuffer *gb = &r->gb;
+	struct fit_data d = { 0 };
+	struct objective ob;
+	int *all = NULL, *coarse = NULL, *spec = NULL, *diff = NULL;
+	int freev[GLINT_MAX_PARAMS];
+	struct glint_lm_result lr;
+	int ret, interior;
+	double t0 = glint_now();
+
+	memset(res, 0, sizeof(*res));
+	memset(&ob, 0, sizeof(ob));
+	res->model = model;
+	if (model->nlobes <= 0)
+		return glint_error_set(EINVAL,
+				       "model %s cannot be fitted by LM here "
+				       "(no linear lobes)",
+				       model->name);
+	if (photo->width != gb->width || photo->height != gb->height)
+		return glint_error_set(EINVAL,
+				       "photo is %dx%d: expected the scene "
+				       "camera's %dx%d",
+				       photo->width, photo->height, gb->width,
+				       gb->height);
+	if (weight &&
+	    (weight->width != gb->width || weight->height != gb->height))
+		return glint_error_set(
+			EINVAL, "weight image is %dx%d: expected %dx%d",
+			weight->width, weight->height, gb->width, gb->height);
+	/* The fine pixel set: every stride-th interior pixel. */
+	int count;
+	ret = collect_pixels(gb, 1, photo, NULL, &d, &interior);
+	free_data(&d);
+	if (ret < 0)
+		return ret;
+	if (interior < 16)
+		return glint_error_set(EINVAL,
+				       "only %d pixels lie wholly on the "
+				       "sphere: expected at least 16 (is the "
+				       "sphere in view?)",
+				       interior);
+	int stride = stride_for(interior, o->max_pixels);
+	memset(&d, 0, sizeof(d));
+	ret = collect_pixels(gb, stride, photo, weight, &d, &count);
+	if (ret < 0)
+		goto out;
+	res->interior = interior;
+	ret = check_photo(&d);
+	if (ret < 0)
+		goto out;
+
+	ob.r = r;
+	ob.m = model;
+	ob.d = &d;
+	ob.o = o;
+	for (int k = 0; k < model->nparams; k++) {
+		ob.p[k] = model->params[k].def;
+		ob.lobe_of[k] = ob.chan_of[k] = -1;
+	}
+	for (int j = 0; j < model->nlobes; j++)
+		for (int c = 0; c < 3; c++) {
+			ob.lobe_of[model->lobe_param[j] + c] = j;
+			ob.chan_of[model->lobe_param[j] + c] = c;
+		}
+	ob.lobes = malloc((size_t)d.n * model->nlobes * 3 * sizeof(double));
+	ob.lobes2 = malloc((size_t)d.n * model->nlobes * 3 * sizeof(double));
+	all = malloc((size_t)d.n * sizeof(int));
+	coarse = malloc((size_t)d.n * sizeof(int));
+	spec = malloc((size_t)d.n * sizeof(int));
+	diff = malloc((size_t)d.n * sizeof(int));
+	if (!ob.lobes || !ob.lobes2 || !all || !coarse || !spec || !diff) {
+		ret = glint_error_set(ENOMEM, "out of memory");
+		goto out;
+	}
+	if (o->faithful) {
+		ob.img = glint_image_new(gb->width, gb->height);
+		if (!ob.img) {
+			ret = -ENOMEM;
+			goto out;
+		}
+	} else {
+		struct glint_shade_cache_opts co = {
+			.light_samples = o->light_samples,
+			.lobe_samples = o->lobe_samples,
+			.static_samples = o->static_samples,
+			.nthreads = o->nthreads,
+		};
+		ret = glint_shade_cache_new(gb, d.pix, d.n, r->env, model, &co,
+					    &ob.cache);
+		if (ret < 0)
+			goto out;
+	}
+	res->setup_seconds = glint_now() - t0;
+
+	/* Selections: all, coarse (4x the stride), and the two masks. */
+	int nall = 0, ncoarse = 0, nspec = 0, ndiff = 0;
+	for (int i = 0; i < d.n; i++) {
+		all[nall++] = i;
+		if (d.xy[2 * i] % (4 * stride) == 0 &&
+		    d.xy[2 * i + 1] % (4 * stride) == 0)
+			coarse[ncoarse++] = i;
+	}
+	if (!o->coarse_to_fine || ncoarse < 64) {
+		memcpy(coarse, all, (size_t)nall * sizeof(int));
+		ncoarse = nall;
+	}
+	/* White Lambertian render: the constant lobes at albedo 1. */
+	{
+		int nj = model->nlobes;
+		double *wl = malloc((size_t)ncoarse * nj * 3 * sizeof(double));
+		if (!wl) {
+			ret = glint_error_set(ENOMEM, "out of memory");
+			goto out;
+		}
+		if (ob.cache)
+			glint_shade_cache_lobes_sel(ob.cache, ob.p, coarse,
+						    ncoarse, wl);
+		else
+			memset(wl, 0,
+			       (size_t)ncoarse * nj * 3 * sizeof(double));
+		for (int t = 0; t < ncoarse; t++) {
+			int s = coarse[t], is_spec = 0;
+			for (int c = 0; c < 3; c++) {
+				double white = 0;
+				for (int j = 0; j < nj; j++)
+					if (!model->lobe_varies[j])
+						white += wl[((size_t)t * nj +
+							     j) * 3 +
+							    c];
+				if (!ob.cache) /* faithful: Lambert render */
+					white = NAN;
+				if (d.y[3 * s + c] >
+				    (1 + o->mask_threshold) * white + 1e-12)
+					is_spec = 1;
+			}
+			if (is_spec)
+				spec[nspec++] = s;
+			else
+				diff[ndiff++] = s;
+		}
+		free(wl);
+	}
+	if (o->faithful && o->method == GLINT_FIT_THREE_PASS) {
+		/* The white render the paper's way: a full Lambert render. */
+		double white_p[GLINT_MAX_PARAMS];
+		const struct glint_model_ops *lm = &glint_model_lambert;
+		for (int c = 0; c < 3; c++)
+			white_p[c] = 1;
+		struct objective wob = ob;
+		wob.m = lm;
+		ret = render_full(&wob, white_p);
+		if (ret < 0)
+			goto out;
+		nspec = ndiff = 0;
+		for (int t = 0; t < ncoarse; t++) {
+			int s = coarse[t], is_spec = 0;
+			const float *w = glint_image_px(ob.img, d.xy[2 * s],
+							d.xy[2 * s + 1]);
+			for (int c = 0; c < 3; c++)
+				is_spec |=
+					d.y[3 * s + c] >
+					(1 + o->mask_threshold) * w[c] + 1e-12;
+			if (is_spec)
+				spec[nspec++] = s;
+			else
+				diff[ndiff++] = s;
+		}
+	}
+	res->specular_pixels = nspec;
+
+	switch (o->method) {
+	case GLINT_FIT_THREE_PASS: {
+		/* Pass 1: constant lobes only, the others switched off. */
+		for (int k = 0; k < model->nparams; k++) {
+			int j = ob.lobe_of[k];
+			freev[k] = j >= 0 && !model->lobe_varies[j];
+			if (j >= 0 && model->lobe_varies[j])
+				ob.p[k] = 0;
+		}
+		if (ndiff < 8) {
+			memcpy(diff, coarse, (size_t)ncoarse * sizeof(int));
+			ndiff = ncoarse;
+		}
+		ret = run_pass(&ob, "1 diffuse", diff, ndiff, freev, 0, res,
+			       &lr);
+		if (ret < 0)
+			goto out;
+		/* Pass 2: the rest from the paper's values, diffuse held. */
+		int any = 0;
+		for (int k = 0; k < model->nparams; k++) {
+			int j = ob.lobe_of[k];
+			freev[k] = !(j >= 0 && !model->lobe_varies[j]);
+			any |= freev[k];
+			if (freev[k])
+				ob.p[k] = model->params[k].def;
+		}
+		if (any) {
+			const int *sel = nspec >= 8 ? spec : coarse;
+			int nsel = nspec >= 8 ? nspec : ncoarse;
+			ret = run_pass(&ob, "2 specular", sel, nsel, freev, 0,
+				       res, &lr);
+			if (ret < 0)
+				goto out;
+		}
+		/* Pass 3: everything, all pixels. */
+		for (int k = 0; k < model->nparams; k++)
+			freev[k] = 1;
+		ret = run_pass(&ob, "3 all", coarse, ncoarse, freev, 0, res,
+			       &lr);
+		break;
+	}
+	case GLINT_FIT_NAIVE:
+		for (int k = 0; k < model->nparams; k++)
+			freev[k] = 1;
+		ret = run_pass(&ob, "all at once", coarse, ncoarse, freev, 0,
+			       res, &lr);
+		break;
+	case GLINT_FIT_VARPRO: {
+		if (o->faithful) {
+			ret = glint_error_set(EINVAL,
+					      "variable projection needs the "
+					      "shade cache (not --faithful)");
+			goto out;
+		}
+		/* Coarse scan of the first nonlinear parameter (roughness
+		 * for Torrance-Sparrow), log-spaced, then LM. */
+		int nl = -1;
+		for (int k = 0; k < model->nparams; k++) {
+			freev[k] = ob.lobe_of[k] < 0;
+			if (freev[k] && nl < 0)
+				nl = k;
+		}
+		if (nl >= 0) {
+			const struct glint_param *pi = &model->params[nl];
+			double best = INFINITY, bestv = pi->def;
+			double lo = fmax(pi->lo, 1e-3), hi = fmin(pi->hi, 0.6);
+			double *scratch =
+				malloc((size_t)3 * ncoarse * sizeof(double));
+			if (!scratch) {
+				ret = -ENOMEM;
+				goto out;
+			}
+			ob.sel = coarse;
+			ob.nsel = ncoarse;
+			ob.varpro = 1;
+			ob.nfree = 0;
+			for (int i = 0; i < 10; i++) {
+				double v = lo * pow(hi / lo, i / 9.0);
+				ob.p[nl] = v;
+				ob.memo_valid = 0;
+				obj_residuals(&ob, ob.p, scratch);
+				double c = 0;
+				for (int k = 0; k < 3 * ncoarse; k++)
+					c += scratch[k] * scratch[k];
+				if (c < best) {
+					best = c;
+					bestv = v;
+				}
+			}
+			free(scratch);
+			ob.p[nl] = bestv;
+			ret = run_pass(&ob, "varpro", coarse, ncoarse, freev, 1,
+				       res, &lr);
+		}
+		break;
+	}
+	}
+	if (ret < 0)
+		goto out;
+	/* Coarse to fine: polish everything on the full pixel set. */
+	if (ncoarse < nall) {
+		int vp = o->method == GLINT_FIT_VARPRO;
+		for (int k = 0; k < model->nparams; k++)
+			freev[k] = vp ? ob.lobe_of[k] < 0 : 1;
+		ret = run_pass(&ob, "fine", all, nall, freev, vp, res, &lr);
+		if (ret < 0)
+			goto out;
+	}
+	/* Standard errors over every parameter at the optimum: an LM call
+	 * that takes no step but computes the Jacobian. */
+	{
+		struct glint_lm_result fin;
+		struct glint_fit_result dummy = { 0 };
+		struct glint_fit_opts o0 = *o;
+		o0.max_iter = 0;
+		ob.o = &o0;
+		for (int k = 0; k < model->nparams; k++)
+			freev[k] = 1;
+		ret = run_pass(&ob, "errors", all, nall, freev, 0, &dummy,
+			       &fin);
+		ob.o = o;
+		if (ret < 0)
+			goto out;
+		for (int k = 0; k < model->nparams; k++) {
+			res->se[k] = fin.se[k];
+			res->at_bound[k] = fin.at_bound[k];
+		}
+		res->cost = fin.cost;
+	}
+	memcpy(res->p, ob.p, sizeof(res->p));
+	finish_stats(&ob, all, nall, res);
+	res->seconds = glint_now() - t0;
+	ret = 0;
+out:
+	glint_shade_cache_free(ob.cache);
+	glint_image_free(ob.img);
+	free(ob.lobes);
+	free(ob.lobes2);
+	free(all);
+	free(coarse);
+	free(spec);
+	free(diff);
+	free_data(&d);
+	return ret;
+}

@@ -1,0 +1,94 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_FIT_FIT_H
+#define GLINT_FIT_FIT_H
+
+/*
+ * Recover a model's parameters from one HDR image of the sphere: minimise
+ * the (weighted) sum of squared differences between render and photo over
+ * the pixels wholly on the sphere.
+ *
+ * Methods:
+ *   three-pass (Joshi & Jensen): 1. diffuse only from 0.5 on the diffuse
+ *     mask; 2. specular, roughness, ior from 0.5, 0.075, 1.5 on the
+ *     specular mask (diffuse held); 3. everything from there, all pixels.
+ *     The specular mask: pixels where the photo exceeds, in any channel, a
+ *     render of a 100 % white Lambertian sphere by more than a threshold.
+ *   naive: every parameter at once from the paper's initial values.
+ *   varpro: variable projection: for given nonlinear parameters (roughness,
+ *     ior) the albedos follow from a bounded linear least-squares problem
+ *     per channel; LM runs on the nonlinear ones only, from the best of a
+ *     coarse scan of roughness.
+ * Evaluation: the shade cache (trace once, re-shade), or with `faithful`
+ * the paper's way, a full trace and render per evaluation (the baseline).
+ */
+
+#include "lm.h"
+#include "render.h"
+#include "shade_cache.h"
+
+enum glint_fit_method {
+	GLINT_FIT_THREE_PASS,
+	GLINT_FIT_NAIVE,
+	GLINT_FIT_VARPRO,
+};
+
+const char *glint_fit_method_name(enum glint_fit_method m);
+int glint_fit_method_parse(const char *s, enum glint_fit_method *m);
+
+struct glint_fit_opts {
+	enum glint_fit_method method;
+	int coarse_to_fine;    /* fit a subsampled pixel set first */
+	int faithful;	       /* full trace + render per evaluation */
+	double mask_threshold; /* relative excess over the white render */
+	int max_pixels;	       /* cap on fitted pixels (every s-th pixel) */
+	int light_samples;     /* shade cache: env samples per hit */
+	int lobe_samples;      /* shade cache: lobe samples per hit */
+	int static_samples;    /* shade cache: for constant lobes */
+	int max_iter;	       /* per LM pass */
+	int nthreads;
+	/* Called as passes run (may be NULL). */
+	void (*progress)(void *ctx, const char *pass, int iter, double cost);
+	void *progress_ctx;
+};
+
+void glint_fit_default_opts(struct glint_fit_opts *o);
+
+#define GLINT_FIT_MAX_PASSES 8
+
+struct glint_fit_pass {
+	char name[32];
+	int pixels;
+	int iterations;
+	int evaluations;
+	double cost0, cost;
+	double seconds;
+};
+
+struct glint_fit_result {
+	const struct glint_model_ops *model;
+	double p[GLINT_MAX_PARAMS];
+	double se[GLINT_MAX_PARAMS];
+	int at_bound[GLINT_MAX_PARAMS];
+	double cost;	 /* 1/2 weighted SSD at the end (fitted pixels) */
+	double rmse;	 /* unweighted, over the fitted pixels */
+	double rel_rmse; /* rmse / mean photo value there */
+	int pixels;	 /* pixels in the final pass */
+	int interior;	 /* pixels wholly on the sphere */
+	int specular_pixels;
+	struct glint_fit_pass passes[GLINT_FIT_MAX_PASSES];
+	int npasses;
+	double seconds;
+	double setup_seconds;
+};
+
+/*
+ * Fit `model` to `photo` (the camera's size) seen in the scene of r (traced
+ * already).  weight (same size, may be NULL for all ones) gives per-pixel,
+ * per-channel weights, 0 for saturated or invalid pixels; non-finite photo
+ * values get weight 0 too.
+ */
+int glint_fit(struct glint_renderer *r, const struct glint_model_ops *model,
+	      const struct glint_image *photo, const struct glint_image *weight,
+	      const struct glint_fit_opts *o, struct glint_fit_result *res);
+
+#endif

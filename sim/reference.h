@@ -1,0 +1,45 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_SIM_REFERENCE_H
+#define GLINT_SIM_REFERENCE_H
+
+/*
+ * Ground-truth renders for the simulated rig, made independently of the
+ * fitter's fast path so that fitting them is no "inverse crime":
+ *   - its own analytic ray-sphere intersection (no Embree, no G-buffer),
+ *     with many randomly jittered samples per pixel;
+ *   - the constant diffuse lobe by deterministic quadrature: an irradiance
+ *     map E(n) = sum over env texels of L max(0, n.w) dOmega, on a grid of
+ *     normals, interpolated bilinearly;
+ *   - the other lobes by independent pseudo-random sampling, env map and
+ *     lobe, combined with the power heuristic and the true pdfs.
+ * What it shares with the fitter is the definition of the scene: the
+ * camera model, the env map's lookup and sampler, the BRDF.
+ */
+
+#include "fit/envmap.h"
+#include "fit/model.h"
+#include "fit/scene.h"
+
+#include "core/image.h"
+
+#include <stdint.h>
+
+struct glint_reference_opts {
+	int spp;	  /* jittered primary samples per pixel */
+	int samples;	  /* per hit and technique, for varying lobes */
+	uint32_t seed;	  /* pseudo-random stream */
+	int nthreads;	  /* 0 = all CPUs */
+	int irradiance_w; /* irradiance map width (height = width / 2) */
+};
+
+void glint_reference_default_opts(struct glint_reference_opts *o);
+
+/* Render scene->cam's image of the sphere of material (model, p) into out
+ * (allocated by the caller at the camera's size). */
+int glint_reference_render(const struct glint_scene *scene,
+			   const struct glint_envmap *env,
+			   const struct glint_model_ops *model, const double *p,
+			   const struct glint_reference_opts *opts,
+			   struct glint_image *out);
+
+#endif

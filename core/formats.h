@@ -10,6 +10,8 @@
 
 #include "image.h"
 
+#include <stdint.h>
+
 /* OpenEXR through the OpenEXRCore C API; RGB or Y channels, any of half,
  * float or uint; scanline or tiled (level 0); DWAA/DWAB fall back to the
  * C++ library (exr_cxx.cpp). */
@@ -32,6 +34,12 @@ int glint_pfm_write(const char *path, const struct glint_image *img);
  */
 int glint_png_write(const char *path, const struct glint_image *img,
 		    double exposure);
+
+/* 8-bit sRGB PNG of ready-made pixels (w * h * 3 bytes), atomically. */
+int glint_png_write_rgb8(const char *path, int w, int h, const uint8_t *px);
+
+/* The tone map above for one linear value already scaled by 2^EV. */
+uint8_t glint_tonemap_srgb8(double v);
 
 /* Exposure (stops) that the auto rule above picks for img. */
 double glint_png_auto_exposure(const struct glint_image *img);

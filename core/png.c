@@ -42,7 +42,7 @@ double glint_png_auto_exposure(const struct glint_image *img)
 	return ev;
 }
 
-static uint8_t srgb8(double v)
+uint8_t glint_tonemap_srgb8(double v)
 {
 	if (!(v > 0))
 		return 0;
@@ -52,8 +52,10 @@ static uint8_t srgb8(double v)
 	return (uint8_t)lrint(v * 255.0);
 }
 
-int glint_png_write(const char *path, const struct glint_image *img,
-		    double exposure)
+/* Rows come from get_row(ctx, y, row) as 8-bit RGB. */
+static int write_png_rows(const char *path, int w, int h,
+			  void (*get_row)(void *ctx, int y, uint8_t *row),
+			  void *ctx)
 {
 	struct glint_atomic_file af;
 	png_structp png = NULL;
@@ -61,10 +63,7 @@ int glint_png_write(const char *path, const struct glint_image *img,
 	uint8_t *row;
 	int ret;
 
-	if (isnan(exposure))
-		exposure = glint_png_auto_exposure(img);
-	double scale = exp2(exposure);
-	row = malloc((size_t)img->width * 3);
+	row = malloc((size_t)w * 3);
 	if (!row)
 		return glint_error_set(ENOMEM, "%s: out of memory", path);
 	ret = glint_atomic_open(&af, path);
@@ -85,16 +84,13 @@ int glint_png_write(const char *path, const struct glint_image *img,
 		goto err;
 	}
 	png_init_io(png, af.fp);
-	png_set_IHDR(png, info, (png_uint_32)img->width,
-		     (png_uint_32)img->height, 8, PNG_COLOR_TYPE_RGB,
-		     PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
-		     PNG_FILTER_TYPE_DEFAULT);
+	png_set_IHDR(png, info, (png_uint_32)w, (png_uint_32)h, 8,
+		     PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+		     PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
 	png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
 	png_write_info(png, info);
-	for (int y = 0; y < img->height; y++) {
-		const float *p = glint_image_px(img, 0, y);
-		for (int i = 0; i < img->width * 3; i++)
-			row[i] = srgb8(p[i] * scale);
+	for (int y = 0; y < h; y++) {
+		get_row(ctx, y, row);
 		png_write_row(png, row);
 	}
 	png_write_end(png, info);
@@ -107,4 +103,47 @@ err:
 	free(row);
 	glint_atomic_abort(&af);
 	return ret;
+}
+
+struct tonemap_rows {
+	const struct glint_image *img;
+	double scale;
+};
+
+static void tonemap_row(void *ctx, int y, uint8_t *row)
+{
+	struct tonemap_rows *t = ctx;
+	const float *p = glint_image_px(t->img, 0, y);
+
+	for (int i = 0; i < t->img->width * 3; i++)
+		row[i] = glint_tonemap_srgb8(p[i] * t->scale);
+}
+
+int glint_png_write(const char *path, const struct glint_image *img,
+		    double exposure)
+{
+	struct tonemap_rows t = { img, 0 };
+
+	if (isnan(exposure))
+		exposure = glint_png_auto_exposure(img);
+	t.scale = exp2(exposure);
+	return write_png_rows(path, img->width, img->height, tonemap_row, &t);
+}
+
+struct rgb8_rows {
+	int w;
+	const uint8_t *px;
+};
+
+static void rgb8_row(void *ctx, int y, uint8_t *row)
+{
+	struct rgb8_rows *t = ctx;
+	memcpy(row, t->px + (size_t)y * t->w * 3, (size_t)t->w * 3);
+}
+
+int glint_png_write_rgb8(const char *path, int w, int h, const uint8_t *px)
+{
+	struct rgb8_rows t = { w, px };
+
+	return write_png_rows(path, w, h, rgb8_row, &t);
 }

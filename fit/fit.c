@@ -405,7 +405,23 @@ static int run_pass(struct objective *ob, const char *name, const int *sel,
 	return 0;
 }
 
-/* Pixels wholly on the sphere, every `stride`-th row and column. */
+static int covered(const struct glint_gbuffer *gb, int x, int y)
+{
+	if (x < 0 || y < 0 || x >= gb->width || y >= gb->height)
+		return 0;
+	size_t i = (size_t)y * gb->width + x;
+	for (int s = 0; s < gb->spp; s++)
+		if (gb->hits[i * gb->spp + s].geom < 0)
+			return 0;
+	return 1;
+}
+
+/*
+ * Pixels wholly on the sphere, every `stride`-th row and column.  A pixel
+ * whose primary samples all hit can still be partly background between
+ * them, which mixes the backdrop into the photo's value: only pixels whose
+ * whole 3x3 neighbourhood is covered are used.
+ */
 static int collect_pixels(const struct glint_gbuffer *gb, int stride,
 			  const struct glint_image *photo,
 			  const struct glint_image *weight, struct fit_data *d,
@@ -424,8 +440,9 @@ static int collect_pixels(const struct glint_gbuffer *gb, int stride,
 		for (int x = 0; x < gb->width; x++) {
 			size_t i = (size_t)y * gb->width + x;
 			int on = 1;
-			for (int s = 0; s < gb->spp; s++)
-				on &= gb->hits[i * gb->spp + s].geom >= 0;
+			for (int dy = -1; dy <= 1 && on; dy++)
+				for (int dx = -1; dx <= 1 && on; dx++)
+					on = covered(gb, x + dx, y + dy);
 			if (!on)
 				continue;
 			(*interior)++;

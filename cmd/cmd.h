@@ -24,6 +24,8 @@ int cmd_render(int argc, char **argv);
 void cmd_render_help(void);
 int cmd_demo(int argc, char **argv);
 void cmd_demo_help(void);
+int cmd_fit(int argc, char **argv);
+void cmd_fit_help(void);
 int cmd_convert(int argc, char **argv);
 void cmd_convert_help(void);
 

@@ -50,24 +50,40 @@ static double texel_weight(const struct glint_image *img, int i, int j)
 	return sum * sin(M_PI * (j + 0.5) / h);
 }
 
-static int build_tables(struct glint_envmap *env)
+/* CDFs of the texel weights, leaving out texels where skip[] is set. */
+static int dist_build(const struct glint_image *img, const unsigned char *skip,
+		      struct glint_env_dist *d)
 {
-	int w = env->img->width, h = env->img->height;
+	int w = img->width, h = img->height;
 
-	env->marginal = calloc((size_t)h + 1, sizeof(double));
-	env->cond = calloc((size_t)h * (w + 1), sizeof(double));
-	if (!env->marginal || !env->cond)
+	d->marginal = calloc((size_t)h + 1, sizeof(double));
+	d->cond = calloc((size_t)h * (w + 1), sizeof(double));
+	if (!d->marginal || !d->cond)
 		return glint_error_set(ENOMEM,
 				       "out of memory for the env map's "
 				       "sampling tables");
 	for (int j = 0; j < h; j++) {
-		double *c = env->cond + (size_t)j * (w + 1);
-		for (int i = 0; i < w; i++)
-			c[i + 1] = c[i] + texel_weight(env->img, i, j);
-		env->marginal[j + 1] = env->marginal[j] + c[w];
+		double *c = d->cond + (size_t)j * (w + 1);
+		for (int i = 0; i < w; i++) {
+			int off = skip && skip[(size_t)j * w + i];
+			c[i + 1] = c[i] + (off ? 0 : texel_weight(img, i, j));
+		}
+		d->marginal[j + 1] = d->marginal[j] + c[w];
 	}
-	env->total = env->marginal[h];
+	d->total = d->marginal[h];
 	return 0;
+}
+
+static void dist_free(struct glint_env_dist *d)
+{
+	free(d->marginal);
+	free(d->cond);
+	d->marginal = d->cond = NULL;
+}
+
+static int build_tables(struct glint_envmap *env)
+{
+	return dist_build(env->img, NULL, &env->dist);
 }
 
 /*
@@ -169,8 +185,7 @@ void glint_envmap_free(struct glint_envmap *env)
 	if (!env)
 		return;
 	glint_image_free(env->img);
-	free(env->marginal);
-	free(env->cond);
+	dist_free(&env->dist);
 	free(env);
 }
 
@@ -224,17 +239,24 @@ static int cdf_find(const double *cdf, int n, double x)
 double glint_envmap_sample(const struct glint_envmap *env, double u1, double u2,
 			   struct vec3 *dir)
 {
+	return glint_env_dist_sample(env, &env->dist, u1, u2, dir);
+}
+
+double glint_env_dist_sample(const struct glint_envmap *env,
+			     const struct glint_env_dist *dd, double u1,
+			     double u2, struct vec3 *dir)
+{
 	int w = env->img->width, h = env->img->height;
 
-	if (!(env->total > 0)) {
+	if (!(dd->total > 0)) {
 		*dir = v3(0, 1, 0);
 		return 0;
 	}
-	double x = u1 * env->total;
-	int j = cdf_find(env->marginal, h, x);
-	double row_w = env->marginal[j + 1] - env->marginal[j];
-	double fv = row_w > 0 ? (x - env->marginal[j]) / row_w : 0.5;
-	const double *c = env->cond + (size_t)j * (w + 1);
+	double x = u1 * dd->total;
+	int j = cdf_find(dd->marginal, h, x);
+	double row_w = dd->marginal[j + 1] - dd->marginal[j];
+	double fv = row_w > 0 ? (x - dd->marginal[j]) / row_w : 0.5;
+	const double *c = dd->cond + (size_t)j * (w + 1);
 	double y = u2 * c[w];
 	int i = cdf_find(c, w, y);
 	double cell = c[i + 1] - c[i];
@@ -246,45 +268,59 @@ double glint_envmap_sample(const struct glint_envmap *env, double u1, double u2,
 	if (!(s > 0) || !(cell > 0))
 		return 0;
 	/* Density over (u, v) is cell * W * H / total; dA = 2 pi^2 sin. */
-	return cell * w * h / env->total / (2 * M_PI * M_PI * s);
+	return cell * w * h / dd->total / (2 * M_PI * M_PI * s);
 }
 
 double glint_envmap_pdf(const struct glint_envmap *env, struct vec3 d)
 {
+	return glint_env_dist_pdf(env, &env->dist, d);
+}
+
+double glint_env_dist_pdf(const struct glint_envmap *env,
+			  const struct glint_env_dist *dd, struct vec3 d)
+{
 	int w = env->img->width, h = env->img->height;
 	double u, v;
 
-	if (!(env->total > 0))
+	if (!(dd->total > 0))
 		return 0;
 	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
 	int i = (int)(u * w), j = (int)(v * h);
 	i = i < 0 ? 0 : i >= w ? w - 1 : i;
 	j = j < 0 ? 0 : j >= h ? h - 1 : j;
 	double s = sin(M_PI * v);
-	const double *c = env->cond + (size_t)j * (w + 1);
+	const double *c = dd->cond + (size_t)j * (w + 1);
 	double cell = c[i + 1] - c[i];
 	if (!(s > 0))
 		return 0;
-	return cell * w * h / env->total / (2 * M_PI * M_PI * s);
+	return cell * w * h / dd->total / (2 * M_PI * M_PI * s);
 }
 
 /* Sampling density over (u, v) of texel (i, j) (wrapping i, clamping j). */
-static double uv_density(const struct glint_envmap *env, int i, int j)
+static double uv_density(const struct glint_envmap *env,
+			 const struct glint_env_dist *dd, int i, int j)
 {
 	int w = env->img->width, h = env->img->height;
 
 	i = ((i % w) + w) % w;
 	j = j < 0 ? 0 : j >= h ? h - 1 : j;
-	const double *c = env->cond + (size_t)j * (w + 1);
-	return (c[i + 1] - c[i]) * w * h / env->total;
+	const double *c = dd->cond + (size_t)j * (w + 1);
+	return (c[i + 1] - c[i]) * w * h / dd->total;
 }
 
 double glint_envmap_pdf_smooth(const struct glint_envmap *env, struct vec3 d)
 {
+	return glint_env_dist_pdf_smooth(env, &env->dist, d);
+}
+
+double glint_env_dist_pdf_smooth(const struct glint_envmap *env,
+				 const struct glint_env_dist *dd,
+				 struct vec3 d)
+{
 	int w = env->img->width, h = env->img->height;
 	double u, v;
 
-	if (!(env->total > 0))
+	if (!(dd->total > 0))
 		return 0;
 	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
 	double s = sin(M_PI * v);
@@ -293,9 +329,129 @@ double glint_envmap_pdf_smooth(const struct glint_envmap *env, struct vec3 d)
 	double x = u * w - 0.5, y = v * h - 0.5;
 	double fx = floor(x), fy = floor(y), tx = x - fx, ty = y - fy;
 	int i = (int)fx, j = (int)fy;
-	double p = (1 - ty) * ((1 - tx) * uv_density(env, i, j) +
-			       tx * uv_density(env, i + 1, j)) +
-		   ty * ((1 - tx) * uv_density(env, i, j + 1) +
-			 tx * uv_density(env, i + 1, j + 1));
+	double p = (1 - ty) * ((1 - tx) * uv_density(env, dd, i, j) +
+			       tx * uv_density(env, dd, i + 1, j)) +
+		   ty * ((1 - tx) * uv_density(env, dd, i, j + 1) +
+			 tx * uv_density(env, dd, i + 1, j + 1));
 	return p / (2 * M_PI * M_PI * s);
+}
+
+static void texel_of(const struct glint_envmap *env, struct vec3 d, int *i,
+		     int *j)
+{
+	int w = env->img->width, h = env->img->height;
+	double u, v;
+
+	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
+	*i = (int)(u * w);
+	*j = (int)(v * h);
+	*i = *i < 0 ? 0 : *i >= w ? w - 1 : *i;
+	*j = *j < 0 ? 0 : *j >= h ? h - 1 : *j;
+}
+
+int glint_env_hot_contains(const struct glint_envmap *env,
+			   const struct glint_env_hot *hot, struct vec3 d)
+{
+	int i, j;
+
+	if (!hot->ntexels)
+		return 0;
+	texel_of(env, d, &i, &j);
+	return hot->is_hot[(size_t)j * env->img->width + i];
+}
+
+int glint_env_hot_new(const struct glint_envmap *env, double tau,
+		      int max_texels, int q, struct glint_env_hot **out)
+{
+	const struct glint_env_dist *dd = &env->dist;
+	int w = env->img->width, h = env->img->height, n = 0, ret;
+	struct glint_env_hot *hot = calloc(1, sizeof(*hot));
+	double mx = 0;
+
+	*out = NULL;
+	if (!hot)
+		return glint_error_set(ENOMEM, "out of memory");
+	hot->is_hot = calloc((size_t)w * h, 1);
+	if (!hot->is_hot) {
+		free(hot);
+		return glint_error_set(ENOMEM, "out of memory");
+	}
+	for (int j = 0; j < h; j++)
+		for (int i = 0; i < w; i++) {
+			const double *c = dd->cond + (size_t)j * (w + 1);
+			mx = fmax(mx, c[i + 1] - c[i]);
+		}
+	for (int j = 0; j < h && mx > 0; j++)
+		for (int i = 0; i < w; i++) {
+			const double *c = dd->cond + (size_t)j * (w + 1);
+			if (c[i + 1] - c[i] >= tau * mx) {
+				hot->is_hot[(size_t)j * w + i] = 1;
+				n++;
+			}
+		}
+	if (n > max_texels) { /* no compact peak: nothing is hot */
+		memset(hot->is_hot, 0, (size_t)w * h);
+		n = 0;
+	}
+	hot->ntexels = n;
+	hot->npts = n * q * q;
+	hot->pts = malloc((size_t)(hot->npts ? hot->npts : 1) * 6 *
+			  sizeof(float));
+	if (!hot->pts) {
+		glint_env_hot_free(hot);
+		return glint_error_set(ENOMEM, "out of memory");
+	}
+	struct vec3 axis = v3(0, 0, 0);
+	int k = 0;
+	for (int j = 0; j < h; j++)
+		for (int i = 0; i < w; i++) {
+			if (!hot->is_hot[(size_t)j * w + i])
+				continue;
+			for (int b = 0; b < q; b++)
+				for (int a = 0; a < q; a++) {
+					double u = (i + (a + 0.5) / q) / w;
+					double v = (j + (b + 0.5) / q) / h;
+					struct vec3 d = m3_mul(
+						&env->rot,
+						glint_envmap_uv_to_dir(u, v));
+					double l[3];
+					double dom = (2 * M_PI / w) * (M_PI / h) *
+						     sin(M_PI * v) / (q * q);
+					glint_envmap_lookup(env, d, l);
+					float *pt = hot->pts + 6 * (size_t)k++;
+					pt[0] = (float)d.x;
+					pt[1] = (float)d.y;
+					pt[2] = (float)d.z;
+					for (int c = 0; c < 3; c++)
+						pt[3 + c] = (float)(l[c] * dom);
+					axis = v3_add(axis,
+						      v3_scale(d, rgb_luminance(l[0], l[1], l[2]) * dom));
+				}
+		}
+	hot->axis = v3_norm(axis);
+	/* Half-angle: the farthest point plus a texel's half diagonal. */
+	double radius = 0;
+	for (int t = 0; t < hot->npts; t++) {
+		const float *pt = hot->pts + 6 * (size_t)t;
+		double c = v3_dot(hot->axis, v3(pt[0], pt[1], pt[2]));
+		radius = fmax(radius, acos(fmin(1, fmax(-1, c))));
+	}
+	hot->radius = radius + M_PI / h * 1.5 + 2 * M_PI / w * 1.5;
+	ret = dist_build(env->img, hot->is_hot, &hot->rest);
+	if (ret < 0) {
+		glint_env_hot_free(hot);
+		return ret;
+	}
+	*out = hot;
+	return 0;
+}
+
+void glint_env_hot_free(struct glint_env_hot *hot)
+{
+	if (!hot)
+		return;
+	free(hot->pts);
+	free(hot->is_hot);
+	dist_free(&hot->rest);
+	free(hot);
 }

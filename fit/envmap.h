@@ -17,14 +17,19 @@
 #include "core/image.h"
 #include "core/vec.h"
 
+/* A piecewise-constant distribution over the map's texels. */
+struct glint_env_dist {
+	double *marginal; /* H + 1 entries, CDF over rows */
+	double *cond;	  /* H * (W + 1) entries, CDF over columns per row */
+	double total;	  /* sum of the weights */
+};
+
 struct glint_envmap {
 	struct glint_image *img; /* owned */
 	struct mat3 rot;	 /* world from map */
 	double scale;		 /* radiance multiplier */
-	/* Importance sampling by luminance * sin(theta) (envmap.c): */
-	double *marginal; /* H + 1 entries, CDF over rows */
-	double *cond;	  /* H * (W + 1) entries, CDF over columns per row */
-	double total;	  /* sum of the weights */
+	/* Importance sampling by luminance * sin(theta) (envmap.c). */
+	struct glint_env_dist dist;
 };
 
 /*
@@ -70,5 +75,39 @@ double glint_envmap_pdf(const struct glint_envmap *env, struct vec3 d);
  * need not be the sampling pdf to stay unbiased).
  */
 double glint_envmap_pdf_smooth(const struct glint_envmap *env, struct vec3 d);
+
+/* The same three for another distribution over this map's texels. */
+double glint_env_dist_sample(const struct glint_envmap *env,
+			     const struct glint_env_dist *d, double u1,
+			     double u2, struct vec3 *dir);
+double glint_env_dist_pdf(const struct glint_envmap *env,
+			  const struct glint_env_dist *d, struct vec3 d_world);
+double glint_env_dist_pdf_smooth(const struct glint_envmap *env,
+				 const struct glint_env_dist *d,
+				 struct vec3 d_world);
+
+/*
+ * The few brightest texels of a map (a sun), to be integrated
+ * deterministically rather than sampled: texels whose sampling weight is at
+ * least tau times the largest, when there are at most max_texels of them
+ * (else none: the map has no compact peak).  Each hot texel is covered by
+ * q x q points carrying radiance x solid angle; `rest` samples everything
+ * else.  A direction belongs to the hot part when its texel is hot.
+ */
+struct glint_env_hot {
+	int ntexels;
+	int npts;
+	float *pts; /* npts x 6: world direction, radiance x solid angle */
+	unsigned char *is_hot; /* W x H */
+	struct glint_env_dist rest;
+	struct vec3 axis; /* a cone holding every hot texel: */
+	double radius;	  /* axis and half-angle (radians) */
+};
+
+int glint_env_hot_new(const struct glint_envmap *env, double tau,
+		      int max_texels, int q, struct glint_env_hot **out);
+void glint_env_hot_free(struct glint_env_hot *hot);
+int glint_env_hot_contains(const struct glint_envmap *env,
+			   const struct glint_env_hot *hot, struct vec3 d);
 
 #endif

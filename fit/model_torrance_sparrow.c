@@ -142,6 +142,13 @@ static double ts_sample_lobe(const double *p, int j, struct vec3 wo,
 	return ts_pdf_lobe(p, j, wo, *wi);
 }
 
+/* Beckmann D falls below 1e-12 of its peak where tan^2(t_h) > 27.6 m^2;
+ * the reflected direction turns by twice the half-vector's angle. */
+static double ts_lobe_extent(const double *p, int j)
+{
+	return j == 1 ? 2 * atan(p[ROUGH] * sqrt(27.6)) : -1;
+}
+
 const struct glint_model_ops glint_model_torrance_sparrow = {
 	.name = "torrance-sparrow",
 	.conventions =
@@ -161,4 +168,5 @@ const struct glint_model_ops glint_model_torrance_sparrow = {
 	.eval_lobes = ts_lobes,
 	.sample_lobe = ts_sample_lobe,
 	.pdf_lobe = ts_pdf_lobe,
+	.lobe_extent = ts_lobe_extent,
 };

@@ -28,6 +28,7 @@ struct cache_hit {
 struct glint_shade_cache {
 	const struct glint_model_ops *model;
 	const struct glint_envmap *env;
+	struct glint_env_hot *hot;
 	int n, spp, nl, nb, nthreads;
 	int32_t *pix;
 	struct cache_hit *hits;	 /* n * spp */
@@ -45,6 +46,40 @@ static struct vec3 local_to_world(const struct cache_hit *h, struct vec3 v)
 {
 	return v3_add(v3_add(v3_scale(fv(h->t), v.x), v3_scale(fv(h->b), v.y)),
 		      v3_scale(fv(h->n), v.z));
+}
+
+/* Lobe j over the hot texels, on their fixed points. */
+static void hot_quadrature(const struct glint_shade_cache *c,
+			   const struct cache_hit *h, const double *p, int j,
+			   double out[3])
+{
+	const struct glint_env_hot *hot = c->hot;
+	const struct glint_model_ops *m = c->model;
+	struct vec3 wo = fv(h->wo);
+	double b[GLINT_MAX_PARAMS];
+
+	if (!hot->npts)
+		return;
+	double ext = m->lobe_extent ? m->lobe_extent(p, j) : -1;
+	if (ext > 0) {
+		struct vec3 r = local_to_world(h, v3(-wo.x, -wo.y, wo.z));
+		double a = acos(fmin(1, fmax(-1, v3_dot(r, hot->axis))));
+		if (a - hot->radius > ext)
+			return;
+	}
+	for (int k = 0; k < hot->npts; k++) {
+		const float *pt = hot->pts + 6 * (size_t)k;
+		struct vec3 d = v3(pt[0], pt[1], pt[2]);
+		struct vec3 wi = v3(v3_dot(d, fv(h->t)), v3_dot(d, fv(h->b)),
+				    v3_dot(d, fv(h->n)));
+		if (!(wi.z > 0))
+			continue;
+		m->eval_lobes(p, wo, wi, b);
+		if (b[j] <= 0)
+			continue;
+		for (int ch = 0; ch < 3; ch++)
+			out[ch] += b[j] * wi.z * pt[3 + ch];
+	}
 }
 
 /*
@@ -65,6 +100,7 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 	double sy = glint_u01(glint_hash32(h->seed ^ 0x9e3779b9u));
 
 	out[0] = out[1] = out[2] = 0;
+	hot_quadrature(c, h, p, j, out);
 	for (int k = 0; k < nl; k++) {
 		const struct env_sample *e = &es[k];
 		struct vec3 wi = fv(e->wi);
@@ -89,7 +125,11 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 		if (b[j] <= 0)
 			continue;
 		struct vec3 ww = local_to_world(h, wi);
-		double ps = nl ? glint_envmap_pdf_smooth(c->env, ww) : 0;
+		if (glint_env_hot_contains(c->env, c->hot, ww))
+			continue; /* integrated by hot_quadrature() */
+		double ps = nl ? glint_env_dist_pdf_smooth(c->env,
+							   &c->hot->rest, ww) :
+				 0;
 		double l[3];
 		glint_envmap_lookup(c->env, ww, l);
 		double w = b[j] * wi.z / (nl * ps + nb * pb);
@@ -99,6 +139,7 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 }
 
 static void draw_env_samples(const struct glint_envmap *env,
+			     const struct glint_env_hot *hot,
 			     const struct cache_hit *h, int nl, uint32_t salt,
 			     struct env_sample *es)
 {
@@ -106,7 +147,8 @@ static void draw_env_samples(const struct glint_envmap *env,
 		double u[2], l[3];
 		struct vec3 d;
 		glint_hammersley((uint32_t)k, (uint32_t)nl, h->seed ^ salt, u);
-		double pdf = glint_envmap_sample(env, u[0], u[1], &d);
+		double pdf = glint_env_dist_sample(env, &hot->rest, u[0], u[1],
+						   &d);
 		struct env_sample *e = &es[k];
 		struct vec3 wi = v3(v3_dot(d, fv(h->t)), v3_dot(d, fv(h->b)),
 				    v3_dot(d, fv(h->n)));
@@ -120,7 +162,8 @@ static void draw_env_samples(const struct glint_envmap *env,
 		for (int ch = 0; ch < 3; ch++)
 			e->l[ch] = (float)l[ch];
 		e->pdf = (float)pdf;
-		e->pdf_smooth = (float)glint_envmap_pdf_smooth(env, d);
+		e->pdf_smooth =
+			(float)glint_env_dist_pdf_smooth(env, &hot->rest, d);
 		/* A sample whose smooth pdf vanishes must keep its weight
 		 * finite: fall back to the sampling pdf. */
 		if (!(e->pdf_smooth > 0))
@@ -158,12 +201,13 @@ static void setup_pixels(void *ctx, int i0, int i1, int thread)
 		for (int s = 0; s < c->spp; s++) {
 			const struct cache_hit *h =
 				&c->hits[(size_t)i * c->spp + s];
-			draw_env_samples(c->env, h, c->nl, 0x3c6ef372u,
+			draw_env_samples(c->env, c->hot, h, c->nl, 0x3c6ef372u,
 					 c->envs + ((size_t)i * c->spp + s) *
 							   c->nl);
 			if (!ns)
 				continue;
-			draw_env_samples(c->env, h, ns, 0x1b873593u, tmp);
+			draw_env_samples(c->env, c->hot, h, ns, 0x1b873593u,
+					 tmp);
 			for (int j = 0; j < m->nlobes; j++) {
 				double a[3];
 				if (m->lobe_varies[j])
@@ -223,6 +267,14 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 				       n);
 	}
 	memcpy(c->pix, pix, (size_t)n * sizeof(*pix));
+	/* Hot texels: within 1 % of the brightest, if at most 64 of them;
+	 * 2 x 2 points each. */
+	int ret = glint_env_hot_new(env, 0.01, opts->no_hot ? 0 : 64, 2,
+				    &c->hot);
+	if (ret < 0) {
+		glint_shade_cache_free(c);
+		return ret;
+	}
 	for (int k = 0; k < c->nb; k++) {
 		c->lobe_u[k][0] = (k + 0.5) / c->nb;
 		c->lobe_u[k][1] = glint_radical2((uint32_t)k);
@@ -280,6 +332,7 @@ void glint_shade_cache_free(struct glint_shade_cache *c)
 	free(c->envs);
 	free(c->lobe_u);
 	free(c->static_lobes);
+	glint_env_hot_free(c->hot);
 	free(c);
 }
 

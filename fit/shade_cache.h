@@ -17,6 +17,11 @@
  * the estimate is a deterministic, continuous function of the parameters,
  * which Levenberg-Marquardt needs.
  *
+ * The env map's few brightest texels (a sun: glint_env_hot_new) are not
+ * sampled but integrated for every hit on fixed points, skipped where the
+ * lobe cannot reach them: the highlight, which carries most of what the
+ * photo says about roughness, is then exact rather than the noisiest part.
+ *
  * The cache holds a chosen set of pixels (e.g. the sphere's interior, or a
  * coarse subset of it).
  */
@@ -31,6 +36,7 @@ struct glint_shade_cache_opts {
 	int light_samples;  /* fixed env samples per hit (varying lobes) */
 	int lobe_samples;   /* fixed lobe samples per hit (varying lobes) */
 	int static_samples; /* per hit and technique for constant lobes */
+	int no_hot;	    /* sample the env map's brightest texels too */
 	int nthreads;
 };
 

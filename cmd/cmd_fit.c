@@ -1,0 +1,373 @@
+/* SPDX-License-Identifier: MIT */
+#define _POSIX_C_SOURCE 200809L
+#include "cmd.h"
+#include "fit_job.h"
+
+#include "core/atomic_dir.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/formats.h"
+#include "core/log.h"
+#include "fit/compare.h"
+
+#include <getopt.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+void cmd_fit_help(void)
+{
+	printf(
+		"usage: glint fit SCENE.json PHOTO.exr [options]\n"
+		"\n"
+		"Recover a material's parameters from one HDR image of the "
+		"sphere (PHOTO, the\nscene camera's size, linear radiance) "
+		"seen under the scene's environment map.\nWrites "
+		"DIR/params.json (values, standard errors, conventions, cost, "
+		"RMSE,\niterations and time per pass), DIR/render.exr (the "
+		"fitted material rendered)\nand DIR/compare.png (photo | "
+		"render | signed error with a scale bar).\n"
+		"\n"
+		"  -o, --out DIR         result folder (default fit-out); "
+		"replaced whole,\n"
+		"                        never left half-written\n"
+		"  --model NAME          torrance-sparrow (default) or "
+		"lambert\n"
+		"  --method M            three-pass (the paper's, default), "
+		"naive, varpro\n"
+		"  --no-coarse           fit on the full pixel set from the "
+		"start\n"
+		"  --faithful            the paper's evaluation: trace and "
+		"render the whole\n"
+		"                        image per evaluation (slow; the "
+		"benchmark baseline)\n"
+		"  --weights W.exr       per-pixel, per-channel weights "
+		"(1/variance; 0 = ignore)\n"
+		"  --mask-threshold T    specular mask: photo > (1+T) x white "
+		"render (default 0.02)\n"
+		"  --max-pixels N        fit on at most N pixels (every s-th; "
+		"default 16384)\n"
+		"  --samples N           fixed env and lobe samples per hit "
+		"(default 16 each)\n"
+		"  --max-iter N          LM iterations per pass (default 60)\n"
+		"  --threads N           worker threads (default: all CPUs)\n"
+		"  --json                print params.json on stdout; logs as "
+		"JSON lines\n"
+		"  -q, --quiet           no progress or info messages\n"
+		"\nExit status: 0 fitted, 1 bad input or failure (nothing "
+		"written), 2 bad command\nline.\n");
+}
+
+static json_t *param_json(const struct glint_fit_result *r)
+{
+	const struct glint_model_ops *m = r->model;
+	json_t *list = json_array();
+
+	for (int k = 0; k < m->nparams; k++) {
+		const struct glint_param *pi = &m->params[k];
+		json_array_append_new(
+			list,
+			json_pack("{s:s,s:f,s:o,s:b,s:[f,f]}", "name", pi->name,
+				  "value", r->p[k], "stderr",
+				  isfinite(r->se[k]) ? json_real(r->se[k]) :
+						       json_null(),
+				  "at_bound", r->at_bound[k], "bounds", pi->lo,
+				  pi->hi));
+	}
+	return list;
+}
+
+static json_t *passes_json(const struct glint_fit_result *r)
+{
+	json_t *a = json_array();
+
+	for (int i = 0; i < r->npasses; i++) {
+		const struct glint_fit_pass *p = &r->passes[i];
+		json_array_append_new(
+			a, json_pack("{s:s,s:i,s:i,s:i,s:f,s:f,s:f}", "name",
+				     p->name, "pixels", p->pixels, "iterations",
+				     p->iterations, "evaluations",
+				     p->evaluations, "cost_start", p->cost0,
+				     "cost_end", p->cost, "seconds",
+				     p->seconds));
+	}
+	return a;
+}
+
+static void fit_progress(void *ctx, const char *pass, int iter, double cost)
+{
+	(void)ctx;
+	if (glint_log_get_mode() == GLINT_LOG_HUMAN && isatty(2))
+		fprintf(stderr, "\rfit: pass %-12s iteration %3d  cost %.6g   ",
+			pass, iter, cost);
+}
+
+int fit_job_run(const struct fit_job *job, json_t **result)
+{
+	struct glint_renderer r;
+	struct glint_fit_result res;
+	struct glint_progress prog;
+	struct glint_atomic_dir ad;
+	struct glint_image *img = NULL, *cov = NULL;
+	char path[4300];
+	int ret;
+
+	*result = NULL;
+	glint_progress_start(&prog, "trace", job->scene.cam.height);
+	ret = glint_renderer_init(&r, &job->scene, job->nthreads, &prog);
+	glint_progress_finish(&prog);
+	if (ret < 0)
+		return ret;
+	struct glint_fit_opts o = job->opts;
+	o.nthreads = job->nthreads;
+	o.progress = fit_progress;
+	ret = glint_fit(&r, job->model, job->photo, job->weight, &o, &res);
+	if (glint_log_get_mode() == GLINT_LOG_HUMAN && isatty(2))
+		fprintf(stderr, "\r%*s\r", 70, "");
+	if (ret < 0)
+		goto out;
+	/* A photo that does not show the sphere where the scene says fits
+	 * badly whatever the parameters: say so rather than report them. */
+	if (!(res.rel_rmse < 0.5)) {
+		ret = glint_error_set(EINVAL,
+				      "%s: the fit leaves a relative RMSE of "
+				      "%.2f on the sphere: the photo does not "
+				      "look like the scene's sphere (wrong "
+				      "scene, position or image?)",
+				      job->photo_path, res.rel_rmse);
+		goto out;
+	}
+	/* The result rendered in full (MIS, the scene's sample counts). */
+	img = glint_image_new(job->scene.cam.width, job->scene.cam.height);
+	cov = glint_image_new(job->scene.cam.width, job->scene.cam.height);
+	if (!img || !cov) {
+		ret = -ENOMEM;
+		goto out;
+	}
+	struct glint_shade_opts so = {
+		.light_samples = job->scene.light_samples,
+		.brdf_samples = job->scene.brdf_samples,
+		.background = 1,
+		.nthreads = job->nthreads,
+	};
+	ret = glint_render_shade(&r.gb, r.tracer, r.env, job->model, res.p, &so,
+				 img, cov);
+	if (ret < 0)
+		goto out;
+	json_t *doc = json_pack(
+		"{s:s,s:s,s:o,s:o,s:{s:s,s:b,s:b,s:f,s:i,s:i},s:f,s:f,s:f,"
+		"s:i,s:i,s:i,s:o,s:f,s:f,s:{s:s,s:s}}",
+		"model", job->model->name, "conventions",
+		job->model->conventions, "material",
+		glint_material_to_json(job->model, res.p), "parameters",
+		param_json(&res), "method", "name",
+		glint_fit_method_name(o.method), "coarse_to_fine",
+		o.coarse_to_fine, "faithful", o.faithful, "mask_threshold",
+		o.mask_threshold, "light_samples", o.light_samples,
+		"lobe_samples", o.lobe_samples, "cost", res.cost, "rmse",
+		res.rmse, "relative_rmse", res.rel_rmse, "pixels", res.pixels,
+		"interior_pixels", res.interior, "specular_pixels",
+		res.specular_pixels, "passes", passes_json(&res), "seconds",
+		res.seconds, "setup_seconds", res.setup_seconds, "inputs",
+		"scene", job->scene_path, "photo", job->photo_path);
+	ret = glint_atomic_dir_open(&ad, job->out_dir);
+	if (ret < 0) {
+		json_decref(doc);
+		goto out;
+	}
+	char *text = json_dumps(doc, JSON_INDENT(2) | JSON_REAL_PRECISION(9));
+	ret = glint_atomic_write_file(
+		glint_atomic_dir_file(&ad, "params.json", path, sizeof(path)),
+		text, strlen(text));
+	free(text);
+	if (!ret)
+		ret = glint_image_write(glint_atomic_dir_file(&ad, "render.exr",
+							      path, sizeof(path)),
+					img, NULL);
+	if (!ret)
+		ret = glint_compare_png(glint_atomic_dir_file(&ad, "compare.png",
+							      path, sizeof(path)),
+					job->photo, img, cov, NULL);
+	if (!ret)
+		ret = glint_atomic_dir_commit(&ad);
+	else
+		glint_atomic_dir_abort(&ad);
+	if (ret < 0) {
+		json_decref(doc);
+		goto out;
+	}
+	json_object_set_new(doc, "output", json_string(job->out_dir));
+	*result = doc;
+out:
+	glint_image_free(img);
+	glint_image_free(cov);
+	glint_renderer_release(&r);
+	return ret;
+}
+
+/* One line per parameter: name, value, standard error. */
+void cmd_print_params(const json_t *doc, const double *truth);
+
+void cmd_print_params(const json_t *doc, const double *truth)
+{
+	json_t *ps = json_object_get(doc, "parameters"), *p;
+	size_t i;
+
+	printf("  %-11s %10s %10s%s\n", "parameter", "value", "std.err",
+	       truth ? "       true      error" : "");
+	json_array_foreach(ps, i, p)
+	{
+		json_t *se = json_object_get(p, "stderr");
+		double v = json_real_value(json_object_get(p, "value"));
+		printf("  %-11s %10.4f ", json_string_value(json_object_get(p, "name")),
+		       v);
+		if (json_is_real(se))
+			printf("%10.4f", json_real_value(se));
+		else
+			printf("%10s", "n/a");
+		if (json_is_true(json_object_get(p, "at_bound")))
+			printf(" (at bound)");
+		if (truth)
+			printf(" %10.4f %+10.4f", truth[i], v - truth[i]);
+		printf("\n");
+	}
+}
+
+int cmd_fit(int argc, char **argv)
+{
+	enum { O_MODEL = 256, O_METHOD, O_NOCOARSE, O_FAITHFUL, O_WEIGHTS,
+	       O_MASK, O_MAXPIX, O_SAMPLES, O_MAXITER, O_THREADS, O_JSON };
+	static const struct option opts[] = {
+		{ "out", required_argument, NULL, 'o' },
+		{ "model", required_argument, NULL, O_MODEL },
+		{ "method", required_argument, NULL, O_METHOD },
+		{ "no-coarse", no_argument, NULL, O_NOCOARSE },
+		{ "faithful", no_argument, NULL, O_FAITHFUL },
+		{ "weights", required_argument, NULL, O_WEIGHTS },
+		{ "mask-threshold", required_argument, NULL, O_MASK },
+		{ "max-pixels", required_argument, NULL, O_MAXPIX },
+		{ "samples", required_argument, NULL, O_SAMPLES },
+		{ "max-iter", required_argument, NULL, O_MAXITER },
+		{ "threads", required_argument, NULL, O_THREADS },
+		{ "json", no_argument, NULL, O_JSON },
+		{ "quiet", no_argument, NULL, 'q' },
+		{ "help", no_argument, NULL, 'h' },
+		{ NULL, 0, NULL, 0 },
+	};
+	struct fit_job job = { .out_dir = "fit-out",
+			       .model = &glint_model_torrance_sparrow };
+	const char *weights = NULL;
+	int json = 0, c, n;
+
+	glint_fit_default_opts(&job.opts);
+	optind = 1;
+	while ((c = getopt_long(argc, argv, "o:qh", opts, NULL)) != -1) {
+		switch (c) {
+		case 'o':
+			job.out_dir = optarg;
+			break;
+		case O_MODEL:
+			job.model = glint_model_find(optarg);
+			if (!job.model)
+				return cmd_usage_error("fit",
+						       "--model '%s': expected "
+						       "one of %s",
+						       optarg,
+						       glint_model_names());
+			break;
+		case O_METHOD:
+			if (glint_fit_method_parse(optarg, &job.opts.method) < 0)
+				return cmd_usage_error("fit", "%s",
+						       glint_error_msg());
+			break;
+		case O_NOCOARSE:
+			job.opts.coarse_to_fine = 0;
+			break;
+		case O_FAITHFUL:
+			job.opts.faithful = 1;
+			break;
+		case O_WEIGHTS:
+			weights = optarg;
+			break;
+		case O_MASK: {
+			char *end;
+			job.opts.mask_threshold = strtod(optarg, &end);
+			if (*end || !(job.opts.mask_threshold >= 0))
+				return cmd_usage_error("fit",
+						       "--mask-threshold '%s': "
+						       "expected a number >= 0",
+						       optarg);
+			break;
+		}
+		case O_MAXPIX:
+			if (cmd_parse_int("fit", "--max-pixels", optarg, 64,
+					  1 << 24, &job.opts.max_pixels) < 0)
+				return GLINT_EXIT_USAGE;
+			break;
+		case O_SAMPLES:
+			if (cmd_parse_int("fit", "--samples", optarg, 1, 4096,
+					  &n) < 0)
+				return GLINT_EXIT_USAGE;
+			job.opts.light_samples = job.opts.lobe_samples = n;
+			break;
+		case O_MAXITER:
+			if (cmd_parse_int("fit", "--max-iter", optarg, 1, 10000,
+					  &job.opts.max_iter) < 0)
+				return GLINT_EXIT_USAGE;
+			break;
+		case O_THREADS:
+			if (cmd_parse_int("fit", "--threads", optarg, 0, 256,
+					  &job.nthreads) < 0)
+				return GLINT_EXIT_USAGE;
+			break;
+		case O_JSON:
+			json = 1;
+			break;
+		case 'q':
+			glint_log_set_mode(GLINT_LOG_QUIET);
+			break;
+		case 'h':
+			cmd_fit_help();
+			return GLINT_EXIT_OK;
+		default:
+			return cmd_usage_error("fit", "unknown option");
+		}
+	}
+	if (json)
+		glint_log_set_mode(GLINT_LOG_JSON);
+	if (optind != argc - 2)
+		return cmd_usage_error("fit",
+				       "expected SCENE.json and PHOTO arguments");
+	job.scene_path = argv[optind];
+	job.photo_path = argv[optind + 1];
+	if (glint_scene_load(job.scene_path, &job.scene) < 0 ||
+	    glint_image_read(job.photo_path, &job.photo) < 0)
+		return cmd_fail("fit");
+	if (weights && glint_image_read(weights, &job.weight) < 0) {
+		glint_image_free(job.photo);
+		return cmd_fail("fit");
+	}
+	json_t *doc;
+	int ret = fit_job_run(&job, &doc);
+	glint_image_free(job.photo);
+	glint_image_free(job.weight);
+	if (ret < 0)
+		return cmd_fail("fit");
+	if (json) {
+		cmd_print_json(doc);
+		return GLINT_EXIT_OK;
+	}
+	printf("fit: %s, %s%s, %.2f s, relative RMSE %.4f on %d pixels\n",
+	       job.model->name, glint_fit_method_name(job.opts.method),
+	       job.opts.coarse_to_fine ? " coarse-to-fine" : "",
+	       json_real_value(json_object_get(doc, "seconds")),
+	       json_real_value(json_object_get(doc, "relative_rmse")),
+	       (int)json_integer_value(json_object_get(doc, "pixels")));
+	cmd_print_params(doc, NULL);
+	printf("results: %s/params.json, render.exr, compare.png\n",
+	       job.out_dir);
+	json_decref(doc);
+	return GLINT_EXIT_OK;
+}

@@ -19,45 +19,48 @@
 
 void cmd_fit_help(void)
 {
-	printf(
-		"usage: glint fit SCENE.json PHOTO.exr [options]\n"
-		"\n"
-		"Recover a material's parameters from one HDR image of the "
-		"sphere (PHOTO, the\nscene camera's size, linear radiance) "
-		"seen under the scene's environment map.\nWrites "
-		"DIR/params.json (values, standard errors, conventions, cost, "
-		"RMSE,\niterations and time per pass), DIR/render.exr (the "
-		"fitted material rendered)\nand DIR/compare.png (photo | "
-		"render | signed error with a scale bar).\n"
-		"\n"
-		"  -o, --out DIR         result folder (default fit-out); "
-		"replaced whole,\n"
-		"                        never left half-written\n"
-		"  --model NAME          torrance-sparrow (default) or "
-		"lambert\n"
-		"  --method M            three-pass (the paper's, default), "
-		"naive, varpro\n"
-		"  --no-coarse           fit on the full pixel set from the "
-		"start\n"
-		"  --faithful            the paper's evaluation: trace and "
-		"render the whole\n"
-		"                        image per evaluation (slow; the "
-		"benchmark baseline)\n"
-		"  --weights W.exr       per-pixel, per-channel weights "
-		"(1/variance; 0 = ignore)\n"
-		"  --mask-threshold T    specular mask: photo > (1+T) x white "
-		"render (default 0.02)\n"
-		"  --max-pixels N        fit on at most N pixels (every s-th; "
-		"default 16384)\n"
-		"  --samples N           fixed env and lobe samples per hit "
-		"(default 16 each)\n"
-		"  --max-iter N          LM iterations per pass (default 60)\n"
-		"  --threads N           worker threads (default: all CPUs)\n"
-		"  --json                print params.json on stdout; logs as "
-		"JSON lines\n"
-		"  -q, --quiet           no progress or info messages\n"
-		"\nExit status: 0 fitted, 1 bad input or failure (nothing "
-		"written), 2 bad command\nline.\n");
+	printf("usage: glint fit SCENE.json PHOTO.exr [options]\n"
+	       "\n"
+	       "Recover a material's parameters from one HDR image of the "
+	       "sphere (PHOTO, the\nscene camera's size, linear radiance) "
+	       "seen under the scene's environment map.\nWrites "
+	       "DIR/params.json (values, standard errors, conventions, cost, "
+	       "RMSE,\niterations and time per pass), DIR/render.exr (the "
+	       "fitted material rendered)\nand DIR/compare.png (photo | "
+	       "render | signed error with a scale bar).\n"
+	       "\n"
+	       "  -o, --out DIR         result folder (default fit-out); "
+	       "replaced whole,\n"
+	       "                        never left half-written\n"
+	       "  --model NAME          torrance-sparrow (default) or "
+	       "lambert\n"
+	       "  --method M            three-pass (the paper's, default), "
+	       "naive, varpro\n"
+	       "  --no-coarse           fit on the full pixel set from the "
+	       "start\n"
+	       "  --faithful            the paper's evaluation: trace and "
+	       "render the whole\n"
+	       "                        image per evaluation (slow; the "
+	       "benchmark baseline)\n"
+	       "  --weights W.exr       per-pixel, per-channel weights "
+	       "(1/variance; 0 = ignore)\n"
+	       "  --weighting W         without --weights: poisson (default: "
+	       "variance ~ signal\n"
+	       "                        + 10%% of the mean) or uniform (plain "
+	       "SSD, the paper)\n"
+	       "  --mask-threshold T    specular mask: photo > (1+T) x white "
+	       "render (default 0.02)\n"
+	       "  --max-pixels N        fit on at most N pixels (every s-th; "
+	       "default 16384)\n"
+	       "  --samples N           fixed env and lobe samples per hit "
+	       "(default 16 each)\n"
+	       "  --max-iter N          LM iterations per pass (default 60)\n"
+	       "  --threads N           worker threads (default: all CPUs)\n"
+	       "  --json                print params.json on stdout; logs as "
+	       "JSON lines\n"
+	       "  -q, --quiet           no progress or info messages\n"
+	       "\nExit status: 0 fitted, 1 bad input or failure (nothing "
+	       "written), 2 bad command\nline.\n");
 }
 
 static json_t *param_json(const struct glint_fit_result *r)
@@ -68,13 +71,12 @@ static json_t *param_json(const struct glint_fit_result *r)
 	for (int k = 0; k < m->nparams; k++) {
 		const struct glint_param *pi = &m->params[k];
 		json_array_append_new(
-			list,
-			json_pack("{s:s,s:f,s:o,s:b,s:[f,f]}", "name", pi->name,
-				  "value", r->p[k], "stderr",
-				  isfinite(r->se[k]) ? json_real(r->se[k]) :
-						       json_null(),
-				  "at_bound", r->at_bound[k], "bounds", pi->lo,
-				  pi->hi));
+			list, json_pack("{s:s,s:f,s:o,s:b,s:[f,f]}", "name",
+					pi->name, "value", r->p[k], "stderr",
+					isfinite(r->se[k]) ? json_real(r->se[k])
+							   : json_null(),
+					"at_bound", r->at_bound[k], "bounds",
+					pi->lo, pi->hi));
 	}
 	return list;
 }
@@ -86,12 +88,12 @@ static json_t *passes_json(const struct glint_fit_result *r)
 	for (int i = 0; i < r->npasses; i++) {
 		const struct glint_fit_pass *p = &r->passes[i];
 		json_array_append_new(
-			a, json_pack("{s:s,s:i,s:i,s:i,s:f,s:f,s:f}", "name",
-				     p->name, "pixels", p->pixels, "iterations",
-				     p->iterations, "evaluations",
-				     p->evaluations, "cost_start", p->cost0,
-				     "cost_end", p->cost, "seconds",
-				     p->seconds));
+			a,
+			json_pack("{s:s,s:i,s:i,s:i,s:f,s:f,s:f}", "name",
+				  p->name, "pixels", p->pixels, "iterations",
+				  p->iterations, "evaluations", p->evaluations,
+				  "cost_start", p->cost0, "cost_end", p->cost,
+				  "seconds", p->seconds));
 	}
 	return a;
 }
@@ -158,7 +160,7 @@ int fit_job_run(const struct fit_job *job, json_t **result)
 		goto out;
 	json_t *doc = json_pack(
 		"{s:s,s:s,s:o,s:o,s:{s:s,s:b,s:b,s:f,s:i,s:i},s:f,s:f,s:f,"
-		"s:i,s:i,s:i,s:o,s:f,s:f,s:{s:s,s:s}}",
+		"s:i,s:i,s:i,s:o,s:f,s:f,s:{s:s,s:s},s:s}",
 		"model", job->model->name, "conventions",
 		job->model->conventions, "material",
 		glint_material_to_json(job->model, res.p), "parameters",
@@ -171,7 +173,10 @@ int fit_job_run(const struct fit_job *job, json_t **result)
 		"interior_pixels", res.interior, "specular_pixels",
 		res.specular_pixels, "passes", passes_json(&res), "seconds",
 		res.seconds, "setup_seconds", res.setup_seconds, "inputs",
-		"scene", job->scene_path, "photo", job->photo_path);
+		"scene", job->scene_path, "photo", job->photo_path, "weighting",
+		job->weight			      ? "weight image"
+		: o.weighting == GLINT_WEIGHT_POISSON ? "poisson"
+						      : "uniform");
 	ret = glint_atomic_dir_open(&ad, job->out_dir);
 	if (ret < 0) {
 		json_decref(doc);
@@ -184,12 +189,14 @@ int fit_job_run(const struct fit_job *job, json_t **result)
 	free(text);
 	if (!ret)
 		ret = glint_image_write(glint_atomic_dir_file(&ad, "render.exr",
-							      path, sizeof(path)),
+							      path,
+							      sizeof(path)),
 					img, NULL);
 	if (!ret)
-		ret = glint_compare_png(glint_atomic_dir_file(&ad, "compare.png",
-							      path, sizeof(path)),
-					job->photo, img, cov, NULL);
+		ret = glint_compare_png(
+			glint_atomic_dir_file(&ad, "compare.png", path,
+					      sizeof(path)),
+			job->photo, img, cov, NULL);
 	if (!ret)
 		ret = glint_atomic_dir_commit(&ad);
 	else
@@ -221,8 +228,8 @@ void cmd_print_params(const json_t *doc, const double *truth)
 	{
 		json_t *se = json_object_get(p, "stderr");
 		double v = json_real_value(json_object_get(p, "value"));
-		printf("  %-11s %10.4f ", json_string_value(json_object_get(p, "name")),
-		       v);
+		printf("  %-11s %10.4f ",
+		       json_string_value(json_object_get(p, "name")), v);
 		if (json_is_real(se))
 			printf("%10.4f", json_real_value(se));
 		else
@@ -237,8 +244,20 @@ void cmd_print_params(const json_t *doc, const double *truth)
 
 int cmd_fit(int argc, char **argv)
 {
-	enum { O_MODEL = 256, O_METHOD, O_NOCOARSE, O_FAITHFUL, O_WEIGHTS,
-	       O_MASK, O_MAXPIX, O_SAMPLES, O_MAXITER, O_THREADS, O_JSON };
+	enum {
+		O_MODEL = 256,
+		O_METHOD,
+		O_NOCOARSE,
+		O_FAITHFUL,
+		O_WEIGHTS,
+		O_WEIGHTING,
+		O_MASK,
+		O_MAXPIX,
+		O_SAMPLES,
+		O_MAXITER,
+		O_THREADS,
+		O_JSON
+	};
 	static const struct option opts[] = {
 		{ "out", required_argument, NULL, 'o' },
 		{ "model", required_argument, NULL, O_MODEL },
@@ -246,6 +265,7 @@ int cmd_fit(int argc, char **argv)
 		{ "no-coarse", no_argument, NULL, O_NOCOARSE },
 		{ "faithful", no_argument, NULL, O_FAITHFUL },
 		{ "weights", required_argument, NULL, O_WEIGHTS },
+		{ "weighting", required_argument, NULL, O_WEIGHTING },
 		{ "mask-threshold", required_argument, NULL, O_MASK },
 		{ "max-pixels", required_argument, NULL, O_MAXPIX },
 		{ "samples", required_argument, NULL, O_SAMPLES },
@@ -278,7 +298,8 @@ int cmd_fit(int argc, char **argv)
 						       glint_model_names());
 			break;
 		case O_METHOD:
-			if (glint_fit_method_parse(optarg, &job.opts.method) < 0)
+			if (glint_fit_method_parse(optarg, &job.opts.method) <
+			    0)
 				return cmd_usage_error("fit", "%s",
 						       glint_error_msg());
 			break;
@@ -290,6 +311,18 @@ int cmd_fit(int argc, char **argv)
 			break;
 		case O_WEIGHTS:
 			weights = optarg;
+			break;
+		case O_WEIGHTING:
+			if (!strcmp(optarg, "poisson"))
+				job.opts.weighting = GLINT_WEIGHT_POISSON;
+			else if (!strcmp(optarg, "uniform"))
+				job.opts.weighting = GLINT_WEIGHT_UNIFORM;
+			else
+				return cmd_usage_error("fit",
+						       "--weighting '%s': "
+						       "expected poisson or "
+						       "uniform",
+						       optarg);
 			break;
 		case O_MASK: {
 			char *end;
@@ -338,8 +371,8 @@ int cmd_fit(int argc, char **argv)
 	if (json)
 		glint_log_set_mode(GLINT_LOG_JSON);
 	if (optind != argc - 2)
-		return cmd_usage_error("fit",
-				       "expected SCENE.json and PHOTO arguments");
+		return cmd_usage_error(
+			"fit", "expected SCENE.json and PHOTO arguments");
 	job.scene_path = argv[optind];
 	job.photo_path = argv[optind + 1];
 	if (glint_scene_load(job.scene_path, &job.scene) < 0 ||

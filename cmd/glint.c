@@ -18,8 +18,8 @@ static const struct glint_cmd commands[] = {
 	  "render a Table-1 material on the simulated rig (no "
 	  "arguments needed)",
 	  cmd_demo, cmd_demo_help },
-	{ "fit", "recover a material from an HDR photo of the sphere",
-	  cmd_fit, cmd_fit_help },
+	{ "fit", "recover a material from an HDR photo of the sphere", cmd_fit,
+	  cmd_fit_help },
 	{ "render", "render a sphere of a material under an environment map",
 	  cmd_render, cmd_render_help },
 	{ "convert", "convert an image between EXR, HDR, PFM (and PNG out)",

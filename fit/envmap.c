@@ -314,8 +314,7 @@ double glint_envmap_pdf_smooth(const struct glint_envmap *env, struct vec3 d)
 }
 
 double glint_env_dist_pdf_smooth(const struct glint_envmap *env,
-				 const struct glint_env_dist *dd,
-				 struct vec3 d)
+				 const struct glint_env_dist *dd, struct vec3 d)
 {
 	int w = env->img->width, h = env->img->height;
 	double u, v;
@@ -395,8 +394,8 @@ int glint_env_hot_new(const struct glint_envmap *env, double tau,
 	}
 	hot->ntexels = n;
 	hot->npts = n * q * q;
-	hot->pts = malloc((size_t)(hot->npts ? hot->npts : 1) * 6 *
-			  sizeof(float));
+	hot->pts =
+		malloc((size_t)(hot->npts ? hot->npts : 1) * 6 * sizeof(float));
 	if (!hot->pts) {
 		glint_env_hot_free(hot);
 		return glint_error_set(ENOMEM, "out of memory");
@@ -415,7 +414,8 @@ int glint_env_hot_new(const struct glint_envmap *env, double tau,
 						&env->rot,
 						glint_envmap_uv_to_dir(u, v));
 					double l[3];
-					double dom = (2 * M_PI / w) * (M_PI / h) *
+					double dom = (2 * M_PI / w) *
+						     (M_PI / h) *
 						     sin(M_PI * v) / (q * q);
 					glint_envmap_lookup(env, d, l);
 					float *pt = hot->pts + 6 * (size_t)k++;
@@ -424,8 +424,12 @@ int glint_env_hot_new(const struct glint_envmap *env, double tau,
 					pt[2] = (float)d.z;
 					for (int c = 0; c < 3; c++)
 						pt[3 + c] = (float)(l[c] * dom);
-					axis = v3_add(axis,
-						      v3_scale(d, rgb_luminance(l[0], l[1], l[2]) * dom));
+					axis = v3_add(
+						axis,
+						v3_scale(d, rgb_luminance(
+								    l[0], l[1],
+								    l[2]) *
+								    dom));
 				}
 		}
 	hot->axis = v3_norm(axis);

@@ -605,6 +605,20 @@ int glint_fit(struct glint_renderer *r, const struct glint_model_ops *model,
 	ret = check_photo(&d);
 	if (ret < 0)
 		goto out;
+	if (!weight && o->weighting == GLINT_WEIGHT_POISSON) {
+		double mean = 0;
+		int nv = 0;
+		for (int i = 0; i < 3 * d.n; i++)
+			if (d.sw[i] > 0) {
+				mean += fmax(0, d.y[i]);
+				nv++;
+			}
+		mean /= nv;
+		for (int i = 0; i < 3 * d.n; i++)
+			if (d.sw[i] > 0)
+				d.sw[i] =
+					1 / sqrt(fmax(0, d.y[i]) + 0.1 * mean);
+	}
 
 	ob.r = r;
 	ob.m = model;

@@ -35,8 +35,18 @@ enum glint_fit_method {
 const char *glint_fit_method_name(enum glint_fit_method m);
 int glint_fit_method_parse(const char *s, enum glint_fit_method *m);
 
+/* Weights when no weight image is given. */
+enum glint_fit_weighting {
+	/* variance ~ signal + 10 % of the mean signal (shot noise): the
+	 * brightest highlight pixels do not swamp the rest */
+	GLINT_WEIGHT_POISSON,
+	/* plain sum of squared differences (the paper) */
+	GLINT_WEIGHT_UNIFORM,
+};
+
 struct glint_fit_opts {
 	enum glint_fit_method method;
+	enum glint_fit_weighting weighting;
 	int coarse_to_fine;    /* fit a subsampled pixel set first */
 	int faithful;	       /* full trace + render per evaluation */
 	double mask_threshold; /* relative excess over the white render */

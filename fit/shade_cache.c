@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 #include "shade_cache.h"
 
+#include "irradiance.h"
 #include "sampling.h"
 
 #include "core/error.h"
@@ -29,6 +30,9 @@ struct glint_shade_cache {
 	const struct glint_model_ops *model;
 	const struct glint_envmap *env;
 	struct glint_env_hot *hot;
+	/* Irradiance of the non-hot texels, for constant 1/pi lobes. */
+	struct glint_irradiance irr;
+	int lambert[GLINT_MAX_PARAMS]; /* lobe j is the constant 1/pi */
 	int n, spp, nl, nb, nthreads;
 	int32_t *pix;
 	struct cache_hit *hits;	 /* n * spp */
@@ -128,8 +132,8 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 		if (glint_env_hot_contains(c->env, c->hot, ww))
 			continue; /* integrated by hot_quadrature() */
 		double ps = nl ? glint_env_dist_pdf_smooth(c->env,
-							   &c->hot->rest, ww) :
-				 0;
+							   &c->hot->rest, ww)
+			       : 0;
 		double l[3];
 		glint_envmap_lookup(c->env, ww, l);
 		double w = b[j] * wi.z / (nl * ps + nb * pb);
@@ -147,8 +151,8 @@ static void draw_env_samples(const struct glint_envmap *env,
 		double u[2], l[3];
 		struct vec3 d;
 		glint_hammersley((uint32_t)k, (uint32_t)nl, h->seed ^ salt, u);
-		double pdf = glint_env_dist_sample(env, &hot->rest, u[0], u[1],
-						   &d);
+		double pdf =
+			glint_env_dist_sample(env, &hot->rest, u[0], u[1], &d);
 		struct env_sample *e = &es[k];
 		struct vec3 wi = v3(v3_dot(d, fv(h->t)), v3_dot(d, fv(h->b)),
 				    v3_dot(d, fv(h->n)));
@@ -204,16 +208,27 @@ static void setup_pixels(void *ctx, int i0, int i1, int thread)
 			draw_env_samples(c->env, c->hot, h, c->nl, 0x3c6ef372u,
 					 c->envs + ((size_t)i * c->spp + s) *
 							   c->nl);
-			if (!ns)
-				continue;
-			draw_env_samples(c->env, c->hot, h, ns, 0x1b873593u,
-					 tmp);
+			int drawn = 0;
 			for (int j = 0; j < m->nlobes; j++) {
-				double a[3];
+				double a[3] = { 0, 0, 0 }, e[3];
 				if (m->lobe_varies[j])
 					continue;
-				lobe_at_hit(c, h, tmp, ns, ns, u, job->p0, j,
-					    a);
+				if (c->lambert[j]) {
+					/* Exact: hot texels + irradiance. */
+					hot_quadrature(c, h, job->p0, j, a);
+					glint_irradiance_lookup(&c->irr,
+								fv(h->n), e);
+					for (int ch = 0; ch < 3; ch++)
+						a[ch] += e[ch] / M_PI;
+				} else {
+					if (!drawn)
+						draw_env_samples(
+							c->env, c->hot, h, ns,
+							0x1b873593u, tmp);
+					drawn = 1;
+					lobe_at_hit(c, h, tmp, ns, ns, u,
+						    job->p0, j, a);
+				}
 				double *dst = c->static_lobes +
 					      ((size_t)i * m->nlobes + j) * 3;
 				for (int ch = 0; ch < 3; ch++)
@@ -269,11 +284,31 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 	memcpy(c->pix, pix, (size_t)n * sizeof(*pix));
 	/* Hot texels: within 1 % of the brightest, if at most 64 of them;
 	 * 2 x 2 points each. */
-	int ret = glint_env_hot_new(env, 0.01, opts->no_hot ? 0 : 64, 2,
-				    &c->hot);
+	int ret =
+		glint_env_hot_new(env, 0.01, opts->no_hot ? 0 : 64, 2, &c->hot);
 	if (ret < 0) {
 		glint_shade_cache_free(c);
 		return ret;
+	}
+	/* Constant lobes equal to 1/pi (Lambert) integrate exactly through
+	 * the irradiance of the rest of the map. */
+	int any_lambert = 0;
+	for (int k = 0; k < model->nparams; k++)
+		p0[k] = model->params[k].def;
+	for (int j = 0; j < model->nlobes; j++) {
+		double b[GLINT_MAX_PARAMS];
+		model->eval_lobes(p0, v3(0, 0.6, 0.8), v3(0.3, 0, 0.9539), b);
+		c->lambert[j] =
+			!model->lobe_varies[j] && fabs(b[j] - 1 / M_PI) < 1e-12;
+		any_lambert |= c->lambert[j];
+	}
+	if (any_lambert) {
+		ret = glint_irradiance_build(env, c->hot->is_hot, 64,
+					     opts->nthreads, &c->irr);
+		if (ret < 0) {
+			glint_shade_cache_free(c);
+			return ret;
+		}
 	}
 	for (int k = 0; k < c->nb; k++) {
 		c->lobe_u[k][0] = (k + 0.5) / c->nb;
@@ -311,8 +346,6 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 				(uint32_t)(pix[i] * gb->spp + s) ^ 0x85ebca6bu);
 		}
 	}
-	for (int k = 0; k < model->nparams; k++)
-		p0[k] = model->params[k].def;
 	struct setup_job job = { c, opts->static_samples, p0, 0 };
 	glint_parallel_for(n, 64, opts->nthreads, setup_pixels, &job);
 	if (job.failed) {
@@ -333,6 +366,7 @@ void glint_shade_cache_free(struct glint_shade_cache *c)
 	free(c->lobe_u);
 	free(c->static_lobes);
 	glint_env_hot_free(c->hot);
+	glint_irradiance_free(&c->irr);
 	free(c);
 }
 

@@ -7,11 +7,9 @@
  * fitter's fast path so that fitting them is no "inverse crime":
  *   - its own analytic ray-sphere intersection (no Embree, no G-buffer),
  *     with many randomly jittered samples per pixel;
- *   - the constant diffuse lobe by deterministic quadrature: an irradiance
- *     map E(n) = sum over env texels of L max(0, n.w) dOmega, on a grid of
- *     normals, interpolated bilinearly;
- *   - the other lobes by independent pseudo-random sampling, env map and
- *     lobe, combined with the power heuristic and the true pdfs.
+ *   - every lobe by independent pseudo-random sampling (no fixed sample
+ *     sets, no hot-texel quadrature, no irradiance map), env map and lobe,
+ *     combined with the power heuristic and the true pdfs.
  * What it shares with the fitter is the definition of the scene: the
  * camera model, the env map's lookup and sampler, the BRDF.
  */

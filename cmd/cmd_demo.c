@@ -1,13 +1,18 @@
 /* SPDX-License-Identifier: MIT */
 /*
- * The main job on the simulated rig, with no arguments: for now a render of
- * a Table-1 material under the embedded real environment map.
+ * The main job on the simulated rig, with no arguments: a sphere of a
+ * Table-1 material is "photographed" under a real environment map by the
+ * simulator (the independent reference renderer, optionally through the
+ * sensor model), then fitted; true and recovered values are printed.
  */
+#define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
-#include "render_job.h"
+#include "fit_job.h"
 
 #include "core/error.h"
 #include "core/log.h"
+#include "sim/reference.h"
+#include "sim/sensor.h"
 
 #include <getopt.h>
 #include <math.h>
@@ -15,34 +20,48 @@
 #include <string.h>
 #include <sys/stat.h>
 
+void cmd_print_params(const json_t *doc, const double *truth);
+
 void cmd_demo_help(void)
 {
-	printf("usage: glint demo [--material NAME] [--out DIR] [--json]\n"
+	printf("usage: glint demo [--material NAME] [--out DIR] [--noise] "
+	       "[--json]\n"
 	       "\n"
-	       "Render a sphere of a material from the paper's Table 1 "
-	       "(default\nyellow-plastic) under the embedded Venice-sunset "
-	       "environment map (Poly Haven,\nCC0), 512x512, and write "
-	       "DIR/render.exr and DIR/render.png (DIR defaults\nto "
-	       "./demo-out).\n"
+	       "The whole job on the simulated rig: the simulator photographs "
+	       "a 10 cm sphere of\na material from the paper's Table 1 "
+	       "(default yellow-plastic) under the\nembedded Venice-sunset "
+	       "environment map (Poly Haven, CC0) with its reference\n"
+	       "renderer, then glint fits the Torrance-Sparrow model to that "
+	       "photo with the\npaper's three-pass method and prints true "
+	       "against recovered values.\nWrites DIR/photo.exr and "
+	       "DIR/fit/{params.json, render.exr, compare.png}\n(DIR "
+	       "defaults to ./demo-out).\n"
 	       "\n"
-	       "  --material NAME  a Table-1 material: satin-paint, "
-	       "semi-gloss-paint,\n"
-	       "                   matte-paint, yellow-plastic, teflon, "
-	       "nylon, silver,\n"
-	       "                   green-acrylic, aluminium-bronze, copper, "
-	       "nickel\n"
+	       "  --material NAME  satin-paint, semi-gloss-paint, "
+	       "matte-paint, yellow-plastic,\n"
+	       "                   teflon, nylon, silver, green-acrylic, "
+	       "aluminium-bronze,\n"
+	       "                   copper, nickel\n"
+	       "  --method M       three-pass (default), naive, varpro\n"
+	       "  --noise          a single 12-bit exposure with shot and "
+	       "read noise instead\n"
+	       "                   of a noise-free HDR photo (saturated "
+	       "pixels get weight 0)\n"
 	       "  --out DIR        output folder (created if missing)\n"
 	       "  --threads N      worker threads (default: all CPUs)\n"
-	       "  --json           print a JSON result on stdout\n"
+	       "  --json           print the fit's params.json plus the "
+	       "truth on stdout\n"
 	       "  -q, --quiet      no progress or info messages\n");
 }
 
 int cmd_demo(int argc, char **argv)
 {
-	enum { O_JSON = 256, O_THREADS };
+	enum { O_JSON = 256, O_THREADS, O_NOISE, O_METHOD };
 	static const struct option opts[] = {
 		{ "material", required_argument, NULL, 'm' },
 		{ "out", required_argument, NULL, 'o' },
+		{ "method", required_argument, NULL, O_METHOD },
+		{ "noise", no_argument, NULL, O_NOISE },
 		{ "threads", required_argument, NULL, O_THREADS },
 		{ "json", no_argument, NULL, O_JSON },
 		{ "quiet", no_argument, NULL, 'q' },
@@ -50,10 +69,13 @@ int cmd_demo(int argc, char **argv)
 		{ NULL, 0, NULL, 0 },
 	};
 	const char *material = "yellow-plastic", *dir = "demo-out";
-	char scene_path[4096], table[4096], exr[4096], png[4096];
-	struct render_job job = { .background = 1, .exposure = NAN };
-	int json = 0, c;
+	char scene_path[4096], table[4096], photo_path[4200], fit_dir[4200];
+	struct fit_job job = { 0 };
+	const struct glint_model_ops *model;
+	double truth[GLINT_MAX_PARAMS];
+	int json = 0, noise = 0, c, ret;
 
+	glint_fit_default_opts(&job.opts);
 	optind = 1;
 	while ((c = getopt_long(argc, argv, "m:o:qh", opts, NULL)) != -1) {
 		switch (c) {
@@ -62,6 +84,15 @@ int cmd_demo(int argc, char **argv)
 			break;
 		case 'o':
 			dir = optarg;
+			break;
+		case O_METHOD:
+			if (glint_fit_method_parse(optarg, &job.opts.method) <
+			    0)
+				return cmd_usage_error("demo", "%s",
+						       glint_error_msg());
+			break;
+		case O_NOISE:
+			noise = 1;
 			break;
 		case O_JSON:
 			json = 1;
@@ -91,34 +122,106 @@ int cmd_demo(int argc, char **argv)
 	snprintf(table, sizeof(table), "%s/paper-table1.json",
 		 glint_data_dir());
 	if (glint_scene_load(scene_path, &job.scene) < 0 ||
-	    glint_material_load(table, material, &job.model, job.params) < 0)
+	    glint_material_load(table, material, &model, truth) < 0)
 		return cmd_fail("demo");
+	if (model != &glint_model_torrance_sparrow) {
+		glint_error_set(EINVAL,
+				"%s is a %s material: the demo fits "
+				"Torrance-Sparrow materials",
+				material, model->name);
+		return cmd_fail("demo");
+	}
 	if (mkdir(dir, 0777) < 0 && errno != EEXIST) {
 		glint_error_set(errno, "%s: cannot create folder: %s", dir,
 				strerror(errno));
 		return cmd_fail("demo");
 	}
-	snprintf(exr, sizeof(exr), "%s/render.exr", dir);
-	snprintf(png, sizeof(png), "%s/render.png", dir);
-	job.out_exr = exr;
-	job.out_png = png;
-	glint_log_info("rendering %s (Table 1) under %s", material,
-		       job.scene.env_path);
-	json_t *result;
-	if (render_job_run(&job, &result) < 0)
+	snprintf(photo_path, sizeof(photo_path), "%s/photo.exr", dir);
+	snprintf(fit_dir, sizeof(fit_dir), "%s/fit", dir);
+
+	/* The simulated capture. */
+	struct glint_envmap *env;
+	if (glint_envmap_load(job.scene.env_path, job.scene.env_rotation,
+			      job.scene.env_scale, &env) < 0)
 		return cmd_fail("demo");
-	if (json) {
-		json_object_set_new(result, "material_name",
-				    json_string(material));
-		cmd_print_json(result);
-		return GLINT_EXIT_OK;
+	struct glint_image *photo =
+		glint_image_new(job.scene.cam.width, job.scene.cam.height);
+	struct glint_reference_opts ro;
+	glint_reference_default_opts(&ro);
+	ro.spp = 4;
+	ro.nthreads = job.nthreads;
+	glint_log_info("simulating a photo of %s (Table 1) under %s", material,
+		       job.scene.env_path);
+	double t0 = glint_now();
+	ret = photo ? glint_reference_render(&job.scene, env, model, truth, &ro,
+					     photo)
+		    : -ENOMEM;
+	glint_envmap_free(env);
+	if (ret < 0)
+		goto fail;
+	double sim_s = glint_now() - t0;
+	if (noise) {
+		struct glint_sensor s;
+		struct glint_image *dn =
+			glint_image_new(photo->width, photo->height);
+		job.weight = glint_image_new(photo->width, photo->height);
+		glint_sensor_default(&s);
+		/* Expose for the diffuse body: highlights clip. */
+		double mean = 0;
+		for (int i = 0; i < photo->width * photo->height * 3; i++)
+			mean += photo->data[i];
+		mean /= photo->width * photo->height * 3.0;
+		s.exposure_s = glint_sensor_exposure_for(&s, mean, 0.1);
+		ret = dn && job.weight ? glint_sensor_capture(&s, photo, dn)
+				       : -ENOMEM;
+		if (!ret)
+			ret = glint_sensor_to_radiance(&s, dn, photo,
+						       job.weight);
+		glint_image_free(dn);
+		if (ret < 0)
+			goto fail;
 	}
-	printf("demo: %s sphere, %dx%d, rendered in %.2f s\n", material,
-	       job.scene.cam.width, job.scene.cam.height,
-	       json_real_value(json_object_get(result, "trace_seconds")) +
-		       json_real_value(
-			       json_object_get(result, "shade_seconds")));
-	printf("  HDR image: %s\n  preview:   %s\n", exr, png);
-	json_decref(result);
+	ret = glint_image_write(photo_path, photo, NULL);
+	if (ret < 0)
+		goto fail;
+	job.scene_path = scene_path;
+	job.photo_path = photo_path;
+	job.photo = photo;
+	job.model = model;
+	job.out_dir = fit_dir;
+	json_t *doc;
+	ret = fit_job_run(&job, &doc);
+	if (ret < 0)
+		goto fail;
+	if (json) {
+		json_object_set_new(doc, "truth",
+				    glint_material_to_json(model, truth));
+		json_object_set_new(doc, "material_name",
+				    json_string(material));
+		json_object_set_new(doc, "photo", json_string(photo_path));
+		cmd_print_json(doc);
+	} else {
+		printf("demo: %s sphere under %s, %dx%d%s\n", material,
+		       strrchr(job.scene.env_path, '/') + 1,
+		       job.scene.cam.width, job.scene.cam.height,
+		       noise ? ", one noisy 12-bit exposure"
+			     : ", noise-free HDR");
+		printf("  photo simulated in %.1f s; fit (%s) in %.2f s, "
+		       "relative RMSE %.4f\n",
+		       sim_s, glint_fit_method_name(job.opts.method),
+		       json_real_value(json_object_get(doc, "seconds")),
+		       json_real_value(json_object_get(doc, "relative_rmse")));
+		cmd_print_params(doc, truth);
+		printf("  photo:   %s\n  results: %s/params.json, render.exr, "
+		       "compare.png\n",
+		       photo_path, fit_dir);
+		json_decref(doc);
+	}
+	glint_image_free(photo);
+	glint_image_free(job.weight);
 	return GLINT_EXIT_OK;
+fail:
+	glint_image_free(photo);
+	glint_image_free(job.weight);
+	return cmd_fail("demo");
 }

@@ -189,14 +189,11 @@ void glint_envmap_free(struct glint_envmap *env)
 	free(env);
 }
 
-void glint_envmap_lookup(const struct glint_envmap *env, struct vec3 d,
-			 double rgb[3])
+static void lookup_uv(const struct glint_envmap *env, double u, double v,
+		      double rgb[3])
 {
 	const struct glint_image *img = env->img;
 	int w = img->width, h = img->height;
-	double u, v;
-
-	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
 	double x = u * w - 0.5, y = v * h - 0.5;
 	double fx = floor(x), fy = floor(y);
 	double tx = x - fx, ty = y - fy;
@@ -216,6 +213,15 @@ void glint_envmap_lookup(const struct glint_envmap *env, struct vec3 d,
 		rgb[k] =
 			env->scale * ((1 - ty) * ((1 - tx) * a[k] + tx * b[k]) +
 				      ty * ((1 - tx) * c[k] + tx * e[k]));
+}
+
+void glint_envmap_lookup(const struct glint_envmap *env, struct vec3 d,
+			 double rgb[3])
+{
+	double u, v;
+
+	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
+	lookup_uv(env, u, v, rgb);
 }
 
 /* Index i with cdf[i] <= x < cdf[i + 1] among n intervals. */
@@ -313,15 +319,13 @@ double glint_envmap_pdf_smooth(const struct glint_envmap *env, struct vec3 d)
 	return glint_env_dist_pdf_smooth(env, &env->dist, d);
 }
 
-double glint_env_dist_pdf_smooth(const struct glint_envmap *env,
-				 const struct glint_env_dist *dd, struct vec3 d)
+static double pdf_smooth_uv(const struct glint_envmap *env,
+			    const struct glint_env_dist *dd, double u, double v)
 {
 	int w = env->img->width, h = env->img->height;
-	double u, v;
 
 	if (!(dd->total > 0))
 		return 0;
-	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
 	double s = sin(M_PI * v);
 	if (!(s > 0))
 		return 0;
@@ -333,6 +337,15 @@ double glint_env_dist_pdf_smooth(const struct glint_envmap *env,
 		   ty * ((1 - tx) * uv_density(env, dd, i, j + 1) +
 			 tx * uv_density(env, dd, i + 1, j + 1));
 	return p / (2 * M_PI * M_PI * s);
+}
+
+double glint_env_dist_pdf_smooth(const struct glint_envmap *env,
+				 const struct glint_env_dist *dd, struct vec3 d)
+{
+	double u, v;
+
+	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
+	return pdf_smooth_uv(env, dd, u, v);
 }
 
 static void texel_of(const struct glint_envmap *env, struct vec3 d, int *i,
@@ -458,4 +471,26 @@ void glint_env_hot_free(struct glint_env_hot *hot)
 	free(hot->is_hot);
 	dist_free(&hot->rest);
 	free(hot);
+}
+
+void glint_env_query(const struct glint_envmap *env,
+		     const struct glint_env_dist *dd,
+		     const struct glint_env_hot *hot, struct vec3 d,
+		     double rgb[3], double *pdf_smooth, int *is_hot)
+{
+	int w = env->img->width, h = env->img->height;
+	double u, v;
+
+	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
+	*is_hot = 0;
+	if (hot && hot->ntexels) {
+		int i = (int)(u * w), j = (int)(v * h);
+		i = i < 0 ? 0 : i >= w ? w - 1 : i;
+		j = j < 0 ? 0 : j >= h ? h - 1 : j;
+		*is_hot = hot->is_hot[(size_t)j * w + i];
+		if (*is_hot)
+			return;
+	}
+	lookup_uv(env, u, v, rgb);
+	*pdf_smooth = pdf_smooth_uv(env, dd, u, v);
 }

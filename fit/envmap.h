@@ -104,6 +104,16 @@ struct glint_env_hot {
 	double radius;	  /* axis and half-angle (radians) */
 };
 
+/*
+ * One query for a direction, converting it to map coordinates once: the
+ * radiance (bilinear), the smooth pdf of distribution dd, and whether the
+ * direction lies in a hot texel (hot may be NULL).
+ */
+void glint_env_query(const struct glint_envmap *env,
+		     const struct glint_env_dist *dd,
+		     const struct glint_env_hot *hot, struct vec3 d,
+		     double rgb[3], double *pdf_smooth, int *is_hot);
+
 int glint_env_hot_new(const struct glint_envmap *env, double tau,
 		      int max_texels, int q, struct glint_env_hot **out);
 void glint_env_hot_free(struct glint_env_hot *hot);

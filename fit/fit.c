@@ -377,7 +377,14 @@ static int run_pass(struct objective *ob, const char *name, const int *sel,
 		ob,
 	};
 	glint_lm_default_opts(&lo_opts);
+	/* The objective is a Monte Carlo estimate good to ~1e-3: a relative
+	 * cost drop below 1e-6 is no progress. */
+	lo_opts.ftol = 1e-6;
+	lo_opts.se_tol = 0.1;
 	lo_opts.max_iter = ob->o->max_iter;
+	/* The fine pass polishes a coarse optimum: a few steps do. */
+	if (!strcmp(name, "fine") && lo_opts.max_iter > 10)
+		lo_opts.max_iter = 10;
 	lo_opts.progress = lm_progress;
 	lo_opts.progress_ctx = &pc;
 	int ret = glint_lm_solve(&pr, &lo_opts, q, lr);

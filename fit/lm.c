@@ -140,6 +140,24 @@ static void standard_errors(const double *a, int n, int m, double cost,
 			st ? NAN : sqrt(fmax(0, s2 * buf[u * nf + u]));
 }
 
+/* Every |q - p| below tol standard errors (from s^2 (J^T J)^-1)? */
+static int step_insignificant(const double *a, const int *freev, int n, int m,
+			      double cost, const double *p, const double *q,
+			      double tol)
+{
+	struct glint_lm_result tmp;
+
+	standard_errors(a, n, m, cost, freev, &tmp);
+	for (int j = 0; j < n; j++) {
+		if (!freev[j])
+			continue;
+		if (!isfinite(tmp.se[j]) ||
+		    fabs(q[j] - p[j]) >= tol * tmp.se[j])
+			return 0;
+	}
+	return 1;
+}
+
 int glint_lm_solve(const struct glint_lm_problem *pr,
 		   const struct glint_lm_opts *o, double *p,
 		   struct glint_lm_result *res)
@@ -173,7 +191,7 @@ int glint_lm_solve(const struct glint_lm_problem *pr,
 		goto out;
 	double cost = half_sq(r, m);
 	res->cost0 = cost;
-	int need_jac = 1, small_drops = 0;
+	int need_jac = 1, small_drops = 0, rejects = 0;
 	res->reason = "iteration limit";
 	for (int it = 0; it < o->max_iter; it++) {
 		res->iterations = it + 1;
@@ -232,7 +250,18 @@ int glint_lm_solve(const struct glint_lm_problem *pr,
 				pred -= 0.5 * dj * a[j * n + k] * (q[k] - p[k]);
 		}
 		double rho = pred > 0 ? (cost - cn) / pred : -1;
+		if (cn < cost && o->se_tol > 0 &&
+		    step_insignificant(a, freev, n, m, cost, p, q, o->se_tol)) {
+			memcpy(p, q, (size_t)n * sizeof(double));
+			memcpy(r, rn, (size_t)m * sizeof(double));
+			cost = cn;
+			need_jac = 1;
+			res->converged = 1;
+			res->reason = "steps below the standard errors";
+			break;
+		}
 		if (cn < cost) {
+			rejects = 0;
 			double drop = (cost - cn) / fmax(cost, 1e-300);
 			memcpy(p, q, (size_t)n * sizeof(double));
 			memcpy(r, rn, (size_t)m * sizeof(double));
@@ -250,6 +279,15 @@ int glint_lm_solve(const struct glint_lm_problem *pr,
 		} else {
 			lambda *= nu;
 			nu *= 2;
+			/* Rejected again and again, or damped hard and the
+			 * linear model promises next to nothing: this is the
+			 * minimum (each rejection costs an evaluation). */
+			if (++rejects >= 4 ||
+			    (lambda > 1 && pred <= o->ftol * cost)) {
+				res->converged = 1;
+				res->reason = "no acceptable step";
+				break;
+			}
 			if (lambda > 1e16) {
 				res->converged = 1;
 				res->reason = "no descent left";

@@ -38,6 +38,9 @@ struct glint_lm_opts {
 	double xtol;	/* stop when the relative step is below */
 	double gtol;	/* stop when the projected gradient is below */
 	double fd_step; /* relative forward-difference step */
+	/* Stop when every accepted step is below se_tol standard errors
+	 * (statistically meaningless moves); 0 disables. */
+	double se_tol;
 	/* Called after every iteration (may be NULL). */
 	void (*progress)(void *ctx, int iter, double cost, const double *p);
 	void *progress_ctx;

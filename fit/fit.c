@@ -3,6 +3,7 @@
 
 #include "core/error.h"
 #include "core/log.h"
+#include "core/vec.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -34,7 +35,7 @@ void glint_fit_default_opts(struct glint_fit_opts *o)
 	memset(o, 0, sizeof(*o));
 	o->method = GLINT_FIT_THREE_PASS;
 	o->coarse_to_fine = 1;
-	o->mask_threshold = 0.02;
+	o->mask_threshold = 0.1;
 	o->max_pixels = 16384;
 	o->light_samples = 16;
 	o->lobe_samples = 16;
@@ -62,7 +63,8 @@ struct objective {
 	double p[GLINT_MAX_PARAMS]; /* all parameters; free ones overwritten */
 	int nfree;
 	int free_idx[GLINT_MAX_PARAMS];
-	int varpro; /* free = nonlinear only; albedos solved inside */
+	int varpro;	 /* free = nonlinear only; albedos solved inside */
+	double rough_lo; /* lower bound on the roughness parameter (coarse) */
 	/* which parameters are lobe albedos: lobe and channel, else -1 */
 	int lobe_of[GLINT_MAX_PARAMS], chan_of[GLINT_MAX_PARAMS];
 	/* memo of lobe integrals at the nonlinear parameters memo_p */
@@ -275,6 +277,19 @@ static int obj_residuals(void *ctx, const double *q, double *res)
 	return 0;
 }
 
+/*
+ * Forward-difference step for the nonlinear parameters, relative.  The
+ * objective is a Monte Carlo estimate on fixed samples: smooth, but with a
+ * fine-scale ripple (lobe samples move with the roughness); 1e-4 steps
+ * pick the ripple up and stall LM in flat valleys, 1e-2 steps see the
+ * trend.  GLINT_FD_STEP overrides it for experiments.
+ */
+static double fd_rel_step(void)
+{
+	const char *e = getenv("GLINT_FD_STEP");
+	return e ? atof(e) : 1e-2;
+}
+
 /* Analytic columns for albedos, forward differences for the rest. */
 static int obj_jacobian(void *ctx, const double *q, const double *r,
 			double *jac)
@@ -288,6 +303,7 @@ static int obj_jacobian(void *ctx, const double *q, const double *r,
 	for (int k = 0; k < nf; k++)
 		p[ob->free_idx[k]] = q[k];
 	const double *lobes = memo_lobes(ob, p);
+	double fd_rel = fd_rel_step();
 	for (int k = 0; k < nf; k++) {
 		int pk = ob->free_idx[k];
 		if (ob->lobe_of[pk] >= 0) {
@@ -306,7 +322,7 @@ static int obj_jacobian(void *ctx, const double *q, const double *r,
 			continue;
 		}
 		const struct glint_param *pi = &ob->m->params[pk];
-		double h = 1e-4 * fmax(fabs(p[pk]), 1e-2);
+		double h = fd_rel * fmax(fabs(p[pk]), 1e-2);
 		if (p[pk] + h > pi->hi)
 			h = -h;
 		double pp[GLINT_MAX_PARAMS];
@@ -340,6 +356,58 @@ static void lm_progress(void *ctx, int iter, double cost, const double *p)
 		pc->o->progress(pc->o->progress_ctx, pc->pass, iter, cost);
 }
 
+/* Weighted cost with the albedos solved for ob->p's other parameters. */
+static double projected_cost(struct objective *ob, const int *sel, int nsel,
+			     double *p, double *scratch)
+{
+	double c = 0;
+
+	ob->sel = sel;
+	ob->nsel = nsel;
+	ob->varpro = 1;
+	ob->nfree = 0;
+	ob->memo_valid = 0;
+	memcpy(ob->p, p, sizeof(ob->p));
+	obj_residuals(ob, p, scratch);
+	memcpy(p, ob->p, sizeof(ob->p));
+	ob->varpro = 0;
+	for (int k = 0; k < 3 * nsel; k++)
+		c += scratch[k] * scratch[k];
+	return c;
+}
+
+static int rescan_roughness(struct objective *ob, const int *sel, int nsel,
+			    double coarse_lo)
+{
+	const struct glint_model_ops *m = ob->m;
+	int rk = m->roughness_param;
+	double *scratch = malloc((size_t)3 * nsel * sizeof(double));
+	double best_p[GLINT_MAX_PARAMS], p[GLINT_MAX_PARAMS];
+
+	if (!scratch)
+		return glint_error_set(ENOMEM, "out of memory");
+	memcpy(best_p, ob->p, sizeof(best_p));
+	memcpy(p, ob->p, sizeof(p));
+	double best = projected_cost(ob, sel, nsel, p, scratch);
+	memcpy(best_p, p, sizeof(best_p));
+	/* Below the coarse bound (which the coarse level could not
+	 * resolve), log-spaced down to the model's bound. */
+	double lo = fmax(m->params[rk].lo, 1e-3), hi = coarse_lo;
+	for (int i = 0; i < 6 && hi > lo; i++) {
+		memcpy(p, best_p, sizeof(p));
+		p[rk] = lo * pow(hi / lo, i / 5.0);
+		double c = projected_cost(ob, sel, nsel, p, scratch);
+		if (c < best) {
+			best = c;
+			memcpy(best_p, p, sizeof(best_p));
+		}
+	}
+	memcpy(ob->p, best_p, sizeof(ob->p));
+	ob->memo_valid = 0;
+	free(scratch);
+	return 0;
+}
+
 /* Run LM over the parameters `freev` of ob->p on selection sel. */
 static int run_pass(struct objective *ob, const char *name, const int *sel,
 		    int nsel, const int *freev, int varpro,
@@ -362,6 +430,9 @@ static int run_pass(struct objective *ob, const char *name, const int *sel,
 			ob->free_idx[ob->nfree] = k;
 			q[ob->nfree] = ob->p[k];
 			lo[ob->nfree] = m->params[k].lo;
+			if (k == m->roughness_param)
+				lo[ob->nfree] =
+					fmax(lo[ob->nfree], ob->rough_lo);
 			hi[ob->nfree] = m->params[k].hi;
 			ob->nfree++;
 		}
@@ -383,8 +454,8 @@ static int run_pass(struct objective *ob, const char *name, const int *sel,
 	lo_opts.se_tol = 0.1;
 	lo_opts.max_iter = ob->o->max_iter;
 	/* The fine pass polishes a coarse optimum: a few steps do. */
-	if (!strcmp(name, "fine") && lo_opts.max_iter > 10)
-		lo_opts.max_iter = 10;
+	if (!strcmp(name, "fine") && lo_opts.max_iter > 20)
+		lo_opts.max_iter = 20;
 	lo_opts.progress = lm_progress;
 	lo_opts.progress_ctx = &pc;
 	int ret = glint_lm_solve(&pr, &lo_opts, q, lr);
@@ -515,6 +586,53 @@ static int check_photo(const struct fit_data *d)
 	return 0;
 }
 
+static int cmp_double(const void *a, const void *b)
+{
+	double x = *(const double *)a, y = *(const double *)b;
+	return (x > y) - (x < y);
+}
+
+/* Median of v[0..n) (reorders v). */
+static double median_of(double *v, int n)
+{
+	qsort(v, (size_t)n, sizeof(double), cmp_double);
+	return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/*
+ * Relative RMSE of the photo against the bare backdrop: the env map seen
+ * along the same primary rays, as if there were no sphere.  A photo that
+ * matches the backdrop better than any fitted sphere does not show the
+ * sphere where the scene says.
+ */
+static double backdrop_error(const struct glint_gbuffer *gb,
+			     const struct glint_envmap *env,
+			     const struct fit_data *d)
+{
+	double se = 0, sy = 0;
+	int n = 0;
+
+	for (int i = 0; i < d->n; i++) {
+		double bg[3] = { 0, 0, 0 }, l[3];
+		for (int s = 0; s < gb->spp; s++) {
+			const float *dir =
+				gb->hits[(size_t)d->pix[i] * gb->spp + s].d;
+			glint_envmap_lookup(env, v3(dir[0], dir[1], dir[2]), l);
+			for (int c = 0; c < 3; c++)
+				bg[c] += l[c] / gb->spp;
+		}
+		for (int c = 0; c < 3; c++) {
+			if (d->sw[3 * i + c] <= 0)
+				continue;
+			double e = bg[c] - d->y[3 * i + c];
+			se += e * e;
+			sy += d->y[3 * i + c];
+			n++;
+		}
+	}
+	return n && sy > 0 ? sqrt(se / n) / (sy / n) : INFINITY;
+}
+
 static int stride_for(int interior, int max_pixels)
 {
 	int s = 1;
@@ -526,7 +644,7 @@ static int stride_for(int interior, int max_pixels)
 static void finish_stats(struct objective *ob, const int *sel, int nsel,
 			 struct glint_fit_result *res)
 {
-	double se = 0, sy = 0;
+	double se = 0, sy = 0, wcost = 0;
 	int n = 0;
 	double *lobes = ob->cache ? malloc((size_t)nsel * ob->m->nlobes * 3 *
 					   sizeof(double))
@@ -548,6 +666,8 @@ static void finish_stats(struct objective *ob, const int *sel, int nsel,
 				v = glint_image_px(ob->img, ob->d->xy[2 * s],
 						   ob->d->xy[2 * s + 1])[c];
 			double e = v - ob->d->y[3 * s + c];
+			double we = ob->d->sw[3 * s + c] * e;
+			wcost += 0.5 * we * we;
 			se += e * e;
 			sy += ob->d->y[3 * s + c];
 			n++;
@@ -555,13 +675,17 @@ static void finish_stats(struct objective *ob, const int *sel, int nsel,
 	}
 	free(lobes);
 	res->rmse = n ? sqrt(se / n) : NAN;
+	res->wcost = wcost;
 	res->rel_rmse = n && sy > 0 ? res->rmse / (sy / n) : NAN;
 	res->pixels = nsel;
 }
 
-int glint_fit(struct glint_renderer *r, const struct glint_model_ops *model,
-	      const struct glint_image *photo, const struct glint_image *weight,
-	      const struct glint_fit_opts *o, struct glint_fit_result *res)
+static int fit_or_eval(struct glint_renderer *r,
+		       const struct glint_model_ops *model,
+		       const struct glint_image *photo,
+		       const struct glint_image *weight,
+		       const struct glint_fit_opts *o, const double *eval_p,
+		       struct glint_fit_result *res)
 {
 	const struct glint_gbuffer *gb = &r->gb;
 	struct fit_data d = { 0 };
@@ -669,82 +793,137 @@ int glint_fit(struct glint_renderer *r, const struct glint_model_ops *model,
 			goto out;
 	}
 	res->setup_seconds = glint_now() - t0;
-
-	/* Selections: all, coarse (4x the stride), and the two masks. */
-	int nall = 0, ncoarse = 0, nspec = 0, ndiff = 0;
-	for (int i = 0; i < d.n; i++) {
-		all[nall++] = i;
-		if (d.xy[2 * i] % (4 * stride) == 0 &&
-		    d.xy[2 * i + 1] % (4 * stride) == 0)
-			coarse[ncoarse++] = i;
+	if (eval_p) {
+		for (int i = 0; i < d.n; i++)
+			all[i] = i;
+		memcpy(ob.p, eval_p, (size_t)model->nparams * sizeof(double));
+		memcpy(res->p, ob.p, sizeof(res->p));
+		finish_stats(&ob, all, d.n, res);
+		res->seconds = glint_now() - t0;
+		ret = 0;
+		goto out;
 	}
-	if (!o->coarse_to_fine || ncoarse < 64) {
+
+	/*
+	 * Selections.  The masks are computed on every fitted pixel; the
+	 * coarse set is every 4th row and column plus every specular pixel:
+	 * a grid alone can miss a small glint, and the glint is what pins
+	 * roughness down (without it the coarse passes drift to any lobe).
+	 */
+	int nall = d.n, ncoarse = 0, nspec = 0, ndiff = 0;
+	unsigned char *is_spec = calloc((size_t)d.n, 1);
+	if (!is_spec) {
+		ret = glint_error_set(ENOMEM, "out of memory");
+		goto out;
+	}
+	for (int i = 0; i < d.n; i++)
+		all[i] = i;
+	/* The white render: the constant lobes at albedo 1 (the faithful
+	 * path renders a white Lambertian sphere in full). */
+	double *white = malloc((size_t)d.n * 3 * sizeof(double));
+	double *ratio = malloc((size_t)d.n * sizeof(double));
+	if (!white || !ratio) {
+		free(white);
+		free(ratio);
+		free(is_spec);
+		ret = glint_error_set(ENOMEM, "out of memory");
+		goto out;
+	}
+	if (o->faithful) {
+		double white_p[GLINT_MAX_PARAMS] = { 1, 1, 1 };
+		struct objective wob = ob;
+		wob.m = &glint_model_lambert;
+		ret = render_full(&wob, white_p);
+		for (int s = 0; s < d.n && !ret; s++)
+			for (int c = 0; c < 3; c++)
+				white[3 * s + c] =
+					glint_image_px(ob.img, d.xy[2 * s],
+						       d.xy[2 * s + 1])[c];
+	} else {
+		int nj = model->nlobes;
+		double *wl = malloc((size_t)d.n * nj * 3 * sizeof(double));
+		ret = wl ? 0 : glint_error_set(ENOMEM, "out of memory");
+		if (wl)
+			glint_shade_cache_lobes_sel(ob.cache, ob.p, all, d.n,
+						    wl);
+		for (int s = 0; s < d.n && wl; s++)
+			for (int c = 0; c < 3; c++) {
+				double w = 0;
+				for (int j = 0; j < nj; j++)
+					if (!model->lobe_varies[j])
+						w += wl[((size_t)s * nj + j) *
+								3 +
+							c];
+				white[3 * s + c] = w;
+			}
+		free(wl);
+	}
+	/*
+	 * The specular mask.  The paper marks pixels where the photo exceeds
+	 * the white render by more than a threshold; but a dark glossy
+	 * material's highlights never outshine a white sphere (satin paint:
+	 * 0.27 against 1.5), which leaves the mask empty and pass 1 fitting
+	 * diffuse albedo on highlights.  A Lambertian surface of unknown
+	 * albedo a shows photo = a x white everywhere, so glint marks the
+	 * pixels whose ratio photo / white exceeds the median ratio by more
+	 * than the threshold; the paper's rule is the case a = 1.
+	 */
+	int nr = 0;
+	for (int s = 0; s < d.n && !ret; s++) {
+		double pw = rgb_luminance(d.y[3 * s], d.y[3 * s + 1],
+					  d.y[3 * s + 2]);
+		double ww = rgb_luminance(white[3 * s], white[3 * s + 1],
+					  white[3 * s + 2]);
+		ratio[s] = ww > 0 ? pw / ww : 0;
+		nr++;
+	}
+	double med = 0;
+	if (!ret && nr) {
+		double *tmp = malloc((size_t)nr * sizeof(double));
+		if (tmp) {
+			memcpy(tmp, ratio, (size_t)nr * sizeof(double));
+			med = median_of(tmp, nr);
+			free(tmp);
+		}
+	}
+	for (int s = 0; s < d.n && !ret; s++)
+		is_spec[s] = ratio[s] > (1 + o->mask_threshold) * med;
+	free(white);
+	free(ratio);
+	if (ret < 0) {
+		free(is_spec);
+		goto out;
+	}
+	for (int s = 0; s < d.n; s++) {
+		int on_grid = d.xy[2 * s] % (4 * stride) == 0 &&
+			      d.xy[2 * s + 1] % (4 * stride) == 0;
+		if (is_spec[s])
+			spec[nspec++] = s;
+		if (on_grid || is_spec[s])
+			coarse[ncoarse++] = s;
+	}
+	if (!o->coarse_to_fine || ncoarse < 64 || ncoarse > nall / 2) {
 		memcpy(coarse, all, (size_t)nall * sizeof(int));
 		ncoarse = nall;
 	}
-	/* White Lambertian render: the constant lobes at albedo 1. */
-	{
-		int nj = model->nlobes;
-		double *wl = malloc((size_t)ncoarse * nj * 3 * sizeof(double));
-		if (!wl) {
-			ret = glint_error_set(ENOMEM, "out of memory");
-			goto out;
-		}
-		if (ob.cache)
-			glint_shade_cache_lobes_sel(ob.cache, ob.p, coarse,
-						    ncoarse, wl);
-		else
-			memset(wl, 0,
-			       (size_t)ncoarse * nj * 3 * sizeof(double));
-		for (int t = 0; t < ncoarse; t++) {
-			int s = coarse[t], is_spec = 0;
-			for (int c = 0; c < 3; c++) {
-				double white = 0;
-				for (int j = 0; j < nj; j++)
-					if (!model->lobe_varies[j])
-						white += wl[((size_t)t * nj +
-							     j) * 3 +
-							    c];
-				if (!ob.cache) /* faithful: Lambert render */
-					white = NAN;
-				if (d.y[3 * s + c] >
-				    (1 + o->mask_threshold) * white + 1e-12)
-					is_spec = 1;
-			}
-			if (is_spec)
-				spec[nspec++] = s;
-			else
-				diff[ndiff++] = s;
-		}
-		free(wl);
-	}
-	if (o->faithful && o->method == GLINT_FIT_THREE_PASS) {
-		/* The white render the paper's way: a full Lambert render. */
-		double white_p[GLINT_MAX_PARAMS];
-		const struct glint_model_ops *lm = &glint_model_lambert;
-		for (int c = 0; c < 3; c++)
-			white_p[c] = 1;
-		struct objective wob = ob;
-		wob.m = lm;
-		ret = render_full(&wob, white_p);
-		if (ret < 0)
-			goto out;
-		nspec = ndiff = 0;
-		for (int t = 0; t < ncoarse; t++) {
-			int s = coarse[t], is_spec = 0;
-			const float *w = glint_image_px(ob.img, d.xy[2 * s],
-							d.xy[2 * s + 1]);
-			for (int c = 0; c < 3; c++)
-				is_spec |=
-					d.y[3 * s + c] >
-					(1 + o->mask_threshold) * w[c] + 1e-12;
-			if (is_spec)
-				spec[nspec++] = s;
-			else
-				diff[ndiff++] = s;
-		}
-	}
+	/* The diffuse mask, within the set the passes run on. */
+	for (int t = 0; t < ncoarse; t++)
+		if (!is_spec[coarse[t]])
+			diff[ndiff++] = coarse[t];
+	free(is_spec);
 	res->specular_pixels = nspec;
+	/*
+	 * A level sampled every `spacing` pixels cannot tell lobes narrower
+	 * than the reflected directions between its samples (about
+	 * 2 spacing / R radians on a sphere R pixels in radius, i.e. a
+	 * roughness of spacing / R): a mirror's glint can fall between
+	 * samples and "mirror" becomes a false minimum.  Coarse passes keep
+	 * roughness above that; the fine pass is free.
+	 */
+	if (ncoarse < nall) {
+		double radius_px = sqrt(interior / M_PI);
+		ob.rough_lo = 4.0 * stride / radius_px;
+	}
 
 	switch (o->method) {
 	case GLINT_FIT_THREE_PASS: {
@@ -846,6 +1025,18 @@ int glint_fit(struct glint_renderer *r, const struct glint_model_ops *model,
 	if (ret < 0)
 		goto out;
 	/* Coarse to fine: polish everything on the full pixel set. */
+	ob.rough_lo = 0;
+	if (ncoarse < nall && model->roughness_param >= 0 &&
+	    o->method != GLINT_FIT_VARPRO) {
+		/* The coarse level could not see lobes below its spacing:
+		 * before polishing, compare the coarse result with sharper and
+		 * rougher lobes at full resolution, albedos solved exactly for
+		 * each, and start from the best. */
+		ret = rescan_roughness(&ob, all, nall,
+				       4.0 * stride / sqrt(interior / M_PI));
+		if (ret < 0)
+			goto out;
+	}
 	if (ncoarse < nall) {
 		int vp = o->method == GLINT_FIT_VARPRO;
 		for (int k = 0; k < model->nparams; k++)
@@ -877,7 +1068,19 @@ int glint_fit(struct glint_renderer *r, const struct glint_model_ops *model,
 	}
 	memcpy(res->p, ob.p, sizeof(res->p));
 	finish_stats(&ob, all, nall, res);
+	res->backdrop_rel_rmse = backdrop_error(gb, r->env, &d);
 	res->seconds = glint_now() - t0;
+	if (res->backdrop_rel_rmse < res->rel_rmse) {
+		ret = glint_error_set(EINVAL,
+				      "the photo shows the backdrop, not a "
+				      "sphere, where the scene puts it (the "
+				      "bare environment explains it with a "
+				      "relative RMSE of %.3f, the fitted "
+				      "sphere only %.3f): wrong scene or "
+				      "sphere position?",
+				      res->backdrop_rel_rmse, res->rel_rmse);
+		goto out;
+	}
 	ret = 0;
 out:
 	glint_shade_cache_free(ob.cache);
@@ -890,4 +1093,21 @@ out:
 	free(diff);
 	free_data(&d);
 	return ret;
+}
+
+int glint_fit(struct glint_renderer *r, const struct glint_model_ops *model,
+	      const struct glint_image *photo, const struct glint_image *weight,
+	      const struct glint_fit_opts *o, struct glint_fit_result *res)
+{
+	return fit_or_eval(r, model, photo, weight, o, NULL, res);
+}
+
+int glint_fit_evaluate(struct glint_renderer *r,
+		       const struct glint_model_ops *model,
+		       const struct glint_image *photo,
+		       const struct glint_image *weight,
+		       const struct glint_fit_opts *o, const double *p,
+		       struct glint_fit_result *res)
+{
+	return fit_or_eval(r, model, photo, weight, o, p, res);
 }

@@ -80,10 +80,12 @@ struct glint_fit_result {
 	double se[GLINT_MAX_PARAMS];
 	int at_bound[GLINT_MAX_PARAMS];
 	double cost;	 /* 1/2 weighted SSD at the end (fitted pixels) */
+	double wcost;	 /* the same cost, recomputed over every pixel */
 	double rmse;	 /* unweighted, over the fitted pixels */
 	double rel_rmse; /* rmse / mean photo value there */
-	int pixels;	 /* pixels in the final pass */
-	int interior;	 /* pixels wholly on the sphere */
+	double backdrop_rel_rmse; /* the same for the bare backdrop */
+	int pixels;		  /* pixels in the final pass */
+	int interior;		  /* pixels wholly on the sphere */
 	int specular_pixels;
 	struct glint_fit_pass passes[GLINT_FIT_MAX_PASSES];
 	int npasses;
@@ -100,5 +102,17 @@ struct glint_fit_result {
 int glint_fit(struct glint_renderer *r, const struct glint_model_ops *model,
 	      const struct glint_image *photo, const struct glint_image *weight,
 	      const struct glint_fit_opts *o, struct glint_fit_result *res);
+
+/*
+ * The objective of glint_fit() at given parameters p, without fitting:
+ * fills res->rmse, rel_rmse, pixels and interior (and p).  For judging a
+ * fit against the truth, or a material against a photo.
+ */
+int glint_fit_evaluate(struct glint_renderer *r,
+		       const struct glint_model_ops *model,
+		       const struct glint_image *photo,
+		       const struct glint_image *weight,
+		       const struct glint_fit_opts *o, const double *p,
+		       struct glint_fit_result *res);
 
 #endif

@@ -63,6 +63,10 @@ struct glint_model_ops {
 			      const double u[2], struct vec3 *wi);
 	double (*pdf_lobe)(const double *p, int j, struct vec3 wo,
 			   struct vec3 wi);
+	/* Index of the parameter that sets the lobe's angular width (a
+	 * roughness), or -1: coarse fitting levels bound it from below by
+	 * what they can resolve. */
+	int roughness_param;
 	/* Angle (radians) from the mirror direction beyond which lobe j is
 	 * below 1e-12 of its peak, or <= 0 when it has no such bound. */
 	double (*lobe_extent)(const double *p, int j);

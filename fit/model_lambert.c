@@ -77,6 +77,7 @@ const struct glint_model_ops glint_model_lambert = {
 	.eval = lambert_eval,
 	.sample = lambert_sample,
 	.pdf = lambert_pdf,
+	.roughness_param = -1,
 	.nlobes = 1,
 	.lobe_param = lambert_lobe_param,
 	.lobe_varies = lambert_lobe_varies,

@@ -162,6 +162,7 @@ const struct glint_model_ops glint_model_torrance_sparrow = {
 	.eval = ts_eval,
 	.sample = ts_sample,
 	.pdf = ts_pdf,
+	.roughness_param = ROUGH,
 	.nlobes = 2,
 	.lobe_param = ts_lobe_param,
 	.lobe_varies = ts_lobe_varies,

@@ -86,8 +86,9 @@ static void shade(const struct ref_job *job, struct vec3 pos, struct vec3 d,
 		for (int k = 0; k < 2 * ns; k++) {
 			struct vec3 wi, ww;
 			double pl, pb;
-			if (k < ns) { /* env-map sample */
-				double u1 = rng_u01(rng), u2 = rng_u01(rng);
+			if (k < ns) { /* env-map sample, jittered strata */
+				double u1 = (k + rng_u01(rng)) / ns;
+				double u2 = rng_u01(rng);
 				pl = glint_envmap_sample(job->env, u1, u2, &ww);
 				wi = v3(v3_dot(ww, t), v3_dot(ww, b),
 					v3_dot(ww, n));

@@ -9,7 +9,8 @@
  *     with many randomly jittered samples per pixel;
  *   - every lobe by independent pseudo-random sampling (no fixed sample
  *     sets, no hot-texel quadrature, no irradiance map), env map and lobe,
- *     combined with the power heuristic and the true pdfs.
+ *     combined with the power heuristic and the true pdfs; env-map
+ *     samples jittered in strata of the row coordinate.
  * What it shares with the fitter is the definition of the scene: the
  * camera model, the env map's lookup and sampler, the BRDF.
  */

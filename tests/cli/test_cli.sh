@@ -103,5 +103,52 @@ cp "$tmp/r.exr" "$tmp/keep.exr"
 check "write into a missing folder fails" run 1 "no/dir/out.exr" render "$tmp/scene.json" --paper copper -o "$tmp/no/dir/out.exr"
 check "existing output untouched" cmp -s "$tmp/r.exr" "$tmp/keep.exr"
 
+# glint fit: a small photo of satin paint rendered by `glint render`.
+cat >"$tmp/fscene.json" <<JSON
+{"camera": {"width": 96, "height": 96, "focal_length_mm": 100,
+            "sensor_width_mm": 36},
+ "sphere": {"diameter_m": 0.1, "circle_px": {"cx": 48, "cy": 48, "r": 30}},
+ "environment": {"path": "env.exr", "rotation_deg": [0, -114, 0]},
+ "render": {"samples_per_pixel": 2, "light_samples": 16, "brdf_samples": 16}}
+JSON
+check "render a photo to fit" run 0 "" render "$tmp/fscene.json" --paper satin-paint -o "$tmp/photo.exr" -q
+check "fit it" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fit1" --json -q
+check "fit --json has values, errors, passes" python3 -c "
+import json; r=json.load(open('$tmp/out'))
+names=[p['name'] for p in r['parameters']]
+assert names==['diffuse.r','diffuse.g','diffuse.b','specular.r','specular.g','specular.b','roughness','ior'], names
+assert r['method']['name']=='three-pass' and len(r['passes'])>=3, r['passes']
+assert abs(r['material']['diffuse'][0]-0.124)<0.02, r['material']
+assert all('stderr' in p for p in r['parameters'])"
+check "fit wrote params.json, render.exr, compare.png" test -s "$tmp/fit1/params.json" -a -s "$tmp/fit1/render.exr" -a -s "$tmp/fit1/compare.png"
+cp -r "$tmp/fit1" "$tmp/fit1.keep"
+
+cat >"$tmp/wide.json" <<JSON
+{"camera": {"width": 100, "height": 96, "focal_length_mm": 100,
+            "sensor_width_mm": 36},
+ "sphere": {"diameter_m": 0.1, "circle_px": {"cx": 48, "cy": 48, "r": 30}},
+ "environment": {"path": "env.exr"}}
+JSON
+check "fit: photo and scene sizes differ" run 1 "photo is 96x96: expected the scene camera's 100x96" fit "$tmp/wide.json" "$tmp/photo.exr" -o "$tmp/fit1"
+sed 's/"cx": 48, "cy": 48, "r": 30/"cx": 14, "cy": 14, "r": 10/' "$tmp/fscene.json" >"$tmp/elsewhere.json"
+check "fit: no sphere where the scene says" run 1 "the photo shows the backdrop, not a sphere" fit "$tmp/elsewhere.json" "$tmp/photo.exr" -o "$tmp/fit1"
+python3 - "$tmp" <<'PY'
+import struct, sys
+d = sys.argv[1]
+def pfm(name, vals):
+    with open(d + "/" + name, "wb") as f:
+        f.write(b"PF\n96 96\n-1.0\n")
+        f.write(struct.pack("<%df" % len(vals), *vals))
+pfm("black.pfm", [0.0] * (96 * 96 * 3))
+pfm("zeros_w.pfm", [0.0] * (96 * 96 * 3))
+PY
+check "fit: an all-black photo" run 1 "black where the scene puts the sphere" fit "$tmp/fscene.json" "$tmp/black.pfm" -o "$tmp/fit1"
+check "fit: every pixel saturated (zero weight)" run 1 "no usable pixel on the sphere" fit "$tmp/fscene.json" "$tmp/photo.exr" --weights "$tmp/zeros_w.pfm" -o "$tmp/fit1"
+sed 's/env.exr/nan.pfm/' "$tmp/fscene.json" >"$tmp/fnan.json"
+check "fit: NaN in the env map" run 1 "nan.pfm: pixel (0, 0) channel G is nan" fit "$tmp/fnan.json" "$tmp/photo.exr" -o "$tmp/fit1"
+check "fit: bad method" run 2 "fit method 'best': expected three-pass, naive or varpro" fit "$tmp/fscene.json" "$tmp/photo.exr" --method best
+check "failed fits left the old results whole" diff -r "$tmp/fit1" "$tmp/fit1.keep"
+check "no half-written result folders" bash -c "! ls '$tmp' | grep -q 'fit1.tmp'"
+
 echo "$((checks - fails)) passed, $fails failed"
 [ "$fails" = 0 ]

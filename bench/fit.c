@@ -1,0 +1,210 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * Fit benchmark: time and accuracy of every method on the same input, in
+ * one run.  The input: a 512x512 photo of a 10 cm sphere (180 px in
+ * radius) of a Table-1 material under the 1024x512 Venice-sunset map,
+ * rendered by the independent reference renderer (cached in bench-out/).
+ * Fast-path methods run `rounds` times interleaved (medians reported); the
+ * paper-faithful path (a full trace and render per evaluation) runs once.
+ *   bench/fit [ROUNDS] [--no-faithful] [--material NAME]
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "bench.h"
+
+#include "core/error.h"
+#include "core/formats.h"
+#include "core/log.h"
+#include "fit/fit.h"
+#include "sim/reference.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/stat.h>
+
+struct variant {
+	const char *name;
+	enum glint_fit_method method;
+	int coarse, faithful;
+};
+
+static const struct variant variants[] = {
+	{ "three-pass, coarse-to-fine (default)", GLINT_FIT_THREE_PASS, 1, 0 },
+	{ "three-pass, full resolution", GLINT_FIT_THREE_PASS, 0, 0 },
+	{ "naive single pass, coarse-to-fine", GLINT_FIT_NAIVE, 1, 0 },
+	{ "variable projection, coarse-to-fine", GLINT_FIT_VARPRO, 1, 0 },
+	{ "three-pass, paper-faithful (re-render)", GLINT_FIT_THREE_PASS, 0,
+	  1 },
+};
+#define NV ((int)(sizeof(variants) / sizeof(variants[0])))
+
+static void scene_512(struct glint_scene *s)
+{
+	glint_scene_defaults(s);
+	double fpx = 1422.2;
+	glint_camera_init(&s->cam, 512, 512, fpx * 0.036 / 512, 0.036 / 512, 0,
+			  0, v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
+	s->sphere_radius = 0.05;
+	s->sphere_centre = v3(0, 0, -0.05 * fpx / 180);
+	snprintf(s->env_path, sizeof(s->env_path), "%s",
+		 GLINT_DATA_DIR "/env/venice_sunset_1k.hdr");
+	s->env_rotation[1] = -114;
+	s->env_scale = 1;
+	s->light_samples = 16;
+	s->brdf_samples = 16;
+}
+
+/* Worst errors against the truth: albedo (abs), roughness (rel), ior. */
+static void errors(const double *p, const double *t, double e[3])
+{
+	e[0] = 0;
+	for (int k = 0; k < 6; k++)
+		e[0] = fmax(e[0], fabs(p[k] - t[k]));
+	e[1] = fabs(p[6] / t[6] - 1);
+	e[2] = fabs(p[7] - t[7]);
+}
+
+int main(int argc, char **argv)
+{
+	int rounds = 3, faithful = 1;
+	const char *material = "yellow-plastic";
+	struct glint_scene sc;
+	struct glint_renderer r;
+	const struct glint_model_ops *m;
+	double truth[GLINT_MAX_PARAMS];
+	char photo_path[512];
+
+	for (int i = 1; i < argc; i++) {
+		if (!strcmp(argv[i], "--no-faithful"))
+			faithful = 0;
+		else if (!strcmp(argv[i], "--material") && i + 1 < argc)
+			material = argv[++i];
+		else
+			rounds = atoi(argv[i]) > 0 ? atoi(argv[i]) : 1;
+	}
+	glint_log_set_mode(GLINT_LOG_QUIET);
+	scene_512(&sc);
+	if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json", material,
+				&m, truth) < 0 ||
+	    glint_renderer_init(&r, &sc, 0, NULL) < 0) {
+		fprintf(stderr, "bench/fit: %s\n", glint_error_msg());
+		return 1;
+	}
+	mkdir("bench-out", 0777);
+	snprintf(photo_path, sizeof(photo_path), "bench-out/photo-%s-512.exr",
+		 material);
+	struct glint_image *photo = NULL;
+	if (glint_image_read(photo_path, &photo) < 0) {
+		struct glint_reference_opts ro;
+		glint_reference_default_opts(&ro);
+		ro.spp = 4;
+		photo = glint_image_new(512, 512);
+		fprintf(stderr,
+			"bench/fit: rendering the reference photo "
+			"(once; cached in %s)\n",
+			photo_path);
+		if (glint_reference_render(&sc, r.env, m, truth, &ro, photo) <
+			    0 ||
+		    glint_image_write(photo_path, photo, NULL) < 0) {
+			fprintf(stderr, "bench/fit: %s\n", glint_error_msg());
+			return 1;
+		}
+	}
+	double t[NV][16], e[NV][3] = { { 0 } };
+	int iters[NV] = { 0 }, evals[NV] = { 0 };
+	if (rounds > 16)
+		rounds = 16;
+	fprintf(stderr, "bench/fit: %s, %d rounds\n", material, rounds);
+	for (int k = 0; k < rounds; k++)
+		for (int v = 0; v < NV; v++) {
+			struct glint_fit_opts o;
+			struct glint_fit_result res;
+			if (variants[v].faithful && (k > 0 || !faithful))
+				continue;
+			glint_fit_default_opts(&o);
+			o.method = variants[v].method;
+			o.coarse_to_fine = variants[v].coarse;
+			o.faithful = variants[v].faithful;
+			if (o.faithful)
+				o.max_iter = 30;
+			double t0 = glint_now();
+			if (glint_fit(&r, m, photo, NULL, &o, &res) < 0) {
+				fprintf(stderr, "bench/fit: %s: %s\n",
+					variants[v].name, glint_error_msg());
+				return 1;
+			}
+			t[v][k] = glint_now() - t0;
+			errors(res.p, truth, e[v]);
+			iters[v] = 0;
+			evals[v] = 0;
+			for (int i = 0; i < res.npasses; i++) {
+				iters[v] += res.passes[i].iterations;
+				evals[v] += res.passes[i].evaluations;
+			}
+		}
+	FILE *csv = fopen("bench-out/fit.csv", "w");
+	fprintf(csv, "variant,median_s,albedo_err,roughness_rel_err,ior_err\n");
+	double med[NV];
+	printf("\n%s under venice_sunset_1k (1024x512), 512x512 photo, sphere "
+	       "radius 180 px\n",
+	       material);
+	printf("%-40s %9s %7s %8s %9s %9s %7s %6s\n", "method", "median s",
+	       "vs 1st", "speedup", "albedo", "rough.", "ior", "iters");
+	for (int v = 0; v < NV; v++) {
+		int n = variants[v].faithful ? (faithful ? 1 : 0) : rounds;
+		if (!n) {
+			med[v] = NAN;
+			continue;
+		}
+		med[v] = bench_median(t[v], n);
+	}
+	for (int v = 0; v < NV; v++) {
+		if (isnan(med[v]))
+			continue;
+		printf("%-40s %9.2f %7.2f %8.1f %9.4f %8.1f%% %7.4f %6d\n",
+		       variants[v].name, med[v], med[v] / med[0],
+		       isnan(med[NV - 1]) ? NAN : med[NV - 1] / med[v], e[v][0],
+		       100 * e[v][1], e[v][2], iters[v]);
+		fprintf(csv, "\"%s\",%.4f,%.5f,%.5f,%.5f\n", variants[v].name,
+			med[v], e[v][0], e[v][1], e[v][2]);
+	}
+	fclose(csv);
+	printf("\nerrors: largest |albedo - truth|, |roughness / truth - 1|, "
+	       "|ior - truth|;\nspeedup = paper-faithful time / this time; "
+	       "medians of %d rounds (faithful: 1 run)\n",
+	       rounds);
+	printf("peak memory: %.1f MiB\n", bench_peak_mib());
+	FILE *gp = fopen("bench-out/fit.gp", "w");
+	fprintf(gp,
+		"set terminal pngcairo noenhanced size 900,520\n"
+		"set output 'bench-out/fit.png'\n"
+		"set datafile separator ','\nset logscale x\n"
+		"set xlabel 'median fit time (s, log)'\n"
+		"set ylabel 'roughness error (%%)'\nset key outside bottom\n"
+		"set title 'glint fit: speed against accuracy'\n"
+		"plot for [i=2:%d] 'bench-out/fit.csv' every ::i-1::i-1 "
+		"using 2:($4*100):(stringcolumn(1)) with points pt 7 ps 2 "
+		"title columnhead(1)\n",
+		NV + 1);
+	fclose(gp);
+	/* gnuplot titles from data are awkward: label the points instead. */
+	gp = fopen("bench-out/fit.gp", "w");
+	fprintf(gp,
+		"set terminal pngcairo noenhanced size 1000,520\n"
+		"set output 'bench-out/fit.png'\n"
+		"set datafile separator ','\nset logscale x\n"
+		"set xlabel 'median fit time (s, log scale)'\n"
+		"set ylabel 'roughness error (%%)'\nset offsets 0.3,1.5,1,0.5\n"
+		"set title 'glint fit: speed against accuracy (%s)'\n"
+		"plot 'bench-out/fit.csv' skip 1 using 2:($4*100) with points "
+		"pt 7 ps 1.5 notitle, '' skip 1 using 2:($4*100):1 with labels "
+		"offset 0,1 font ',8' notitle\n",
+		material);
+	fclose(gp);
+	if (system("command -v gnuplot >/dev/null 2>&1") == 0 &&
+	    system("gnuplot bench-out/fit.gp") == 0)
+		printf("plot: bench-out/fit.png\n");
+	glint_image_free(photo);
+	glint_renderer_release(&r);
+	return 0;
+}

@@ -33,20 +33,7 @@
 #include "fit/fit.h"
 #include "fit/microfacet.h"
 #include "sim/reference.h"
-
-static void scene_for(struct glint_scene *s, const char *map, double rot_y)
-{
-	glint_scene_defaults(s);
-	/* 192 x 192, 100 mm lens on a 36 mm sensor, a 10 cm sphere at
-	 * 0.5 m: the sphere is 53 px in radius. */
-	glint_camera_init(&s->cam, 192, 192, 0.1, 0.036 / 192, 0, 0,
-			  v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
-	s->sphere_centre = v3(0, 0, -0.5);
-	s->sphere_radius = 0.05;
-	snprintf(s->env_path, sizeof(s->env_path), "%s", map);
-	s->env_rotation[1] = rot_y;
-	s->env_scale = 1;
-}
+#include "sim_scene.h"
 
 int main(int argc, char **argv)
 {
@@ -59,7 +46,7 @@ int main(int argc, char **argv)
 		fprintf(stderr, "usage: %s MATERIAL MAP ROTATION_Y\n", argv[0]);
 		return 2;
 	}
-	scene_for(&sc, argv[2], atof(argv[3]));
+	sim_scene_192(&sc, argv[2], atof(argv[3]));
 	CHECK(glint_material_load(GLINT_DATA_DIR "/paper-table1.json", argv[1],
 				  &m, truth) == 0,
 	      "%s", glint_error_msg());
@@ -67,13 +54,10 @@ int main(int argc, char **argv)
 	      glint_error_msg());
 	if (test_failures)
 		return test_result();
-	struct glint_image *photo = glint_image_new(192, 192);
-	struct glint_reference_opts ro;
-	glint_reference_default_opts(&ro);
-	ro.spp = 4;
-	ro.samples = 64;
-	CHECK(glint_reference_render(&sc, r.env, m, truth, &ro, photo) == 0,
-	      "%s", glint_error_msg());
+	struct glint_image *photo = sim_photo(&r, m, truth);
+	CHECK(photo != NULL, "%s", glint_error_msg());
+	if (!photo)
+		return test_result();
 
 	struct glint_fit_opts o;
 	struct glint_fit_result res, at_truth;

@@ -16,6 +16,7 @@
 #include "core/error.h"
 #include "fit/fit.h"
 #include "sim/reference.h"
+#include "sim_scene.h"
 
 int main(void)
 {
@@ -25,13 +26,7 @@ int main(void)
 	double truth[GLINT_MAX_PARAMS];
 	struct glint_fit_result res[2];
 
-	glint_scene_defaults(&sc);
-	glint_camera_init(&sc.cam, 192, 192, 0.1, 0.036 / 192, 0, 0,
-			  v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
-	sc.sphere_centre = v3(0, 0, -0.5);
-	sc.sphere_radius = 0.05;
-	snprintf(sc.env_path, sizeof(sc.env_path), "%s",
-		 GLINT_TEST_DATA "/studio_dwab.exr");
+	sim_scene_192(&sc, GLINT_TEST_DATA "/studio_dwab.exr", 0);
 	CHECK(glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
 				  "aluminium-bronze", &m, truth) == 0,
 	      "%s", glint_error_msg());
@@ -39,12 +34,10 @@ int main(void)
 	      glint_error_msg());
 	if (test_failures)
 		return test_result();
-	struct glint_image *photo = glint_image_new(192, 192);
-	struct glint_reference_opts ro;
-	glint_reference_default_opts(&ro);
-	ro.spp = 4;
-	ro.samples = 64;
-	glint_reference_render(&sc, r.env, m, truth, &ro, photo);
+	struct glint_image *photo = sim_photo(&r, m, truth);
+	CHECK(photo != NULL, "%s", glint_error_msg());
+	if (!photo)
+		return test_result();
 	for (int k = 0; k < 2; k++) {
 		struct glint_fit_opts o;
 		glint_fit_default_opts(&o);

@@ -176,25 +176,12 @@ int main(int argc, char **argv)
 	printf("peak memory: %.1f MiB\n", bench_peak_mib());
 	FILE *gp = fopen("bench-out/fit.gp", "w");
 	fprintf(gp,
-		"set terminal pngcairo noenhanced size 900,520\n"
-		"set output 'bench-out/fit.png'\n"
-		"set datafile separator ','\nset logscale x\n"
-		"set xlabel 'median fit time (s, log)'\n"
-		"set ylabel 'roughness error (%%)'\nset key outside bottom\n"
-		"set title 'glint fit: speed against accuracy'\n"
-		"plot for [i=2:%d] 'bench-out/fit.csv' every ::i-1::i-1 "
-		"using 2:($4*100):(stringcolumn(1)) with points pt 7 ps 2 "
-		"title columnhead(1)\n",
-		NV + 1);
-	fclose(gp);
-	/* gnuplot titles from data are awkward: label the points instead. */
-	gp = fopen("bench-out/fit.gp", "w");
-	fprintf(gp,
 		"set terminal pngcairo noenhanced size 1000,520\n"
 		"set output 'bench-out/fit.png'\n"
 		"set datafile separator ','\nset logscale x\n"
 		"set xlabel 'median fit time (s, log scale)'\n"
-		"set ylabel 'roughness error (%%)'\nset offsets 0.3,1.5,1,0.5\n"
+		"set ylabel 'roughness error (%%)'\nset yrange [0:*]\n"
+		"set xrange [0.5:2000]\n"
 		"set title 'glint fit: speed against accuracy (%s)'\n"
 		"plot 'bench-out/fit.csv' skip 1 using 2:($4*100) with points "
 		"pt 7 ps 1.5 notitle, '' skip 1 using 2:($4*100):1 with labels "

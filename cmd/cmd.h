@@ -39,6 +39,10 @@ int cmd_usage_error(const char *cmd, const char *fmt, ...);
 /* Print a JSON result on stdout (consumes obj). */
 void cmd_print_json(json_t *obj);
 
+/* Print a fit's parameters (value, standard error; truth and error when
+ * truth is not NULL) as a table on stdout. */
+void cmd_print_params(const json_t *doc, const double *truth);
+
 /* Parse a positive int option value; -1 on error (message printed). */
 int cmd_parse_int(const char *cmd, const char *opt, const char *val, int lo,
 		  int hi, int *out);

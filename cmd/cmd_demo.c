@@ -20,8 +20,6 @@
 #include <string.h>
 #include <sys/stat.h>
 
-void cmd_print_params(const json_t *doc, const double *truth);
-
 void cmd_demo_help(void)
 {
 	printf("usage: glint demo [--material NAME] [--out DIR] [--noise] "

@@ -48,8 +48,10 @@ void cmd_fit_help(void)
 	       "variance ~ signal\n"
 	       "                        + 10%% of the mean) or uniform (plain "
 	       "SSD, the paper)\n"
-	       "  --mask-threshold T    specular mask: photo > (1+T) x white "
-	       "render (default 0.02)\n"
+	       "  --mask-threshold T    specular mask: photo / white render "
+	       "above (1+T) x its\n"
+	       "                        median (default 0.1; "
+	       "docs/fitting.md)\n"
 	       "  --max-pixels N        fit on about N pixels (every s-th; "
 	       "default 4096)\n"
 	       "  --samples N           fixed env and lobe samples per hit "
@@ -213,9 +215,6 @@ out:
 	glint_renderer_release(&r);
 	return ret;
 }
-
-/* One line per parameter: name, value, standard error. */
-void cmd_print_params(const json_t *doc, const double *truth);
 
 void cmd_print_params(const json_t *doc, const double *truth)
 {

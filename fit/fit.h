@@ -11,8 +11,10 @@
  *   three-pass (Joshi & Jensen): 1. diffuse only from 0.5 on the diffuse
  *     mask; 2. specular, roughness, ior from 0.5, 0.075, 1.5 on the
  *     specular mask (diffuse held); 3. everything from there, all pixels.
- *     The specular mask: pixels where the photo exceeds, in any channel, a
- *     render of a 100 % white Lambertian sphere by more than a threshold.
+ *     The specular mask: pixels whose ratio photo / (render of a 100 %
+ *     white Lambertian sphere) exceeds the median ratio by more than a
+ *     threshold (the paper compares with the white render itself, which a
+ *     dark glossy material never exceeds; docs/fitting.md).
  *   naive: every parameter at once from the paper's initial values.
  *   varpro: variable projection: for given nonlinear parameters (roughness,
  *     ior) the albedos follow from a bounded linear least-squares problem
@@ -49,7 +51,7 @@ struct glint_fit_opts {
 	enum glint_fit_weighting weighting;
 	int coarse_to_fine;    /* fit a subsampled pixel set first */
 	int faithful;	       /* full trace + render per evaluation */
-	double mask_threshold; /* relative excess over the white render */
+	double mask_threshold; /* photo / white above (1 + t) x median */
 	int max_pixels;	       /* cap on fitted pixels (every s-th pixel) */
 	int light_samples;     /* shade cache: env samples per hit */
 	int lobe_samples;      /* shade cache: lobe samples per hit */

@@ -1,0 +1,107 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_CAPTURE_CAMERA_H
+#define GLINT_CAPTURE_CAMERA_H
+
+/*
+ * Cameras behind one interface: an ops table per backend (sim today; V4L2
+ * and libcamera next), an opaque handle, and generic logic on top that
+ * only returns frames whose *applied* exposure and gain are the requested
+ * ones (real sensors apply a new exposure a few frames late).
+ *
+ * Time comes from an injectable clock so that the simulated camera's frame
+ * timing (frame period >= exposure) runs instantly in tests.
+ */
+
+#include <stdint.h>
+
+/* Time source: seconds on a monotonic clock, and a sleep until then. */
+struct glint_clock {
+	double (*now)(void *ctx);
+	void (*sleep_until)(void *ctx, double t);
+	void *ctx;
+};
+
+/* The real clock (CLOCK_MONOTONIC, nanosleep). */
+extern const struct glint_clock glint_clock_real;
+
+/* A fake clock for tests: time only moves when someone sleeps. */
+struct glint_fake_clock {
+	double t;
+};
+struct glint_clock glint_clock_fake(struct glint_fake_clock *fc);
+
+#define GLINT_CAMERA_MAX_FORMATS 16
+
+struct glint_camera_info {
+	char backend[16];
+	char name[64];
+	int width, height;
+	int nformats;
+	char formats[GLINT_CAMERA_MAX_FORMATS][16]; /* e.g. "RGGB16" */
+	int bit_depth;	     /* of the configured format */
+	int manual_exposure; /* exposure can be set with AE off */
+	double exposure_min_s, exposure_max_s, exposure_step_s;
+	double gain_min, gain_max;
+	double frame_period_min_s; /* fastest frame period */
+};
+
+/* One frame as captured. */
+struct glint_frame {
+	int width, height;
+	char format[16];       /* "RGGB16": Bayer RGGB, one uint16 per pixel */
+	int bit_depth;	       /* significant bits */
+	uint16_t *data;	       /* width * height samples, owned */
+	double exposure_s;     /* applied, as the camera reports it */
+	double gain;	       /* applied analogue gain */
+	double black_level;    /* DN */
+	double t_start, t_end; /* exposure window on the camera's clock */
+	uint64_t sequence;
+};
+
+void glint_frame_release(struct glint_frame *f);
+
+struct glint_camera_ops {
+	/* Backend name ("sim", "v4l2", "libcamera"). */
+	const char *name;
+	/* Open `device` (backend-specific; NULL = the first/default). */
+	int (*open)(const char *device, const struct glint_clock *clock,
+		    void **priv);
+	/* Release everything. */
+	void (*close)(void *priv);
+	/* Capabilities of the opened camera. */
+	int (*describe)(void *priv, struct glint_camera_info *info);
+	/* Choose the format: raw Bayer at the highest bit depth if offered,
+	 * else the most linear one. */
+	int (*configure)(void *priv);
+	/* Request exposure and gain with auto exposure off (takes effect
+	 * after the camera's latency). */
+	int (*set_exposure)(void *priv, double exposure_s, double gain);
+	/* The next frame, with what was applied to it. */
+	int (*grab)(void *priv, struct glint_frame *frame);
+};
+
+struct glint_camera;
+
+/* Open a camera by backend name and device. */
+int glint_camera_open(const char *backend, const char *device,
+		      const struct glint_clock *clock,
+		      struct glint_camera **out);
+void glint_camera_close(struct glint_camera *cam);
+int glint_camera_describe(struct glint_camera *cam,
+			  struct glint_camera_info *info);
+
+/*
+ * A frame exposed as requested: set exposure and gain, then grab frames,
+ * dropping those whose applied values differ from the request by more
+ * than the camera's step, until one matches (at most max_drop frames).
+ * Fails, naming the control, on a camera without manual exposure or a
+ * request outside its range.  *dropped (may be NULL) counts drops.
+ */
+int glint_camera_capture(struct glint_camera *cam, double exposure_s,
+			 double gain, int max_drop, struct glint_frame *frame,
+			 int *dropped);
+
+/* Backends. */
+extern const struct glint_camera_ops glint_camera_sim_ops;
+
+#endif

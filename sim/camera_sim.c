@@ -1,0 +1,257 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * The simulated camera: the sensor model (sim/sensor.c) behind the camera
+ * ops table.  It photographs a radiance image (today a built-in test card
+ * spanning 6 decades with a bright disk; the rig's scene once the board
+ * drives it), outputs 12-bit Bayer RGGB in uint16, applies a new exposure
+ * `latency` frames after it is requested, as real sensors do, and keeps
+ * real frame timing (frame period = max(exposure, fastest period)) on the
+ * injected clock.
+ *
+ * Device string: "sim" or "sim:key=value,...", keys: width, height,
+ * latency (frames), manual (0 = no manual exposure), seed, noise (0/1).
+ */
+#include "capture/camera.h"
+#include "sensor.h"
+
+#include "core/error.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct sim_cam {
+	struct glint_clock clock;
+	struct glint_sensor sensor;
+	struct glint_image *radiance;
+	int width, height, latency, manual;
+	/* exposure pipeline: requested values land `latency` frames on */
+	double pending_e[8], pending_g[8];
+	double exposure_s, gain;
+	double next_frame_t;
+	uint64_t sequence;
+};
+
+static int parse_device(const char *dev, struct sim_cam *s)
+{
+	const char *p;
+
+	if (!dev || !strcmp(dev, "sim"))
+		return 0;
+	if (strncmp(dev, "sim:", 4) != 0)
+		return glint_error_set(EINVAL,
+				       "sim camera device '%s': expected 'sim' "
+				       "or 'sim:key=value,...'",
+				       dev);
+	for (p = dev + 4; *p;) {
+		char key[32];
+		double v;
+		int n = 0;
+		if (sscanf(p, "%31[a-z]=%lf%n", key, &v, &n) != 2)
+			return glint_error_set(EINVAL,
+					       "sim camera device '%s': bad "
+					       "option at '%s'",
+					       dev, p);
+		if (!strcmp(key, "width") && v >= 2 && v <= 8192)
+			s->width = (int)v;
+		else if (!strcmp(key, "height") && v >= 2 && v <= 8192)
+			s->height = (int)v;
+		else if (!strcmp(key, "latency") && v >= 0 && v <= 7)
+			s->latency = (int)v;
+		else if (!strcmp(key, "manual"))
+			s->manual = v != 0;
+		else if (!strcmp(key, "seed"))
+			s->sensor.seed = (uint64_t)v;
+		else if (!strcmp(key, "noise"))
+			s->sensor.noise = v != 0;
+		else
+			return glint_error_set(EINVAL,
+					       "sim camera device '%s': option "
+					       "%s=%g: expected width, height "
+					       "(2..8192), latency (0..7), "
+					       "manual, seed or noise",
+					       dev, key, v);
+		p += n;
+		if (*p == ',')
+			p++;
+	}
+	return 0;
+}
+
+/* 6 decades left to right, and a disk 1000x brighter than its row. */
+static struct glint_image *test_card(int w, int h)
+{
+	struct glint_image *img = glint_image_new(w, h);
+	if (!img)
+		return NULL;
+	for (int y = 0; y < h; y++)
+		for (int x = 0; x < w; x++) {
+			float *p = glint_image_px(img, x, y);
+			double l = 1e-4 * pow(10, 6.0 * x / (w - 1));
+			double dx = x - 0.7 * w, dy = y - 0.5 * h;
+			if (dx * dx + dy * dy < 0.01 * w * w)
+				l = 5e2;
+			p[0] = (float)(0.8 * l);
+			p[1] = (float)l;
+			p[2] = (float)(0.6 * l);
+		}
+	return img;
+}
+
+static int sim_open(const char *device, const struct glint_clock *clock,
+		    void **priv)
+{
+	struct sim_cam *s = calloc(1, sizeof(*s));
+	int ret;
+
+	*priv = NULL;
+	if (!s)
+		return glint_error_set(ENOMEM, "out of memory");
+	s->clock = *clock;
+	glint_sensor_default(&s->sensor);
+	s->width = 64;
+	s->height = 48;
+	s->latency = 2;
+	s->manual = 1;
+	ret = parse_device(device, s);
+	if (ret < 0) {
+		free(s);
+		return ret;
+	}
+	s->radiance = test_card(s->width, s->height);
+	if (!s->radiance) {
+		free(s);
+		return glint_error_prefix(ENOMEM, "sim camera");
+	}
+	s->exposure_s = s->sensor.exposure_s;
+	s->gain = 1;
+	for (int i = 0; i < 8; i++) {
+		s->pending_e[i] = s->exposure_s;
+		s->pending_g[i] = s->gain;
+	}
+	s->next_frame_t = s->clock.now(s->clock.ctx);
+	*priv = s;
+	return 0;
+}
+
+static void sim_close(void *priv)
+{
+	struct sim_cam *s = priv;
+	if (!s)
+		return;
+	glint_image_free(s->radiance);
+	free(s);
+}
+
+static int sim_describe(void *priv, struct glint_camera_info *in)
+{
+	struct sim_cam *s = priv;
+
+	memset(in, 0, sizeof(*in));
+	snprintf(in->backend, sizeof(in->backend), "sim");
+	snprintf(in->name, sizeof(in->name), "simulated 12-bit sensor");
+	in->width = s->width;
+	in->height = s->height;
+	in->nformats = 1;
+	snprintf(in->formats[0], sizeof(in->formats[0]), "RGGB16");
+	in->bit_depth = s->sensor.bits;
+	in->manual_exposure = s->manual;
+	in->exposure_min_s = 1e-5;
+	in->exposure_max_s = 2;
+	in->exposure_step_s = 1e-5;
+	in->gain_min = 1;
+	in->gain_max = 16;
+	in->frame_period_min_s = 1.0 / 30;
+	return 0;
+}
+
+static int sim_configure(void *priv)
+{
+	(void)priv; /* one format: raw Bayer at the sensor's depth */
+	return 0;
+}
+
+static int sim_set_exposure(void *priv, double exposure_s, double gain)
+{
+	struct sim_cam *s = priv;
+
+	if (!s->manual)
+		return glint_error_set(ENOTSUP,
+				       "sim camera: exposure is automatic");
+	/* Quantise to the 10 us step, as a real driver would. */
+	double e = 1e-5 * floor(exposure_s / 1e-5 + 0.5);
+	s->pending_e[s->latency] = e;
+	s->pending_g[s->latency] = gain;
+	for (int i = s->latency + 1; i < 8; i++) {
+		s->pending_e[i] = e;
+		s->pending_g[i] = gain;
+	}
+	return 0;
+}
+
+static int sim_grab(void *priv, struct glint_frame *f)
+{
+	struct sim_cam *s = priv;
+	struct glint_image *dn = NULL;
+	int ret;
+
+	memset(f, 0, sizeof(*f));
+	/* This frame's settings come out of the latency pipeline. */
+	s->exposure_s = s->pending_e[0];
+	s->gain = s->pending_g[0];
+	memmove(s->pending_e, s->pending_e + 1, 7 * sizeof(double));
+	memmove(s->pending_g, s->pending_g + 1, 7 * sizeof(double));
+	double now = s->clock.now(s->clock.ctx);
+	double t0 = fmax(now, s->next_frame_t);
+	double period = fmax(s->exposure_s, 1.0 / 30);
+	s->next_frame_t = t0 + period;
+	s->clock.sleep_until(s->clock.ctx, t0 + s->exposure_s);
+
+	struct glint_sensor sn = s->sensor;
+	sn.exposure_s = s->exposure_s;
+	sn.gain = s->sensor.gain * s->gain;
+	sn.seed = s->sensor.seed * 1000003u + s->sequence;
+	dn = glint_image_new(s->width, s->height);
+	f->data = malloc((size_t)s->width * s->height * sizeof(uint16_t));
+	if (!dn || !f->data) {
+		ret = glint_error_set(ENOMEM, "sim camera: out of memory");
+		goto err;
+	}
+	ret = glint_sensor_capture(&sn, s->radiance, dn);
+	if (ret < 0)
+		goto err;
+	/* Bayer RGGB: R at (even, even), B at (odd, odd), G elsewhere. */
+	for (int y = 0; y < s->height; y++)
+		for (int x = 0; x < s->width; x++) {
+			int c = (x & 1) + (y & 1);
+			f->data[(size_t)y * s->width + x] =
+				(uint16_t)glint_image_px(dn, x, y)[c];
+		}
+	glint_image_free(dn);
+	f->width = s->width;
+	f->height = s->height;
+	snprintf(f->format, sizeof(f->format), "RGGB16");
+	f->bit_depth = s->sensor.bits;
+	f->exposure_s = s->exposure_s;
+	f->gain = s->gain;
+	f->black_level = s->sensor.black_level;
+	f->t_start = t0;
+	f->t_end = t0 + s->exposure_s;
+	f->sequence = s->sequence++;
+	return 0;
+err:
+	glint_image_free(dn);
+	glint_frame_release(f);
+	return ret;
+}
+
+const struct glint_camera_ops glint_camera_sim_ops = {
+	.name = "sim",
+	.open = sim_open,
+	.close = sim_close,
+	.describe = sim_describe,
+	.configure = sim_configure,
+	.set_exposure = sim_set_exposure,
+	.grab = sim_grab,
+};

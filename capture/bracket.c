@@ -1,0 +1,171 @@
+/* SPDX-License-Identifier: MIT */
+#include "bracket.h"
+
+#include "core/error.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+void glint_bracket_default_opts(struct glint_bracket_opts *o)
+{
+	o->step_ev = 1;
+	o->max_frames = 16;
+	o->max_time_s = 60;
+	o->start_s = 0;
+	o->floor_dn = 16;
+	o->max_drop = 6;
+}
+
+static int cmp_u16(const void *a, const void *b)
+{
+	return (int)*(const uint16_t *)a - (int)*(const uint16_t *)b;
+}
+
+void glint_frame_roi_stats(const struct glint_frame *f,
+			   const struct glint_roi *roi, int *saturated,
+			   double *p01)
+{
+	struct glint_roi r = *roi;
+	uint16_t top = (uint16_t)((1u << f->bit_depth) - 1);
+	int n = 0;
+
+	if (r.x1 <= r.x0 || r.y1 <= r.y0) {
+		r.x0 = r.y0 = 0;
+		r.x1 = f->width;
+		r.y1 = f->height;
+	}
+	uint16_t *v = malloc((size_t)(r.x1 - r.x0) * (r.y1 - r.y0) *
+			     sizeof(uint16_t));
+	*saturated = 0;
+	*p01 = 0;
+	if (!v)
+		return;
+	for (int y = r.y0; y < r.y1; y++)
+		for (int x = r.x0; x < r.x1; x++) {
+			uint16_t d = f->data[(size_t)y * f->width + x];
+			*saturated += d >= top;
+			v[n++] = d;
+		}
+	qsort(v, (size_t)n, sizeof(uint16_t), cmp_u16);
+	*p01 = v[(size_t)(0.01 * (n - 1))] - f->black_level;
+	free(v);
+}
+
+static int take(struct glint_camera *cam, double e, double g,
+		const struct glint_bracket_opts *o, struct glint_bracket *b,
+		struct glint_frame *f)
+{
+	if (b->n >= GLINT_BRACKET_MAX || b->n >= o->max_frames) {
+		b->truncated = 1;
+		return 1;
+	}
+	int ret = glint_camera_capture(cam, e, g, o->max_drop, f, NULL);
+	if (ret < 0)
+		return ret;
+	b->frames[b->n++] = *f;
+	return 0;
+}
+
+static int by_exposure(const void *a, const void *b)
+{
+	const struct glint_frame *x = a, *y = b;
+	double ex = x->exposure_s * x->gain, ey = y->exposure_s * y->gain;
+	return (ex > ey) - (ex < ey);
+}
+
+int glint_bracket_capture(struct glint_camera *cam, const struct glint_roi *roi,
+			  const struct glint_bracket_opts *o,
+			  const struct glint_clock *clock,
+			  struct glint_bracket *b)
+{
+	struct glint_camera_info in;
+	struct glint_frame f;
+	double t0 = clock->now(clock->ctx), step = exp2(o->step_ev);
+	int sat, ret;
+	double p01;
+
+	memset(b, 0, sizeof(*b));
+	glint_camera_describe(cam, &in);
+	if (!in.manual_exposure)
+		return glint_error_set(ENOTSUP,
+				       "camera %s (%s) has no manual exposure "
+				       "control: cannot bracket",
+				       in.name, in.backend);
+	/* Start at o->start_s, or 10 ms within the camera's range, and
+	 * extend both ways (metering the start from the ROI's median is
+	 * still to come; coverage does not depend on it). */
+	double e = o->start_s > 0 ? o->start_s
+				  : fmin(fmax(0.01, in.exposure_min_s),
+					 in.exposure_max_s);
+	e = fmin(fmax(e, in.exposure_min_s), in.exposure_max_s);
+	ret = take(cam, e, 1, o, b, &f);
+	if (ret < 0)
+		goto err;
+	double e0 = e;
+	/* Down until nothing in the ROI saturates. */
+	glint_frame_roi_stats(&f, roi, &sat, &p01);
+	while (sat > 0 && !ret) {
+		if (e / step < in.exposure_min_s) {
+			if (e <= in.exposure_min_s)
+				break; /* cannot go darker */
+			e = in.exposure_min_s;
+		} else {
+			e /= step;
+		}
+		if (clock->now(clock->ctx) - t0 > o->max_time_s) {
+			b->truncated = 1;
+			break;
+		}
+		ret = take(cam, e, 1, o, b, &f);
+		if (ret == 0)
+			glint_frame_roi_stats(&f, roi, &sat, &p01);
+	}
+	if (ret < 0)
+		goto err;
+	b->covered_low = sat == 0;
+	/* Up from the start until the darkest ROI pixels clear the floor. */
+	e = e0;
+	double g = 1;
+	f = b->frames[0];
+	glint_frame_roi_stats(&f, roi, &sat, &p01);
+	ret = 0;
+	while (p01 < o->floor_dn && !ret) {
+		/* Exposure x gain steps by exactly step_ev; gain makes up
+		 * what the longest exposure cannot. */
+		double target = e * g * step;
+		if (target <= in.exposure_max_s) {
+			e = target;
+			g = 1;
+		} else if (target / in.exposure_max_s <= in.gain_max) {
+			e = in.exposure_max_s;
+			g = target / in.exposure_max_s;
+			b->used_gain = 1;
+		} else {
+			break; /* exposure and gain exhausted */
+		}
+		if (clock->now(clock->ctx) - t0 > o->max_time_s) {
+			b->truncated = 1;
+			break;
+		}
+		ret = take(cam, e, g, o, b, &f);
+		if (ret == 0)
+			glint_frame_roi_stats(&f, roi, &sat, &p01);
+	}
+	if (ret < 0)
+		goto err;
+	b->covered_high = p01 >= o->floor_dn;
+	qsort(b->frames, (size_t)b->n, sizeof(b->frames[0]), by_exposure);
+	b->seconds = clock->now(clock->ctx) - t0;
+	return 0;
+err:
+	glint_bracket_release(b);
+	return ret;
+}
+
+void glint_bracket_release(struct glint_bracket *b)
+{
+	for (int i = 0; i < b->n; i++)
+		glint_frame_release(&b->frames[i]);
+	b->n = 0;
+}

@@ -1,0 +1,55 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_CAPTURE_BRACKET_H
+#define GLINT_CAPTURE_BRACKET_H
+
+/*
+ * Exposure brackets that cover a region of interest's dynamic range.
+ * From a start exposure the planner steps down (by step_ev) until the ROI
+ * has no saturated pixel, and up until the ROI's darkest pixels (its 1st
+ * percentile) are above the noise floor; when exposure reaches the
+ * camera's maximum it raises gain instead, and says so.  Capped in frame
+ * count and total time; every frame carries its applied exposure and gain.
+ */
+
+#include "camera.h"
+
+#define GLINT_BRACKET_MAX 32
+
+/* Pixel rectangle [x0, x1) x [y0, y1); all zero = the whole frame. */
+struct glint_roi {
+	int x0, y0, x1, y1;
+};
+
+struct glint_bracket_opts {
+	double step_ev;	   /* default 1 */
+	int max_frames;	   /* default 16 */
+	double max_time_s; /* total capture time, default 60 */
+	double start_s;	   /* 0: 10 ms */
+	double floor_dn;   /* darkest ROI pixels must exceed black + this */
+	int max_drop;	   /* frames to wait for an exposure to land */
+};
+
+void glint_bracket_default_opts(struct glint_bracket_opts *o);
+
+struct glint_bracket {
+	int n;
+	struct glint_frame frames[GLINT_BRACKET_MAX]; /* shortest first */
+	int used_gain;		       /* exposure ran out: gain was raised */
+	int truncated;		       /* a cap stopped it before coverage */
+	int covered_low, covered_high; /* the two goals reached */
+	double seconds;		       /* on the camera's clock */
+};
+
+int glint_bracket_capture(struct glint_camera *cam, const struct glint_roi *roi,
+			  const struct glint_bracket_opts *o,
+			  const struct glint_clock *clock,
+			  struct glint_bracket *out);
+void glint_bracket_release(struct glint_bracket *b);
+
+/* ROI statistics of a frame: saturated pixel count and the 1st percentile
+ * of (value - black level). */
+void glint_frame_roi_stats(const struct glint_frame *f,
+			   const struct glint_roi *roi, int *saturated,
+			   double *p01);
+
+#endif

@@ -348,30 +348,6 @@ double glint_env_dist_pdf_smooth(const struct glint_envmap *env,
 	return pdf_smooth_uv(env, dd, u, v);
 }
 
-static void texel_of(const struct glint_envmap *env, struct vec3 d, int *i,
-		     int *j)
-{
-	int w = env->img->width, h = env->img->height;
-	double u, v;
-
-	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
-	*i = (int)(u * w);
-	*j = (int)(v * h);
-	*i = *i < 0 ? 0 : *i >= w ? w - 1 : *i;
-	*j = *j < 0 ? 0 : *j >= h ? h - 1 : *j;
-}
-
-int glint_env_hot_contains(const struct glint_envmap *env,
-			   const struct glint_env_hot *hot, struct vec3 d)
-{
-	int i, j;
-
-	if (!hot->ntexels)
-		return 0;
-	texel_of(env, d, &i, &j);
-	return hot->is_hot[(size_t)j * env->img->width + i];
-}
-
 int glint_env_hot_new(const struct glint_envmap *env, double tau,
 		      int max_texels, int q, struct glint_env_hot **out)
 {

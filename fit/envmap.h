@@ -92,7 +92,8 @@ double glint_env_dist_pdf_smooth(const struct glint_envmap *env,
  * least tau times the largest, when there are at most max_texels of them
  * (else none: the map has no compact peak).  Each hot texel is covered by
  * q x q points carrying radiance x solid angle; `rest` samples everything
- * else.  A direction belongs to the hot part when its texel is hot.
+ * else.  A direction belongs to the hot part when its texel is hot
+ * (glint_env_query reports it).
  */
 struct glint_env_hot {
 	int ntexels;
@@ -117,7 +118,4 @@ void glint_env_query(const struct glint_envmap *env,
 int glint_env_hot_new(const struct glint_envmap *env, double tau,
 		      int max_texels, int q, struct glint_env_hot **out);
 void glint_env_hot_free(struct glint_env_hot *hot);
-int glint_env_hot_contains(const struct glint_envmap *env,
-			   const struct glint_env_hot *hot, struct vec3 d);
-
 #endif

@@ -129,13 +129,15 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 		if (b[j] <= 0)
 			continue;
 		struct vec3 ww = local_to_world(h, wi);
-		if (glint_env_hot_contains(c->env, c->hot, ww))
+		double l[3], ps = 0;
+		int is_hot;
+		/* One conversion to map coordinates for all three answers. */
+		glint_env_query(c->env, &c->hot->rest, c->hot, ww, l, &ps,
+				&is_hot);
+		if (is_hot)
 			continue; /* integrated by hot_quadrature() */
-		double ps = nl ? glint_env_dist_pdf_smooth(c->env,
-							   &c->hot->rest, ww)
-			       : 0;
-		double l[3];
-		glint_envmap_lookup(c->env, ww, l);
+		if (!nl)
+			ps = 0;
 		double w = b[j] * wi.z / (nl * ps + nb * pb);
 		for (int ch = 0; ch < 3; ch++)
 			out[ch] += w * l[ch];
@@ -370,16 +372,6 @@ void glint_shade_cache_free(struct glint_shade_cache *c)
 	free(c);
 }
 
-int glint_shade_cache_count(const struct glint_shade_cache *c)
-{
-	return c->n;
-}
-
-const int32_t *glint_shade_cache_pixels(const struct glint_shade_cache *c)
-{
-	return c->pix;
-}
-
 struct lobes_job {
 	struct glint_shade_cache *c;
 	const double *p;
@@ -432,27 +424,4 @@ void glint_shade_cache_lobes_sel(struct glint_shade_cache *c, const double *p,
 	struct lobes_job job = { c, p, sel, lobes };
 
 	glint_parallel_for(nsel, 32, c->nthreads, lobes_pixels, &job);
-}
-
-void glint_shade_cache_eval(struct glint_shade_cache *c, const double *p,
-			    double *rgb)
-{
-	const struct glint_model_ops *m = c->model;
-	int nj = m->nlobes;
-	double *lobes = malloc((size_t)c->n * nj * 3 * sizeof(double));
-
-	if (!lobes) {
-		memset(rgb, 0, (size_t)c->n * 3 * sizeof(double));
-		return;
-	}
-	glint_shade_cache_lobes(c, p, lobes);
-	for (int i = 0; i < c->n; i++)
-		for (int ch = 0; ch < 3; ch++) {
-			double v = 0;
-			for (int j = 0; j < nj; j++)
-				v += p[m->lobe_param[j] + ch] *
-				     lobes[((size_t)i * nj + j) * 3 + ch];
-			rgb[3 * i + ch] = v;
-		}
-	free(lobes);
 }

@@ -52,9 +52,6 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 			  struct glint_shade_cache **out);
 void glint_shade_cache_free(struct glint_shade_cache *c);
 
-int glint_shade_cache_count(const struct glint_shade_cache *c);
-const int32_t *glint_shade_cache_pixels(const struct glint_shade_cache *c);
-
 /*
  * Lobe integrals for parameters p: lobes[(i * nlobes + j) * 3 + c] for
  * pixel i, lobe j, channel c.  Only varying lobes are recomputed.
@@ -67,9 +64,5 @@ void glint_shade_cache_lobes(struct glint_shade_cache *c, const double *p,
  * position in sel. */
 void glint_shade_cache_lobes_sel(struct glint_shade_cache *c, const double *p,
 				 const int *sel, int nsel, double *lobes);
-
-/* Radiance of every cached pixel for parameters p: rgb[3 * i + c]. */
-void glint_shade_cache_eval(struct glint_shade_cache *c, const double *p,
-			    double *rgb);
 
 #endif

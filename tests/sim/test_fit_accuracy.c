@@ -10,7 +10,7 @@
  * 7.5 % in all (yellow plastic and teflon under Venice are the misses,
  * with a fitted cost *below* the truth's: the fast model's own optimum
  * sits there, so more pixels, not more iterations, would close it; at
- * 512 px yellow plastic comes out within 0.5 %).  The test asserts what is
+ * 512 px yellow plastic comes out within 0.2 %).  The test asserts what is
  * reached and prints whether the target is met.  Where the image cannot
  * determine a parameter the test says so and checks what it does:
  *   - roughness below the pixel footprint (a lobe narrower than one pixel's

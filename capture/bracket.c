@@ -35,18 +35,22 @@ void glint_frame_roi_stats(const struct glint_frame *f,
 		r.x1 = f->width;
 		r.y1 = f->height;
 	}
-	uint16_t *v = malloc((size_t)(r.x1 - r.x0) * (r.y1 - r.y0) *
+	int ch = f->channels > 0 ? f->channels : 1;
+	uint16_t *v = malloc((size_t)(r.x1 - r.x0) * (r.y1 - r.y0) * ch *
 			     sizeof(uint16_t));
 	*saturated = 0;
 	*p01 = 0;
 	if (!v)
 		return;
 	for (int y = r.y0; y < r.y1; y++)
-		for (int x = r.x0; x < r.x1; x++) {
-			uint16_t d = f->data[(size_t)y * f->width + x];
-			*saturated += d >= top;
-			v[n++] = d;
-		}
+		for (int x = r.x0; x < r.x1; x++)
+			for (int c = 0; c < ch; c++) {
+				uint16_t d = f->data[((size_t)y * f->width +
+						      x) * ch +
+						     c];
+				*saturated += d >= top;
+				v[n++] = d;
+			}
 	qsort(v, (size_t)n, sizeof(uint16_t), cmp_u16);
 	*p01 = v[(size_t)(0.01 * (n - 1))] - f->black_level;
 	free(v);

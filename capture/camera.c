@@ -6,6 +6,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -56,9 +57,17 @@ void glint_frame_release(struct glint_frame *f)
 	f->data = NULL;
 }
 
-static const struct glint_camera_ops *const backends[] = {
-	&glint_camera_sim_ops,
-};
+static int verbose;
+
+void glint_camera_set_verbose(int on)
+{
+	verbose = on;
+}
+
+int glint_camera_verbose(void)
+{
+	return verbose;
+}
 
 struct glint_camera {
 	const struct glint_camera_ops *ops;
@@ -75,12 +84,19 @@ int glint_camera_open(const char *backend, const char *device,
 	int ret;
 
 	*out = NULL;
-	for (size_t i = 0; i < sizeof(backends) / sizeof(backends[0]); i++)
-		if (!strcmp(backends[i]->name, backend))
-			ops = backends[i];
+	char names[64] = "";
+	for (int i = 0; glint_camera_backends[i]; i++) {
+		size_t n = strlen(names);
+		if (!strcmp(glint_camera_backends[i]->name, backend))
+			ops = glint_camera_backends[i];
+		snprintf(names + n, sizeof(names) - n, "%s%s", i ? ", " : "",
+			 glint_camera_backends[i]->name);
+	}
 	if (!ops)
-		return glint_error_set(
-			EINVAL, "camera backend '%s': expected sim", backend);
+		return glint_error_set(EINVAL,
+				       "camera backend '%s': this glint has "
+				       "%s",
+				       backend, names);
 	cam = calloc(1, sizeof(*cam));
 	if (!cam)
 		return glint_error_set(ENOMEM, "out of memory");
@@ -144,16 +160,17 @@ int glint_camera_capture(struct glint_camera *cam, double exposure_s,
 				       "[%g, %g]",
 				       in->name, gain, in->gain_min,
 				       in->gain_max);
-	ret = cam->ops->set_exposure(cam->priv, exposure_s, gain);
+	ret = cam->ops->set_exposure(cam->priv, &exposure_s, &gain);
 	if (ret < 0)
 		return ret;
-	double tol_e = fmax(in->exposure_step_s, 1e-9 * exposure_s);
+	double tol_e = fmax(0.5 * in->exposure_step_s, 1e-9 * exposure_s);
 	for (int k = 0; k <= max_drop; k++) {
 		ret = cam->ops->grab(cam->priv, frame);
 		if (ret < 0)
 			return ret;
 		if (fabs(frame->exposure_s - exposure_s) <= tol_e &&
-		    fabs(frame->gain - gain) <= 1e-6 * gain)
+		    fabs(frame->gain - gain) <=
+			    fmax(0.5 * in->gain_step, 1e-6 * gain))
 			return 0;
 		glint_frame_release(frame);
 		if (dropped)

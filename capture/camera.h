@@ -14,6 +14,10 @@
 
 #include <stdint.h>
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* Time source: seconds on a monotonic clock, and a sleep until then. */
 struct glint_clock {
 	double (*now)(void *ctx);
@@ -41,20 +45,29 @@ struct glint_camera_info {
 	int bit_depth;	     /* of the configured format */
 	int manual_exposure; /* exposure can be set with AE off */
 	double exposure_min_s, exposure_max_s, exposure_step_s;
-	double gain_min, gain_max;
+	double gain_min, gain_max, gain_step;
 	double frame_period_min_s; /* fastest frame period */
+	char exposure_control[40]; /* how exposure is set, for the record */
+	char gain_control[40];
+	char detail[96]; /* driver, bus, path */
 };
 
 /* One frame as captured. */
 struct glint_frame {
 	int width, height;
-	char format[16];       /* "RGGB16": Bayer RGGB, one uint16 per pixel */
-	int bit_depth;	       /* significant bits */
-	uint16_t *data;	       /* width * height samples, owned */
-	double exposure_s;     /* applied, as the camera reports it */
-	double gain;	       /* applied analogue gain */
-	double black_level;    /* DN */
-	double t_start, t_end; /* exposure window on the camera's clock */
+	/* Layout of data: "RGGB16" (also GRBG16, GBRG16, BGGR16): Bayer, one
+	 * uint16 per pixel; "MONO16": one per pixel; "RGB16": three per
+	 * pixel.  Values are the camera's numbers, right-aligned. */
+	char format[16];
+	char source_format[16]; /* as the camera delivered it, e.g. "pRCC" */
+	int channels;		/* samples per pixel: 1 or 3 */
+	int bit_depth;		/* significant bits */
+	int linear;		/* 0: the camera encoded it (YUYV, RGB24) */
+	uint16_t *data;		/* width * height * channels, owned */
+	double exposure_s;	/* applied, as the camera reports it */
+	double gain;		/* applied analogue gain */
+	double black_level;	/* DN */
+	double t_start, t_end;	/* exposure window on the camera's clock */
 	uint64_t sequence;
 };
 
@@ -74,10 +87,15 @@ struct glint_camera_ops {
 	 * else the most linear one. */
 	int (*configure)(void *priv);
 	/* Request exposure and gain with auto exposure off (takes effect
-	 * after the camera's latency). */
-	int (*set_exposure)(void *priv, double exposure_s, double gain);
+	 * after the camera's latency); on return both hold the values the
+	 * camera will apply (its quantisation of the request). */
+	int (*set_exposure)(void *priv, double *exposure_s, double *gain);
 	/* The next frame, with what was applied to it. */
 	int (*grab)(void *priv, struct glint_frame *frame);
+	/* Optional: device names this backend can open, one per call of
+	 * `found`; returns the count or a negative errno. */
+	int (*enumerate)(void (*found)(const char *device, void *ctx),
+			 void *ctx);
 };
 
 struct glint_camera;
@@ -101,7 +119,20 @@ int glint_camera_capture(struct glint_camera *cam, double exposure_s,
 			 double gain, int max_drop, struct glint_frame *frame,
 			 int *dropped);
 
-/* Backends. */
+/* Backends (v4l2 and libcamera when built). */
 extern const struct glint_camera_ops glint_camera_sim_ops;
+extern const struct glint_camera_ops glint_camera_v4l2_ops;
+extern const struct glint_camera_ops glint_camera_libcamera_ops;
+
+/* The backends built into this binary, NULL-terminated. */
+extern const struct glint_camera_ops *const glint_camera_backends[];
+
+/* Backend libraries' own logging (libcamera's): silenced unless on. */
+void glint_camera_set_verbose(int on);
+int glint_camera_verbose(void);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -172,7 +172,7 @@ static int sim_configure(void *priv)
 	return 0;
 }
 
-static int sim_set_exposure(void *priv, double exposure_s, double gain)
+static int sim_set_exposure(void *priv, double *exposure_s, double *gain)
 {
 	struct sim_cam *s = priv;
 
@@ -180,13 +180,14 @@ static int sim_set_exposure(void *priv, double exposure_s, double gain)
 		return glint_error_set(ENOTSUP,
 				       "sim camera: exposure is automatic");
 	/* Quantise to the 10 us step, as a real driver would. */
-	double e = 1e-5 * floor(exposure_s / 1e-5 + 0.5);
+	double e = 1e-5 * floor(*exposure_s / 1e-5 + 0.5);
 	s->pending_e[s->latency] = e;
-	s->pending_g[s->latency] = gain;
+	s->pending_g[s->latency] = *gain;
 	for (int i = s->latency + 1; i < 8; i++) {
 		s->pending_e[i] = e;
-		s->pending_g[i] = gain;
+		s->pending_g[i] = *gain;
 	}
+	*exposure_s = e;
 	return 0;
 }
 
@@ -232,6 +233,9 @@ static int sim_grab(void *priv, struct glint_frame *f)
 	f->width = s->width;
 	f->height = s->height;
 	snprintf(f->format, sizeof(f->format), "RGGB16");
+	snprintf(f->source_format, sizeof(f->source_format), "sim");
+	f->channels = 1;
+	f->linear = 1;
 	f->bit_depth = s->sensor.bits;
 	f->exposure_s = s->exposure_s;
 	f->gain = s->gain;

@@ -9,12 +9,18 @@
 
 void glint_bracket_default_opts(struct glint_bracket_opts *o)
 {
+	memset(o, 0, sizeof(*o));
 	o->step_ev = 1;
-	o->max_frames = 16;
+	o->max_frames = 24;
 	o->max_time_s = 60;
 	o->start_s = 0;
 	o->floor_dn = 16;
 	o->max_drop = 6;
+}
+
+static int cancelled(const struct glint_bracket_opts *o)
+{
+	return o->cancel && *o->cancel;
 }
 
 static int cmp_u16(const void *a, const void *b)
@@ -22,9 +28,8 @@ static int cmp_u16(const void *a, const void *b)
 	return (int)*(const uint16_t *)a - (int)*(const uint16_t *)b;
 }
 
-void glint_frame_roi_stats(const struct glint_frame *f,
-			   const struct glint_roi *roi, int *saturated,
-			   double *p01)
+static void roi_stats(const struct glint_frame *f, const struct glint_roi *roi,
+		      int *saturated, double *p01, double *p99)
 {
 	struct glint_roi r = *roi;
 	uint16_t top = (uint16_t)((1u << f->bit_depth) - 1);
@@ -40,6 +45,8 @@ void glint_frame_roi_stats(const struct glint_frame *f,
 			     sizeof(uint16_t));
 	*saturated = 0;
 	*p01 = 0;
+	if (p99)
+		*p99 = 0;
 	if (!v)
 		return;
 	for (int y = r.y0; y < r.y1; y++)
@@ -53,7 +60,54 @@ void glint_frame_roi_stats(const struct glint_frame *f,
 			}
 	qsort(v, (size_t)n, sizeof(uint16_t), cmp_u16);
 	*p01 = v[(size_t)(0.01 * (n - 1))] - f->black_level;
+	if (p99)
+		*p99 = v[(size_t)(0.99 * (n - 1))] - f->black_level;
 	free(v);
+}
+
+void glint_frame_roi_stats(const struct glint_frame *f,
+			   const struct glint_roi *roi, int *saturated,
+			   double *p01)
+{
+	roi_stats(f, roi, saturated, p01, NULL);
+}
+
+int glint_bracket_meter(struct glint_camera *cam, const struct glint_roi *roi,
+			const struct glint_bracket_opts *o, double *start_s,
+			int *frames)
+{
+	struct glint_camera_info in;
+	struct glint_frame f;
+	double e, p01, p99;
+	int sat, ret;
+
+	glint_camera_describe(cam, &in);
+	e = fmin(fmax(0.01, in.exposure_min_s), in.exposure_max_s);
+	*frames = 0;
+	for (int k = 0; k < 5; k++) {
+		if (cancelled(o))
+			return glint_error_set(ECANCELED, "capture cancelled");
+		ret = glint_camera_capture(cam, e, 1, o->max_drop, &f, NULL);
+		if (ret < 0)
+			return ret;
+		(*frames)++;
+		roi_stats(&f, roi, &sat, &p01, &p99);
+		double range = (1 << f.bit_depth) - 1 - f.black_level;
+		glint_frame_release(&f);
+		double next;
+		if (p99 >= 0.98 * range)
+			next = e / 16; /* clipped: no measure, jump down */
+		else if (p99 >= 0.25 * range && p99 <= 0.75 * range)
+			break;
+		else
+			next = e * 0.5 * range / fmax(p99, 1);
+		next = fmin(fmax(next, in.exposure_min_s), in.exposure_max_s);
+		if (fabs(next - e) <= 0.5 * in.exposure_step_s)
+			break; /* at a limit */
+		e = next;
+	}
+	*start_s = e;
+	return 0;
 }
 
 static int take(struct glint_camera *cam, double e, double g,
@@ -64,10 +118,17 @@ static int take(struct glint_camera *cam, double e, double g,
 		b->truncated = 1;
 		return 1;
 	}
+	if (cancelled(o))
+		return glint_error_set(ECANCELED, "capture cancelled");
 	int ret = glint_camera_capture(cam, e, g, o->max_drop, f, NULL);
 	if (ret < 0)
 		return ret;
 	b->frames[b->n++] = *f;
+	if (o->on_frame) {
+		ret = o->on_frame(f, b->n - 1, o->ctx);
+		if (ret)
+			return ret < 0 ? ret : -EIO;
+	}
 	return 0;
 }
 
@@ -96,13 +157,15 @@ int glint_bracket_capture(struct glint_camera *cam, const struct glint_roi *roi,
 				       "camera %s (%s) has no manual exposure "
 				       "control: cannot bracket",
 				       in.name, in.backend);
-	/* Start at o->start_s, or 10 ms within the camera's range, and
-	 * extend both ways (metering the start from the ROI's median is
-	 * still to come; coverage does not depend on it). */
-	double e = o->start_s > 0 ? o->start_s
-				  : fmin(fmax(0.01, in.exposure_min_s),
-					 in.exposure_max_s);
+	/* Start at o->start_s or a metered exposure, and extend both ways. */
+	double e = o->start_s;
+	if (e <= 0) {
+		ret = glint_bracket_meter(cam, roi, o, &e, &b->metering_frames);
+		if (ret < 0)
+			return ret;
+	}
 	e = fmin(fmax(e, in.exposure_min_s), in.exposure_max_s);
+	b->metered_start_s = e;
 	ret = take(cam, e, 1, o, b, &f);
 	if (ret < 0)
 		goto err;

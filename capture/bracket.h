@@ -4,8 +4,8 @@
 
 /*
  * Exposure brackets that cover a region of interest's dynamic range.
- * From a start exposure the planner steps down (by step_ev) until the ROI
- * has no saturated pixel, and up until the ROI's darkest pixels (its 1st
+ * From a metered start exposure the planner steps down (by step_ev) until the
+ * ROI has no saturated pixel, and up until the ROI's darkest pixels (its 1st
  * percentile) are above the noise floor; when exposure reaches the
  * camera's maximum it raises gain instead, and says so.  Capped in frame
  * count and total time; every frame carries its applied exposure and gain.
@@ -22,11 +22,18 @@ struct glint_roi {
 
 struct glint_bracket_opts {
 	double step_ev;	   /* default 1 */
-	int max_frames;	   /* default 16 */
+	int max_frames;	   /* default 24 */
 	double max_time_s; /* total capture time, default 60 */
-	double start_s;	   /* 0: 10 ms */
+	double start_s;	   /* 0: metered */
 	double floor_dn;   /* darkest ROI pixels must exceed black + this */
 	int max_drop;	   /* frames to wait for an exposure to land */
+	/* Called with each frame as it is captured (capture order, from 0),
+	 * e.g. to put it on disk before the next; nonzero return stops the
+	 * bracket with that error. */
+	int (*on_frame)(const struct glint_frame *f, int index, void *ctx);
+	void *ctx;
+	/* Set (e.g. from a signal handler) to stop: -ECANCELED. */
+	volatile int *cancel;
 };
 
 void glint_bracket_default_opts(struct glint_bracket_opts *o);
@@ -38,6 +45,8 @@ struct glint_bracket {
 	int truncated;		       /* a cap stopped it before coverage */
 	int covered_low, covered_high; /* the two goals reached */
 	double seconds;		       /* on the camera's clock */
+	double metered_start_s;	       /* where it started */
+	int metering_frames;	       /* frames spent metering */
 };
 
 int glint_bracket_capture(struct glint_camera *cam, const struct glint_roi *roi,
@@ -46,10 +55,17 @@ int glint_bracket_capture(struct glint_camera *cam, const struct glint_roi *roi,
 			  struct glint_bracket *out);
 void glint_bracket_release(struct glint_bracket *b);
 
-/* ROI statistics of a frame: saturated pixel count and the 1st percentile
+/* ROI statistics of a frame: saturated sample count and the 1st percentile
  * of (value - black level). */
 void glint_frame_roi_stats(const struct glint_frame *f,
 			   const struct glint_roi *roi, int *saturated,
 			   double *p01);
+
+/* A start exposure: the one that puts the ROI's 99th percentile near
+ * half the range, found in at most 5 frames from 10 ms (fewer when
+ * the first lands); frames are not kept. */
+int glint_bracket_meter(struct glint_camera *cam, const struct glint_roi *roi,
+			const struct glint_bracket_opts *o, double *start_s,
+			int *frames);
 
 #endif

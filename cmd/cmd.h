@@ -28,6 +28,10 @@ int cmd_fit(int argc, char **argv);
 void cmd_fit_help(void);
 int cmd_convert(int argc, char **argv);
 void cmd_convert_help(void);
+int cmd_capture(int argc, char **argv);
+void cmd_capture_help(void);
+int cmd_cameras(int argc, char **argv);
+void cmd_cameras_help(void);
 
 /* Folder of glint's own data (embedded env map, Table 1). */
 const char *glint_data_dir(void);

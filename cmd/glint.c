@@ -24,6 +24,10 @@ static const struct glint_cmd commands[] = {
 	  cmd_render, cmd_render_help },
 	{ "convert", "convert an image between EXR, HDR, PFM (and PNG out)",
 	  cmd_convert, cmd_convert_help },
+	{ "capture", "capture an exposure bracket of the probe or the sample",
+	  cmd_capture, cmd_capture_help },
+	{ "cameras", "list cameras and their capabilities", cmd_cameras,
+	  cmd_cameras_help },
 };
 
 #define NCOMMANDS (sizeof(commands) / sizeof(commands[0]))

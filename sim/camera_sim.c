@@ -9,7 +9,10 @@
  * injected clock.
  *
  * Device string: "sim" or "sim:key=value,...", keys: width, height,
- * latency (frames), manual (0 = no manual exposure), seed, noise (0/1).
+ * latency (frames), manual (0 = no manual exposure), seed, noise (0/1),
+ * decades (the test card's dynamic range, default 6, plus its bright
+ * disk), timescale (real seconds per simulated second, default 1: tests
+ * and demos run a 2 s exposure in 20 ms with 0.01).
  */
 #include "capture/camera.h"
 #include "sensor.h"
@@ -22,7 +25,8 @@
 #include <string.h>
 
 struct sim_cam {
-	struct glint_clock clock;
+	struct glint_clock clock, outer;
+	double timescale, decades;
 	struct glint_sensor sensor;
 	struct glint_image *radiance;
 	int width, height, latency, manual;
@@ -65,12 +69,17 @@ static int parse_device(const char *dev, struct sim_cam *s)
 			s->sensor.seed = (uint64_t)v;
 		else if (!strcmp(key, "noise"))
 			s->sensor.noise = v != 0;
+		else if (!strcmp(key, "decades") && v >= 0 && v <= 8)
+			s->decades = v;
+		else if (!strcmp(key, "timescale") && v > 0 && v <= 1)
+			s->timescale = v;
 		else
 			return glint_error_set(EINVAL,
 					       "sim camera device '%s': option "
 					       "%s=%g: expected width, height "
 					       "(2..8192), latency (0..7), "
-					       "manual, seed or noise",
+					       "manual, seed, noise, decades "
+					       "(0..8) or timescale (0..1]",
 					       dev, key, v);
 		p += n;
 		if (*p == ',')
@@ -79,8 +88,8 @@ static int parse_device(const char *dev, struct sim_cam *s)
 	return 0;
 }
 
-/* 6 decades left to right, and a disk 1000x brighter than its row. */
-static struct glint_image *test_card(int w, int h)
+/* `decades` decades left to right up to 100, and a disk at 500. */
+static struct glint_image *test_card(int w, int h, double decades)
 {
 	struct glint_image *img = glint_image_new(w, h);
 	if (!img)
@@ -88,7 +97,8 @@ static struct glint_image *test_card(int w, int h)
 	for (int y = 0; y < h; y++)
 		for (int x = 0; x < w; x++) {
 			float *p = glint_image_px(img, x, y);
-			double l = 1e-4 * pow(10, 6.0 * x / (w - 1));
+			double l = 1e2 *
+				   pow(10, decades * ((double)x / (w - 1) - 1));
 			double dx = x - 0.7 * w, dy = y - 0.5 * h;
 			if (dx * dx + dy * dy < 0.01 * w * w)
 				l = 5e2;
@@ -97,6 +107,19 @@ static struct glint_image *test_card(int w, int h)
 			p[2] = (float)(0.6 * l);
 		}
 	return img;
+}
+
+/* Simulated time runs 1/timescale times faster than the outer clock. */
+static double scaled_now(void *ctx)
+{
+	struct sim_cam *s = ctx;
+	return s->outer.now(s->outer.ctx) / s->timescale;
+}
+
+static void scaled_sleep_until(void *ctx, double t)
+{
+	struct sim_cam *s = ctx;
+	s->outer.sleep_until(s->outer.ctx, t * s->timescale);
 }
 
 static int sim_open(const char *device, const struct glint_clock *clock,
@@ -108,7 +131,9 @@ static int sim_open(const char *device, const struct glint_clock *clock,
 	*priv = NULL;
 	if (!s)
 		return glint_error_set(ENOMEM, "out of memory");
-	s->clock = *clock;
+	s->outer = *clock;
+	s->timescale = 1;
+	s->decades = 6;
 	glint_sensor_default(&s->sensor);
 	s->width = 64;
 	s->height = 48;
@@ -119,7 +144,14 @@ static int sim_open(const char *device, const struct glint_clock *clock,
 		free(s);
 		return ret;
 	}
-	s->radiance = test_card(s->width, s->height);
+	if (s->timescale == 1) {
+		s->clock = *clock;
+	} else {
+		s->clock.now = scaled_now;
+		s->clock.sleep_until = scaled_sleep_until;
+		s->clock.ctx = s;
+	}
+	s->radiance = test_card(s->width, s->height, s->decades);
 	if (!s->radiance) {
 		free(s);
 		return glint_error_prefix(ENOMEM, "sim camera");
@@ -163,6 +195,10 @@ static int sim_describe(void *priv, struct glint_camera_info *in)
 	in->gain_min = 1;
 	in->gain_max = 16;
 	in->frame_period_min_s = 1.0 / 30;
+	snprintf(in->exposure_control, sizeof(in->exposure_control),
+		 "simulated, 10 us steps");
+	snprintf(in->gain_control, sizeof(in->gain_control),
+		 "simulated analogue gain");
 	return 0;
 }
 

@@ -1,0 +1,198 @@
+/* SPDX-License-Identifier: MIT */
+#include "frame_file.h"
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+#include <jansson.h>
+#include <png.h>
+#include <setjmp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+char *glint_frame_metadata_json(const struct glint_frame *f, int index)
+{
+	json_t *o = json_pack(
+		"{s:i, s:i, s:i, s:s, s:s, s:i, s:i, s:b, s:f, s:f, s:f, s:f, "
+		"s:f, s:I}",
+		"index", index, "width", f->width, "height", f->height,
+		"format", f->format, "source_format", f->source_format,
+		"channels", f->channels, "bit_depth", f->bit_depth, "linear",
+		f->linear, "exposure_s", f->exposure_s, "gain", f->gain,
+		"black_level", f->black_level, "t_start", f->t_start, "t_end",
+		f->t_end, "sequence", (json_int_t)f->sequence);
+	char *s = o ? json_dumps(o, JSON_INDENT(2) | JSON_REAL_PRECISION(17))
+		    : NULL;
+	json_decref(o);
+	return s;
+}
+
+int glint_frame_write(const char *path, const struct glint_frame *f,
+		      const char *meta)
+{
+	struct glint_atomic_file af;
+	png_structp png = NULL;
+	png_infop info = NULL;
+	int ch = f->channels == 3 ? 3 : 1;
+	uint8_t *row = malloc((size_t)f->width * ch * 2);
+	int ret;
+
+	if (!row)
+		return glint_error_set(ENOMEM, "%s: out of memory", path);
+	ret = glint_atomic_open(&af, path);
+	if (ret < 0) {
+		free(row);
+		return ret;
+	}
+	png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+	if (png)
+		info = png_create_info_struct(png);
+	if (!png || !info) {
+		ret = glint_error_set(ENOMEM, "%s: libpng setup failed", path);
+		goto err;
+	}
+	if (setjmp(png_jmpbuf(png))) {
+		ret = glint_error_set(EIO, "%s: libpng failed while writing",
+				      path);
+		goto err;
+	}
+	png_init_io(png, af.fp);
+	/* Level 1: raw sensor data barely compresses; time matters more. */
+	png_set_compression_level(png, 1);
+	png_set_IHDR(png, info, (png_uint_32)f->width, (png_uint_32)f->height,
+		     16, ch == 3 ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_GRAY,
+		     PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+		     PNG_FILTER_TYPE_DEFAULT);
+	png_text text;
+	memset(&text, 0, sizeof(text));
+	text.compression = PNG_ITXT_COMPRESSION_NONE;
+	text.key = (png_charp) "glint:frame";
+	text.text = (png_charp)meta;
+	png_set_text(png, info, &text, 1);
+	png_write_info(png, info);
+	for (int y = 0; y < f->height; y++) {
+		const uint16_t *s = f->data + (size_t)y * f->width * ch;
+		for (int i = 0; i < f->width * ch; i++) {
+			row[2 * i] = (uint8_t)(s[i] >> 8); /* PNG: big-endian */
+			row[2 * i + 1] = (uint8_t)(s[i] & 0xff);
+		}
+		png_write_row(png, row);
+	}
+	png_write_end(png, info);
+	png_destroy_write_struct(&png, &info);
+	free(row);
+	return glint_atomic_commit(&af);
+err:
+	if (png)
+		png_destroy_write_struct(&png, info ? &info : NULL);
+	free(row);
+	glint_atomic_abort(&af);
+	return ret;
+}
+
+static int meta_from_text(const char *path, const char *text,
+			  struct glint_frame *f)
+{
+	json_error_t e;
+	json_t *o = json_loads(text, 0, &e);
+	const char *fmt = NULL, *src = "";
+	int lin = 1;
+	json_int_t seq = 0;
+
+	if (!o ||
+	    json_unpack(o, "{s:s, s?s, s:i, s?b, s:F, s:F, s:F, s?I}", "format",
+			&fmt, "source_format", &src, "bit_depth", &f->bit_depth,
+			"linear", &lin, "exposure_s", &f->exposure_s, "gain",
+			&f->gain, "black_level", &f->black_level, "sequence",
+			&seq) != 0) {
+		json_decref(o);
+		return glint_error_set(EINVAL,
+				       "%s: glint:frame metadata is missing "
+				       "or incomplete",
+				       path);
+	}
+	snprintf(f->format, sizeof(f->format), "%s", fmt);
+	snprintf(f->source_format, sizeof(f->source_format), "%s", src);
+	f->linear = lin;
+	f->sequence = (uint64_t)seq;
+	json_decref(o);
+	return 0;
+}
+
+int glint_frame_read(const char *path, struct glint_frame *f)
+{
+	FILE *fp = fopen(path, "rb");
+	png_structp png = NULL;
+	png_infop info = NULL;
+	uint8_t *volatile row = NULL; /* survives longjmp */
+	int ret = 0;
+
+	memset(f, 0, sizeof(*f));
+	if (!fp)
+		return glint_error_set(errno, "%s: %s", path, strerror(errno));
+	png = png_create_read_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+	if (png)
+		info = png_create_info_struct(png);
+	if (!png || !info) {
+		ret = glint_error_set(ENOMEM, "%s: libpng setup failed", path);
+		goto out;
+	}
+	if (setjmp(png_jmpbuf(png))) {
+		ret = glint_error_set(EIO,
+				      "%s: not a PNG, or truncated or "
+				      "corrupt",
+				      path);
+		goto out;
+	}
+	png_init_io(png, fp);
+	png_read_info(png, info);
+	int depth = png_get_bit_depth(png, info),
+	    type = png_get_color_type(png, info);
+	int ch = type == PNG_COLOR_TYPE_RGB ? 3 : 1;
+	if (depth != 16 ||
+	    (type != PNG_COLOR_TYPE_GRAY && type != PNG_COLOR_TYPE_RGB)) {
+		ret = glint_error_set(EINVAL,
+				      "%s: %d-bit PNG of colour type %d: "
+				      "expected a 16-bit grey or RGB glint "
+				      "frame",
+				      path, depth, type);
+		goto out;
+	}
+	png_textp texts;
+	int ntext = 0;
+	png_get_text(png, info, &texts, &ntext);
+	ret = -EINVAL;
+	for (int i = 0; i < ntext; i++)
+		if (!strcmp(texts[i].key, "glint:frame"))
+			ret = meta_from_text(path, texts[i].text, f);
+	if (ret == -EINVAL && !ntext)
+		ret = glint_error_set(EINVAL, "%s: no glint:frame metadata",
+				      path);
+	if (ret < 0)
+		goto out;
+	f->width = (int)png_get_image_width(png, info);
+	f->height = (int)png_get_image_height(png, info);
+	f->channels = ch;
+	f->data = malloc((size_t)f->width * f->height * ch * sizeof(uint16_t));
+	row = malloc((size_t)f->width * ch * 2);
+	if (!f->data || !row) {
+		ret = glint_error_set(ENOMEM, "%s: out of memory", path);
+		goto out;
+	}
+	for (int y = 0; y < f->height; y++) {
+		png_read_row(png, row, NULL);
+		uint16_t *d = f->data + (size_t)y * f->width * ch;
+		for (int i = 0; i < f->width * ch; i++)
+			d[i] = (uint16_t)(row[2 * i] << 8 | row[2 * i + 1]);
+	}
+	png_read_end(png, NULL);
+out:
+	if (png)
+		png_destroy_read_struct(&png, info ? &info : NULL, NULL);
+	free(row);
+	fclose(fp);
+	if (ret < 0)
+		glint_frame_release(f);
+	return ret;
+}

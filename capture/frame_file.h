@@ -1,0 +1,27 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_CAPTURE_FRAME_FILE_H
+#define GLINT_CAPTURE_FRAME_FILE_H
+
+/*
+ * A raw frame on disk: a 16-bit PNG (greyscale for Bayer and mono
+ * layouts, RGB for three-channel frames) holding the camera's numbers
+ * unchanged and right-aligned (0 .. 2^bit_depth - 1, not rescaled), with
+ * the frame's metadata as JSON in an iTXt chunk keyed "glint:frame"
+ * (the same JSON as the frame's sidecar file).  Lossless, written
+ * atomically (temp + fsync + rename + directory fsync); any PNG reader
+ * opens it.  docs/capture.md documents the layout.
+ */
+
+#include "camera.h"
+
+/* The frame's metadata as a JSON object text (caller frees). */
+char *glint_frame_metadata_json(const struct glint_frame *f, int index);
+
+int glint_frame_write(const char *path, const struct glint_frame *f,
+		      const char *metadata_json);
+
+/* Read pixel data back (format and bit depth from the metadata chunk);
+ * fails naming the file on anything truncated or inconsistent. */
+int glint_frame_read(const char *path, struct glint_frame *f);
+
+#endif

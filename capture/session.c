@@ -1,0 +1,229 @@
+/* SPDX-License-Identifier: MIT */
+#define _POSIX_C_SOURCE 200809L
+#include "session.h"
+
+#include "frame_file.h"
+
+#include "core/atomic_file.h"
+
+#include <fcntl.h>
+#include <jansson.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+struct glint_session {
+	char dir[4096];
+	json_t *doc;
+	FILE *log;
+};
+
+static void utc_stamp(char *buf, size_t n, int compact)
+{
+	struct timespec ts;
+	struct tm tm;
+	clock_gettime(CLOCK_REALTIME, &ts);
+	gmtime_r(&ts.tv_sec, &tm);
+	strftime(buf, n, compact ? "%Y%m%dT%H%M%SZ" : "%Y-%m-%dT%H:%M:%SZ",
+		 &tm);
+}
+
+static int fsync_path(const char *path)
+{
+	int fd = open(path, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+	if (fd < 0)
+		return glint_error_set(errno, "%s: %s", path, strerror(errno));
+	int r = fsync(fd);
+	int e = errno;
+	close(fd);
+	return r < 0 && e != EINVAL
+		       ? glint_error_set(e, "%s: fsync: %s", path, strerror(e))
+		       : 0;
+}
+
+static int save_doc(struct glint_session *s)
+{
+	char path[4200];
+	char *text =
+		json_dumps(s->doc, JSON_INDENT(2) | JSON_REAL_PRECISION(17));
+	if (!text)
+		return glint_error_set(ENOMEM, "out of memory");
+	snprintf(path, sizeof(path), "%s/session.json", s->dir);
+	size_t n = strlen(text);
+	text[n] = '\n';
+	int ret = glint_atomic_write_file(path, text, n + 1);
+	free(text);
+	return ret;
+}
+
+static json_t *camera_json(const struct glint_camera_info *in)
+{
+	json_t *fmts = json_array();
+	for (int i = 0; i < in->nformats; i++)
+		json_array_append_new(fmts, json_string(in->formats[i]));
+	return json_pack(
+		"{s:s, s:s, s:s, s:i, s:i, s:o, s:i, s:b, s:[f, f], "
+		"s:f, s:[f, f], s:s, s:s, s:f}",
+		"backend", in->backend, "name", in->name, "detail", in->detail,
+		"width", in->width, "height", in->height, "formats", fmts,
+		"bit_depth", in->bit_depth, "manual_exposure",
+		in->manual_exposure, "exposure_range_s", in->exposure_min_s,
+		in->exposure_max_s, "exposure_step_s", in->exposure_step_s,
+		"gain_range", in->gain_min, in->gain_max, "exposure_control",
+		in->exposure_control, "gain_control", in->gain_control,
+		"frame_period_min_s", in->frame_period_min_s);
+}
+
+int glint_session_create(const char *root, const char *kind,
+			 const char *rig_json,
+			 const struct glint_camera_info *cam,
+			 struct glint_session **out)
+{
+	struct glint_session *s;
+	char stamp[32], path[4200];
+	int ret;
+
+	*out = NULL;
+	if (mkdir(root, 0777) < 0 && errno != EEXIST)
+		return glint_error_set(errno, "capture root %s: %s", root,
+				       strerror(errno));
+	s = calloc(1, sizeof(*s));
+	if (!s)
+		return glint_error_set(ENOMEM, "out of memory");
+	utc_stamp(stamp, sizeof(stamp), 1);
+	for (int n = 0;; n++) {
+		if (n == 0)
+			snprintf(s->dir, sizeof(s->dir), "%s/%s-%s", root, kind,
+				 stamp);
+		else
+			snprintf(s->dir, sizeof(s->dir), "%s/%s-%s-%d", root,
+				 kind, stamp, n);
+		if (mkdir(s->dir, 0777) == 0)
+			break;
+		if (errno != EEXIST || n > 999) {
+			ret = glint_error_set(errno, "%s: %s", s->dir,
+					      strerror(errno));
+			free(s);
+			return ret;
+		}
+	}
+	ret = fsync_path(root);
+	utc_stamp(stamp, sizeof(stamp), 0);
+	s->doc = json_pack("{s:s, s:s, s:s, s:s, s:o, s:[]}", "glint",
+			   GLINT_SESSION_VERSION, "kind", kind, "status",
+			   "incomplete", "started", stamp, "camera",
+			   camera_json(cam), "frames");
+	if (!s->doc && ret == 0)
+		ret = glint_error_set(ENOMEM, "out of memory");
+	if (ret == 0 && rig_json) {
+		snprintf(path, sizeof(path), "%s/rig.json", s->dir);
+		ret = glint_atomic_write_file(path, rig_json, strlen(rig_json));
+	}
+	if (ret == 0)
+		ret = save_doc(s);
+	snprintf(path, sizeof(path), "%s/log.txt", s->dir);
+	if (ret == 0 && !(s->log = fopen(path, "a")))
+		ret = glint_error_set(errno, "%s: %s", path, strerror(errno));
+	if (ret < 0) {
+		json_decref(s->doc);
+		free(s);
+		return ret;
+	}
+	*out = s;
+	glint_session_log(s, "session %s: %s on %s (%s)", s->dir, kind,
+			  cam->name, cam->backend);
+	return 0;
+}
+
+const char *glint_session_dir(const struct glint_session *s)
+{
+	return s->dir;
+}
+
+void glint_session_log(struct glint_session *s, const char *fmt, ...)
+{
+	char stamp[32];
+	va_list ap;
+	if (!s->log)
+		return;
+	utc_stamp(stamp, sizeof(stamp), 0);
+	fprintf(s->log, "%s ", stamp);
+	va_start(ap, fmt);
+	vfprintf(s->log, fmt, ap);
+	va_end(ap);
+	fputc('\n', s->log);
+	fflush(s->log);
+	fdatasync(fileno(s->log));
+}
+
+int glint_session_add_frame(struct glint_session *s,
+			    const struct glint_frame *f, int index)
+{
+	char name[32], path[4200];
+	char *meta = glint_frame_metadata_json(f, index);
+	int ret;
+
+	if (!meta)
+		return glint_error_set(ENOMEM, "out of memory");
+	snprintf(name, sizeof(name), "frame-%03d.png", index);
+	snprintf(path, sizeof(path), "%s/%s", s->dir, name);
+	ret = glint_frame_write(path, f, meta);
+	if (ret == 0) {
+		snprintf(path, sizeof(path), "%s/frame-%03d.json", s->dir,
+			 index);
+		size_t n = strlen(meta);
+		char *m = realloc(meta, n + 2);
+		if (m) {
+			meta = m;
+			meta[n] = '\n';
+			ret = glint_atomic_write_file(path, meta, n + 1);
+		}
+	}
+	free(meta);
+	if (ret < 0)
+		return ret;
+	json_array_append_new(json_object_get(s->doc, "frames"),
+			      json_pack("{s:s, s:f, s:f}", "file", name,
+					"exposure_s", f->exposure_s, "gain",
+					f->gain));
+	glint_session_log(s, "frame %d: %g s, gain %g, sequence %llu", index,
+			  f->exposure_s, f->gain,
+			  (unsigned long long)f->sequence);
+	return save_doc(s);
+}
+
+int glint_session_finish(struct glint_session *s, const struct glint_bracket *b,
+			 const char *error)
+{
+	char stamp[32];
+	int ret;
+
+	utc_stamp(stamp, sizeof(stamp), 0);
+	json_object_set_new(s->doc, "finished", json_string(stamp));
+	if (error) {
+		json_object_set_new(s->doc, "error", json_string(error));
+		glint_session_log(s, "stopped: %s", error);
+	} else {
+		json_object_set_new(s->doc, "status", json_string("complete"));
+		json_object_set_new(
+			s->doc, "bracket",
+			json_pack("{s:i, s:b, s:b, s:b, s:b, s:f, s:f}",
+				  "frames", b->n, "covered_low", b->covered_low,
+				  "covered_high", b->covered_high, "used_gain",
+				  b->used_gain, "truncated", b->truncated,
+				  "seconds", b->seconds, "metered_start_s",
+				  b->metered_start_s));
+		glint_session_log(s, "complete: %d frames in %.2f s", b->n,
+				  b->seconds);
+	}
+	ret = save_doc(s);
+	if (s->log)
+		fclose(s->log);
+	json_decref(s->doc);
+	free(s);
+	return ret;
+}

@@ -1,0 +1,47 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_CAPTURE_SESSION_H
+#define GLINT_CAPTURE_SESSION_H
+
+/*
+ * A capture session on disk: one directory per capture,
+ *   <root>/<kind>-<UTC date>T<time>Z[-n]/
+ *     session.json      status ("incomplete" until the bracket finished,
+ *                       then "complete"), camera, bracket outcome, frame
+ *                       list, the error that stopped it if any
+ *     rig.json          the rig configuration used
+ *     log.txt           one line per event, appended and flushed
+ *     frame-NNN.png     raw frames (capture/frame_file.h), in capture order
+ *     frame-NNN.json    each frame's metadata
+ * Every file but the log is written whole or not at all (temp + fsync +
+ * rename + directory fsync); a frame is on disk before the next is
+ * requested, so an interrupted capture keeps every frame it got, and its
+ * session.json still says "incomplete".
+ */
+
+#include "bracket.h"
+#include "core/error.h"
+
+struct glint_session;
+
+/* Create the directory and its first session.json ("incomplete").  rig
+ * may be NULL. */
+int glint_session_create(const char *root, const char *kind,
+			 const char *rig_json,
+			 const struct glint_camera_info *cam,
+			 struct glint_session **out);
+const char *glint_session_dir(const struct glint_session *s);
+
+/* Write frame `index` and add it to session.json. */
+int glint_session_add_frame(struct glint_session *s,
+			    const struct glint_frame *f, int index);
+
+/* Append a line to log.txt. */
+void glint_session_log(struct glint_session *s, const char *fmt, ...)
+	GLINT_PRINTF(2, 3);
+
+/* Final session.json: "complete" with the bracket's outcome when error is
+ * NULL, else "incomplete" with the error.  Frees s. */
+int glint_session_finish(struct glint_session *s, const struct glint_bracket *b,
+			 const char *error);
+
+#endif

@@ -271,14 +271,15 @@ int cmd_capture(int argc, char **argv)
 	sigaction(SIGTERM, &old_term, NULL);
 	{
 		/* The session records the outcome either way. */
-		char err[512];
+		char err[512], dir[4096];
 		snprintf(err, sizeof(err), "%s", glint_error_msg());
+		snprintf(dir, sizeof(dir), "%s", glint_session_dir(session));
 		int r2 =
 			glint_session_finish(session, &b, ret < 0 ? err : NULL);
 		if (ret < 0)
 			glint_error_set(-ret,
 					"%s (session %s kept, incomplete)", err,
-					glint_session_dir(session));
+					dir);
 		session = NULL;
 		if (ret == 0 && r2 < 0)
 			ret = r2;

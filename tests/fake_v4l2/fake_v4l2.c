@@ -19,11 +19,16 @@
  *     manual=0              exposure_auto offers no manual mode
  *     busy=1                open fails with EBUSY
  *     refuse=exposure|gain|auto   VIDIOC_S_CTRL on it fails with EACCES
- *     enodev_after=N        unplugged after N frames: ENODEV, POLLERR
- *     eio_at=N              VIDIOC_DQBUF of frame N fails with EIO
- *     stall_after=N         no frame after the N-th
- *     short_from=N          frames delivered from the N-th (from 0) on
- *                           arrive truncated (bytesused / 2)
+ *   faults, counted in frames the client has dequeued (VIDIOC_DQBUF):
+ *     enodev_after=N        unplugged after N: ENODEV, POLLERR
+ *     eio_at=N              the N-th VIDIOC_DQBUF (from 0) fails with EIO
+ *     stall_after=N         no frame after N
+ *     short_from=N          from the N-th on, frames arrive truncated
+ *                           (bytesused / 2)
+ *
+ * Simplification: a frame starts only when a buffer is queued for it (a
+ * real sensor keeps running and the driver drops the frame), so that the
+ * host never renders frames nobody reads.
  *
  * The fd it returns is a memfd holding the buffers, so mmap of it is
  * real shared memory.  A poll() that names the fake fd among others only
@@ -85,7 +90,8 @@ struct fake {
 	struct glint_frame next; /* the frame being exposed (data != NULL) */
 	double next_start;	 /* sensor time the next frame starts */
 	long produced;		 /* frames the sensor completed */
-	long delivered;		 /* of which into a buffer */
+	long dequeued;		 /* frames the client dequeued */
+	int paused;		 /* waiting for a buffer to start a frame */
 };
 
 static pthread_mutex_t lock = PTHREAD_MUTEX_INITIALIZER;
@@ -354,6 +360,7 @@ static int sensor_start(struct fake *f)
 	set_sim_exposure(f);
 	f->t0_real = now_real();
 	f->produced = 0;
+	f->dequeued = 0;
 	f->next_start = 0;
 	return 0;
 }
@@ -379,8 +386,18 @@ static void catch_up(struct fake *f)
 		if (!f->next.data) {
 			if (f->next_start > t)
 				return;
+			/* Rendering frames nobody has a buffer for costs the
+			 * host more than the sensor: the sensor waits for a
+			 * buffer (QBUF restarts it) instead of dropping. */
+			int queued = 0;
+			for (int i = 0; i < f->nbuf; i++)
+				queued |= f->state[i] == B_QUEUED;
+			if (!queued) {
+				f->paused = 1;
+				return;
+			}
 			if (f->stall_after >= 0 &&
-			    f->produced >= f->stall_after)
+			    f->dequeued >= f->stall_after)
 				return;
 			/* A host too slow to render at the time scale: the
 			 * sensor's clock slips instead of falling ever
@@ -399,9 +416,9 @@ static void catch_up(struct fake *f)
 		}
 		if (f->next.t_end > t)
 			return;
-		if (f->stall_after >= 0 && f->produced >= f->stall_after)
+		if (f->stall_after >= 0 && f->dequeued >= f->stall_after)
 			return;
-		if (f->enodev_after >= 0 && f->produced >= f->enodev_after) {
+		if (f->enodev_after >= 0 && f->dequeued >= f->enodev_after) {
 			f->unplugged = 1;
 			return;
 		}
@@ -416,9 +433,7 @@ static void catch_up(struct fake *f)
 			pack_frame(f, &f->next,
 				   f->mem + (size_t)b * f->bufsize);
 			m->bytesused = (uint32_t)f->sizeimage;
-			if (f->short_from >= 0 && f->delivered >= f->short_from)
-				m->bytesused /= 2;
-			f->delivered++;
+
 			m->sequence = (uint32_t)f->produced;
 			double ts = f->t0_real + f->next.t_start * f->timescale;
 			m->timestamp.tv_sec = (time_t)ts;
@@ -440,7 +455,7 @@ static void catch_up(struct fake *f)
 static double until_next(const struct fake *f)
 {
 	if (!f->streaming || f->unplugged ||
-	    (f->stall_after >= 0 && f->produced >= f->stall_after))
+	    (f->stall_after >= 0 && f->dequeued >= f->stall_after))
 		return 1e9;
 	double t = f->next.data ? f->next.t_end : f->next_start;
 	return f->t0_real + t * f->timescale - now_real();
@@ -656,8 +671,11 @@ static int dqbuf(struct fake *f, struct v4l2_buffer *b, int nonblock)
 	int i = f->done[0];
 	memmove(f->done, f->done + 1, (size_t)(--f->ndone) * sizeof(int));
 	f->state[i] = B_CLIENT;
-	if (f->eio_at >= 0 && (long)f->meta[i].sequence >= f->eio_at)
+	long k = f->dequeued++;
+	if (f->eio_at >= 0 && k >= f->eio_at)
 		return fail(EIO);
+	if (f->short_from >= 0 && k >= f->short_from)
+		f->meta[i].bytesused = (uint32_t)(f->sizeimage / 2);
 	fill_buf(f, i, b);
 	b->flags &= ~(uint32_t)V4L2_BUF_FLAG_DONE;
 	return 0;
@@ -771,6 +789,13 @@ static int handle_ioctl(struct fake *f, unsigned long req, void *arg)
 		    f->state[b->index] != B_CLIENT)
 			return fail(EINVAL);
 		f->state[b->index] = B_QUEUED;
+		if (f->paused) { /* the next frame starts now */
+			f->paused = 0;
+			double t = (now_real() - f->t0_real) / f->timescale;
+			if (t > f->next_start)
+				f->t0_real = now_real() -
+					     f->next_start * f->timescale;
+		}
 		return 0;
 	}
 	case VIDIOC_DQBUF:

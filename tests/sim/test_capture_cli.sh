@@ -1,0 +1,131 @@
+#!/usr/bin/env bash
+# glint capture and glint cameras as a user meets them: on the simulated
+# camera, and on the V4L2 backend through the fake device (LD_PRELOAD) with
+# injected faults; every session on disk is checked whole.
+# usage: test_capture_cli.sh GLINT FAKE_V4L2_SO|none CHECK_SESSION_PY
+set -u
+glint=$1
+fake=$2
+checker=$3
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fails=0 checks=0
+export ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}verify_asan_link_order=0"
+
+check() {
+	local what=$1
+	shift
+	checks=$((checks + 1))
+	if "$@"; then
+		echo "ok   $what"
+	else
+		echo "FAIL $what"
+		fails=$((fails + 1))
+	fi
+}
+
+# run EXPECTED_STATUS FRAGMENT ARGS... (env FAKE=1 preloads the fake)
+run() {
+	local want=$1 frag=$2
+	shift 2
+	if [ "${FAKE:-0}" = 1 ]; then
+		LD_PRELOAD=$fake "$glint" "$@" >"$tmp/out" 2>"$tmp/err"
+	else
+		"$glint" "$@" >"$tmp/out" 2>"$tmp/err"
+	fi
+	local got=$?
+	if [ "$got" != "$want" ]; then
+		echo "  glint $*: exit $got, expected $want; stderr:" >&2
+		cat "$tmp/err" >&2
+		return 1
+	fi
+	if [ -n "$frag" ] && ! grep -qF -- "$frag" "$tmp/err"; then
+		echo "  glint $*: stderr lacks '$frag':" >&2
+		cat "$tmp/err" >&2
+		return 1
+	fi
+}
+
+only_session() { # the one session directory under $1
+	local d
+	d=$(ls -d "$1"/*/ 2>/dev/null | head -1)
+	echo "${d%/}"
+}
+
+check "capture --help" run 0 "" capture --help
+check "cameras --help" run 0 "" cameras --help
+check "capture without what: exit 2" run 2 "probe or sample" capture
+check "capture of something else: exit 2" run 2 "probe or sample" capture teapot
+
+cat >"$tmp/rig.json" <<JSON
+{"camera": {"backend": "sim", "device": "sim:width=96,height=64,timescale=0.01,decades=4"},
+ "bracket": {"step_ev": 1, "max_frames": 24},
+ "roi": {"sample": [0, 0, 96, 64]},
+ "output": "$tmp/caps"}
+JSON
+check "sim capture completes" run 0 "range covered" capture sample --config "$tmp/rig.json"
+check "its session is complete and whole" python3 "$checker" "$(only_session "$tmp/caps")" complete 8
+check "--json result" run 0 "" capture probe --config "$tmp/rig.json" --out "$tmp/caps2" --json
+check "--json says complete" python3 -c "import json,sys; d=json.load(open('$tmp/out')); sys.exit(d['status']!='complete' or d['frames']<8)"
+
+echo '{"camera": {"backend": "sim"}, "bracket": {"stepev": 1}}' >"$tmp/typo.json"
+check "misspelt rig key: exit 1, named" run 1 "stepev" capture sample --config "$tmp/typo.json"
+echo '{"camera": {"backend": "gopro"}}' >"$tmp/nob.json"
+check "unknown backend: exit 1, named" run 1 "gopro" capture sample --config "$tmp/nob.json" --out "$tmp/x"
+check "missing config: exit 1, named" run 1 "nowhere.json" capture sample --config "$tmp/nowhere.json"
+cat >"$tmp/auto.json" <<JSON
+{"camera": {"backend": "sim", "device": "sim:manual=0,timescale=0.01"}, "output": "$tmp/auto"}
+JSON
+check "no manual exposure: refused, named" run 1 "no manual exposure" capture sample --config "$tmp/auto.json"
+check "the refused session is kept, incomplete" python3 "$checker" "$(only_session "$tmp/auto")" incomplete 0
+
+check "cameras lists the sim" run 0 "" cameras --backend sim
+check "... with its ranges" grep -q "exposure manual" "$tmp/out"
+check "cameras --json" run 0 "" cameras --json
+check "... parses" python3 -c "import json; json.load(open('$tmp/out'))"
+
+# Interrupted: real-time sim, SIGINT after a second.
+cat >"$tmp/slow.json" <<JSON
+{"camera": {"backend": "sim", "device": "sim:width=64,height=48"}, "output": "$tmp/slow"}
+JSON
+"$glint" capture sample --config "$tmp/slow.json" -q 2>"$tmp/err" &
+pid=$!
+sleep 1.5
+kill -INT $pid
+wait $pid
+st=$?
+check "SIGINT: exit 130" test "$st" = 130
+check "SIGINT: message says cancelled" grep -q "cancelled" "$tmp/err"
+check "SIGINT: session incomplete with its frames" python3 "$checker" "$(only_session "$tmp/slow")" incomplete 1
+
+if [ "$fake" != none ]; then
+	v4l2_rig() { # name fake-options
+		cat >"$tmp/$1.json" <<JSON
+{"camera": {"backend": "v4l2", "device": "/dev/video0"}, "output": "$tmp/$1"}
+JSON
+	}
+	v4l2_rig ok
+	check "v4l2 (fake): cameras describes it" env FAKE=1 FAKE_V4L2=noise=0 bash -c "$(declare -f run); tmp=$tmp glint=$glint fake=$fake run 0 '' cameras --device /dev/video0"
+	check "... by name" grep -q "glint fake camera" "$tmp/out"
+	export FAKE_V4L2="timescale=0.01"
+	check "v4l2 (fake): capture completes" env FAKE=1 bash -c "$(declare -f run); tmp=$tmp glint=$glint fake=$fake run 0 'range covered' capture sample --config $tmp/ok.json"
+	check "... session whole" python3 "$checker" "$(only_session "$tmp/ok")" complete 8
+	# FAKE_V4L2 fault:stderr fragment:frames the session must keep (the
+	# counts are dequeues; metering and drops use ~40 before frame 0)
+	for fault in "enodev_after=60:disappeared:1" "eio_at=60:Input/output error:1" \
+		"stall_after=60:no frame within:1" "refuse=exposure:exposure_time_absolute:0" \
+		"short_from=60:short frame:1"; do
+		name=${fault%%=*}
+		keep=${fault##*:}
+		fault=${fault%:*}
+		v4l2_rig "$name"
+		export FAKE_V4L2="timescale=0.01,${fault%%:*}"
+		check "v4l2 (fake) $name: exit 1, clear error" env FAKE=1 bash -c "$(declare -f run); tmp=$tmp glint=$glint fake=$fake run 1 '${fault#*:}' capture sample --config $tmp/$name.json"
+		check "... says the session is kept" grep -q "incomplete" "$tmp/err"
+		check "... session incomplete, frames whole" python3 "$checker" "$(only_session "$tmp/$name")" incomplete "$keep"
+	done
+	unset FAKE_V4L2
+fi
+
+echo "$((checks - fails)) passed, $fails failed"
+[ "$fails" = 0 ]

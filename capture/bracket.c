@@ -110,28 +110,6 @@ int glint_bracket_meter(struct glint_camera *cam, const struct glint_roi *roi,
 	return 0;
 }
 
-static int take(struct glint_camera *cam, double e, double g,
-		const struct glint_bracket_opts *o, struct glint_bracket *b,
-		struct glint_frame *f)
-{
-	if (b->n >= GLINT_BRACKET_MAX || b->n >= o->max_frames) {
-		b->truncated = 1;
-		return 1;
-	}
-	if (cancelled(o))
-		return glint_error_set(ECANCELED, "capture cancelled");
-	int ret = glint_camera_capture(cam, e, g, o->max_drop, f, NULL);
-	if (ret < 0)
-		return ret;
-	b->frames[b->n++] = *f;
-	if (o->on_frame) {
-		ret = o->on_frame(f, b->n - 1, o->ctx);
-		if (ret)
-			return ret < 0 ? ret : -EIO;
-	}
-	return 0;
-}
-
 static int by_exposure(const void *a, const void *b)
 {
 	const struct glint_frame *x = a, *y = b;
@@ -139,95 +117,158 @@ static int by_exposure(const void *a, const void *b)
 	return (ex > ey) - (ex < ey);
 }
 
+/* The planner, driven by glint_camera_stream(): requests run ahead of
+ * the frames by the camera's latency, so it decides from what has
+ * arrived and predicts where the linear sensor will reach its goals. */
+struct planner {
+	struct glint_camera_info in;
+	const struct glint_bracket_opts *o;
+	const struct glint_roi *roi;
+	const struct glint_clock *clock;
+	struct glint_bracket *b;
+	double t0, step, e0;
+	int phase; /* 0: down from e0, 1: up, 2: no more */
+	double next_down, last_up;
+	int requested;
+	int low_done, high_done, down_exhausted, up_exhausted;
+	double best_p01, best_eg; /* darkest-pixel level of the most exposed
+				     frame seen, and its exposure x gain */
+};
+
+static int plan_next(void *ctx, double *e, double *g)
+{
+	struct planner *p = ctx;
+	const struct glint_camera_info *in = &p->in;
+
+	if (p->phase == 2 || (p->low_done && p->high_done))
+		return 0;
+	if (p->requested >= p->o->max_frames ||
+	    p->requested >= GLINT_BRACKET_MAX ||
+	    p->clock->now(p->clock->ctx) - p->t0 > p->o->max_time_s ||
+	    (p->o->cancel && *p->o->cancel)) {
+		p->b->truncated = 1;
+		p->phase = 2;
+		return 0;
+	}
+	if (p->phase == 0 && (p->low_done || p->down_exhausted))
+		p->phase = 1;
+	if (p->phase == 0) {
+		*e = p->next_down;
+		*g = 1;
+		if (*e <= in->exposure_min_s * (1 + 1e-9)) {
+			*e = in->exposure_min_s;
+			p->down_exhausted = 1; /* cannot go darker */
+		}
+		p->next_down = fmax(*e / p->step, in->exposure_min_s);
+		p->requested++;
+		return 1;
+	}
+	if (p->high_done || p->up_exhausted)
+		return 0;
+	/* Enough requested already, if the sensor is linear?  Predict from
+	 * the most exposed frame whose darkest pixels are measurable. */
+	if (p->best_p01 >= 3) {
+		double need = p->best_eg * p->o->floor_dn / p->best_p01;
+		if (p->last_up >= need * 1.05)
+			return 0; /* wait for the frames in flight */
+	}
+	double target = p->last_up * p->step;
+	if (target <= in->exposure_max_s) {
+		*e = target;
+		*g = 1;
+	} else if (target / in->exposure_max_s <= in->gain_max) {
+		*e = in->exposure_max_s;
+		*g = target / in->exposure_max_s;
+		p->b->used_gain = 1;
+	} else if (p->last_up < in->exposure_max_s * in->gain_max * 0.999) {
+		*e = in->exposure_max_s; /* the last step: all there is */
+		*g = in->gain_max;
+		p->b->used_gain = 1;
+	} else {
+		p->up_exhausted = 1;
+		return 0;
+	}
+	p->last_up = *e * *g;
+	p->requested++;
+	return 1;
+}
+
+static int got_frame(void *ctx, struct glint_frame *f)
+{
+	struct planner *p = ctx;
+	struct glint_bracket *b = p->b;
+	int sat, ret = 0;
+	double p01;
+
+	glint_frame_roi_stats(f, p->roi, &sat, &p01);
+	if (sat == 0)
+		p->low_done = 1;
+	if (p01 >= p->o->floor_dn)
+		p->high_done = 1;
+	if (f->exposure_s * f->gain > p->best_eg) {
+		p->best_eg = f->exposure_s * f->gain;
+		p->best_p01 = p01;
+	}
+	if (b->n >= GLINT_BRACKET_MAX) {
+		glint_frame_release(f);
+		return 0;
+	}
+	b->frames[b->n++] = *f;
+	if (p->o->on_frame) {
+		ret = p->o->on_frame(f, b->n - 1, p->o->ctx);
+		if (ret > 0)
+			ret = -EIO;
+	}
+	return ret;
+}
+
 int glint_bracket_capture(struct glint_camera *cam, const struct glint_roi *roi,
 			  const struct glint_bracket_opts *o,
 			  const struct glint_clock *clock,
 			  struct glint_bracket *b)
 {
-	struct glint_camera_info in;
-	struct glint_frame f;
-	double t0 = clock->now(clock->ctx), step = exp2(o->step_ev);
-	int sat, ret;
-	double p01;
+	struct planner p;
+	int ret;
 
 	memset(b, 0, sizeof(*b));
-	glint_camera_describe(cam, &in);
-	if (!in.manual_exposure)
+	memset(&p, 0, sizeof(p));
+	glint_camera_describe(cam, &p.in);
+	if (!p.in.manual_exposure)
 		return glint_error_set(ENOTSUP,
 				       "camera %s (%s) has no manual exposure "
 				       "control: cannot bracket",
-				       in.name, in.backend);
-	/* Start at o->start_s or a metered exposure, and extend both ways. */
+				       p.in.name, p.in.backend);
+	p.o = o;
+	p.roi = roi;
+	p.clock = clock;
+	p.b = b;
+	p.t0 = clock->now(clock->ctx);
+	p.step = exp2(o->step_ev);
+	/* Start at o->start_s or a metered exposure, and extend both ways:
+	 * down from the start, then up from it. */
 	double e = o->start_s;
 	if (e <= 0) {
 		ret = glint_bracket_meter(cam, roi, o, &e, &b->metering_frames);
 		if (ret < 0)
 			return ret;
 	}
-	e = fmin(fmax(e, in.exposure_min_s), in.exposure_max_s);
-	b->metered_start_s = e;
-	ret = take(cam, e, 1, o, b, &f);
-	if (ret < 0)
-		goto err;
-	double e0 = e;
-	/* Down until nothing in the ROI saturates. */
-	glint_frame_roi_stats(&f, roi, &sat, &p01);
-	while (sat > 0 && !ret) {
-		if (e / step < in.exposure_min_s) {
-			if (e <= in.exposure_min_s)
-				break; /* cannot go darker */
-			e = in.exposure_min_s;
-		} else {
-			e /= step;
-		}
-		if (clock->now(clock->ctx) - t0 > o->max_time_s) {
-			b->truncated = 1;
-			break;
-		}
-		ret = take(cam, e, 1, o, b, &f);
-		if (ret == 0)
-			glint_frame_roi_stats(&f, roi, &sat, &p01);
+	e = fmin(fmax(e, p.in.exposure_min_s), p.in.exposure_max_s);
+	b->metered_start_s = p.e0 = p.next_down = p.last_up = e;
+	struct glint_stream_cb cb = { plan_next, got_frame, &p };
+	ret = glint_camera_stream(cam, &cb, o->max_drop, NULL);
+	if (ret == 0 && o->cancel && *o->cancel)
+		ret = glint_error_set(ECANCELED, "capture cancelled");
+	if (ret < 0) {
+		glint_bracket_release(b);
+		return ret;
 	}
-	if (ret < 0)
-		goto err;
-	b->covered_low = sat == 0;
-	/* Up from the start until the darkest ROI pixels clear the floor. */
-	e = e0;
-	double g = 1;
-	f = b->frames[0];
-	glint_frame_roi_stats(&f, roi, &sat, &p01);
-	ret = 0;
-	while (p01 < o->floor_dn && !ret) {
-		/* Exposure x gain steps by exactly step_ev; gain makes up
-		 * what the longest exposure cannot. */
-		double target = e * g * step;
-		if (target <= in.exposure_max_s) {
-			e = target;
-			g = 1;
-		} else if (target / in.exposure_max_s <= in.gain_max) {
-			e = in.exposure_max_s;
-			g = target / in.exposure_max_s;
-			b->used_gain = 1;
-		} else {
-			break; /* exposure and gain exhausted */
-		}
-		if (clock->now(clock->ctx) - t0 > o->max_time_s) {
-			b->truncated = 1;
-			break;
-		}
-		ret = take(cam, e, g, o, b, &f);
-		if (ret == 0)
-			glint_frame_roi_stats(&f, roi, &sat, &p01);
-	}
-	if (ret < 0)
-		goto err;
-	b->covered_high = p01 >= o->floor_dn;
+	b->covered_low = p.low_done;
+	b->covered_high = p.high_done;
+	if (b->covered_low && b->covered_high)
+		b->truncated = 0;
 	qsort(b->frames, (size_t)b->n, sizeof(b->frames[0]), by_exposure);
-	b->seconds = clock->now(clock->ctx) - t0;
+	b->seconds = clock->now(clock->ctx) - p.t0;
 	return 0;
-err:
-	glint_bracket_release(b);
-	return ret;
 }
 
 void glint_bracket_release(struct glint_bracket *b)

@@ -71,6 +71,7 @@ int glint_camera_verbose(void)
 
 struct glint_camera {
 	const struct glint_camera_ops *ops;
+	struct glint_clock clock;
 	void *priv;
 	struct glint_camera_info info;
 };
@@ -101,6 +102,7 @@ int glint_camera_open(const char *backend, const char *device,
 	if (!cam)
 		return glint_error_set(ENOMEM, "out of memory");
 	cam->ops = ops;
+	cam->clock = clock ? *clock : glint_clock_real;
 	ret = ops->open(device, clock ? clock : &glint_clock_real, &cam->priv);
 	if (ret < 0)
 		goto err_open;
@@ -133,16 +135,9 @@ int glint_camera_describe(struct glint_camera *cam,
 	return 0;
 }
 
-int glint_camera_capture(struct glint_camera *cam, double exposure_s,
-			 double gain, int max_drop, struct glint_frame *frame,
-			 int *dropped)
+static int check_request(const struct glint_camera_info *in, double exposure_s,
+			 double gain)
 {
-	const struct glint_camera_info *in = &cam->info;
-	int ret;
-
-	memset(frame, 0, sizeof(*frame));
-	if (dropped)
-		*dropped = 0;
 	if (!in->manual_exposure)
 		return glint_error_set(ENOTSUP,
 				       "camera %s (%s) has no manual exposure "
@@ -160,17 +155,39 @@ int glint_camera_capture(struct glint_camera *cam, double exposure_s,
 				       "[%g, %g]",
 				       in->name, gain, in->gain_min,
 				       in->gain_max);
+	return 0;
+}
+
+/* Does a frame carry the (quantised) request? */
+static int matches(const struct glint_camera_info *in,
+		   const struct glint_frame *f, double exposure_s, double gain)
+{
+	double tol_e = fmax(0.5 * in->exposure_step_s, 1e-9 * exposure_s);
+	return fabs(f->exposure_s - exposure_s) <= tol_e &&
+	       fabs(f->gain - gain) <= fmax(0.5 * in->gain_step, 1e-6 * gain);
+}
+
+int glint_camera_capture(struct glint_camera *cam, double exposure_s,
+			 double gain, int max_drop, struct glint_frame *frame,
+			 int *dropped)
+{
+	const struct glint_camera_info *in = &cam->info;
+	int ret;
+
+	memset(frame, 0, sizeof(*frame));
+	if (dropped)
+		*dropped = 0;
+	ret = check_request(in, exposure_s, gain);
+	if (ret < 0)
+		return ret;
 	ret = cam->ops->set_exposure(cam->priv, &exposure_s, &gain);
 	if (ret < 0)
 		return ret;
-	double tol_e = fmax(0.5 * in->exposure_step_s, 1e-9 * exposure_s);
 	for (int k = 0; k <= max_drop; k++) {
 		ret = cam->ops->grab(cam->priv, frame);
 		if (ret < 0)
 			return ret;
-		if (fabs(frame->exposure_s - exposure_s) <= tol_e &&
-		    fabs(frame->gain - gain) <=
-			    fmax(0.5 * in->gain_step, 1e-6 * gain))
+		if (matches(in, frame, exposure_s, gain))
 			return 0;
 		glint_frame_release(frame);
 		if (dropped)
@@ -180,4 +197,80 @@ int glint_camera_capture(struct glint_camera *cam, double exposure_s,
 			       "camera %s: exposure %g s / gain %g not "
 			       "applied after %d frames",
 			       in->name, exposure_s, gain, max_drop + 1);
+}
+
+#define STREAM_MAX 32
+
+int glint_camera_stream(struct glint_camera *cam,
+			const struct glint_stream_cb *cb, int max_drop,
+			int *dropped)
+{
+	const struct glint_camera_info *in = &cam->info;
+	double want_e[STREAM_MAX], want_g[STREAM_MAX];
+	int n = 0, drops = 0, planning = 1, fresh = 1, ret;
+	int depth = in->latency_frames + 1;
+	double t_write = 0;
+
+	if (dropped)
+		*dropped = 0;
+	if (depth > STREAM_MAX)
+		depth = STREAM_MAX;
+	for (;;) {
+		/* One request per frame keeps `depth` in flight: the next
+		 * only once a frame has started since the last one (frames
+		 * queued before it do not count: a host slower than the
+		 * camera would otherwise write faster than frames start, and
+		 * a sensor keeps only the last of several writes). */
+		if (planning && n < depth && (fresh || n == 0)) {
+			double e, g;
+			if (cb->plan(cb->ctx, &e, &g)) {
+				ret = check_request(in, e, g);
+				if (ret == 0)
+					ret = cam->ops->set_exposure(cam->priv,
+								     &e, &g);
+				if (ret < 0)
+					return ret;
+				want_e[n] = e;
+				want_g[n++] = g;
+				t_write = cam->clock.now(cam->clock.ctx);
+				fresh = 0;
+			} else if (n == 0) {
+				planning = 0;
+			}
+		}
+		if (n == 0 && !planning)
+			return 0;
+		if (n == 0)
+			continue; /* plan() is waiting for nothing: ask again */
+		struct glint_frame f;
+		ret = cam->ops->grab(cam->priv, &f);
+		if (ret < 0)
+			return ret;
+		if (f.t_start >= t_write)
+			fresh = 1;
+		int j = 0;
+		while (j < n && !matches(in, &f, want_e[j], want_g[j]))
+			j++;
+		if (j == n) {
+			glint_frame_release(&f);
+			if (dropped)
+				(*dropped)++;
+			if (++drops > max_drop)
+				return glint_error_set(
+					ETIMEDOUT,
+					"camera %s: exposure %g s / gain %g "
+					"not applied after %d frames",
+					in->name, want_e[0], want_g[0], drops);
+			continue;
+		}
+		/* Requests before j were overtaken (the camera merged
+		 * writes): forget them. */
+		n -= j + 1;
+		memmove(want_e, want_e + j + 1, (size_t)n * sizeof(double));
+		memmove(want_g, want_g + j + 1, (size_t)n * sizeof(double));
+		drops = 0;
+		ret = cb->got(cb->ctx, &f);
+		if (ret < 0)
+			return ret;
+	}
 }

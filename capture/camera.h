@@ -47,6 +47,9 @@ struct glint_camera_info {
 	double exposure_min_s, exposure_max_s, exposure_step_s;
 	double gain_min, gain_max, gain_step;
 	double frame_period_min_s; /* fastest frame period */
+	/* Frames between a set_exposure() and the first frame exposed with
+	 * it, at most (how deep to pipeline requests). */
+	int latency_frames;
 	char exposure_control[40]; /* how exposure is set, for the record */
 	char gain_control[40];
 	char detail[96]; /* driver, bus, path */
@@ -67,7 +70,9 @@ struct glint_frame {
 	double exposure_s;	/* applied, as the camera reports it */
 	double gain;		/* applied analogue gain */
 	double black_level;	/* DN */
-	double t_start, t_end;	/* exposure window on the camera's clock */
+	/* Exposure window on the clock given to glint_camera_open()
+	 * (V4L2: CLOCK_MONOTONIC, which glint_clock_real is). */
+	double t_start, t_end;
 	uint64_t sequence;
 };
 
@@ -118,6 +123,26 @@ int glint_camera_describe(struct glint_camera *cam,
 int glint_camera_capture(struct glint_camera *cam, double exposure_s,
 			 double gain, int max_drop, struct glint_frame *frame,
 			 int *dropped);
+
+/*
+ * Pipelined capture: frames at a planned sequence of exposures, each
+ * requested while earlier ones are still in flight, so the camera's
+ * latency costs frames once per stream instead of once per exposure.
+ * plan() gives the next request (returns 0 when there are no more; it is
+ * asked again later, so it may wait for frames); got() receives each
+ * frame whose applied values match a request, in request order, and owns
+ * its data (a negative return stops the stream with that error).  A
+ * frame matching no outstanding request is dropped (at most max_drop in
+ * a row).  Returns when plan() has no more and every request has arrived.
+ */
+struct glint_stream_cb {
+	int (*plan)(void *ctx, double *exposure_s, double *gain);
+	int (*got)(void *ctx, struct glint_frame *frame);
+	void *ctx;
+};
+int glint_camera_stream(struct glint_camera *cam,
+			const struct glint_stream_cb *cb, int max_drop,
+			int *dropped);
 
 /* Backends (v4l2 and libcamera when built). */
 extern const struct glint_camera_ops glint_camera_sim_ops;

@@ -273,6 +273,9 @@ int lc_configure_impl(LcCam *c)
 	if (fd != ci.end())
 		c->period_s = fd->second.min().get<int64_t>() * 1e-6;
 	in.frame_period_min_s = c->period_s;
+	// Controls ride on requests: a value lands once the requests queued
+	// before it have completed.
+	in.latency_frames = (int)c->requests.size();
 	return 0;
 }
 

@@ -22,13 +22,14 @@
  * (the driver's quantised value is what we record), (2) notes the time of
  * the write on CLOCK_MONOTONIC, the clock of buffer timestamps, and
  * (3) labels frames with the new values only from the `latency`-th frame
- * that started after the write: the first such frame's sequence number
- * s gives s + latency - 1 (sequence numbers count frames the driver
- * dropped, so a gap only makes this later, never early).  Start of
- * exposure comes from the timestamp (start-of-exposure flag) or from the
- * end-of-frame timestamp minus the longer of the old and new exposures.
- * Frames before that carry the previous values, so glint_camera_capture()
- * drops them.  tests/sim/test_v4l2_fake.c checks labels against pixels.
+ * that started after the write (counting frames we dequeue; one the
+ * driver dropped makes the label later, never early).  Start of exposure
+ * comes from the timestamp (start-of-exposure flag) or from the
+ * end-of-frame timestamp minus the longest exposure in flight.  Several
+ * writes may be in flight (pipelined brackets); each frame gets the
+ * newest one that has landed.  Frames exposed before a request landed
+ * carry older values, so glint_camera_capture() drops them.
+ * tests/sim/test_v4l2_fake.c checks labels against pixels.
  */
 #define _POSIX_C_SOURCE 200809L
 #include "camera.h"
@@ -51,6 +52,7 @@
 #include <unistd.h>
 
 #define MAX_BUFFERS 8
+#define MAX_WRITES  16
 
 struct ctrl {
 	uint32_t id;
@@ -84,10 +86,18 @@ struct v4l2_cam {
 	void *map[MAX_BUFFERS];
 	size_t map_len[MAX_BUFFERS];
 	/* exposure labelling */
-	double t_set;	     /* CLOCK_MONOTONIC of the last control write */
-	int apply_known;     /* apply_seq found */
-	long long apply_seq; /* first sequence with the requested values */
-	double cur_e, cur_g, prev_e, prev_g;
+	/* Control writes not yet known to have landed, oldest first, and
+	 * the values of the newest one that has. */
+	struct write {
+		double t;	  /* CLOCK_MONOTONIC of the write */
+		double e, g;	  /* values read back */
+		long long before; /* newest sequence seen starting before */
+		long long first;  /* first sequence seen starting after */
+	} writes[MAX_WRITES];
+	long long last_seq; /* newest sequence dequeued */
+	int nwrites;
+	double cur_e, cur_g; /* latest written */
+	double base_e, base_g;
 };
 
 static double monotonic_now(void)
@@ -346,6 +356,7 @@ static int v4l2_open(const char *device, const struct glint_clock *clock,
 	if (!c)
 		return glint_error_set(ENOMEM, "out of memory");
 	c->fd = -1;
+	c->last_seq = -1;
 	c->clock = *clock;
 	ret = parse_device(device, c);
 	if (ret < 0)
@@ -468,6 +479,7 @@ static int v4l2_describe(void *priv, struct glint_camera_info *in)
 		snprintf(in->gain_control, sizeof(in->gain_control), "none");
 	}
 	in->frame_period_min_s = c->period_s;
+	in->latency_frames = c->latency;
 	return 0;
 }
 
@@ -548,29 +560,6 @@ static int write_ctrl(struct v4l2_cam *c, const struct ctrl *k, int32_t v,
 	return 0;
 }
 
-/* Dequeue and requeue the frames already completed (at most one round of
- * buffers: a camera faster than us must not keep us here); returns the
- * count or a negative errno. */
-static int drain(struct v4l2_cam *c)
-{
-	int n = 0;
-	while (n < c->nbuf) {
-		struct v4l2_buffer b;
-		memset(&b, 0, sizeof(b));
-		b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-		b.memory = V4L2_MEMORY_MMAP;
-		if (xioctl(c->fd, VIDIOC_DQBUF, &b) < 0) {
-			if (errno == EAGAIN)
-				return n;
-			return ioctl_error(c, "VIDIOC_DQBUF");
-		}
-		n++;
-		if (xioctl(c->fd, VIDIOC_QBUF, &b) < 0)
-			return ioctl_error(c, "VIDIOC_QBUF");
-	}
-	return n;
-}
-
 static int clamp_ctrl(const struct ctrl *k, double v)
 {
 	double step = fmax(k->q.step, 1);
@@ -596,9 +585,6 @@ static int v4l2_set_exposure(void *priv, double *exposure_s, double *gain)
 		if (ret < 0)
 			return ret;
 	}
-	ret = drain(c);
-	if (ret < 0)
-		return ret;
 	if (c->ae.present) {
 		ret = write_ctrl(c, &c->ae, V4L2_EXPOSURE_MANUAL, &got);
 		if (ret < 0)
@@ -609,8 +595,6 @@ static int v4l2_set_exposure(void *priv, double *exposure_s, double *gain)
 					       "back %d after setting manual",
 					       c->path, (int)got);
 	}
-	c->prev_e = c->cur_e;
-	c->prev_g = c->cur_g;
 	ret = write_ctrl(c, &c->exposure,
 			 clamp_ctrl(&c->exposure, *exposure_s / c->exp_unit_s),
 			 &got);
@@ -626,11 +610,67 @@ static int v4l2_set_exposure(void *priv, double *exposure_s, double *gain)
 			return ret;
 		c->cur_g = got / c->gain_unity;
 	}
-	c->t_set = monotonic_now();
-	c->apply_known = 0;
+	if (c->nwrites == MAX_WRITES) { /* the oldest must have landed */
+		c->base_e = c->writes[0].e;
+		c->base_g = c->writes[0].g;
+		memmove(c->writes, c->writes + 1,
+			(MAX_WRITES - 1) * sizeof(c->writes[0]));
+		c->nwrites--;
+	}
+	c->writes[c->nwrites++] = (struct write){ monotonic_now(), c->cur_e,
+						  c->cur_g, c->last_seq, -1 };
 	*exposure_s = c->cur_e;
 	*gain = c->cur_g;
 	return 0;
+}
+
+/* The values a frame was exposed with: those of the newest write that
+ * has landed by it (the `latency`-th frame to start after the write; with
+ * latency 0 the first to end after it).  When the driver dropped frames
+ * around a write, the frames that may or may not have the new values get
+ * exposure 0 (unknown), so no capture accepts them. */
+static void label_frame(struct v4l2_cam *c, long long seq, int soe, double ts,
+			double *e, double *g)
+{
+	double emin = c->base_e, emax = c->base_e;
+	for (int i = 0; i < c->nwrites; i++) {
+		emin = fmin(emin, c->writes[i].e);
+		emax = fmax(emax, c->writes[i].e);
+	}
+	/* Start and end of exposure, conservatively when only one end is
+	 * stamped. */
+	double start = soe ? ts : ts - emax;
+	double end = soe ? ts + emin : ts;
+	int landed = -1, unsure = 0;
+	c->last_seq = seq;
+	for (int i = 0; i < c->nwrites; i++) {
+		struct write *w = &c->writes[i];
+		if (c->latency == 0) {
+			if (end >= w->t)
+				landed = i;
+			continue;
+		}
+		if (w->first < 0 && start < w->t)
+			w->before = seq;
+		else if (w->first < 0)
+			w->first = seq;
+		if (w->first < 0)
+			continue;
+		if (seq >= w->first + c->latency - 1)
+			landed = i;
+		else if (w->first > w->before + 1)
+			unsure = 1; /* dropped frames hide where it landed */
+	}
+	if (landed >= 0) {
+		c->base_e = c->writes[landed].e;
+		c->base_g = c->writes[landed].g;
+		memmove(c->writes, c->writes + landed + 1,
+			(size_t)(c->nwrites - landed - 1) *
+				sizeof(c->writes[0]));
+		c->nwrites -= landed + 1;
+	}
+	*e = unsure ? 0 : c->base_e;
+	*g = unsure ? 0 : c->base_g;
 }
 
 static int v4l2_grab(void *priv, struct glint_frame *f)
@@ -714,17 +754,7 @@ static int v4l2_grab(void *priv, struct glint_frame *f)
 	double ts = (double)b.timestamp.tv_sec + 1e-6 * b.timestamp.tv_usec;
 	int soe = (b.flags & V4L2_BUF_FLAG_TSTAMP_SRC_MASK) ==
 		  V4L2_BUF_FLAG_TSTAMP_SRC_SOE;
-	double start = soe ? ts : ts - fmax(c->cur_e, c->prev_e);
-	double end = soe ? ts + fmin(c->cur_e, c->prev_e) : ts;
-	if (!c->apply_known &&
-	    (c->latency == 0 ? end >= c->t_set : start >= c->t_set)) {
-		c->apply_known = 1;
-		c->apply_seq = (long long)b.sequence +
-			       (c->latency > 1 ? c->latency - 1 : 0);
-	}
-	int applied = c->apply_known && (long long)b.sequence >= c->apply_seq;
-	f->exposure_s = applied ? c->cur_e : c->prev_e;
-	f->gain = applied ? c->cur_g : c->prev_g;
+	label_frame(c, b.sequence, soe, ts, &f->exposure_s, &f->gain);
 	f->black_level = c->black;
 	f->sequence = b.sequence;
 	f->t_start = soe ? ts : ts - f->exposure_s;

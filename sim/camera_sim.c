@@ -195,6 +195,7 @@ static int sim_describe(void *priv, struct glint_camera_info *in)
 	in->gain_min = 1;
 	in->gain_max = 16;
 	in->frame_period_min_s = 1.0 / 30;
+	in->latency_frames = s->latency;
 	snprintf(in->exposure_control, sizeof(in->exposure_control),
 		 "simulated, 10 us steps");
 	snprintf(in->gain_control, sizeof(in->gain_control),
@@ -276,8 +277,9 @@ static int sim_grab(void *priv, struct glint_frame *f)
 	f->exposure_s = s->exposure_s;
 	f->gain = s->gain;
 	f->black_level = s->sensor.black_level;
-	f->t_start = t0;
-	f->t_end = t0 + s->exposure_s;
+	/* On the outer clock, as the interface promises. */
+	f->t_start = t0 * s->timescale;
+	f->t_end = (t0 + s->exposure_s) * s->timescale;
 	f->sequence = s->sequence++;
 	return 0;
 err:

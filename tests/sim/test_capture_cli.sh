@@ -111,10 +111,10 @@ JSON
 	check "v4l2 (fake): capture completes" env FAKE=1 bash -c "$(declare -f run); tmp=$tmp glint=$glint fake=$fake run 0 'range covered' capture sample --config $tmp/ok.json"
 	check "... session whole" python3 "$checker" "$(only_session "$tmp/ok")" complete 8
 	# FAKE_V4L2 fault:stderr fragment:frames the session must keep (the
-	# counts are dequeues; metering and drops use ~40 before frame 0)
-	for fault in "enodev_after=60:disappeared:1" "eio_at=60:Input/output error:1" \
-		"stall_after=60:no frame within:1" "refuse=exposure:exposure_time_absolute:0" \
-		"short_from=60:short frame:1"; do
+	# counts are dequeues; metering and drops use ~20 before frame 0)
+	for fault in "enodev_after=30:disappeared:1" "eio_at=30:Input/output error:1" \
+		"stall_after=30:no frame within:1" "refuse=exposure:exposure_time_absolute:0" \
+		"short_from=30:short frame:1"; do
 		name=${fault%%=*}
 		keep=${fault##*:}
 		fault=${fault%:*}

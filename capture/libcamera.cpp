@@ -52,9 +52,11 @@ int manager_get()
 		g_manager_users++;
 		return 0;
 	}
-	if (!glint_camera_verbose()) {
-		logSetLevel("*", "ERROR");
-	}
+	// Below ERROR unless --verbose; the logger reads this when it is
+	// first used, which is the manager's construction.  A user's own
+	// LIBCAMERA_LOG_LEVELS wins.
+	if (!glint_camera_verbose())
+		setenv("LIBCAMERA_LOG_LEVELS", "*:ERROR", 0);
 	g_manager = std::make_unique<CameraManager>();
 	int ret = g_manager->start();
 	if (ret < 0) {

@@ -46,6 +46,14 @@ static int test_checks;
 			test_failures == before ? "ok  " : "FAIL", #fn);       \
 	} while (0)
 
+#define RUN_ARG(fn, arg)                                                       \
+	do {                                                                   \
+		int before = test_failures;                                    \
+		fn(arg);                                                       \
+		fprintf(stderr, "%s %s\n",                                     \
+			test_failures == before ? "ok  " : "FAIL", #fn);       \
+	} while (0)
+
 static inline int test_result(void)
 {
 	fprintf(stderr, "%d checks, %d failed\n", test_checks, test_failures);

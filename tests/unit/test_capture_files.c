@@ -1,0 +1,171 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * Capture files: raw frames round-trip bit for bit through their 16-bit
+ * PNG with metadata; truncated or foreign files fail naming the file; a
+ * session directory says "incomplete" until finished, and lists exactly
+ * the frames on disk.
+ */
+#include "test.h"
+
+#include "capture/frame_file.h"
+#include "capture/session.h"
+#include "core/error.h"
+
+#include <jansson.h>
+#include <stdint.h>
+
+static struct glint_frame make_frame(int w, int h, int ch, int bits)
+{
+	struct glint_frame f;
+	memset(&f, 0, sizeof(f));
+	f.width = w;
+	f.height = h;
+	f.channels = ch;
+	f.bit_depth = bits;
+	f.linear = ch == 1;
+	snprintf(f.format, sizeof(f.format), ch == 1 ? "GRBG16" : "RGB16");
+	snprintf(f.source_format, sizeof(f.source_format), "SGRBG12P");
+	f.exposure_s = 0.0123;
+	f.gain = 2.5;
+	f.black_level = 64;
+	f.sequence = 77;
+	f.data = malloc((size_t)w * h * ch * sizeof(uint16_t));
+	uint32_t x = 12345;
+	for (int i = 0; i < w * h * ch; i++) {
+		x = x * 1664525u + 1013904223u;
+		f.data[i] = (uint16_t)((x >> 8) & ((1u << bits) - 1));
+	}
+	return f;
+}
+
+static void roundtrip(int ch, int bits, const char *dir)
+{
+	char path[512];
+	struct glint_frame f = make_frame(37, 23, ch, bits), g;
+	snprintf(path, sizeof(path), "%s/f%d.png", dir, ch);
+	char *meta = glint_frame_metadata_json(&f, 3);
+	CHECK(glint_frame_write(path, &f, meta) == 0, "%s", glint_error_msg());
+	free(meta);
+	CHECK(glint_frame_read(path, &g) == 0, "%s", glint_error_msg());
+	if (g.data) {
+		CHECK(g.width == 37 && g.height == 23 && g.channels == ch,
+		      "%dx%dx%d", g.width, g.height, g.channels);
+		CHECK(!memcmp(f.data, g.data, (size_t)37 * 23 * ch * 2),
+		      "pixel data changed on the way");
+		CHECK(g.exposure_s == f.exposure_s && g.gain == f.gain &&
+			      g.black_level == 64 && g.bit_depth == bits &&
+			      g.sequence == 77 && !strcmp(g.format, f.format),
+		      "metadata: %g s x%g black %g bits %d seq %llu %s",
+		      g.exposure_s, g.gain, g.black_level, g.bit_depth,
+		      (unsigned long long)g.sequence, g.format);
+	}
+	glint_frame_release(&f);
+	glint_frame_release(&g);
+}
+
+static void test_frames(const char *dir)
+{
+	roundtrip(1, 12, dir);
+	roundtrip(3, 8, dir);
+	roundtrip(1, 16, dir);
+
+	/* Truncated: half the file. */
+	char src[512], dst[512];
+	struct glint_frame g;
+	snprintf(src, sizeof(src), "%s/f1.png", dir);
+	snprintf(dst, sizeof(dst), "%s/half.png", dir);
+	FILE *in = fopen(src, "rb"), *out = fopen(dst, "wb");
+	fseek(in, 0, SEEK_END);
+	long n = ftell(in);
+	fseek(in, 0, SEEK_SET);
+	char *buf = malloc((size_t)n);
+	CHECK(fread(buf, 1, (size_t)n, in) == (size_t)n, "read %s", src);
+	fwrite(buf, 1, (size_t)n / 2, out);
+	fclose(in);
+	fclose(out);
+	CHECK(glint_frame_read(dst, &g) < 0 && g.data == NULL,
+	      "a truncated frame was read");
+	CHECK_MSG(glint_error_msg(), "half.png");
+	/* Not a PNG. */
+	snprintf(dst, sizeof(dst), "%s/text.png", dir);
+	out = fopen(dst, "wb");
+	fputs("hello\n", out);
+	fclose(out);
+	CHECK(glint_frame_read(dst, &g) < 0, "a text file was read");
+	CHECK_MSG(glint_error_msg(), "text.png");
+	free(buf);
+}
+
+static json_t *load(const char *dir, const char *name)
+{
+	char path[4200];
+	json_error_t e;
+	snprintf(path, sizeof(path), "%s/%s", dir, name);
+	return json_load_file(path, 0, &e);
+}
+
+static void test_session(const char *dir)
+{
+	struct glint_camera_info in;
+	struct glint_session *s;
+	struct glint_frame f = make_frame(16, 8, 1, 12);
+	char root[512], sdir[4096];
+
+	memset(&in, 0, sizeof(in));
+	snprintf(in.backend, sizeof(in.backend), "sim");
+	snprintf(in.name, sizeof(in.name), "test");
+	snprintf(root, sizeof(root), "%s/sessions", dir);
+	CHECK(glint_session_create(root, "probe", "{\"camera\": {}}\n", &in,
+				   &s) == 0,
+	      "%s", glint_error_msg());
+	if (!s)
+		return;
+	snprintf(sdir, sizeof(sdir), "%s", glint_session_dir(s));
+	json_t *doc = load(sdir, "session.json");
+	CHECK(doc && !strcmp(json_string_value(json_object_get(doc, "status")),
+			     "incomplete"),
+	      "a new session is not marked incomplete");
+	json_decref(doc);
+	CHECK(glint_session_add_frame(s, &f, 0) == 0, "%s", glint_error_msg());
+	f.exposure_s *= 2;
+	CHECK(glint_session_add_frame(s, &f, 1) == 0, "%s", glint_error_msg());
+	doc = load(sdir, "session.json");
+	CHECK(doc && json_array_size(json_object_get(doc, "frames")) == 2,
+	      "session.json lists %zu frames after 2",
+	      doc ? json_array_size(json_object_get(doc, "frames")) : 0);
+	json_decref(doc);
+	/* Stopped by an error: stays incomplete, says why, keeps frames. */
+	struct glint_bracket b;
+	memset(&b, 0, sizeof(b));
+	CHECK(glint_session_finish(s, &b, "camera disappeared") == 0, "%s",
+	      glint_error_msg());
+	doc = load(sdir, "session.json");
+	CHECK(doc &&
+		      !strcmp(json_string_value(json_object_get(doc, "status")),
+			      "incomplete") &&
+		      !strcmp(json_string_value(json_object_get(doc, "error")),
+			      "camera disappeared"),
+	      "an interrupted session must stay incomplete with its error");
+	json_decref(doc);
+	struct glint_frame g;
+	char p[4200];
+	snprintf(p, sizeof(p), "%s/frame-001.png", sdir);
+	CHECK(glint_frame_read(p, &g) == 0 && g.exposure_s == f.exposure_s,
+	      "frame 1 not kept: %s", glint_error_msg());
+	glint_frame_release(&g);
+	glint_frame_release(&f);
+}
+
+int main(void)
+{
+	char dir[] = "/tmp/glint-capture-files-XXXXXX";
+	if (!mkdtemp(dir))
+		return 1;
+	RUN_ARG(test_frames, dir);
+	RUN_ARG(test_session, dir);
+	char cmd[600];
+	snprintf(cmd, sizeof(cmd), "rm -rf '%s'", dir);
+	if (system(cmd) != 0)
+		fprintf(stderr, "could not remove %s\n", dir);
+	return test_result();
+}

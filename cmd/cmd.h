@@ -31,6 +31,8 @@ void cmd_convert_help(void);
 int cmd_capture(int argc, char **argv);
 void cmd_capture_help(void);
 int cmd_cameras(int argc, char **argv);
+int cmd_hdr(int argc, char **argv);
+void cmd_hdr_help(void);
 void cmd_cameras_help(void);
 
 /* Folder of glint's own data (embedded env map, Table 1). */

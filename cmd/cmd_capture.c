@@ -71,8 +71,8 @@ struct rig {
 
 static int load_rig(const char *path, const char *kind, struct rig *r)
 {
-	static const char *const top[] = { "camera", "bracket", "roi", "output",
-					   NULL };
+	static const char *const top[] = { "camera", "bracket", "roi",
+					   "output", "sensor",	NULL };
 	static const char *const cam_keys[] = { "backend", "device", NULL };
 	static const char *const br_keys[] = { "step_ev",    "max_frames",
 					       "max_time_s", "floor_dn",

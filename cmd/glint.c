@@ -28,6 +28,8 @@ static const struct glint_cmd commands[] = {
 	  cmd_capture, cmd_capture_help },
 	{ "cameras", "list cameras and their capabilities", cmd_cameras,
 	  cmd_cameras_help },
+	{ "hdr", "merge a bracket of raw frames into radiance and variance",
+	  cmd_hdr, cmd_hdr_help },
 };
 
 #define NCOMMANDS (sizeof(commands) / sizeof(commands[0]))

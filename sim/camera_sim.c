@@ -14,6 +14,7 @@
  * disk), timescale (real seconds per simulated second, default 1: tests
  * and demos run a 2 s exposure in 20 ms with 0.01).
  */
+#include "camera_sim.h"
 #include "capture/camera.h"
 #include "sensor.h"
 
@@ -89,7 +90,7 @@ static int parse_device(const char *dev, struct sim_cam *s)
 }
 
 /* `decades` decades left to right up to 100, and a disk at 500. */
-static struct glint_image *test_card(int w, int h, double decades)
+struct glint_image *glint_sim_test_card(int w, int h, double decades)
 {
 	struct glint_image *img = glint_image_new(w, h);
 	if (!img)
@@ -151,7 +152,7 @@ static int sim_open(const char *device, const struct glint_clock *clock,
 		s->clock.sleep_until = scaled_sleep_until;
 		s->clock.ctx = s;
 	}
-	s->radiance = test_card(s->width, s->height, s->decades);
+	s->radiance = glint_sim_test_card(s->width, s->height, s->decades);
 	if (!s->radiance) {
 		free(s);
 		return glint_error_prefix(ENOMEM, "sim camera");

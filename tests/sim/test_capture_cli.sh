@@ -68,6 +68,25 @@ check "its session is complete and whole" python3 "$checker" "$(only_session "$t
 check "--json result" run 0 "" capture probe --config "$tmp/rig.json" --out "$tmp/caps2" --json
 check "--json says complete" python3 -c "import json,sys; d=json.load(open('$tmp/out')); sys.exit(d['status']!='complete' or d['frames']<8)"
 
+# glint hdr on that session, and on bad frame sets.
+sess=$(only_session "$tmp/caps")
+check "hdr of the session" run 0 "" hdr "$sess" --json
+check "... writes radiance, variance, weights, mask" \
+	bash -c "cd '$sess' && test -s hdr.exr && test -s variance.exr && test -s weights.exr && test -s mask.png && test -s hdr.json"
+check "... still bracket, all valid" python3 -c "import json,sys; d=json.load(open('$tmp/out')); sys.exit(d['moved'] or d['valid_pixels'] != 96*64)"
+check "hdr of files without -o: exit 2" run 2 "-o DIR" hdr "$sess/frame-000.png"
+cp "$sess/frame-003.png" "$tmp/f3.png"
+head -c 2000 "$sess/frame-004.png" >"$tmp/f4.png"
+check "hdr of a truncated frame: exit 1, named" run 1 "f4.png" hdr "$tmp/f3.png" "$tmp/f4.png" -o "$tmp/hdrx"
+check "... nothing written" test ! -e "$tmp/hdrx/hdr.exr"
+sess2=$(only_session "$tmp/caps2")
+cat >"$tmp/small.json" <<JSON
+{"camera": {"backend": "sim", "device": "sim:width=32,height=32,timescale=0.01"}, "output": "$tmp/small"}
+JSON
+"$glint" capture sample --config "$tmp/small.json" -q
+check "hdr of frames of different sizes: exit 1" run 1 "must match" hdr "$sess/frame-003.png" "$(only_session "$tmp/small")/frame-001.png" -o "$tmp/hdry"
+check "hdr of a missing session: exit 1" run 1 "nowhere" hdr "$tmp/nowhere"
+
 echo '{"camera": {"backend": "sim"}, "bracket": {"stepev": 1}}' >"$tmp/typo.json"
 check "misspelt rig key: exit 1, named" run 1 "stepev" capture sample --config "$tmp/typo.json"
 echo '{"camera": {"backend": "gopro"}}' >"$tmp/nob.json"

@@ -1,0 +1,299 @@
+/* SPDX-License-Identifier: MIT */
+#include "hdr_linear.h"
+
+#include "core/error.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+void glint_noise_default(struct glint_noise_model *m)
+{
+	/* sim/sensor.c: 12-bit ADC spanning a 10 ke- full well, 2.5 e-. */
+	m->dn_per_electron = 4095.0 / 10000.0;
+	m->read_noise_e = 2.5;
+	m->saturation_dn = 0;
+}
+
+void glint_raw_hdr_release(struct glint_raw_hdr *h)
+{
+	free(h->x);
+	free(h->var);
+	free(h->valid);
+	memset(h, 0, sizeof(*h));
+}
+
+static int check_frames(const struct glint_frame *f, int n)
+{
+	if (n < 1)
+		return glint_error_set(EINVAL, "HDR merge: no frames");
+	for (int i = 0; i < n; i++) {
+		if (!f[i].linear || f[i].channels != 1)
+			return glint_error_set(
+				EINVAL,
+				"HDR merge: frame %d is %s, %d channel(s)%s: "
+				"the linear merge takes raw Bayer or mono "
+				"frames (camera-encoded ones need a response "
+				"curve)",
+				i, f[i].format, f[i].channels,
+				f[i].linear ? "" : ", camera-encoded");
+		if (f[i].width != f[0].width || f[i].height != f[0].height ||
+		    strcmp(f[i].format, f[0].format) != 0 ||
+		    f[i].bit_depth != f[0].bit_depth)
+			return glint_error_set(
+				EINVAL,
+				"HDR merge: frame %d is %dx%d %s %d-bit, frame "
+				"0 "
+				"%dx%d %s %d-bit: a bracket's frames must "
+				"match",
+				i, f[i].width, f[i].height, f[i].format,
+				f[i].bit_depth, f[0].width, f[0].height,
+				f[0].format, f[0].bit_depth);
+		if (!(f[i].exposure_s > 0) || !isfinite(f[i].exposure_s) ||
+		    !(f[i].gain > 0) || !isfinite(f[i].gain))
+			return glint_error_set(
+				EINVAL,
+				"HDR merge: frame %d has exposure "
+				"%g s, gain %g: expected positive "
+				"finite values",
+				i, f[i].exposure_s, f[i].gain);
+		if (f[i].bit_depth < 1 || f[i].bit_depth > 16 ||
+		    !(f[i].black_level >= 0) ||
+		    f[i].black_level >= (1 << f[i].bit_depth) - 1)
+			return glint_error_set(
+				EINVAL,
+				"HDR merge: frame %d: black level "
+				"%g for %d bits",
+				i, f[i].black_level, f[i].bit_depth);
+	}
+	return 0;
+}
+
+static int by_exposure(const void *a, const void *b)
+{
+	const struct glint_frame *x = *(const struct glint_frame *const *)a;
+	const struct glint_frame *y = *(const struct glint_frame *const *)b;
+	double ex = x->exposure_s * x->gain, ey = y->exposure_s * y->gain;
+	return (ex > ey) - (ex < ey);
+}
+
+/* Variance of x = (DN - black) / (t g) when the expected signal is d DN. */
+static double var_x(const struct glint_noise_model *m, double g, double tg,
+		    double d)
+{
+	double gc = g * m->dn_per_electron;
+	double v = gc * fmax(d, 0) +
+		   gc * gc * m->read_noise_e * m->read_noise_e + 1.0 / 12;
+	return v / (tg * tg);
+}
+
+int glint_hdr_merge_raw(const struct glint_frame *frames, int n,
+			const struct glint_noise_model *noise,
+			struct glint_raw_hdr *out, struct glint_hdr_report *rep)
+{
+	const struct glint_frame **f;
+	struct glint_hdr_report local;
+	int ret = check_frames(frames, n);
+
+	memset(out, 0, sizeof(*out));
+	if (!rep)
+		rep = &local;
+	memset(rep, 0, sizeof(*rep));
+	if (ret < 0)
+		return ret;
+	size_t ns = (size_t)frames[0].width * frames[0].height;
+	f = malloc((size_t)n * sizeof(*f));
+	out->x = malloc(ns * sizeof(float));
+	out->var = malloc(ns * sizeof(float));
+	out->valid = malloc(ns);
+	if (!f || !out->x || !out->var || !out->valid) {
+		free(f);
+		glint_raw_hdr_release(out);
+		return glint_error_set(ENOMEM, "HDR merge: out of memory");
+	}
+	for (int i = 0; i < n; i++)
+		f[i] = &frames[i];
+	qsort(f, (size_t)n, sizeof(*f), by_exposure);
+	out->width = frames[0].width;
+	out->height = frames[0].height;
+	snprintf(out->format, sizeof(out->format), "%s", frames[0].format);
+
+	double top = (1 << frames[0].bit_depth) - 1;
+	rep->frames = n;
+	rep->sites = (long)ns;
+	rep->pairs = n - 1 < 32 ? n - 1 : 32;
+	for (size_t s = 0; s < ns; s++) {
+		double sw = 0, swx = 0, xhat = 0;
+		int any = 0;
+		/* Pass 1: variances from each sample's own value; pass 2:
+		 * from the merged estimate (unbiased weights). */
+		for (int pass = 0; pass < 2; pass++) {
+			sw = swx = 0;
+			any = 0;
+			for (int i = 0; i < n; i++) {
+				const struct glint_frame *fi = f[i];
+				double sat =
+					noise->saturation_dn > 0
+						? noise->saturation_dn
+						: fi->black_level +
+							  0.95 * (top -
+								  fi->black_level);
+				double dn = fi->data[s];
+				if (dn >= sat)
+					continue;
+				double tg = fi->exposure_s * fi->gain;
+				double d = dn - fi->black_level;
+				double v = var_x(noise, fi->gain, tg,
+						 pass ? xhat * tg : d);
+				sw += 1 / v;
+				swx += d / tg / v;
+				any = 1;
+			}
+			if (!any)
+				break;
+			xhat = swx / sw;
+		}
+		if (!any) {
+			/* Clipped in every frame: a lower bound, no weight. */
+			const struct glint_frame *fs = f[0];
+			out->x[s] = (float)((top - fs->black_level) /
+					    (fs->exposure_s * fs->gain));
+			out->var[s] = 0;
+			out->valid[s] = 0;
+			rep->invalid_sites++;
+			continue;
+		}
+		out->x[s] = (float)xhat;
+		out->var[s] = (float)(1 / sw);
+		out->valid[s] = 1;
+		if (xhat < 3 * sqrt(1 / sw))
+			rep->dark_sites++;
+		/* Motion check on frames adjacent in exposure. */
+		for (int i = 0; i + 1 < n && i < 32; i++) {
+			const struct glint_frame *a = f[i], *b = f[i + 1];
+			double da = a->data[s] - a->black_level,
+			       db = b->data[s] - b->black_level;
+			double ra = top - a->black_level,
+			       rb = top - b->black_level;
+			if (da < 0.02 * ra || da > 0.9 * ra || db < 0.02 * rb ||
+			    db > 0.9 * rb)
+				continue;
+			double ta = a->exposure_s * a->gain,
+			       tb = b->exposure_s * b->gain;
+			double v = var_x(noise, a->gain, ta, xhat * ta) +
+				   var_x(noise, b->gain, tb, xhat * tb);
+			double z = (da / ta - db / tb) / sqrt(v);
+			rep->compared[i]++;
+			if (fabs(z) > 5)
+				rep->disagree[i] += 1;
+		}
+	}
+	for (int i = 0; i < rep->pairs; i++) {
+		if (rep->compared[i])
+			rep->disagree[i] /= (double)rep->compared[i];
+		if (rep->compared[i] > 100 && rep->disagree[i] > 0.01)
+			rep->moved = 1;
+	}
+	free(f);
+	if (rep->invalid_sites == rep->sites) {
+		glint_raw_hdr_release(out);
+		return glint_error_set(ERANGE,
+				       "HDR merge: every frame is clipped "
+				       "everywhere (shortest %g s): nothing to "
+				       "merge",
+				       frames[0].exposure_s);
+	}
+	if (rep->dark_sites + rep->invalid_sites == rep->sites) {
+		glint_raw_hdr_release(out);
+		return glint_error_set(ERANGE,
+				       "HDR merge: every frame is black (no "
+				       "site 3 sigma above the read noise): "
+				       "nothing to merge");
+	}
+	return 0;
+}
+
+/* Colour (0 R, 1 G, 2 B) of site (x, y) in a Bayer layout, -1 for mono. */
+static int cfa_colour(const char *format, int x, int y)
+{
+	if (!strncmp(format, "MONO", 4))
+		return -1;
+	char c = format[(y & 1) * 2 + (x & 1)];
+	return c == 'R' ? 0 : c == 'G' ? 1 : 2;
+}
+
+int glint_hdr_demosaic(const struct glint_raw_hdr *raw,
+		       struct glint_image **radiance,
+		       struct glint_image **variance,
+		       struct glint_image **valid)
+{
+	int w = raw->width, h = raw->height;
+	const char *fmt = raw->format;
+
+	*radiance = *variance = *valid = NULL;
+	if (strcmp(fmt, "RGGB16") && strcmp(fmt, "GRBG16") &&
+	    strcmp(fmt, "GBRG16") && strcmp(fmt, "BGGR16") &&
+	    strcmp(fmt, "MONO16"))
+		return glint_error_set(EINVAL,
+				       "demosaic: layout '%s': expected "
+				       "RGGB16, GRBG16, GBRG16, BGGR16 or "
+				       "MONO16",
+				       fmt);
+	struct glint_image *r = glint_image_new(w, h),
+			   *v = glint_image_new(w, h),
+			   *m = glint_image_new(w, h);
+	if (!r || !v || !m) {
+		glint_image_free(r);
+		glint_image_free(v);
+		glint_image_free(m);
+		return glint_error_set(ENOMEM, "demosaic: out of memory");
+	}
+	for (int y = 0; y < h; y++)
+		for (int x = 0; x < w; x++) {
+			float *pr = glint_image_px(r, x, y),
+			      *pv = glint_image_px(v, x, y),
+			      *pm = glint_image_px(m, x, y);
+			int ok = 1;
+			for (int c = 0; c < 3; c++) {
+				double sx = 0, sv = 0;
+				int k = 0;
+				int own = cfa_colour(fmt, x, y);
+				int radius = own == c || own < 0 ? 0 : 1;
+				for (int dy = -radius; dy <= radius; dy++)
+					for (int dx = -radius; dx <= radius;
+					     dx++) {
+						int xx = x + dx, yy = y + dy;
+						if (xx < 0 || yy < 0 ||
+						    xx >= w || yy >= h)
+							continue;
+						int cc =
+							cfa_colour(fmt, xx, yy);
+						size_t s = (size_t)yy * w + xx;
+						if ((cc >= 0 && cc != c) ||
+						    !raw->valid[s])
+							continue;
+						sx += raw->x[s];
+						sv += raw->var[s];
+						k++;
+					}
+				if (k == 0) {
+					ok = 0;
+					/* Best available: the site itself. */
+					size_t s = (size_t)y * w + x;
+					pr[c] = raw->x[s];
+					pv[c] = 0;
+					continue;
+				}
+				pr[c] = (float)(sx / k);
+				pv[c] = (float)(sv / ((double)k * k));
+			}
+			if (!ok)
+				pv[0] = pv[1] = pv[2] = 0;
+			pm[0] = pm[1] = pm[2] = (float)ok;
+		}
+	*radiance = r;
+	*variance = v;
+	*valid = m;
+	return 0;
+}

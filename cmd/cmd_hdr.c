@@ -1,0 +1,320 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * glint hdr: a session's (or a list of) raw frames -> radiance, variance,
+ * fit weights and a validity mask (capture/hdr_linear.h, docs/hdr.md).
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "cmd.h"
+
+#include "capture/frame_file.h"
+#include "capture/hdr_linear.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/json.h"
+#include "core/log.h"
+
+#include <getopt.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+void cmd_hdr_help(void)
+{
+	printf("usage: glint hdr (SESSION_DIR | FRAME.png...) [options]\n"
+	       "\n"
+	       "Merge a bracket of raw frames (a capture session, or frame "
+	       "files written by\nglint capture) into linear radiance with "
+	       "noise-optimal weights, zero weight\nfor clipped samples, a "
+	       "per-pixel variance and a motion check.  Writes into\nthe "
+	       "session (or -o DIR):\n"
+	       "  hdr.exr        radiance, DN per second at unity gain "
+	       "(demosaiced: bilinear)\n"
+	       "  variance.exr   its variance per pixel and channel (0 = "
+	       "invalid)\n"
+	       "  weights.exr    1 / variance, 0 where invalid: glint fit "
+	       "--weights\n"
+	       "  mask.png       white = valid, black = clipped in every "
+	       "frame\n"
+	       "  hdr.png        preview (auto exposure)\n"
+	       "  hdr.json       what the merge saw (frames, clipped and dark "
+	       "pixels, motion)\n"
+	       "\n"
+	       "  -o, --out DIR         output folder (default: the session; "
+	       "required for files)\n"
+	       "      --dn-per-electron C  sensor conversion gain at unity "
+	       "gain (default: the\n"
+	       "                        rig's \"sensor\", else the simulated "
+	       "sensor's 0.4095)\n"
+	       "      --read-noise E    read noise, electrons (default: rig, "
+	       "else 2.5)\n"
+	       "      --saturation DN   samples at or above this are clipped "
+	       "(default: 95 %% of\n"
+	       "                        the range above black)\n"
+	       "      --json            print a JSON result on stdout\n"
+	       "  -q, --quiet           no info messages\n"
+	       "\nExit status: 0 done (a moved bracket is reported, not an "
+	       "error), 1 bad input,\n2 bad command line.\n");
+}
+
+static int parse_double(const char *opt, const char *v, double lo, double *out)
+{
+	char *end;
+	double d = strtod(v, &end);
+	if (*end || !isfinite(d) || d < lo)
+		return cmd_usage_error(
+			"hdr", "%s '%s': expected a number >= %g", opt, v, lo);
+	*out = d;
+	return 0;
+}
+
+/* The rig's "sensor" section, if the session has one. */
+static int session_noise(const char *dir, struct glint_noise_model *m)
+{
+	static const char *const keys[] = { "dn_per_electron", "read_noise_e",
+					    "saturation_dn", NULL };
+	char path[4200];
+	json_t *rig, *s = NULL;
+	struct stat st;
+	int ret;
+
+	snprintf(path, sizeof(path), "%s/rig.json", dir);
+	if (stat(path, &st) != 0)
+		return 0;
+	ret = glint_json_load(path, &rig);
+	if (ret < 0)
+		return ret;
+	ret = glint_json_object(path, "", rig, "sensor", 0, &s);
+	if (!ret && s)
+		ret = glint_json_known_keys(path, "sensor", s, keys);
+	if (!ret && s)
+		ret = glint_json_number(path, "sensor", s, "dn_per_electron", 0,
+					(struct glint_range){ 0, 1e6, 1, 0 },
+					&m->dn_per_electron);
+	if (!ret && s)
+		ret = glint_json_number(path, "sensor", s, "read_noise_e", 0,
+					(struct glint_range){ 0, 1e6, 0, 0 },
+					&m->read_noise_e);
+	if (!ret && s)
+		ret = glint_json_number(path, "sensor", s, "saturation_dn", 0,
+					(struct glint_range){ 0, 65535, 0, 0 },
+					&m->saturation_dn);
+	json_decref(rig);
+	return ret;
+}
+
+static int load_session(const char *dir, struct glint_frame **frames, int *n)
+{
+	char path[4200];
+	json_t *doc, *list;
+	int ret;
+
+	snprintf(path, sizeof(path), "%s/session.json", dir);
+	ret = glint_json_load(path, &doc);
+	if (ret < 0)
+		return ret;
+	list = json_object_get(doc, "frames");
+	if (!json_is_array(list) || json_array_size(list) == 0) {
+		json_decref(doc);
+		return glint_error_set(EINVAL, "%s: no frames listed", path);
+	}
+	*n = (int)json_array_size(list);
+	*frames = calloc((size_t)*n, sizeof(**frames));
+	if (!*frames) {
+		json_decref(doc);
+		return glint_error_set(ENOMEM, "out of memory");
+	}
+	for (int i = 0; i < *n && ret == 0; i++) {
+		const char *name = json_string_value(json_object_get(
+			json_array_get(list, (size_t)i), "file"));
+		if (!name || strchr(name, '/')) {
+			ret = glint_error_set(EINVAL,
+					      "%s: frames[%d].file: expected a "
+					      "file name in the session",
+					      path, i);
+			break;
+		}
+		snprintf(path, sizeof(path), "%s/%s", dir, name);
+		ret = glint_frame_read(path, &(*frames)[i]);
+	}
+	json_decref(doc);
+	return ret;
+}
+
+static void free_frames(struct glint_frame *f, int n)
+{
+	for (int i = 0; f && i < n; i++)
+		glint_frame_release(&f[i]);
+	free(f);
+}
+
+int cmd_hdr(int argc, char **argv)
+{
+	enum { O_CPE = 256, O_READ, O_SAT, O_JSON };
+	static const struct option opts[] = {
+		{ "out", required_argument, NULL, 'o' },
+		{ "dn-per-electron", required_argument, NULL, O_CPE },
+		{ "read-noise", required_argument, NULL, O_READ },
+		{ "saturation", required_argument, NULL, O_SAT },
+		{ "json", no_argument, NULL, O_JSON },
+		{ "quiet", no_argument, NULL, 'q' },
+		{ "help", no_argument, NULL, 'h' },
+		{ NULL, 0, NULL, 0 },
+	};
+	const char *out = NULL;
+	double cpe = NAN, rn = NAN, sat = NAN;
+	int json = 0, c, ret;
+
+	optind = 1;
+	while ((c = getopt_long(argc, argv, "o:qh", opts, NULL)) != -1) {
+		switch (c) {
+		case 'o':
+			out = optarg;
+			break;
+		case O_CPE:
+			if (parse_double("--dn-per-electron", optarg, 1e-9,
+					 &cpe))
+				return GLINT_EXIT_USAGE;
+			break;
+		case O_READ:
+			if (parse_double("--read-noise", optarg, 0, &rn))
+				return GLINT_EXIT_USAGE;
+			break;
+		case O_SAT:
+			if (parse_double("--saturation", optarg, 1, &sat))
+				return GLINT_EXIT_USAGE;
+			break;
+		case O_JSON:
+			json = 1;
+			glint_log_set_mode(GLINT_LOG_JSON);
+			break;
+		case 'q':
+			glint_log_set_mode(GLINT_LOG_QUIET);
+			break;
+		case 'h':
+			cmd_hdr_help();
+			return GLINT_EXIT_OK;
+		default:
+			return GLINT_EXIT_USAGE;
+		}
+	}
+	if (optind >= argc)
+		return cmd_usage_error("hdr", "expected a session folder or "
+					      "frame files");
+
+	struct glint_noise_model nm;
+	struct glint_frame *frames = NULL;
+	struct glint_raw_hdr raw;
+	struct glint_hdr_report rep;
+	struct glint_image *rad = NULL, *var = NULL, *valid = NULL,
+			   *weights = NULL;
+	int n = 0;
+	struct stat st;
+	glint_noise_default(&nm);
+	memset(&raw, 0, sizeof(raw));
+	/* One argument that is not a file: a session (or an error naming
+	 * its session.json). */
+	int is_session = optind == argc - 1 &&
+			 !(stat(argv[optind], &st) == 0 && S_ISREG(st.st_mode));
+	if (is_session) {
+		ret = session_noise(argv[optind], &nm);
+		if (ret == 0)
+			ret = load_session(argv[optind], &frames, &n);
+		if (!out)
+			out = argv[optind];
+	} else {
+		if (!out)
+			return cmd_usage_error("hdr",
+					       "frame files need -o DIR");
+		n = argc - optind;
+		frames = calloc((size_t)n, sizeof(*frames));
+		ret = frames ? 0 : glint_error_set(ENOMEM, "out of memory");
+		for (int i = 0; i < n && ret == 0; i++)
+			ret = glint_frame_read(argv[optind + i], &frames[i]);
+	}
+	if (!isnan(cpe))
+		nm.dn_per_electron = cpe;
+	if (!isnan(rn))
+		nm.read_noise_e = rn;
+	if (!isnan(sat))
+		nm.saturation_dn = sat;
+	if (ret == 0)
+		ret = glint_hdr_merge_raw(frames, n, &nm, &raw, &rep);
+	if (ret == 0)
+		ret = glint_hdr_demosaic(&raw, &rad, &var, &valid);
+	if (ret == 0 && mkdir(out, 0777) < 0 && errno != EEXIST)
+		ret = glint_error_set(errno, "%s: %s", out, strerror(errno));
+	if (ret == 0 && !(weights = glint_image_new(rad->width, rad->height)))
+		ret = glint_error_set(ENOMEM, "out of memory");
+	long valid_px = 0;
+	if (ret == 0) {
+		size_t np = (size_t)rad->width * rad->height * 3;
+		for (size_t i = 0; i < np; i++)
+			weights->data[i] =
+				var->data[i] > 0 ? 1 / var->data[i] : 0;
+		for (size_t i = 0; i < np; i += 3)
+			valid_px += valid->data[i] > 0;
+	}
+	char path[4200];
+	const char *files[] = { "hdr.exr", "variance.exr", "weights.exr",
+				"mask.png", "hdr.png" };
+	struct glint_image *imgs[] = { rad, var, weights, valid, rad };
+	for (int i = 0; i < 5 && ret == 0; i++) {
+		struct glint_write_opts wo = { 0, 0, i == 4 };
+		snprintf(path, sizeof(path), "%s/%s", out, files[i]);
+		ret = glint_image_write(path, imgs[i], &wo);
+	}
+	json_t *res = NULL;
+	if (ret == 0) {
+		json_t *pairs = json_array();
+		for (int i = 0; i < rep.pairs; i++)
+			json_array_append_new(
+				pairs, json_pack("{s:i, s:I, s:f}", "pair", i,
+						 "compared",
+						 (json_int_t)rep.compared[i],
+						 "disagree_fraction",
+						 rep.disagree[i]));
+		res = json_pack("{s:s, s:i, s:i, s:i, s:I, s:I, s:I, s:b, s:o, "
+				"s:{s:f, s:f, s:f}}",
+				"output", out, "frames", n, "width", rad->width,
+				"height", rad->height, "valid_pixels",
+				(json_int_t)valid_px, "clipped_sites",
+				(json_int_t)rep.invalid_sites, "dark_sites",
+				(json_int_t)rep.dark_sites, "moved", rep.moved,
+				"motion", pairs, "noise_model",
+				"dn_per_electron", nm.dn_per_electron,
+				"read_noise_e", nm.read_noise_e,
+				"saturation_dn", nm.saturation_dn);
+		char *text = json_dumps(res, JSON_INDENT(2));
+		snprintf(path, sizeof(path), "%s/hdr.json", out);
+		ret = text ? glint_atomic_write_file(path, text, strlen(text))
+			   : glint_error_set(ENOMEM, "out of memory");
+		free(text);
+	}
+	if (ret == 0) {
+		if (rep.moved)
+			glint_log_error(
+				"warning: frames of the bracket "
+				"disagree where both are well exposed "
+				"(moved rig or scene?): see %s/hdr.json",
+				out);
+		glint_log_info("%d frames -> %s/hdr.exr (%dx%d), %ld of %ld "
+			       "pixels valid, %ld sites clipped in every "
+			       "frame",
+			       n, out, rad->width, rad->height, valid_px,
+			       (long)rad->width * rad->height,
+			       rep.invalid_sites);
+		if (json)
+			cmd_print_json(res);
+		else
+			json_decref(res);
+	}
+	glint_image_free(rad);
+	glint_image_free(var);
+	glint_image_free(valid);
+	glint_image_free(weights);
+	glint_raw_hdr_release(&raw);
+	free_frames(frames, n);
+	return ret < 0 ? cmd_fail("hdr") : GLINT_EXIT_OK;
+}

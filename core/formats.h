@@ -38,6 +38,10 @@ int glint_png_write(const char *path, const struct glint_image *img,
 /* 8-bit sRGB PNG of ready-made pixels (w * h * 3 bytes), atomically. */
 int glint_png_write_rgb8(const char *path, int w, int h, const uint8_t *px);
 
+/* Read any PNG as 8-bit RGB (w * h * 3 bytes, caller frees): the camera's
+ * code values as stored, no gamma or colour conversion. */
+int glint_png_read_rgb8(const char *path, int *w, int *h, uint8_t **px);
+
 /* The tone map above for one linear value already scaled by 2^EV. */
 uint8_t glint_tonemap_srgb8(double v);
 

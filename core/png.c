@@ -147,3 +147,30 @@ int glint_png_write_rgb8(const char *path, int w, int h, const uint8_t *px)
 
 	return write_png_rows(path, w, h, rgb8_row, &t);
 }
+
+int glint_png_read_rgb8(const char *path, int *w, int *h, uint8_t **px)
+{
+	png_image img;
+
+	*px = NULL;
+	memset(&img, 0, sizeof(img));
+	img.version = PNG_IMAGE_VERSION;
+	if (!png_image_begin_read_from_file(&img, path))
+		return glint_error_set(EIO, "%s: %s", path, img.message);
+	/* No gamma handling: 8-bit in, the same 8-bit values out. */
+	img.format = PNG_FORMAT_RGB;
+	size_t n = PNG_IMAGE_SIZE(img);
+	*px = malloc(n);
+	if (!*px) {
+		png_image_free(&img);
+		return glint_error_set(ENOMEM, "%s: out of memory", path);
+	}
+	if (!png_image_finish_read(&img, NULL, *px, 0, NULL)) {
+		free(*px);
+		*px = NULL;
+		return glint_error_set(EIO, "%s: %s", path, img.message);
+	}
+	*w = (int)img.width;
+	*h = (int)img.height;
+	return 0;
+}

@@ -8,6 +8,8 @@
 
 #include "capture/frame_file.h"
 #include "capture/hdr_linear.h"
+#include "capture/hdr_response.h"
+#include "core/formats.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/json.h"
@@ -23,6 +25,8 @@
 void cmd_hdr_help(void)
 {
 	printf("usage: glint hdr (SESSION_DIR | FRAME.png...) [options]\n"
+	       "       glint hdr --times T1,T2,... IMAGE.png... -o DIR "
+	       "[--response M]\n"
 	       "\n"
 	       "Merge a bracket of raw frames (a capture session, or frame "
 	       "files written by\nglint capture) into linear radiance with "
@@ -41,8 +45,17 @@ void cmd_hdr_help(void)
 	       "  hdr.json       what the merge saw (frames, clipped and dark "
 	       "pixels, motion)\n"
 	       "\n"
+	       "\n8-bit photos (any camera) with --times or --times-file: the "
+	       "camera's response\nis recovered (--response robertson, the "
+	       "default, or debevec), written to\nresponse.csv, and the "
+	       "photos merged; codes at the black floor and at 255 get\nno "
+	       "weight (no variance image for 8-bit input).\n\n"
 	       "  -o, --out DIR         output folder (default: the session; "
 	       "required for files)\n"
+	       "      --times LIST      8-bit mode: exposure times in "
+	       "seconds, e.g. 32,16,1/2\n"
+	       "      --times-file F    the same, one per line\n"
+	       "      --response M      robertson (default) or debevec\n"
 	       "      --dn-per-electron C  sensor conversion gain at unity "
 	       "gain (default: the\n"
 	       "                        rig's \"sensor\", else the simulated "
@@ -149,20 +162,158 @@ static void free_frames(struct glint_frame *f, int n)
 	free(f);
 }
 
+/* "32", "1/1024", "0.5" */
+static int parse_time(const char *s, double *t)
+{
+	char *end;
+	double a = strtod(s, &end);
+	if (*end == '/') {
+		double b = strtod(end + 1, &end);
+		a = b != 0 ? a / b : NAN;
+	}
+	while (*end == ' ' || *end == '\r' || *end == '\n')
+		end++;
+	if (*end || !(a > 0) || !isfinite(a))
+		return -1;
+	*t = a;
+	return 0;
+}
+
+static int read_times(const char *list, const char *file, int n, double *t)
+{
+	char buf[8192];
+	int k = 0;
+	if (file) {
+		FILE *f = fopen(file, "r");
+		if (!f)
+			return glint_error_set(errno, "%s: %s", file,
+					       strerror(errno));
+		while (k <= n && fgets(buf, sizeof(buf), f)) {
+			if (buf[0] == '\n' || buf[0] == '#')
+				continue;
+			if (k == n || parse_time(buf, &t[k]) < 0) {
+				fclose(f);
+				return glint_error_set(EINVAL,
+						       "%s: line %d: '%.40s': "
+						       "expected %d positive "
+						       "times (seconds, 1/N "
+						       "allowed)",
+						       file, k + 1, buf, n);
+			}
+			k++;
+		}
+		fclose(f);
+	} else {
+		snprintf(buf, sizeof(buf), "%s", list);
+		for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok;
+		     tok = strtok_r(NULL, ",", &save)) {
+			if (k == n || parse_time(tok, &t[k]) < 0)
+				return glint_error_set(
+					EINVAL,
+					"--times: '%s': expected "
+					"%d positive times",
+					tok, n);
+			k++;
+		}
+	}
+	if (k != n)
+		return glint_error_set(EINVAL,
+				       "%s: %d exposure times for %d images",
+				       file ? file : "--times", k, n);
+	return 0;
+}
+
+static int ldr_main(char **files, int n, const char *times,
+		    const char *times_file, const char *method, const char *out,
+		    int json)
+{
+	uint8_t **img = calloc((size_t)n, sizeof(*img));
+	double *t = calloc((size_t)n, sizeof(double));
+	double resp[256][3];
+	struct glint_image *rad = NULL, *valid = NULL;
+	int w = 0, h = 0, iters = 0, ret;
+
+	ret = img && t ? 0 : glint_error_set(ENOMEM, "out of memory");
+	if (ret == 0)
+		ret = read_times(times, times_file, n, t);
+	for (int i = 0; i < n && ret == 0; i++) {
+		int wi, hi;
+		ret = glint_png_read_rgb8(files[i], &wi, &hi, &img[i]);
+		if (ret == 0 && i && (wi != w || hi != h))
+			ret = glint_error_set(EINVAL,
+					      "%s is %dx%d, %s %dx%d: the "
+					      "photos must match",
+					      files[i], wi, hi, files[0], w, h);
+		w = wi;
+		h = hi;
+	}
+	struct glint_ldr_stack s = { n, w, h, (const uint8_t *const *)img, t };
+	if (ret == 0 && !strcmp(method, "debevec")) {
+		struct glint_debevec_opts o;
+		glint_debevec_default_opts(&o);
+		ret = glint_response_debevec(&s, &o, resp);
+	} else if (ret == 0) {
+		ret = glint_response_robertson(&s, 30, 0.01, resp, &iters);
+	}
+	if (ret == 0)
+		ret = glint_ldr_merge(&s, resp, NULL, &rad, &valid);
+	if (ret == 0 && mkdir(out, 0777) < 0 && errno != EEXIST)
+		ret = glint_error_set(errno, "%s: %s", out, strerror(errno));
+	char path[4200];
+	const char *names[] = { "hdr.exr", "mask.png", "hdr.png" };
+	struct glint_image *imgs[] = { rad, valid, rad };
+	for (int i = 0; i < 3 && ret == 0; i++) {
+		struct glint_write_opts wo = { 0, 0, i == 2 };
+		snprintf(path, sizeof(path), "%s/%s", out, names[i]);
+		ret = glint_image_write(path, imgs[i], &wo);
+	}
+	if (ret == 0) {
+		char csv[256 * 64];
+		size_t k = 0;
+		for (int z = 0; z < 256; z++)
+			k += (size_t)snprintf(csv + k, sizeof(csv) - k,
+					      "%.8g,%.8g,%.8g\n", resp[z][0],
+					      resp[z][1], resp[z][2]);
+		snprintf(path, sizeof(path), "%s/response.csv", out);
+		ret = glint_atomic_write_file(path, csv, k);
+	}
+	if (ret == 0) {
+		glint_log_info("%d photos (%s response%s) -> %s/hdr.exr "
+			       "(%dx%d), response.csv",
+			       n, method, iters ? ", iterated" : "", out, w, h);
+		if (json)
+			cmd_print_json(json_pack("{s:s, s:i, s:s, s:i, s:i}",
+						 "output", out, "photos", n,
+						 "response", method, "width", w,
+						 "height", h));
+	}
+	for (int i = 0; img && i < n; i++)
+		free(img[i]);
+	free(img);
+	free(t);
+	glint_image_free(rad);
+	glint_image_free(valid);
+	return ret < 0 ? cmd_fail("hdr") : GLINT_EXIT_OK;
+}
+
 int cmd_hdr(int argc, char **argv)
 {
-	enum { O_CPE = 256, O_READ, O_SAT, O_JSON };
+	enum { O_CPE = 256, O_READ, O_SAT, O_JSON, O_TIMES, O_TFILE, O_RESP };
 	static const struct option opts[] = {
 		{ "out", required_argument, NULL, 'o' },
 		{ "dn-per-electron", required_argument, NULL, O_CPE },
 		{ "read-noise", required_argument, NULL, O_READ },
 		{ "saturation", required_argument, NULL, O_SAT },
 		{ "json", no_argument, NULL, O_JSON },
+		{ "times", required_argument, NULL, O_TIMES },
+		{ "times-file", required_argument, NULL, O_TFILE },
+		{ "response", required_argument, NULL, O_RESP },
 		{ "quiet", no_argument, NULL, 'q' },
 		{ "help", no_argument, NULL, 'h' },
 		{ NULL, 0, NULL, 0 },
 	};
-	const char *out = NULL;
+	const char *out = NULL, *times = NULL, *times_file = NULL,
+		   *method = "robertson";
 	double cpe = NAN, rn = NAN, sat = NAN;
 	int json = 0, c, ret;
 
@@ -189,6 +340,22 @@ int cmd_hdr(int argc, char **argv)
 			json = 1;
 			glint_log_set_mode(GLINT_LOG_JSON);
 			break;
+		case O_TIMES:
+			times = optarg;
+			break;
+		case O_TFILE:
+			times_file = optarg;
+			break;
+		case O_RESP:
+			if (strcmp(optarg, "robertson") &&
+			    strcmp(optarg, "debevec"))
+				return cmd_usage_error(
+					"hdr",
+					"--response '%s': expected "
+					"robertson or debevec",
+					optarg);
+			method = optarg;
+			break;
 		case 'q':
 			glint_log_set_mode(GLINT_LOG_QUIET);
 			break;
@@ -202,6 +369,13 @@ int cmd_hdr(int argc, char **argv)
 	if (optind >= argc)
 		return cmd_usage_error("hdr", "expected a session folder or "
 					      "frame files");
+	if (times || times_file) {
+		if (!out)
+			return cmd_usage_error("hdr",
+					       "8-bit photos need -o DIR");
+		return ldr_main(argv + optind, argc - optind, times, times_file,
+				method, out, json);
+	}
 
 	struct glint_noise_model nm;
 	struct glint_frame *frames = NULL;

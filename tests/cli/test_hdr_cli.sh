@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# glint hdr on 8-bit photos: the real Memorial Church stack (skips without
+# ../shared/data) and bad input.
+# usage: test_hdr_cli.sh GLINT SHARED_DATA_DIR
+set -u
+glint=$1
+mem=$2/exposures/memorial
+[ -d "$mem" ] || { echo "skip: $mem absent"; exit 77; }
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fails=0 checks=0
+check() {
+	local what=$1
+	shift
+	checks=$((checks + 1))
+	if "$@"; then echo "ok   $what"; else echo "FAIL $what"; fails=$((fails + 1)); fi
+}
+run() {
+	local want=$1 frag=$2
+	shift 2
+	"$glint" "$@" >"$tmp/out" 2>"$tmp/err"
+	local got=$?
+	[ "$got" = "$want" ] || { echo "  glint $*: exit $got, expected $want:" >&2; cat "$tmp/err" >&2; return 1; }
+	[ -z "$frag" ] || grep -qF -- "$frag" "$tmp/err" || { echo "  stderr lacks '$frag':" >&2; cat "$tmp/err" >&2; return 1; }
+}
+photos=("$mem"/memorial00[67]?.png)
+check "memorial stack merges" run 0 "" hdr --times-file "$mem/shutter_times_qhan1028.txt" "${photos[@]}" -o "$tmp/m" --json
+check "... radiance, mask, response written" bash -c "test -s '$tmp/m/hdr.exr' && test -s '$tmp/m/mask.png' && test \$(wc -l <'$tmp/m/response.csv') = 256"
+check "debevec response too" run 0 "" hdr --times 32,16,8,4,2,1,1/2,1/4,1/8,1/16,1/32,1/64,1/128,1/256,1/512,1/1024 "${photos[@]}" -o "$tmp/d" --response debevec -q
+check "times count mismatch: exit 1" run 1 "15 exposure times for 16 images" hdr --times 32,16,8,4,2,1,1/2,1/4,1/8,1/16,1/32,1/64,1/128,1/256,1/512 "${photos[@]:0:15}" "${photos[15]}" -o "$tmp/x"
+check "equal times: exit 1" run 1 "must differ" hdr --times 1,1 "${photos[0]}" "${photos[1]}" -o "$tmp/x"
+check "a bad time: exit 1" run 1 "'-2'" hdr --times 1,-2 "${photos[0]}" "${photos[1]}" -o "$tmp/x"
+check "unknown response method: exit 2" run 2 "robertson or debevec" hdr --times 1,2 a.png b.png -o "$tmp/x" --response fancy
+head -c 3000 "${photos[3]}" >"$tmp/cut.png"
+check "truncated photo: exit 1, named" run 1 "cut.png" hdr --times 1,2 "${photos[0]}" "$tmp/cut.png" -o "$tmp/x"
+check "nothing written on failure" test ! -e "$tmp/x/hdr.exr"
+echo "$((checks - fails)) passed, $fails failed"
+[ "$fails" = 0 ]

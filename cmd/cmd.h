@@ -32,6 +32,8 @@ int cmd_capture(int argc, char **argv);
 void cmd_capture_help(void);
 int cmd_cameras(int argc, char **argv);
 int cmd_hdr(int argc, char **argv);
+int cmd_probe(int argc, char **argv);
+void cmd_probe_help(void);
 void cmd_hdr_help(void);
 void cmd_cameras_help(void);
 

@@ -30,6 +30,8 @@ static const struct glint_cmd commands[] = {
 	  cmd_cameras_help },
 	{ "hdr", "merge a bracket of raw frames into radiance and variance",
 	  cmd_hdr, cmd_hdr_help },
+	{ "probe", "unwrap a mirror-ball photo; convert probe formats",
+	  cmd_probe, cmd_probe_help },
 };
 
 #define NCOMMANDS (sizeof(commands) / sizeof(commands[0]))

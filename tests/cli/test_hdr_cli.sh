@@ -34,5 +34,16 @@ check "unknown response method: exit 2" run 2 "robertson or debevec" hdr --times
 head -c 3000 "${photos[3]}" >"$tmp/cut.png"
 check "truncated photo: exit 1, named" run 1 "cut.png" hdr --times 1,2 "${photos[0]}" "$tmp/cut.png" -o "$tmp/x"
 check "nothing written on failure" test ! -e "$tmp/x/hdr.exr"
+# glint probe
+campus=$(dirname "$mem")/../probes/campus_probe.hdr
+check "probe convert angular -> latlong" run 0 "" probe convert "$campus" "$tmp/c.exr" --from angular --to latlong
+check "... -> cross" run 0 "" probe convert "$tmp/c.exr" "$tmp/c.hdr" --from latlong --to cross --size 300x400
+check "unknown format: exit 2" run 2 "latlong, angular, cross or ball" probe convert "$tmp/c.exr" "$tmp/d.exr" --from latlong --to sphere
+check "non-square angular: exit 1" run 1 "square" probe convert "$tmp/c.exr" "$tmp/d.exr" --from angular --to latlong
+check "unwrap without the ball: exit 2" run 2 "--ball" probe unwrap "$tmp/c.exr" -o "$tmp/e.exr" --focal-px 1000
+check "unwrap of a ball off the photo: exit 1" run 1 "not inside" probe unwrap "$tmp/c.exr" -o "$tmp/e.exr" --focal-px 1000 --ball 10,10,50
+check "... nothing written" test ! -e "$tmp/e.exr"
+check "unwrap writes env, mask, density" run 0 "" probe unwrap "$tmp/c.exr" -o "$tmp/e.exr" --focal-px 1000 --ball 320,160,100
+check "... all three" bash -c "test -s '$tmp/e.exr' && test -s '$tmp/e-mask.png' && test -s '$tmp/e-density.exr'"
 echo "$((checks - fails)) passed, $fails failed"
 [ "$fails" = 0 ]

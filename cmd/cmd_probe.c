@@ -1,0 +1,293 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * glint probe unwrap | convert: light-probe processing
+ * (capture/probe.h, docs/hdr.md).
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "cmd.h"
+
+#include "capture/probe.h"
+#include "core/error.h"
+#include "core/log.h"
+
+#include <getopt.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+void cmd_probe_help(void)
+{
+	printf("usage: glint probe unwrap PHOTO.exr --focal-px F --ball "
+	       "CX,CY,R [options] -o ENV.exr\n"
+	       "       glint probe convert IN OUT --from FMT --to FMT "
+	       "[--size WxH]\n"
+	       "\n"
+	       "unwrap: a photographed mirror ball (HDR, linear) to a "
+	       "lat-long map in the\ncamera's frame (+Y up, the camera "
+	       "looking along -Z: the map's centre), with\nthe rig's "
+	       "perspective camera (each pixel's own view ray, not the "
+	       "orthographic\napproximation), divided by the ball's "
+	       "reflectance at each angle.  Also writes\nENV-mask.png "
+	       "(white = reliable: not grazing, not the camera's own "
+	       "reflection)\nand ENV-density.exr (photo pixels per "
+	       "steradian, for blending two views).\n"
+	       "  --focal-px F         focal length in pixels\n"
+	       "  --principal X,Y      principal point (default: the image "
+	       "centre)\n"
+	       "  --ball CX,CY,R       the ball's image circle, pixels\n"
+	       "  --chrome N,K         complex index of the ball (default "
+	       "3.2,3.3: chrome, 55 %%)\n"
+	       "  --reflectivity R     a constant reflectance instead\n"
+	       "  --grazing DEG        unreliable beyond this incidence "
+	       "(default 80)\n"
+	       "  --size WxH           output size (default 4R x 2R)\n"
+	       "  --orthographic       the peers' approximation, for "
+	       "comparison\n"
+	       "\n"
+	       "convert: between latlong, angular (Debevec's light probe "
+	       "format), cross\n(vertical cube cross) and ball (ideal "
+	       "mirror ball, orthographic); orientations\nin docs/hdr.md.  "
+	       "Default size keeps the angular resolution.\n"
+	       "\nExit status: 0 done, 1 bad input, 2 bad command line.\n");
+}
+
+static int parse_list(const char *opt, const char *v, int n, double *out)
+{
+	char buf[256];
+	int k = 0;
+	snprintf(buf, sizeof(buf), "%s", v);
+	for (char *save = NULL, *t = strtok_r(buf, ",x", &save); t;
+	     t = strtok_r(NULL, ",x", &save)) {
+		char *end;
+		double d = strtod(t, &end);
+		if (*end || !isfinite(d) || k == n)
+			return cmd_usage_error("probe",
+					       "%s '%s': expected %d numbers",
+					       opt, v, n);
+		out[k++] = d;
+	}
+	if (k != n)
+		return cmd_usage_error("probe", "%s '%s': expected %d numbers",
+				       opt, v, n);
+	return 0;
+}
+
+/* ENV.exr -> ENV-suffix */
+static void sibling(const char *path, const char *suffix, char *buf, size_t n)
+{
+	const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
+	size_t stem = dot && (!slash || dot > slash) ? (size_t)(dot - path)
+						     : strlen(path);
+	snprintf(buf, n, "%.*s%s", (int)stem, path, suffix);
+}
+
+static int unwrap_main(int argc, char **argv)
+{
+	enum {
+		O_F = 256,
+		O_PP,
+		O_BALL,
+		O_CHROME,
+		O_REFL,
+		O_GRAZE,
+		O_SIZE,
+		O_ORTHO
+	};
+	static const struct option opts[] = {
+		{ "focal-px", required_argument, NULL, O_F },
+		{ "principal", required_argument, NULL, O_PP },
+		{ "ball", required_argument, NULL, O_BALL },
+		{ "chrome", required_argument, NULL, O_CHROME },
+		{ "reflectivity", required_argument, NULL, O_REFL },
+		{ "grazing", required_argument, NULL, O_GRAZE },
+		{ "size", required_argument, NULL, O_SIZE },
+		{ "orthographic", no_argument, NULL, O_ORTHO },
+		{ "out", required_argument, NULL, 'o' },
+		{ "quiet", no_argument, NULL, 'q' },
+		{ "help", no_argument, NULL, 'h' },
+		{ NULL, 0, NULL, 0 },
+	};
+	struct glint_unwrap_opts o;
+	const char *out = NULL;
+	double v[3];
+	int c, have_ball = 0;
+
+	glint_unwrap_default_opts(&o);
+	optind = 1;
+	while ((c = getopt_long(argc, argv, "o:qh", opts, NULL)) != -1) {
+		switch (c) {
+		case O_F:
+			if (parse_list("--focal-px", optarg, 1, v))
+				return GLINT_EXIT_USAGE;
+			o.fpx = v[0];
+			break;
+		case O_PP:
+			if (parse_list("--principal", optarg, 2, v))
+				return GLINT_EXIT_USAGE;
+			o.cx = v[0];
+			o.cy = v[1];
+			break;
+		case O_BALL:
+			if (parse_list("--ball", optarg, 3, v))
+				return GLINT_EXIT_USAGE;
+			o.ball_cx = v[0];
+			o.ball_cy = v[1];
+			o.ball_r = v[2];
+			have_ball = 1;
+			break;
+		case O_CHROME:
+			if (parse_list("--chrome", optarg, 2, v))
+				return GLINT_EXIT_USAGE;
+			for (int k = 0; k < 3; k++) {
+				o.n[k] = v[0];
+				o.k[k] = v[1];
+			}
+			break;
+		case O_REFL:
+			if (parse_list("--reflectivity", optarg, 1, v) ||
+			    !(v[0] > 0 && v[0] <= 1))
+				return cmd_usage_error("probe",
+						       "--reflectivity '%s': "
+						       "expected (0, 1]",
+						       optarg);
+			o.reflectivity = v[0];
+			break;
+		case O_GRAZE:
+			if (parse_list("--grazing", optarg, 1, v))
+				return GLINT_EXIT_USAGE;
+			o.grazing_deg = v[0];
+			break;
+		case O_SIZE:
+			if (parse_list("--size", optarg, 2, v))
+				return GLINT_EXIT_USAGE;
+			o.width = (int)v[0];
+			o.height = (int)v[1];
+			break;
+		case O_ORTHO:
+			o.orthographic = 1;
+			break;
+		case 'o':
+			out = optarg;
+			break;
+		case 'q':
+			glint_log_set_mode(GLINT_LOG_QUIET);
+			break;
+		case 'h':
+			cmd_probe_help();
+			return GLINT_EXIT_OK;
+		default:
+			return GLINT_EXIT_USAGE;
+		}
+	}
+	if (optind != argc - 1 || !out)
+		return cmd_usage_error("probe", "unwrap: expected PHOTO and -o "
+						"ENV.exr");
+	if (!(o.fpx > 0) || !have_ball)
+		return cmd_usage_error("probe", "unwrap: --focal-px and --ball "
+						"are required (automatic ball "
+						"detection is to come)");
+	struct glint_image *photo = NULL, *env = NULL, *mask = NULL,
+			   *dens = NULL;
+	char path[4200];
+	int ret = glint_image_read(argv[optind], &photo);
+	if (ret == 0)
+		ret = glint_probe_unwrap(photo, &o, &env, &mask, &dens);
+	if (ret == 0)
+		ret = glint_image_write(out, env, NULL);
+	if (ret == 0) {
+		sibling(out, "-mask.png", path, sizeof(path));
+		struct glint_write_opts wo = { 0, 0, 0 };
+		ret = glint_image_write(path, mask, &wo);
+	}
+	if (ret == 0) {
+		sibling(out, "-density.exr", path, sizeof(path));
+		ret = glint_image_write(path, dens, NULL);
+	}
+	if (ret == 0)
+		glint_log_info("%s -> %s (%dx%d), mask and density beside it",
+			       argv[optind], out, env->width, env->height);
+	glint_image_free(photo);
+	glint_image_free(env);
+	glint_image_free(mask);
+	glint_image_free(dens);
+	return ret < 0 ? cmd_fail("probe") : GLINT_EXIT_OK;
+}
+
+static int convert_main(int argc, char **argv)
+{
+	enum { O_FROM = 256, O_TO, O_SIZE };
+	static const struct option opts[] = {
+		{ "from", required_argument, NULL, O_FROM },
+		{ "to", required_argument, NULL, O_TO },
+		{ "size", required_argument, NULL, O_SIZE },
+		{ "quiet", no_argument, NULL, 'q' },
+		{ "help", no_argument, NULL, 'h' },
+		{ NULL, 0, NULL, 0 },
+	};
+	enum glint_probe_format from = GLINT_PROBE_LATLONG,
+				to = GLINT_PROBE_LATLONG;
+	const char *fs = NULL, *ts = NULL;
+	double v[2] = { 0, 0 };
+	int c;
+
+	optind = 1;
+	while ((c = getopt_long(argc, argv, "qh", opts, NULL)) != -1) {
+		switch (c) {
+		case O_FROM:
+			fs = optarg;
+			break;
+		case O_TO:
+			ts = optarg;
+			break;
+		case O_SIZE:
+			if (parse_list("--size", optarg, 2, v))
+				return GLINT_EXIT_USAGE;
+			break;
+		case 'q':
+			glint_log_set_mode(GLINT_LOG_QUIET);
+			break;
+		case 'h':
+			cmd_probe_help();
+			return GLINT_EXIT_OK;
+		default:
+			return GLINT_EXIT_USAGE;
+		}
+	}
+	if (optind != argc - 2 || !fs || !ts)
+		return cmd_usage_error("probe",
+				       "convert: expected IN OUT --from "
+				       "FMT --to FMT");
+	if (glint_probe_format_parse(fs, &from) < 0 ||
+	    glint_probe_format_parse(ts, &to) < 0)
+		return cmd_usage_error("probe", "%s", glint_error_msg());
+	struct glint_image *src = NULL, *dst = NULL;
+	int ret = glint_image_read(argv[optind], &src);
+	if (ret == 0)
+		ret = glint_probe_convert(src, from, to, (int)v[0], (int)v[1],
+					  &dst);
+	if (ret < 0)
+		glint_error_prefix(ret, "%s", argv[optind]);
+	if (ret == 0)
+		ret = glint_image_write(argv[optind + 1], dst, NULL);
+	if (ret == 0)
+		glint_log_info("%s (%s) -> %s (%s, %dx%d)", argv[optind], fs,
+			       argv[optind + 1], ts, dst->width, dst->height);
+	glint_image_free(src);
+	glint_image_free(dst);
+	return ret < 0 ? cmd_fail("probe") : GLINT_EXIT_OK;
+}
+
+int cmd_probe(int argc, char **argv)
+{
+	if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
+		cmd_probe_help();
+		return argc < 2 ? GLINT_EXIT_USAGE : GLINT_EXIT_OK;
+	}
+	if (!strcmp(argv[1], "unwrap"))
+		return unwrap_main(argc - 1, argv + 1);
+	if (!strcmp(argv[1], "convert"))
+		return convert_main(argc - 1, argv + 1);
+	return cmd_usage_error("probe", "'%s': expected unwrap or convert",
+			       argv[1]);
+}

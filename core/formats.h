@@ -42,6 +42,11 @@ int glint_png_write_rgb8(const char *path, int w, int h, const uint8_t *px);
  * code values as stored, no gamma or colour conversion. */
 int glint_png_read_rgb8(const char *path, int *w, int *h, uint8_t **px);
 
+/* Any 8-bit image (PNG, TGA, JPEG, BMP) as RGB bytes, caller frees. */
+int glint_ldr_read(const char *path, int *w, int *h, uint8_t **rgb);
+/* The same as an image of code / 255 (camera-encoded, not radiance). */
+int glint_ldr_read_image(const char *path, struct glint_image **out);
+
 /* The tone map above for one linear value already scaled by 2^EV. */
 uint8_t glint_tonemap_srgb8(double v);
 

@@ -114,9 +114,13 @@ int glint_image_read(const char *path, struct glint_image **out)
 		return glint_rgbe_read(path, out);
 	if (!strcmp(ext, "pfm"))
 		return glint_pfm_read(path, out);
+	if (!strcmp(ext, "png") || !strcmp(ext, "tga") || !strcmp(ext, "jpg") ||
+	    !strcmp(ext, "jpeg") || !strcmp(ext, "bmp"))
+		return glint_ldr_read_image(path, out);
 	return glint_error_set(EINVAL,
 			       "%s: unknown image extension '.%s': expected "
-			       ".exr, .hdr, .pic or .pfm",
+			       ".exr, .hdr, .pic, .pfm (HDR) or .png, .tga, "
+			       ".jpg, .bmp (8-bit)",
 			       path, ext);
 }
 

@@ -7,9 +7,11 @@
 #include "cmd.h"
 
 #include "capture/probe.h"
+#include "capture/probe_register.h"
 #include "core/error.h"
 #include "core/log.h"
 
+#include <errno.h>
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
@@ -22,6 +24,8 @@ void cmd_probe_help(void)
 	       "CX,CY,R [options] -o ENV.exr\n"
 	       "       glint probe convert IN OUT --from FMT --to FMT "
 	       "[--size WxH]\n"
+	       "       glint probe register ENV1.exr ENV2.exr -o OUT.exr "
+	       "[--yaw DEG] [--points F]\n"
 	       "\n"
 	       "unwrap: a photographed mirror ball (HDR, linear) to a "
 	       "lat-long map in the\ncamera's frame (+Y up, the camera "
@@ -49,6 +53,16 @@ void cmd_probe_help(void)
 	       "format), cross\n(vertical cube cross) and ball (ideal "
 	       "mirror ball, orthographic); orientations\nin docs/hdr.md.  "
 	       "Default size keeps the angular resolution.\n"
+	       "\n"
+	       "register: two unwrapped views of the probe (the second photo "
+	       "~90 degrees\naway) to one map in view 1's frame: the "
+	       "rotation from --points (a file of\nlines 'x1 y1 x2 y2', "
+	       "lat-long pixel positions of the same feature in each\nmap; "
+	       "least squares), else automatically from --yaw (the rough "
+	       "turn about\n+Y, default 90) by the best agreement where both "
+	       "views are reliable; then\nthe views are blended, each "
+	       "weighted by its mask x sampling density (the\n-mask.png and "
+	       "-density.exr written by unwrap, when present).\n"
 	       "\nExit status: 0 done, 1 bad input, 2 bad command line.\n");
 }
 
@@ -278,6 +292,135 @@ static int convert_main(int argc, char **argv)
 	return ret < 0 ? cmd_fail("probe") : GLINT_EXIT_OK;
 }
 
+/* ENV-mask.png x ENV-density.exr, or NULL when absent. */
+static struct glint_image *view_weight(const char *env)
+{
+	char mp[4200], dp[4200];
+	struct glint_image *m = NULL, *d = NULL;
+	sibling(env, "-mask.png", mp, sizeof(mp));
+	sibling(env, "-density.exr", dp, sizeof(dp));
+	if (glint_image_read(mp, &m) < 0 || glint_image_read(dp, &d) < 0 ||
+	    m->width != d->width || m->height != d->height) {
+		glint_image_free(m);
+		glint_image_free(d);
+		glint_error_clear();
+		return NULL;
+	}
+	for (size_t i = 0; i < (size_t)m->width * m->height * 3; i++)
+		m->data[i] = (m->data[i] > 0.5f) * d->data[i];
+	glint_image_free(d);
+	return m;
+}
+
+static int register_main(int argc, char **argv)
+{
+	enum { O_YAW = 256, O_POINTS };
+	static const struct option opts[] = {
+		{ "yaw", required_argument, NULL, O_YAW },
+		{ "points", required_argument, NULL, O_POINTS },
+		{ "out", required_argument, NULL, 'o' },
+		{ "json", no_argument, NULL, 'j' },
+		{ "quiet", no_argument, NULL, 'q' },
+		{ "help", no_argument, NULL, 'h' },
+		{ NULL, 0, NULL, 0 },
+	};
+	const char *out = NULL, *points = NULL;
+	double yaw = 90;
+	int c, json = 0;
+
+	optind = 1;
+	while ((c = getopt_long(argc, argv, "o:qh", opts, NULL)) != -1) {
+		switch (c) {
+		case O_YAW:
+			if (parse_list("--yaw", optarg, 1, &yaw))
+				return GLINT_EXIT_USAGE;
+			break;
+		case O_POINTS:
+			points = optarg;
+			break;
+		case 'o':
+			out = optarg;
+			break;
+		case 'j':
+			json = 1;
+			break;
+		case 'q':
+			glint_log_set_mode(GLINT_LOG_QUIET);
+			break;
+		case 'h':
+			cmd_probe_help();
+			return GLINT_EXIT_OK;
+		default:
+			return GLINT_EXIT_USAGE;
+		}
+	}
+	if (optind != argc - 2 || !out)
+		return cmd_usage_error("probe", "register: expected ENV1 ENV2 "
+						"-o OUT");
+	struct glint_image *e1 = NULL, *e2 = NULL, *w1, *w2, *blend = NULL;
+	struct mat3 r;
+	double quality = NAN;
+	int ret = glint_image_read(argv[optind], &e1);
+	if (ret == 0)
+		ret = glint_image_read(argv[optind + 1], &e2);
+	w1 = ret == 0 ? view_weight(argv[optind]) : NULL;
+	w2 = ret == 0 ? view_weight(argv[optind + 1]) : NULL;
+	if (ret == 0 && points) {
+		FILE *f = fopen(points, "r");
+		struct vec3 a[256], b[256];
+		int n = 0;
+		double x1, y1, x2, y2;
+		if (!f)
+			ret = glint_error_set(errno, "%s: %s", points,
+					      strerror(errno));
+		while (ret == 0 && n < 256 &&
+		       fscanf(f, " %lf %lf %lf %lf", &x1, &y1, &x2, &y2) == 4) {
+			glint_probe_pixel_dir(GLINT_PROBE_LATLONG, e1->width,
+					      e1->height, x1, y1, &a[n]);
+			glint_probe_pixel_dir(GLINT_PROBE_LATLONG, e2->width,
+					      e2->height, x2, y2, &b[n]);
+			n++;
+		}
+		if (f && ret == 0 && !feof(f))
+			ret = glint_error_set(EINVAL,
+					      "%s: line %d: expected 'x1 y1 x2 "
+					      "y2' (lat-long pixels)",
+					      points, n + 1);
+		if (f)
+			fclose(f);
+		if (ret == 0)
+			ret = glint_register_points(a, b, n, &r, &quality);
+	} else if (ret == 0) {
+		struct mat3 guess = m3_rotation_xyz_deg(0, yaw, 0);
+		ret = glint_register_auto(e1, w1, e2, w2, &guess, &r, &quality);
+	}
+	if (ret == 0)
+		ret = glint_probe_blend(e1, w1, e2, w2, &r, &blend);
+	if (ret == 0)
+		ret = glint_image_write(out, blend, NULL);
+	if (ret == 0) {
+		struct mat3 id = m3_rotation_xyz_deg(0, 0, 0);
+		double ang = glint_rotation_angle_deg(&id, &r);
+		glint_log_info("view 2 turned %.2f deg into view 1 (%s %.4g); "
+			       "blend -> %s",
+			       ang, points ? "residual deg RMS" : "cost",
+			       quality, out);
+		if (json)
+			cmd_print_json(json_pack(
+				"{s:[[f,f,f],[f,f,f],[f,f,f]], s:f, s:s}",
+				"rotation", r.m[0][0], r.m[0][1], r.m[0][2],
+				r.m[1][0], r.m[1][1], r.m[1][2], r.m[2][0],
+				r.m[2][1], r.m[2][2], "angle_deg", ang,
+				"output", out));
+	}
+	glint_image_free(e1);
+	glint_image_free(e2);
+	glint_image_free(w1);
+	glint_image_free(w2);
+	glint_image_free(blend);
+	return ret < 0 ? cmd_fail("probe") : GLINT_EXIT_OK;
+}
+
 int cmd_probe(int argc, char **argv)
 {
 	if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
@@ -288,6 +431,8 @@ int cmd_probe(int argc, char **argv)
 		return unwrap_main(argc - 1, argv + 1);
 	if (!strcmp(argv[1], "convert"))
 		return convert_main(argc - 1, argv + 1);
-	return cmd_usage_error("probe", "'%s': expected unwrap or convert",
-			       argv[1]);
+	if (!strcmp(argv[1], "register"))
+		return register_main(argc - 1, argv + 1);
+	return cmd_usage_error(
+		"probe", "'%s': expected unwrap, convert or register", argv[1]);
 }

@@ -45,5 +45,9 @@ check "unwrap of a ball off the photo: exit 1" run 1 "not inside" probe unwrap "
 check "... nothing written" test ! -e "$tmp/e.exr"
 check "unwrap writes env, mask, density" run 0 "" probe unwrap "$tmp/c.exr" -o "$tmp/e.exr" --focal-px 1000 --ball 320,160,100
 check "... all three" bash -c "test -s '$tmp/e.exr' && test -s '$tmp/e-mask.png' && test -s '$tmp/e-density.exr'"
+check "register a map with itself: no turn" run 0 "" probe register "$tmp/c.exr" "$tmp/c.exr" -o "$tmp/b.exr" --yaw 0 --json
+check "... angle ~0" python3 -c "import json,sys; d=json.load(open('$tmp/out')); sys.exit(d['angle_deg'] > 0.3)"
+printf '10 10 20 20\n' >"$tmp/one.txt"
+check "register from one point: exit 1" run 1 "at least 2" probe register "$tmp/c.exr" "$tmp/c.exr" -o "$tmp/b2.exr" --points "$tmp/one.txt"
 echo "$((checks - fails)) passed, $fails failed"
 [ "$fails" = 0 ]

@@ -312,13 +312,28 @@ int glint_ldr_merge(const struct glint_ldr_stack *s,
 	}
 	size_t np = (size_t)s->width * s->height;
 	long bad = 0;
+	/* w ln I per code, and ln t per frame, once. */
+	double wl[256][3], lnt[256];
+	for (int z = 0; z < 256; z++)
+		for (int c = 0; c < 3; c++)
+			wl[z][c] = w[z][c] * lnr[z][c];
+	for (int i = 0; i < s->n && i < 256; i++)
+		lnt[i] = log(s->times[i]);
+	if (s->n > 256) {
+		glint_image_free(img);
+		glint_image_free(m);
+		return glint_error_set(EINVAL,
+				       "merge: %d exposures (at most "
+				       "256)",
+				       s->n);
+	}
 	for (size_t p = 0; p < np; p++)
 		for (int c = 0; c < 3; c++) {
 			double num = 0, den = 0;
 			int zmin = 255, zmax = 0;
 			for (int i = 0; i < s->n; i++) {
 				int z = s->rgb[i][3 * p + c];
-				num += w[z][c] * (lnr[z][c] - log(s->times[i]));
+				num += wl[z][c] - w[z][c] * lnt[i];
 				den += w[z][c];
 				zmin = z < zmin ? z : zmin;
 				zmax = z > zmax ? z : zmax;

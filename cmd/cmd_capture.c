@@ -7,6 +7,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
 
+#include "capture/hdr_linear.h"
 #include "capture/session.h"
 #include "core/error.h"
 #include "core/json.h"
@@ -28,7 +29,10 @@ void cmd_capture_help(void)
 	       "saturates, longer ones (then gain) until its darkest\npixels "
 	       "clear the noise floor.  Each frame is on disk before the next "
 	       "is taken;\nan interrupted or failed capture leaves its session "
-	       "marked incomplete with\nevery frame it got.\n"
+	       "marked incomplete with\nevery frame it got.  A complete raw "
+	       "bracket is merged into KIND.exr,\nKIND-variance.exr, "
+	       "KIND-weights.exr and KIND-mask.png in the session\n(see "
+	       "glint hdr).\n"
 	       "\n"
 	       "  --config FILE       rig configuration (default: the "
 	       "simulated rig,\n"
@@ -241,6 +245,7 @@ int cmd_capture(int argc, char **argv)
 	struct glint_camera *cam = NULL;
 	struct glint_camera_info info;
 	struct glint_session *session = NULL;
+	char session_dir[4096] = "";
 	struct glint_bracket b;
 	struct frame_ctx fc;
 	struct sigaction sa, old_int, old_term;
@@ -252,6 +257,8 @@ int cmd_capture(int argc, char **argv)
 	ret = glint_session_create(out, kind, rig.text, &info, &session);
 	if (ret < 0)
 		goto done;
+	snprintf(session_dir, sizeof(session_dir), "%s",
+		 glint_session_dir(session));
 	glint_log_info("capturing the %s with %s (%s) into %s", kind, info.name,
 		       info.backend, glint_session_dir(session));
 	memset(&fc, 0, sizeof(fc));
@@ -283,6 +290,42 @@ int cmd_capture(int argc, char **argv)
 		session = NULL;
 		if (ret == 0 && r2 < 0)
 			ret = r2;
+	}
+	/* The merged HDR image of a raw bracket, beside its frames:
+	 * KIND.exr, KIND-variance.exr, KIND-weights.exr, KIND-mask.png. */
+	char hdr_dir[4096] = "";
+	long valid_px = 0;
+	if (ret == 0 && b.n > 0 && b.frames[0].linear &&
+	    b.frames[0].channels == 1) {
+		char names[5][64];
+		const char *np[5];
+		static const char *const suffix[5] = { ".exr", "-variance.exr",
+						       "-weights.exr",
+						       "-mask.png", ".png" };
+		for (int i = 0; i < 5; i++) {
+			snprintf(names[i], sizeof(names[i]), "%s%s", kind,
+				 suffix[i]);
+			np[i] = names[i];
+		}
+		struct glint_noise_model nm;
+		struct glint_hdr_report rep;
+		int w, h;
+		glint_noise_default(&nm);
+		snprintf(hdr_dir, sizeof(hdr_dir), "%s", session_dir);
+		ret = cmd_session_noise(hdr_dir, &nm);
+		if (ret == 0)
+			ret = cmd_hdr_merge_write(b.frames, b.n, &nm, hdr_dir,
+						  np, &rep, &w, &h, &valid_px);
+		if (ret == 0 && rep.moved)
+			glint_log_error(
+				"warning: the bracket's frames disagree "
+				"(moved rig or scene?); run glint hdr "
+				"on the session for details");
+		if (ret < 0)
+			glint_error_prefix(ret,
+					   "merging the bracket (frames "
+					   "kept in %s)",
+					   hdr_dir);
 	}
 	if (ret == 0) {
 		if (json) {

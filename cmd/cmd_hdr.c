@@ -83,7 +83,7 @@ static int parse_double(const char *opt, const char *v, double lo, double *out)
 }
 
 /* The rig's "sensor" section, if the session has one. */
-static int session_noise(const char *dir, struct glint_noise_model *m)
+int cmd_session_noise(const char *dir, struct glint_noise_model *m)
 {
 	static const char *const keys[] = { "dn_per_electron", "read_noise_e",
 					    "saturation_dn", NULL };
@@ -160,6 +160,48 @@ static void free_frames(struct glint_frame *f, int n)
 	for (int i = 0; f && i < n; i++)
 		glint_frame_release(&f[i]);
 	free(f);
+}
+
+int cmd_hdr_merge_write(const struct glint_frame *frames, int n,
+			const struct glint_noise_model *nm, const char *out,
+			const char *const names[5],
+			struct glint_hdr_report *rep, int *width, int *height,
+			long *valid_px)
+{
+	struct glint_raw_hdr raw;
+	struct glint_image *rad = NULL, *var = NULL, *valid = NULL,
+			   *weights = NULL;
+	int ret = glint_hdr_merge_raw(frames, n, nm, &raw, rep);
+	if (ret == 0)
+		ret = glint_hdr_demosaic(&raw, &rad, &var, &valid);
+	if (ret == 0 && mkdir(out, 0777) < 0 && errno != EEXIST)
+		ret = glint_error_set(errno, "%s: %s", out, strerror(errno));
+	if (ret == 0 && !(weights = glint_image_new(rad->width, rad->height)))
+		ret = glint_error_set(ENOMEM, "out of memory");
+	*valid_px = 0;
+	if (ret == 0) {
+		size_t np = (size_t)rad->width * rad->height * 3;
+		for (size_t i = 0; i < np; i++)
+			weights->data[i] =
+				var->data[i] > 0 ? 1 / var->data[i] : 0;
+		for (size_t i = 0; i < np; i += 3)
+			*valid_px += valid->data[i] > 0;
+		*width = rad->width;
+		*height = rad->height;
+	}
+	char path[4200];
+	struct glint_image *imgs[] = { rad, var, weights, valid, rad };
+	for (int i = 0; i < 5 && ret == 0; i++) {
+		struct glint_write_opts wo = { 0, 0, i == 4 };
+		snprintf(path, sizeof(path), "%s/%s", out, names[i]);
+		ret = glint_image_write(path, imgs[i], &wo);
+	}
+	glint_image_free(rad);
+	glint_image_free(var);
+	glint_image_free(valid);
+	glint_image_free(weights);
+	glint_raw_hdr_release(&raw);
+	return ret;
 }
 
 /* "32", "1/1024", "0.5" */
@@ -379,20 +421,21 @@ int cmd_hdr(int argc, char **argv)
 
 	struct glint_noise_model nm;
 	struct glint_frame *frames = NULL;
-	struct glint_raw_hdr raw;
 	struct glint_hdr_report rep;
-	struct glint_image *rad = NULL, *var = NULL, *valid = NULL,
-			   *weights = NULL;
-	int n = 0;
+	static const char *const hdr_names[5] = { "hdr.exr", "variance.exr",
+						  "weights.exr", "mask.png",
+						  "hdr.png" };
+	int n = 0, width = 0, height = 0;
+	long valid_px = 0;
+	char path[4200];
 	struct stat st;
 	glint_noise_default(&nm);
-	memset(&raw, 0, sizeof(raw));
 	/* One argument that is not a file: a session (or an error naming
 	 * its session.json). */
 	int is_session = optind == argc - 1 &&
 			 !(stat(argv[optind], &st) == 0 && S_ISREG(st.st_mode));
 	if (is_session) {
-		ret = session_noise(argv[optind], &nm);
+		ret = cmd_session_noise(argv[optind], &nm);
 		if (ret == 0)
 			ret = load_session(argv[optind], &frames, &n);
 		if (!out)
@@ -414,31 +457,8 @@ int cmd_hdr(int argc, char **argv)
 	if (!isnan(sat))
 		nm.saturation_dn = sat;
 	if (ret == 0)
-		ret = glint_hdr_merge_raw(frames, n, &nm, &raw, &rep);
-	if (ret == 0)
-		ret = glint_hdr_demosaic(&raw, &rad, &var, &valid);
-	if (ret == 0 && mkdir(out, 0777) < 0 && errno != EEXIST)
-		ret = glint_error_set(errno, "%s: %s", out, strerror(errno));
-	if (ret == 0 && !(weights = glint_image_new(rad->width, rad->height)))
-		ret = glint_error_set(ENOMEM, "out of memory");
-	long valid_px = 0;
-	if (ret == 0) {
-		size_t np = (size_t)rad->width * rad->height * 3;
-		for (size_t i = 0; i < np; i++)
-			weights->data[i] =
-				var->data[i] > 0 ? 1 / var->data[i] : 0;
-		for (size_t i = 0; i < np; i += 3)
-			valid_px += valid->data[i] > 0;
-	}
-	char path[4200];
-	const char *files[] = { "hdr.exr", "variance.exr", "weights.exr",
-				"mask.png", "hdr.png" };
-	struct glint_image *imgs[] = { rad, var, weights, valid, rad };
-	for (int i = 0; i < 5 && ret == 0; i++) {
-		struct glint_write_opts wo = { 0, 0, i == 4 };
-		snprintf(path, sizeof(path), "%s/%s", out, files[i]);
-		ret = glint_image_write(path, imgs[i], &wo);
-	}
+		ret = cmd_hdr_merge_write(frames, n, &nm, out, hdr_names, &rep,
+					  &width, &height, &valid_px);
 	json_t *res = NULL;
 	if (ret == 0) {
 		json_t *pairs = json_array();
@@ -449,17 +469,16 @@ int cmd_hdr(int argc, char **argv)
 						 (json_int_t)rep.compared[i],
 						 "disagree_fraction",
 						 rep.disagree[i]));
-		res = json_pack("{s:s, s:i, s:i, s:i, s:I, s:I, s:I, s:b, s:o, "
-				"s:{s:f, s:f, s:f}}",
-				"output", out, "frames", n, "width", rad->width,
-				"height", rad->height, "valid_pixels",
-				(json_int_t)valid_px, "clipped_sites",
-				(json_int_t)rep.invalid_sites, "dark_sites",
-				(json_int_t)rep.dark_sites, "moved", rep.moved,
-				"motion", pairs, "noise_model",
-				"dn_per_electron", nm.dn_per_electron,
-				"read_noise_e", nm.read_noise_e,
-				"saturation_dn", nm.saturation_dn);
+		res = json_pack(
+			"{s:s, s:i, s:i, s:i, s:I, s:I, s:I, s:b, s:o, "
+			"s:{s:f, s:f, s:f}}",
+			"output", out, "frames", n, "width", width, "height",
+			height, "valid_pixels", (json_int_t)valid_px,
+			"clipped_sites", (json_int_t)rep.invalid_sites,
+			"dark_sites", (json_int_t)rep.dark_sites, "moved",
+			rep.moved, "motion", pairs, "noise_model",
+			"dn_per_electron", nm.dn_per_electron, "read_noise_e",
+			nm.read_noise_e, "saturation_dn", nm.saturation_dn);
 		char *text = json_dumps(res, JSON_INDENT(2));
 		snprintf(path, sizeof(path), "%s/hdr.json", out);
 		ret = text ? glint_atomic_write_file(path, text, strlen(text))
@@ -476,19 +495,13 @@ int cmd_hdr(int argc, char **argv)
 		glint_log_info("%d frames -> %s/hdr.exr (%dx%d), %ld of %ld "
 			       "pixels valid, %ld sites clipped in every "
 			       "frame",
-			       n, out, rad->width, rad->height, valid_px,
-			       (long)rad->width * rad->height,
-			       rep.invalid_sites);
+			       n, out, width, height, valid_px,
+			       (long)width * height, rep.invalid_sites);
 		if (json)
 			cmd_print_json(res);
 		else
 			json_decref(res);
 	}
-	glint_image_free(rad);
-	glint_image_free(var);
-	glint_image_free(valid);
-	glint_image_free(weights);
-	glint_raw_hdr_release(&raw);
 	free_frames(frames, n);
 	return ret < 0 ? cmd_fail("hdr") : GLINT_EXIT_OK;
 }

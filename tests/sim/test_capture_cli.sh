@@ -65,6 +65,8 @@ cat >"$tmp/rig.json" <<JSON
 JSON
 check "sim capture completes" run 0 "range covered" capture sample --config "$tmp/rig.json"
 check "its session is complete and whole" python3 "$checker" "$(only_session "$tmp/caps")" complete 8
+check "... with the merged HDR beside the frames" bash -c "cd '$(only_session "$tmp/caps")' && test -s sample.exr && test -s sample-variance.exr && test -s sample-weights.exr && test -s sample-mask.png"
+check "... with the merged HDR beside the frames" bash -c "cd '$(only_session "$tmp/caps")' && test -s sample.exr && test -s sample-variance.exr && test -s sample-weights.exr && test -s sample-mask.png"
 check "--json result" run 0 "" capture probe --config "$tmp/rig.json" --out "$tmp/caps2" --json
 check "--json says complete" python3 -c "import json,sys; d=json.load(open('$tmp/out')); sys.exit(d['status']!='complete' or d['frames']<8)"
 

@@ -8,6 +8,8 @@
 #include "cmd.h"
 
 #include "capture/hdr_linear.h"
+#include "capture/probe.h"
+#include "capture/sphere_detect.h"
 #include "capture/session.h"
 #include "core/error.h"
 #include "core/json.h"
@@ -71,12 +73,13 @@ struct rig {
 	const char *backend, *device, *output;
 	struct glint_bracket_opts bracket;
 	struct glint_roi roi;
+	double focal_px, principal[2]; /* optics; 0 = not given */
 };
 
 static int load_rig(const char *path, const char *kind, struct rig *r)
 {
-	static const char *const top[] = { "camera", "bracket", "roi",
-					   "output", "sensor",	NULL };
+	static const char *const top[] = { "camera", "bracket", "roi", "output",
+					   "sensor", "optics",	NULL };
 	static const char *const cam_keys[] = { "backend", "device", NULL };
 	static const char *const br_keys[] = { "step_ev",    "max_frames",
 					       "max_time_s", "floor_dn",
@@ -139,6 +142,28 @@ static int load_rig(const char *path, const char *kind, struct rig *r)
 			ret = glint_json_int(path, "bracket", br, "max_drop", 0,
 					     0, 64, &o->max_drop);
 	}
+	if (!ret) {
+		static const char *const opt_keys[] = { "focal_px", "principal",
+							NULL };
+		json_t *opt = NULL;
+		r->principal[0] = r->principal[1] = -1;
+		if (!ret)
+			ret = glint_json_object(path, "", r->doc, "optics", 0,
+						&opt);
+		if (!ret && opt)
+			ret = glint_json_known_keys(path, "optics", opt,
+						    opt_keys);
+		if (!ret && opt)
+			ret = glint_json_number(
+				path, "optics", opt, "focal_px", 1,
+				(struct glint_range){ 1, 1e6, 0, 0 },
+				&r->focal_px);
+		if (!ret && opt)
+			ret = glint_json_numbers(
+				path, "optics", opt, "principal", 0, 2,
+				(struct glint_range){ 0, 1e5, 0, 0 },
+				r->principal);
+	}
 	if (!ret)
 		ret = glint_json_object(path, "", r->doc, "roi", 0, &roi);
 	if (!ret && roi)
@@ -155,6 +180,51 @@ static int load_rig(const char *path, const char *kind, struct rig *r)
 		r->text = json_dumps(r->doc, JSON_INDENT(2));
 	if (ret < 0)
 		json_decref(r->doc);
+	return ret;
+}
+
+/* probe.exr -> env.exr (+ env-mask.png, env-density.exr): the ball found
+ * in the merged image, unwrapped with the rig's focal length. */
+static int unwrap_probe(const char *dir, const struct rig *rig)
+{
+	char path[4200];
+	struct glint_image *probe = NULL, *env = NULL, *mask = NULL,
+			   *dens = NULL;
+	struct glint_circle c;
+	struct glint_unwrap_opts o;
+	snprintf(path, sizeof(path), "%s/probe.exr", dir);
+	int ret = glint_image_read(path, &probe);
+	if (ret == 0)
+		ret = glint_sphere_detect(probe, 0, 0, &c);
+	if (ret == 0) {
+		glint_unwrap_default_opts(&o);
+		o.fpx = rig->focal_px;
+		o.cx = rig->principal[0];
+		o.cy = rig->principal[1];
+		o.ball_cx = c.cx;
+		o.ball_cy = c.cy;
+		o.ball_r = c.r;
+		glint_log_info("probe ball at (%.2f, %.2f), radius %.2f px "
+			       "(%d edge points, %.2f px rms)",
+			       c.cx, c.cy, c.r, c.points, c.rms_px);
+		ret = glint_probe_unwrap(probe, &o, &env, &mask, &dens);
+	}
+	const char *names[3] = { "env.exr", "env-mask.png", "env-density.exr" };
+	struct glint_image *imgs[3] = { env, mask, dens };
+	for (int i = 0; i < 3 && ret == 0; i++) {
+		struct glint_write_opts wo = { 0, 0, 0 };
+		snprintf(path, sizeof(path), "%s/%s", dir, names[i]);
+		ret = glint_image_write(path, imgs[i], &wo);
+	}
+	if (ret < 0)
+		glint_error_prefix(ret,
+				   "unwrapping the probe (frames and "
+				   "probe.exr kept in %s)",
+				   dir);
+	glint_image_free(probe);
+	glint_image_free(env);
+	glint_image_free(mask);
+	glint_image_free(dens);
 	return ret;
 }
 
@@ -326,6 +396,8 @@ int cmd_capture(int argc, char **argv)
 					   "merging the bracket (frames "
 					   "kept in %s)",
 					   hdr_dir);
+		if (ret == 0 && !strcmp(kind, "probe") && rig.focal_px > 0)
+			ret = unwrap_probe(hdr_dir, &rig);
 	}
 	if (ret == 0) {
 		if (json) {

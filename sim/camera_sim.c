@@ -10,11 +10,14 @@
  *
  * Device string: "sim" or "sim:key=value,...", keys: width, height,
  * latency (frames), manual (0 = no manual exposure), seed, noise (0/1),
- * decades (the test card's dynamic range, default 6, plus its bright
+ * scene (card, the default, or probe: a chrome ball reflecting the
+ * Venice map, sim/camera_sim.h), decades (the test card's dynamic
+ * range, default 6, plus its bright
  * disk), timescale (real seconds per simulated second, default 1: tests
  * and demos run a 2 s exposure in 20 ms with 0.01).
  */
 #include "camera_sim.h"
+#include "probe_sim.h"
 #include "capture/camera.h"
 #include "sensor.h"
 
@@ -28,6 +31,7 @@
 struct sim_cam {
 	struct glint_clock clock, outer;
 	double timescale, decades;
+	int probe; /* scene: a chrome ball reflecting the Venice map */
 	struct glint_sensor sensor;
 	struct glint_image *radiance;
 	int width, height, latency, manual;
@@ -53,6 +57,22 @@ static int parse_device(const char *dev, struct sim_cam *s)
 		char key[32];
 		double v;
 		int n = 0;
+		if (!strncmp(p, "scene=", 6)) {
+			char word[16];
+			if (sscanf(p + 6, "%15[a-z]%n", word, &n) != 1 ||
+			    (strcmp(word, "card") && strcmp(word, "probe")))
+				return glint_error_set(
+					EINVAL,
+					"sim camera device '%s': "
+					"scene: expected card or "
+					"probe",
+					dev);
+			s->probe = !strcmp(word, "probe");
+			p += 6 + n;
+			if (*p == ',')
+				p++;
+			continue;
+		}
 		if (sscanf(p, "%31[a-z]=%lf%n", key, &v, &n) != 2)
 			return glint_error_set(EINVAL,
 					       "sim camera device '%s': bad "
@@ -90,6 +110,31 @@ static int parse_device(const char *dev, struct sim_cam *s)
 }
 
 /* `decades` decades left to right up to 100, and a disk at 500. */
+int glint_sim_probe_scene(int w, int h, struct glint_image **out)
+{
+	struct glint_image *env = NULL;
+	double n[3] = { 3.2, 3.2, 3.2 }, k[3] = { 3.3, 3.3, 3.3 };
+	int ret = glint_image_read(GLINT_DATA_DIR "/env/venice_sunset_1k.hdr",
+				   &env);
+	*out = NULL;
+	if (ret < 0)
+		return glint_error_prefix(ret, "sim probe scene");
+	/* Focal length 2 w px; the ball centred, 0.4 of the smaller side
+	 * in radius: at distance d radii with f tan(asin(1 / d)) = r. */
+	double f = glint_sim_probe_focal_px(w);
+	double r = 0.4 * (w < h ? w : h);
+	double d = 1 / sin(atan(r / f));
+	ret = glint_sim_mirror_ball(env, w, h, f, v3(0, 0, -d), 1, n, k, 3,
+				    out);
+	glint_image_free(env);
+	return ret;
+}
+
+double glint_sim_probe_focal_px(int w)
+{
+	return 2.0 * w;
+}
+
 struct glint_image *glint_sim_test_card(int w, int h, double decades)
 {
 	struct glint_image *img = glint_image_new(w, h);
@@ -152,7 +197,15 @@ static int sim_open(const char *device, const struct glint_clock *clock,
 		s->clock.sleep_until = scaled_sleep_until;
 		s->clock.ctx = s;
 	}
-	s->radiance = glint_sim_test_card(s->width, s->height, s->decades);
+	if (s->probe)
+		ret = glint_sim_probe_scene(s->width, s->height, &s->radiance);
+	else
+		s->radiance =
+			glint_sim_test_card(s->width, s->height, s->decades);
+	if (ret < 0) {
+		free(s);
+		return ret;
+	}
 	if (!s->radiance) {
 		free(s);
 		return glint_error_prefix(ENOMEM, "sim camera");

@@ -7,6 +7,8 @@ set -u
 glint=$1
 fake=$2
 checker=$3
+check_env=$4
+data=$5
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fails=0 checks=0
@@ -88,6 +90,15 @@ JSON
 "$glint" capture sample --config "$tmp/small.json" -q
 check "hdr of frames of different sizes: exit 1" run 1 "must match" hdr "$sess/frame-003.png" "$(only_session "$tmp/small")/frame-001.png" -o "$tmp/hdry"
 check "hdr of a missing session: exit 1" run 1 "nowhere" hdr "$tmp/nowhere"
+
+# A probe capture on the simulated rig: the merged probe.exr, the ball
+# found in it and unwrapped to env.exr, which must match the map it
+# reflects.
+sed "s#\"captures\"#\"$tmp/probe\"#" "$data/rig-sim-probe.json" >"$tmp/probe.json"
+check "probe capture: merged, ball found, unwrapped" run 0 "probe ball at" capture probe --config "$tmp/probe.json"
+psess=$(only_session "$tmp/probe")
+check "... env.exr, its mask and density" bash -c "cd '$psess' && test -s probe.exr && test -s env.exr && test -s env-mask.png && test -s env-density.exr"
+check "... env.exr is the reflected map (median error <= 5 %)" "$check_env" "$psess/env.exr" "$psess/env-mask.png" "$data/env/venice_sunset_1k.hdr" 0.05
 
 echo '{"camera": {"backend": "sim"}, "bracket": {"stepev": 1}}' >"$tmp/typo.json"
 check "misspelt rig key: exit 1, named" run 1 "stepev" capture sample --config "$tmp/typo.json"

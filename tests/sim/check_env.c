@@ -42,6 +42,10 @@ int main(int argc, char **argv)
 		    lum(env->data + 3 * i) > 0)
 			r[m++] = lum(env->data + 3 * i) / lum(t->data + 3 * i);
 	qsort(r, m, sizeof(double), cmp);
+	if (m == 0) {
+		fprintf(stderr, "check_env: no reliable texel\n");
+		return 1;
+	}
 	double scale = r[m / 2];
 	for (size_t i = 0; i < m; i++)
 		e[i] = fabs(r[i] / scale - 1);
@@ -50,5 +54,12 @@ int main(int argc, char **argv)
 	printf("unwrapped probe vs its map: median |error| %.4f, 90th "
 	       "percentile %.4f over %zu reliable texels (%.1f %%)\n",
 	       e[m / 2], e[m * 9 / 10], m, 100.0 * m / n);
-	return e[m / 2] <= limit && m > n / 2 ? 0 : 1;
+	int ok = e[m / 2] <= limit && m > n / 2;
+	free(r);
+	free(e);
+	glint_image_free(env);
+	glint_image_free(mask);
+	glint_image_free(truth);
+	glint_image_free(t);
+	return ok ? 0 : 1;
 }

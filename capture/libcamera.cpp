@@ -447,14 +447,7 @@ static int lc_grab(void *priv, struct glint_frame *f)
 		glint_frame_release(f);
 		return ret;
 	}
-	f->width = c->width;
-	f->height = c->height;
-	snprintf(f->format, sizeof(f->format), "%s", c->fmt->layout);
-	snprintf(f->source_format, sizeof(f->source_format), "%s",
-		 c->fmt->name);
-	f->channels = c->fmt->channels;
-	f->bit_depth = c->fmt->bits;
-	f->linear = c->fmt->linear;
+	glint_v4l2_frame_describe(c->fmt, c->width, c->height, f);
 	return 0;
 }
 

@@ -741,14 +741,7 @@ static int v4l2_grab(void *priv, struct glint_frame *f)
 		glint_frame_release(f);
 		return ret;
 	}
-	f->width = c->width;
-	f->height = c->height;
-	snprintf(f->format, sizeof(f->format), "%s", c->fmt->layout);
-	snprintf(f->source_format, sizeof(f->source_format), "%s",
-		 c->fmt->name);
-	f->channels = c->fmt->channels;
-	f->bit_depth = c->fmt->bits;
-	f->linear = c->fmt->linear;
+	glint_v4l2_frame_describe(c->fmt, c->width, c->height, f);
 	/* Buffer timestamps are CLOCK_MONOTONIC: start of exposure or end
 	 * of frame, as the flags say. */
 	double ts = (double)b.timestamp.tv_sec + 1e-6 * b.timestamp.tv_usec;

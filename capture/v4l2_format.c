@@ -2,10 +2,13 @@
 #define _POSIX_C_SOURCE 200809L
 #include "v4l2_format.h"
 
+#include "camera.h"
+
 #include "core/error.h"
 
 #include <linux/videodev2.h>
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #define F(fmt, layout, bits, pack, ch, lin, rank)                              \
@@ -176,4 +179,17 @@ int glint_v4l2_convert(const struct glint_v4l2_format *f, const uint8_t *src,
 		convert_row(f, src + (size_t)y * stride, width,
 			    dst + (size_t)y * width * f->channels);
 	return 0;
+}
+
+void glint_v4l2_frame_describe(const struct glint_v4l2_format *f, int width,
+			       int height, struct glint_frame *frame)
+{
+	frame->width = width;
+	frame->height = height;
+	snprintf(frame->format, sizeof(frame->format), "%s", f->layout);
+	snprintf(frame->source_format, sizeof(frame->source_format), "%s",
+		 f->name);
+	frame->channels = f->channels;
+	frame->bit_depth = f->bits;
+	frame->linear = f->linear;
 }

@@ -53,6 +53,12 @@ int glint_v4l2_convert(const struct glint_v4l2_format *f, const uint8_t *src,
 		       size_t size, size_t stride, int width, int height,
 		       uint16_t *dst);
 
+struct glint_frame;
+/* Fill a converted frame's geometry, layout, source format, channels,
+ * bit depth and linearity from its format. */
+void glint_v4l2_frame_describe(const struct glint_v4l2_format *f, int width,
+			       int height, struct glint_frame *frame);
+
 /* "pRCC" from a fourcc (buf has room for 5). */
 void glint_fourcc_str(uint32_t fourcc, char buf[5]);
 

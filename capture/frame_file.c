@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 #include "frame_file.h"
 
-#include "core/atomic_file.h"
+#include "core/formats.h"
 #include "core/error.h"
 
 #include <jansson.h>
@@ -28,67 +28,27 @@ char *glint_frame_metadata_json(const struct glint_frame *f, int index)
 	return s;
 }
 
+/* A row of a frame as PNG wants it: 16-bit big-endian samples. */
+static void frame_row(void *ctx, int y, uint8_t *row)
+{
+	const struct glint_frame *f = ctx;
+	int n = f->width * (f->channels == 3 ? 3 : 1);
+	const uint16_t *s = f->data + (size_t)y * n;
+	for (int i = 0; i < n; i++) {
+		row[2 * i] = (uint8_t)(s[i] >> 8);
+		row[2 * i + 1] = (uint8_t)(s[i] & 0xff);
+	}
+}
+
 int glint_frame_write(const char *path, const struct glint_frame *f,
 		      const char *meta)
 {
-	struct glint_atomic_file af;
-	png_structp png = NULL;
-	png_infop info = NULL;
-	int ch = f->channels == 3 ? 3 : 1;
-	uint8_t *row = malloc((size_t)f->width * ch * 2);
-	int ret;
-
-	if (!row)
-		return glint_error_set(ENOMEM, "%s: out of memory", path);
-	ret = glint_atomic_open(&af, path);
-	if (ret < 0) {
-		free(row);
-		return ret;
-	}
-	png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
-	if (png)
-		info = png_create_info_struct(png);
-	if (!png || !info) {
-		ret = glint_error_set(ENOMEM, "%s: libpng setup failed", path);
-		goto err;
-	}
-	if (setjmp(png_jmpbuf(png))) {
-		ret = glint_error_set(EIO, "%s: libpng failed while writing",
-				      path);
-		goto err;
-	}
-	png_init_io(png, af.fp);
 	/* Level 1: raw sensor data barely compresses; time matters more. */
-	png_set_compression_level(png, 1);
-	png_set_IHDR(png, info, (png_uint_32)f->width, (png_uint_32)f->height,
-		     16, ch == 3 ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_GRAY,
-		     PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
-		     PNG_FILTER_TYPE_DEFAULT);
-	png_text text;
-	memset(&text, 0, sizeof(text));
-	text.compression = PNG_ITXT_COMPRESSION_NONE;
-	text.key = (png_charp) "glint:frame";
-	text.text = (png_charp)meta;
-	png_set_text(png, info, &text, 1);
-	png_write_info(png, info);
-	for (int y = 0; y < f->height; y++) {
-		const uint16_t *s = f->data + (size_t)y * f->width * ch;
-		for (int i = 0; i < f->width * ch; i++) {
-			row[2 * i] = (uint8_t)(s[i] >> 8); /* PNG: big-endian */
-			row[2 * i + 1] = (uint8_t)(s[i] & 0xff);
-		}
-		png_write_row(png, row);
-	}
-	png_write_end(png, info);
-	png_destroy_write_struct(&png, &info);
-	free(row);
-	return glint_atomic_commit(&af);
-err:
-	if (png)
-		png_destroy_write_struct(&png, info ? &info : NULL);
-	free(row);
-	glint_atomic_abort(&af);
-	return ret;
+	struct glint_png_layout l = {
+		16, f->channels == 3 ? 3 : 1, 0, 1, "glint:frame", meta
+	};
+	return glint_png_write_rows(path, f->width, f->height, &l, frame_row,
+				    (void *)f);
 }
 
 static int meta_from_text(const char *path, const char *text,

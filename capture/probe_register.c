@@ -10,18 +10,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-static struct mat3 mul(const struct mat3 *a, const struct mat3 *b)
-{
-	struct mat3 c;
-	for (int i = 0; i < 3; i++)
-		for (int j = 0; j < 3; j++) {
-			c.m[i][j] = 0;
-			for (int k = 0; k < 3; k++)
-				c.m[i][j] += a->m[i][k] * b->m[k][j];
-		}
-	return c;
-}
-
 double glint_rotation_angle_deg(const struct mat3 *a, const struct mat3 *b)
 {
 	/* trace(a^T b) = 1 + 2 cos(angle) */
@@ -177,7 +165,7 @@ static double cost_of(const struct small *a, const struct small *b,
 static struct mat3 euler(const struct mat3 *g, double rx, double ry, double rz)
 {
 	struct mat3 d = m3_rotation_xyz_deg(rx, ry, rz);
-	return mul(&d, g);
+	return m3_mul_m3(&d, g);
 }
 
 int glint_register_auto(const struct glint_image *env1,

@@ -37,13 +37,15 @@ int cmd_probe(int argc, char **argv);
 struct glint_frame;
 struct glint_noise_model;
 struct glint_hdr_report;
+struct glint_image;
 /* Merge a raw bracket and write radiance, variance, weights, mask and a
- * preview into folder `out` under names[0..4]. */
+ * preview into folder `out` under names[0..4]; the radiance is handed to
+ * *radiance when that is not NULL. */
 int cmd_hdr_merge_write(const struct glint_frame *frames, int n,
 			const struct glint_noise_model *nm, const char *out,
 			const char *const names[5],
 			struct glint_hdr_report *rep, int *width, int *height,
-			long *valid_px);
+			long *valid_px, struct glint_image **radiance);
 /* The noise model of a session's rig.json "sensor" section (m keeps its
  * values for what is absent). */
 int cmd_session_noise(const char *dir, struct glint_noise_model *m);

@@ -183,19 +183,16 @@ static int load_rig(const char *path, const char *kind, struct rig *r)
 	return ret;
 }
 
-/* probe.exr -> env.exr (+ env-mask.png, env-density.exr): the ball found
- * in the merged image, unwrapped with the rig's focal length. */
-static int unwrap_probe(const char *dir, const struct rig *rig)
+/* The merged probe -> env.exr (+ env-mask.png, env-density.exr): the ball
+ * found in it, unwrapped with the rig's focal length. */
+static int unwrap_probe(const char *dir, const struct rig *rig,
+			const struct glint_image *probe)
 {
 	char path[4200];
-	struct glint_image *probe = NULL, *env = NULL, *mask = NULL,
-			   *dens = NULL;
+	struct glint_image *env = NULL, *mask = NULL, *dens = NULL;
 	struct glint_circle c;
 	struct glint_unwrap_opts o;
-	snprintf(path, sizeof(path), "%s/probe.exr", dir);
-	int ret = glint_image_read(path, &probe);
-	if (ret == 0)
-		ret = glint_sphere_detect(probe, 0, 0, &c);
+	int ret = glint_sphere_detect(probe, 0, 0, &c);
 	if (ret == 0) {
 		glint_unwrap_default_opts(&o);
 		o.fpx = rig->focal_px;
@@ -221,7 +218,6 @@ static int unwrap_probe(const char *dir, const struct rig *rig)
 				   "unwrapping the probe (frames and "
 				   "probe.exr kept in %s)",
 				   dir);
-	glint_image_free(probe);
 	glint_image_free(env);
 	glint_image_free(mask);
 	glint_image_free(dens);
@@ -363,7 +359,6 @@ int cmd_capture(int argc, char **argv)
 	}
 	/* The merged HDR image of a raw bracket, beside its frames:
 	 * KIND.exr, KIND-variance.exr, KIND-weights.exr, KIND-mask.png. */
-	char hdr_dir[4096] = "";
 	long valid_px = 0;
 	if (ret == 0 && b.n > 0 && b.frames[0].linear &&
 	    b.frames[0].channels == 1) {
@@ -379,13 +374,14 @@ int cmd_capture(int argc, char **argv)
 		}
 		struct glint_noise_model nm;
 		struct glint_hdr_report rep;
+		struct glint_image *rad = NULL;
 		int w, h;
 		glint_noise_default(&nm);
-		snprintf(hdr_dir, sizeof(hdr_dir), "%s", session_dir);
-		ret = cmd_session_noise(hdr_dir, &nm);
+		ret = cmd_session_noise(session_dir, &nm);
 		if (ret == 0)
-			ret = cmd_hdr_merge_write(b.frames, b.n, &nm, hdr_dir,
-						  np, &rep, &w, &h, &valid_px);
+			ret = cmd_hdr_merge_write(b.frames, b.n, &nm,
+						  session_dir, np, &rep, &w, &h,
+						  &valid_px, &rad);
 		if (ret == 0 && rep.moved)
 			glint_log_error(
 				"warning: the bracket's frames disagree "
@@ -395,9 +391,10 @@ int cmd_capture(int argc, char **argv)
 			glint_error_prefix(ret,
 					   "merging the bracket (frames "
 					   "kept in %s)",
-					   hdr_dir);
+					   session_dir);
 		if (ret == 0 && !strcmp(kind, "probe") && rig.focal_px > 0)
-			ret = unwrap_probe(hdr_dir, &rig);
+			ret = unwrap_probe(session_dir, &rig, rad);
+		glint_image_free(rad);
 	}
 	if (ret == 0) {
 		if (json) {

@@ -166,7 +166,7 @@ int cmd_hdr_merge_write(const struct glint_frame *frames, int n,
 			const struct glint_noise_model *nm, const char *out,
 			const char *const names[5],
 			struct glint_hdr_report *rep, int *width, int *height,
-			long *valid_px)
+			long *valid_px, struct glint_image **radiance)
 {
 	struct glint_raw_hdr raw;
 	struct glint_image *rad = NULL, *var = NULL, *valid = NULL,
@@ -196,7 +196,10 @@ int cmd_hdr_merge_write(const struct glint_frame *frames, int n,
 		snprintf(path, sizeof(path), "%s/%s", out, names[i]);
 		ret = glint_image_write(path, imgs[i], &wo);
 	}
-	glint_image_free(rad);
+	if (radiance && ret == 0)
+		*radiance = rad;
+	else
+		glint_image_free(rad);
 	glint_image_free(var);
 	glint_image_free(valid);
 	glint_image_free(weights);
@@ -458,7 +461,7 @@ int cmd_hdr(int argc, char **argv)
 		nm.saturation_dn = sat;
 	if (ret == 0)
 		ret = cmd_hdr_merge_write(frames, n, &nm, out, hdr_names, &rep,
-					  &width, &height, &valid_px);
+					  &width, &height, &valid_px, NULL);
 	json_t *res = NULL;
 	if (ret == 0) {
 		json_t *pairs = json_array();

@@ -35,6 +35,18 @@ int glint_pfm_write(const char *path, const struct glint_image *img);
 int glint_png_write(const char *path, const struct glint_image *img,
 		    double exposure);
 
+/* A PNG written atomically, rows from get_row(ctx, y, row): bit_depth 8 or
+ * 16 (big-endian samples, as PNG stores them), 1 or 3 channels, an sRGB
+ * chunk, level-1 compression when `fast`, and one optional iTXt chunk. */
+struct glint_png_layout {
+	int bit_depth, channels, srgb, fast;
+	const char *text_key, *text;
+};
+int glint_png_write_rows(const char *path, int w, int h,
+			 const struct glint_png_layout *l,
+			 void (*get_row)(void *ctx, int y, uint8_t *row),
+			 void *ctx);
+
 /* 8-bit sRGB PNG of ready-made pixels (w * h * 3 bytes), atomically. */
 int glint_png_write_rgb8(const char *path, int w, int h, const uint8_t *px);
 

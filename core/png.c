@@ -52,10 +52,13 @@ uint8_t glint_tonemap_srgb8(double v)
 	return (uint8_t)lrint(v * 255.0);
 }
 
-/* Rows come from get_row(ctx, y, row) as 8-bit RGB. */
-static int write_png_rows(const char *path, int w, int h,
-			  void (*get_row)(void *ctx, int y, uint8_t *row),
-			  void *ctx)
+/* 8-bit sRGB previews. */
+static const struct glint_png_layout rgb8 = { 8, 3, 1, 0, NULL, NULL };
+
+int glint_png_write_rows(const char *path, int w, int h,
+			 const struct glint_png_layout *l,
+			 void (*get_row)(void *ctx, int y, uint8_t *row),
+			 void *ctx)
 {
 	struct glint_atomic_file af;
 	png_structp png = NULL;
@@ -63,7 +66,7 @@ static int write_png_rows(const char *path, int w, int h,
 	uint8_t *row;
 	int ret;
 
-	row = malloc((size_t)w * 3);
+	row = malloc((size_t)w * l->channels * (l->bit_depth / 8));
 	if (!row)
 		return glint_error_set(ENOMEM, "%s: out of memory", path);
 	ret = glint_atomic_open(&af, path);
@@ -84,10 +87,23 @@ static int write_png_rows(const char *path, int w, int h,
 		goto err;
 	}
 	png_init_io(png, af.fp);
-	png_set_IHDR(png, info, (png_uint_32)w, (png_uint_32)h, 8,
-		     PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
-		     PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-	png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+	if (l->fast)
+		png_set_compression_level(png, 1);
+	png_set_IHDR(png, info, (png_uint_32)w, (png_uint_32)h, l->bit_depth,
+		     l->channels == 3 ? PNG_COLOR_TYPE_RGB
+				      : PNG_COLOR_TYPE_GRAY,
+		     PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+		     PNG_FILTER_TYPE_DEFAULT);
+	if (l->srgb)
+		png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+	if (l->text_key) {
+		png_text text;
+		memset(&text, 0, sizeof(text));
+		text.compression = PNG_ITXT_COMPRESSION_NONE;
+		text.key = (png_charp)l->text_key;
+		text.text = (png_charp)l->text;
+		png_set_text(png, info, &text, 1);
+	}
 	png_write_info(png, info);
 	for (int y = 0; y < h; y++) {
 		get_row(ctx, y, row);
@@ -127,7 +143,8 @@ int glint_png_write(const char *path, const struct glint_image *img,
 	if (isnan(exposure))
 		exposure = glint_png_auto_exposure(img);
 	t.scale = exp2(exposure);
-	return write_png_rows(path, img->width, img->height, tonemap_row, &t);
+	return glint_png_write_rows(path, img->width, img->height, &rgb8,
+				    tonemap_row, &t);
 }
 
 struct rgb8_rows {
@@ -145,7 +162,7 @@ int glint_png_write_rgb8(const char *path, int w, int h, const uint8_t *px)
 {
 	struct rgb8_rows t = { w, px };
 
-	return write_png_rows(path, w, h, rgb8_row, &t);
+	return glint_png_write_rows(path, w, h, &rgb8, rgb8_row, &t);
 }
 
 int glint_png_read_rgb8(const char *path, int *w, int *h, uint8_t **px)

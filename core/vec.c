@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 #include "vec.h"
 
-static struct mat3 m3_mul_m3(const struct mat3 *a, const struct mat3 *b)
+struct mat3 m3_mul_m3(const struct mat3 *a, const struct mat3 *b)
 {
 	struct mat3 r;
 

@@ -82,6 +82,8 @@ static inline struct vec3 m3_tmul(const struct mat3 *a, struct vec3 v)
  * then Y, then Z: R = Rz * Ry * Rx.
  */
 struct mat3 m3_rotation_xyz_deg(double rx, double ry, double rz);
+/* a b */
+struct mat3 m3_mul_m3(const struct mat3 *a, const struct mat3 *b);
 
 /* Orthonormal frame (t, b, n) around the unit vector n (Duff et al. 2017). */
 void v3_frame(struct vec3 n, struct vec3 *t, struct vec3 *b);

@@ -6,6 +6,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
+#include "capture_scene.h"
 
 #include "capture/hdr_linear.h"
 #include "capture/probe.h"
@@ -34,7 +35,11 @@ void cmd_capture_help(void)
 	       "marked incomplete with\nevery frame it got.  A complete raw "
 	       "bracket is merged into KIND.exr,\nKIND-variance.exr, "
 	       "KIND-weights.exr and KIND-mask.png in the session\n(see "
-	       "glint hdr).\n"
+	       "glint hdr).  A probe is also unwrapped to env.exr, and a "
+	       "sample "
+	       "gets a\nscene.json for glint fit SESSION (the sphere found in "
+	       "sample.exr, lit by\nthe probe's env.exr), when the rig gives "
+	       "optics.focal_px.\n"
 	       "\n"
 	       "  --config FILE       rig configuration (default: the "
 	       "simulated rig,\n"
@@ -42,6 +47,9 @@ void cmd_capture_help(void)
 	       "docs/capture.md)\n"
 	       "  --out DIR           sessions go under DIR (default: the "
 	       "config's \"output\")\n"
+	       "  --probe SESSION     the probe session that lights a sample "
+	       "(default: the\n"
+	       "                      newest complete one under DIR)\n"
 	       "      --verbose       show camera libraries' own logging\n"
 	       "      --json          print a JSON result on stdout, logs as "
 	       "JSON lines\n"
@@ -74,12 +82,15 @@ struct rig {
 	struct glint_bracket_opts bracket;
 	struct glint_roi roi;
 	double focal_px, principal[2]; /* optics; 0 = not given */
+	double pitch_um;	       /* optics.pixel_pitch_um */
+	double diameter_m;	       /* sample.diameter_m */
 };
 
 static int load_rig(const char *path, const char *kind, struct rig *r)
 {
-	static const char *const top[] = { "camera", "bracket", "roi", "output",
-					   "sensor", "optics",	NULL };
+	static const char *const top[] = { "camera", "bracket", "roi",
+					   "output", "sensor",	"optics",
+					   "sample", NULL };
 	static const char *const cam_keys[] = { "backend", "device", NULL };
 	static const char *const br_keys[] = { "step_ev",    "max_frames",
 					       "max_time_s", "floor_dn",
@@ -144,9 +155,22 @@ static int load_rig(const char *path, const char *kind, struct rig *r)
 	}
 	if (!ret) {
 		static const char *const opt_keys[] = { "focal_px", "principal",
+							"pixel_pitch_um",
 							NULL };
-		json_t *opt = NULL;
+		static const char *const sample_keys[] = { "diameter_m", NULL };
+		json_t *opt = NULL, *smp = NULL;
 		r->principal[0] = r->principal[1] = -1;
+		r->pitch_um = 1;
+		r->diameter_m = 0.1;
+		ret = glint_json_object(path, "", r->doc, "sample", 0, &smp);
+		if (!ret && smp)
+			ret = glint_json_known_keys(path, "sample", smp,
+						    sample_keys);
+		if (!ret && smp)
+			ret = glint_json_number(
+				path, "sample", smp, "diameter_m", 0,
+				(struct glint_range){ 0, 10, 1, 0 },
+				&r->diameter_m);
 		if (!ret)
 			ret = glint_json_object(path, "", r->doc, "optics", 0,
 						&opt);
@@ -163,6 +187,11 @@ static int load_rig(const char *path, const char *kind, struct rig *r)
 				path, "optics", opt, "principal", 0, 2,
 				(struct glint_range){ 0, 1e5, 0, 0 },
 				r->principal);
+		if (!ret && opt)
+			ret = glint_json_number(
+				path, "optics", opt, "pixel_pitch_um", 0,
+				(struct glint_range){ 0, 1000, 1, 0 },
+				&r->pitch_um);
 	}
 	if (!ret)
 		ret = glint_json_object(path, "", r->doc, "roi", 0, &roi);
@@ -224,6 +253,38 @@ static int unwrap_probe(const char *dir, const struct rig *rig,
 	return ret;
 }
 
+/* A merged sample -> scene.json lit by the probe session's env.exr.  A
+ * missing probe is not the sample's fault: its capture stays complete and
+ * the warning says what to do; a given --probe that is wrong is an error. */
+static int sample_scene(const char *dir, const char *root, const char *probe,
+			const struct rig *rig, const struct glint_image *rad,
+			char *scene_path, size_t n)
+{
+	char found[4200];
+	struct capture_optics o = { rig->focal_px,
+				    { rig->principal[0], rig->principal[1] },
+				    rig->pitch_um,
+				    rig->diameter_m };
+	int ret = 0;
+
+	if (!probe) {
+		ret = capture_latest_probe(root, found, sizeof(found));
+		probe = found;
+	}
+	if (ret == 0)
+		ret = capture_write_scene(dir, rad, &o, probe, NULL);
+	if (ret == 0) {
+		snprintf(scene_path, n, "%s/scene.json", dir);
+		return 0;
+	}
+	if (probe != found)
+		return ret;
+	glint_log_warn("no scene.json for the sample: %s (session "
+		       "%s is complete; glint fit needs a scene)",
+		       glint_error_msg(), dir);
+	return 0;
+}
+
 static volatile sig_atomic_t interrupted;
 static volatile int cancel_flag;
 
@@ -249,9 +310,10 @@ static int save_frame(const struct glint_frame *f, int index, void *ctx)
 
 int cmd_capture(int argc, char **argv)
 {
-	enum { O_CONFIG = 256, O_OUT, O_JSON, O_VERBOSE };
+	enum { O_CONFIG = 256, O_OUT, O_JSON, O_VERBOSE, O_PROBE };
 	static const struct option opts[] = {
 		{ "config", required_argument, NULL, O_CONFIG },
+		{ "probe", required_argument, NULL, O_PROBE },
 		{ "out", required_argument, NULL, O_OUT },
 		{ "json", no_argument, NULL, O_JSON },
 		{ "verbose", no_argument, NULL, O_VERBOSE },
@@ -259,8 +321,8 @@ int cmd_capture(int argc, char **argv)
 		{ "help", no_argument, NULL, 'h' },
 		{ NULL, 0, NULL, 0 },
 	};
-	const char *config = NULL, *out = NULL;
-	char default_config[4096];
+	const char *config = NULL, *out = NULL, *probe = NULL;
+	char default_config[4096], scene_path[4200] = "";
 	int json = 0, c, ret;
 
 	optind = 1;
@@ -271,6 +333,9 @@ int cmd_capture(int argc, char **argv)
 			break;
 		case O_OUT:
 			out = optarg;
+			break;
+		case O_PROBE:
+			probe = optarg;
 			break;
 		case O_JSON:
 			json = 1;
@@ -383,10 +448,9 @@ int cmd_capture(int argc, char **argv)
 						  session_dir, np, &rep, &w, &h,
 						  &valid_px, &rad);
 		if (ret == 0 && rep.moved)
-			glint_log_error(
-				"warning: the bracket's frames disagree "
-				"(moved rig or scene?); run glint hdr "
-				"on the session for details");
+			glint_log_warn("the bracket's frames disagree "
+				       "(moved rig or scene?); run glint hdr "
+				       "on the session for details");
 		if (ret < 0)
 			glint_error_prefix(ret,
 					   "merging the bracket (frames "
@@ -394,14 +458,20 @@ int cmd_capture(int argc, char **argv)
 					   session_dir);
 		if (ret == 0 && !strcmp(kind, "probe") && rig.focal_px > 0)
 			ret = unwrap_probe(session_dir, &rig, rad);
+		if (ret == 0 && !strcmp(kind, "sample") && rig.focal_px > 0)
+			ret = sample_scene(session_dir, out, probe, &rig, rad,
+					   scene_path, sizeof(scene_path));
 		glint_image_free(rad);
 	}
 	if (ret == 0) {
 		if (json) {
 			cmd_print_json(json_pack(
-				"{s:s, s:s, s:i, s:f, s:f, s:f, s:b, s:b, s:b, "
-				"s:b, s:f}",
-				"status", "complete", "kind", kind, "frames",
+				"{s:s, s:s, s:s, s:s*, s:i, s:f, s:f, s:f, "
+				"s:b, "
+				"s:b, s:b, s:b, s:f}",
+				"status", "complete", "kind", kind, "session",
+				session_dir, "scene",
+				scene_path[0] ? scene_path : NULL, "frames",
 				b.n, "shortest_s", b.frames[0].exposure_s,
 				"longest_s", b.frames[b.n - 1].exposure_s,
 				"max_gain", b.frames[b.n - 1].gain,

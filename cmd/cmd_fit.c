@@ -7,6 +7,8 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/formats.h"
+#include "core/json.h"
+#include "core/lockfile.h"
 #include "core/log.h"
 #include "fit/compare.h"
 
@@ -15,11 +17,13 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 void cmd_fit_help(void)
 {
 	printf("usage: glint fit SCENE.json PHOTO.exr [options]\n"
+	       "       glint fit SESSION [options]\n"
 	       "\n"
 	       "Recover a material's parameters from one HDR image of the "
 	       "sphere (PHOTO, the\nscene camera's size, linear radiance) "
@@ -28,6 +32,10 @@ void cmd_fit_help(void)
 	       "RMSE,\niterations and time per pass), DIR/render.exr (the "
 	       "fitted material rendered)\nand DIR/compare.png (photo | "
 	       "render | signed error with a scale bar).\n"
+	       "Given a sample's capture session (glint capture sample), it "
+	       "fits SESSION/sample.exr\nwith SESSION/scene.json and the "
+	       "merge's weights into SESSION/fit; one fit per\nsession at a "
+	       "time (a second one is refused, or waits with --wait).\n"
 	       "\n"
 	       "  -o, --out DIR         result folder (default fit-out); "
 	       "replaced whole,\n"
@@ -58,6 +66,8 @@ void cmd_fit_help(void)
 	       "(default 8 each)\n"
 	       "  --max-iter N          LM iterations per pass (default 60)\n"
 	       "  --threads N           worker threads (default: all CPUs)\n"
+	       "  --wait                SESSION: wait for a running fit of "
+	       "it to end\n"
 	       "  --json                print params.json on stdout; logs as "
 	       "JSON lines\n"
 	       "  -q, --quiet           no progress or info messages\n"
@@ -241,6 +251,82 @@ void cmd_print_params(const json_t *doc, const double *truth)
 	}
 }
 
+/* A sample's capture session, as glint fit SESSION uses it. */
+struct fit_session {
+	char scene[4200], photo[4200], weights[4200], out[4200];
+};
+
+static int fit_session_open(const char *dir, int wait, struct fit_session *fs,
+			    int *lock)
+{
+	char path[4200];
+	struct stat st;
+	json_t *doc;
+	int ret;
+
+	if (stat(dir, &st) < 0 || !S_ISDIR(st.st_mode))
+		return glint_error_set(ENOENT,
+				       "%s: not a capture session folder "
+				       "(give SCENE.json and PHOTO, or a "
+				       "session)",
+				       dir);
+	snprintf(path, sizeof(path), "%s/session.json", dir);
+	ret = glint_json_load(path, &doc);
+	if (ret < 0)
+		return ret;
+	const char *status = json_string_value(json_object_get(doc, "status"));
+	const char *kind = json_string_value(json_object_get(doc, "kind"));
+	if (!status || strcmp(status, "complete") != 0 || !kind ||
+	    strcmp(kind, "sample") != 0) {
+		ret = glint_error_set(EINVAL,
+				      "%s: a %s %s session: expected a "
+				      "complete sample session",
+				      dir, status ? status : "(no status)",
+				      kind ? kind : "(no kind)");
+		json_decref(doc);
+		return ret;
+	}
+	json_decref(doc);
+	snprintf(fs->scene, sizeof(fs->scene), "%s/scene.json", dir);
+	snprintf(fs->photo, sizeof(fs->photo), "%s/sample.exr", dir);
+	snprintf(fs->weights, sizeof(fs->weights), "%s/sample-weights.exr",
+		 dir);
+	snprintf(fs->out, sizeof(fs->out), "%s/fit", dir);
+	if (stat(fs->scene, &st) < 0)
+		return glint_error_set(ENOENT,
+				       "%s: no scene.json (the sample was "
+				       "captured without a probe or optics; "
+				       "capture the probe, then the sample, "
+				       "or write a scene, docs/scene.md)",
+				       dir);
+	if (stat(fs->weights, &st) < 0)
+		fs->weights[0] = '\0';
+	snprintf(path, sizeof(path), "%s/fit.lock", dir);
+	if (wait) {
+		ret = glint_lockfile_acquire(path, "glint fit", 0, lock);
+		if (ret == -EBUSY) {
+			glint_log_info("%s", glint_error_msg());
+			glint_log_info("waiting for it to finish");
+			ret = glint_lockfile_acquire(path, "glint fit", 1,
+						     lock);
+		}
+	} else {
+		ret = glint_lockfile_acquire(path, "glint fit", 0, lock);
+		if (ret == -EBUSY)
+			glint_error_prefix(ret,
+					   "%s is being fitted (use --wait to "
+					   "wait for it)",
+					   dir);
+	}
+	if (ret < 0)
+		return ret;
+	/* We hold the lock: what a killed fit left is ours to clean. */
+	if (glint_atomic_dir_sweep(fs->out) > 0)
+		glint_log_info("%s: cleaned up after an interrupted fit",
+			       fs->out);
+	return 0;
+}
+
 int cmd_fit(int argc, char **argv)
 {
 	enum {
@@ -255,7 +341,8 @@ int cmd_fit(int argc, char **argv)
 		O_SAMPLES,
 		O_MAXITER,
 		O_THREADS,
-		O_JSON
+		O_JSON,
+		O_WAIT
 	};
 	static const struct option opts[] = {
 		{ "out", required_argument, NULL, 'o' },
@@ -271,14 +358,14 @@ int cmd_fit(int argc, char **argv)
 		{ "max-iter", required_argument, NULL, O_MAXITER },
 		{ "threads", required_argument, NULL, O_THREADS },
 		{ "json", no_argument, NULL, O_JSON },
+		{ "wait", no_argument, NULL, O_WAIT },
 		{ "quiet", no_argument, NULL, 'q' },
 		{ "help", no_argument, NULL, 'h' },
 		{ NULL, 0, NULL, 0 },
 	};
-	struct fit_job job = { .out_dir = "fit-out",
-			       .model = &glint_model_torrance_sparrow };
+	struct fit_job job = { .model = &glint_model_torrance_sparrow };
 	const char *weights = NULL;
-	int json = 0, c, n;
+	int json = 0, wait = 0, c, n;
 
 	glint_fit_default_opts(&job.opts);
 	optind = 1;
@@ -357,6 +444,9 @@ int cmd_fit(int argc, char **argv)
 		case O_JSON:
 			json = 1;
 			break;
+		case O_WAIT:
+			wait = 1;
+			break;
 		case 'q':
 			glint_log_set_mode(GLINT_LOG_QUIET);
 			break;
@@ -369,22 +459,39 @@ int cmd_fit(int argc, char **argv)
 	}
 	if (json)
 		glint_log_set_mode(GLINT_LOG_JSON);
-	if (optind != argc - 2)
-		return cmd_usage_error(
-			"fit", "expected SCENE.json and PHOTO arguments");
-	job.scene_path = argv[optind];
-	job.photo_path = argv[optind + 1];
-	if (glint_scene_load(job.scene_path, &job.scene) < 0 ||
-	    glint_image_read(job.photo_path, &job.photo) < 0)
-		return cmd_fail("fit");
-	if (weights && glint_image_read(weights, &job.weight) < 0) {
-		glint_image_free(job.photo);
-		return cmd_fail("fit");
+	struct fit_session fs;
+	int lock = -1, ret;
+	if (optind == argc - 1) {
+		ret = fit_session_open(argv[optind], wait, &fs, &lock);
+		if (ret < 0)
+			return cmd_fail("fit");
+		job.scene_path = fs.scene;
+		job.photo_path = fs.photo;
+		if (!weights && fs.weights[0])
+			weights = fs.weights;
+		if (!job.out_dir)
+			job.out_dir = fs.out;
+	} else if (optind == argc - 2) {
+		job.scene_path = argv[optind];
+		job.photo_path = argv[optind + 1];
+	} else {
+		return cmd_usage_error("fit",
+				       "expected SCENE.json and PHOTO, or a "
+				       "capture SESSION");
 	}
-	json_t *doc;
-	int ret = fit_job_run(&job, &doc);
+	if (!job.out_dir)
+		job.out_dir = "fit-out";
+	json_t *doc = NULL;
+	ret = glint_scene_load(job.scene_path, &job.scene);
+	if (!ret)
+		ret = glint_image_read(job.photo_path, &job.photo);
+	if (!ret && weights)
+		ret = glint_image_read(weights, &job.weight);
+	if (!ret)
+		ret = fit_job_run(&job, &doc);
 	glint_image_free(job.photo);
 	glint_image_free(job.weight);
+	glint_lockfile_release(lock);
 	if (ret < 0)
 		return cmd_fail("fit");
 	if (json) {

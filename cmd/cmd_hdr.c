@@ -490,11 +490,10 @@ int cmd_hdr(int argc, char **argv)
 	}
 	if (ret == 0) {
 		if (rep.moved)
-			glint_log_error(
-				"warning: frames of the bracket "
-				"disagree where both are well exposed "
-				"(moved rig or scene?): see %s/hdr.json",
-				out);
+			glint_log_warn("frames of the bracket "
+				       "disagree where both are well exposed "
+				       "(moved rig or scene?): see %s/hdr.json",
+				       out);
 		glint_log_info("%d frames -> %s/hdr.exr (%dx%d), %ld of %ld "
 			       "pixels valid, %ld sites clipped in every "
 			       "frame",

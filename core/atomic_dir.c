@@ -112,3 +112,42 @@ void glint_atomic_dir_abort(struct glint_atomic_dir *ad)
 		remove_tree(ad->tmp_path);
 	ad->tmp_path[0] = '\0';
 }
+
+int glint_atomic_dir_sweep(const char *path)
+{
+	char dir[4096], base[4096], buf[8400];
+	struct stat st;
+	int restored = 0, removed = 0;
+
+	snprintf(dir, sizeof(dir), "%s", path);
+	snprintf(base, sizeof(base), "%s", basename(dir));
+	snprintf(dir, sizeof(dir), "%s", path);
+	char *parent = dirname(dir);
+	DIR *d = opendir(parent);
+	struct dirent *e;
+	size_t bl = strlen(base);
+	int have_final = stat(path, &st) == 0;
+
+	if (!d)
+		return 0;
+	while ((e = readdir(d))) {
+		if (strncmp(e->d_name, base, bl) != 0)
+			continue;
+		const char *rest = e->d_name + bl;
+		if (strncmp(rest, ".tmp.", 5) && strncmp(rest, ".old.", 5))
+			continue;
+		snprintf(buf, sizeof(buf), "%s/%s", parent, e->d_name);
+		/* Cut between moving the old result aside and putting the
+		 * new one in place: the old one is whole, bring it back. */
+		if (!have_final && !strncmp(rest, ".old.", 5) &&
+		    rename(buf, path) == 0) {
+			have_final = 1;
+			restored++;
+			continue;
+		}
+		remove_tree(buf);
+		removed++;
+	}
+	closedir(d);
+	return restored + removed;
+}

@@ -23,5 +23,11 @@ const char *glint_atomic_dir_file(const struct glint_atomic_dir *ad,
 int glint_atomic_dir_commit(struct glint_atomic_dir *ad);
 /* Remove the temporary folder and its files. */
 void glint_atomic_dir_abort(struct glint_atomic_dir *ad);
+/* Clean up after writers that died (SIGKILL, power cut) while writing
+ * `path`: their temporary folders are removed, and an old result moved
+ * aside but never replaced is put back.  Only for a caller that knows no
+ * writer is running (it holds the lock that writers take).  Returns the
+ * number of leftovers handled. */
+int glint_atomic_dir_sweep(const char *path);
 
 #endif

@@ -42,7 +42,10 @@ static void log_v(const char *level, const char *fmt, va_list ap)
 		json_decref(o);
 	} else {
 		fprintf(stderr, "glint: %s%s\n",
-			level[0] == 'e' ? "error: " : "", msg);
+			level[0] == 'e'	  ? "error: "
+			: level[0] == 'w' ? "warning: "
+					  : "",
+			msg);
 	}
 }
 
@@ -54,6 +57,15 @@ void glint_log_info(const char *fmt, ...)
 		return;
 	va_start(ap, fmt);
 	log_v("info", fmt, ap);
+	va_end(ap);
+}
+
+void glint_log_warn(const char *fmt, ...)
+{
+	va_list ap;
+
+	va_start(ap, fmt);
+	log_v("warning", fmt, ap);
 	va_end(ap);
 }
 

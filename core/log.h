@@ -23,6 +23,8 @@ enum glint_log_mode glint_log_get_mode(void);
 
 void glint_log_info(const char *fmt, ...) GLINT_PRINTF(1, 2);
 void glint_log_error(const char *fmt, ...) GLINT_PRINTF(1, 2);
+/* Shown even when quiet: something the user should act on. */
+void glint_log_warn(const char *fmt, ...) GLINT_PRINTF(1, 2);
 
 /* Seconds on a monotonic clock. */
 double glint_now(void);

@@ -39,6 +39,11 @@ static void irr_rows(void *ctx, int y0, int y1, int thread)
 		}
 }
 
+static int imin(int a, int b)
+{
+	return a < b ? a : b;
+}
+
 int glint_irradiance_build(const struct glint_envmap *env,
 			   const unsigned char *exclude, int w, int nthreads,
 			   struct glint_irradiance *ir)
@@ -47,7 +52,9 @@ int glint_irradiance_build(const struct glint_envmap *env,
 	const struct glint_image *img = env->img;
 	int W = img->width, H = img->height;
 	int f = W / 128 > 1 ? W / 128 : 1;
-	int dw = W / f, dh = H / f;
+	/* Blocks of f x f texels; the last row and column of blocks may be
+	 * narrower when f does not divide the size. */
+	int dw = (W + f - 1) / f, dh = (H + f - 1) / f;
 	double *lt = calloc((size_t)dw * dh * 3, sizeof(double));
 	struct vec3 *dir = malloc((size_t)dw * dh * sizeof(struct vec3));
 
@@ -85,10 +92,12 @@ int glint_irradiance_build(const struct glint_envmap *env,
 	}
 	for (int j = 0; j < dh; j++)
 		for (int i = 0; i < dw; i++)
-			dir[(size_t)j * dw + i] =
-				m3_mul(&env->rot,
-				       glint_envmap_uv_to_dir((i + 0.5) / dw,
-							      (j + 0.5) / dh));
+			dir[(size_t)j * dw + i] = m3_mul(
+				&env->rot,
+				glint_envmap_uv_to_dir(
+					(i * f + 0.5 * imin(f, W - i * f)) / W,
+					(j * f + 0.5 * imin(f, H - j * f)) /
+						H));
 	struct irr_job job = { ir, lt, dir, dw * dh };
 	glint_parallel_for(ir->h, 1, nthreads, irr_rows, &job);
 	free(lt);

@@ -10,16 +10,19 @@
  *
  * Device string: "sim" or "sim:key=value,...", keys: width, height,
  * latency (frames), manual (0 = no manual exposure), seed, noise (0/1),
- * scene (card, the default, or probe: a chrome ball reflecting the
- * Venice map, sim/camera_sim.h), decades (the test card's dynamic
- * range, default 6, plus its bright
- * disk), timescale (real seconds per simulated second, default 1: tests
- * and demos run a 2 s exposure in 20 ms with 0.01).
+ * scene (card, the default; probe: a chrome ball reflecting the Venice
+ * map; sample: a sphere of a Table-1 material under the same map, see
+ * sim/camera_sim.h), material (the sample's Table-1 name, default
+ * yellow-plastic), decades (the test card's dynamic range, default 6, plus
+ * its bright disk), timescale (real seconds per simulated second, default
+ * 1: tests and demos run a 2 s exposure in 20 ms with 0.01).
  */
 #include "camera_sim.h"
 #include "probe_sim.h"
 #include "capture/camera.h"
 #include "sensor.h"
+
+#include "reference.h"
 
 #include "core/error.h"
 
@@ -31,7 +34,8 @@
 struct sim_cam {
 	struct glint_clock clock, outer;
 	double timescale, decades;
-	int probe; /* scene: a chrome ball reflecting the Venice map */
+	enum { SCENE_CARD, SCENE_PROBE, SCENE_SAMPLE } scene;
+	char material[48]; /* the sample's Table-1 name */
 	struct glint_sensor sensor;
 	struct glint_image *radiance;
 	int width, height, latency, manual;
@@ -58,17 +62,35 @@ static int parse_device(const char *dev, struct sim_cam *s)
 		double v;
 		int n = 0;
 		if (!strncmp(p, "scene=", 6)) {
+			static const char *const names[] = { "card", "probe",
+							     "sample" };
 			char word[16];
-			if (sscanf(p + 6, "%15[a-z]%n", word, &n) != 1 ||
-			    (strcmp(word, "card") && strcmp(word, "probe")))
+			int k = 3;
+			if (sscanf(p + 6, "%15[a-z]%n", word, &n) == 1)
+				for (k = 0; k < 3 && strcmp(word, names[k]);)
+					k++;
+			if (k == 3)
 				return glint_error_set(
 					EINVAL,
 					"sim camera device '%s': "
-					"scene: expected card or "
-					"probe",
+					"scene: expected card, probe or "
+					"sample",
 					dev);
-			s->probe = !strcmp(word, "probe");
+			s->scene = k;
 			p += 6 + n;
+			if (*p == ',')
+				p++;
+			continue;
+		}
+		if (!strncmp(p, "material=", 9)) {
+			if (sscanf(p + 9, "%47[a-z-]%n", s->material, &n) != 1)
+				return glint_error_set(
+					EINVAL,
+					"sim camera device '%s': "
+					"material: expected a Table-1 name "
+					"such as yellow-plastic",
+					dev);
+			p += 9 + n;
 			if (*p == ',')
 				p++;
 			continue;
@@ -109,13 +131,39 @@ static int parse_device(const char *dev, struct sim_cam *s)
 	return 0;
 }
 
-/* `decades` decades left to right up to 100, and a disk at 500. */
+int glint_sim_rig_map(struct glint_image **out)
+{
+	struct glint_image *src = NULL, *dst;
+	int ret = glint_image_read(GLINT_DATA_DIR "/env/venice_sunset_1k.hdr",
+				   &src);
+	*out = NULL;
+	if (ret < 0)
+		return ret;
+	dst = glint_image_new(src->width, src->height);
+	if (!dst) {
+		glint_image_free(src);
+		return glint_error_set(ENOMEM, "out of memory");
+	}
+	/* A whole number of texel columns: a rotation about +Y that needs
+	 * no resampling. */
+	int w = src->width,
+	    shift = (int)lround(GLINT_SIM_RIG_MAP_TURN / 360.0 * w);
+	for (int y = 0; y < src->height; y++)
+		for (int x = 0; x < w; x++)
+			memcpy(glint_image_px(dst, x, y),
+			       glint_image_px(src, ((x + shift) % w + w) % w,
+					      y),
+			       3 * sizeof(float));
+	glint_image_free(src);
+	*out = dst;
+	return 0;
+}
+
 int glint_sim_probe_scene(int w, int h, struct glint_image **out)
 {
 	struct glint_image *env = NULL;
 	double n[3] = { 3.2, 3.2, 3.2 }, k[3] = { 3.3, 3.3, 3.3 };
-	int ret = glint_image_read(GLINT_DATA_DIR "/env/venice_sunset_1k.hdr",
-				   &env);
+	int ret = glint_sim_rig_map(&env);
 	*out = NULL;
 	if (ret < 0)
 		return glint_error_prefix(ret, "sim probe scene");
@@ -133,6 +181,57 @@ int glint_sim_probe_scene(int w, int h, struct glint_image **out)
 double glint_sim_probe_focal_px(int w)
 {
 	return 2.0 * w;
+}
+
+int glint_sim_sample_scene_def(int w, int h, struct glint_scene *sc)
+{
+	glint_scene_defaults(sc);
+	/* Pixel pitch 1 um; only focal length / pitch matters to a pinhole. */
+	double pitch = 1e-6, f = glint_sim_probe_focal_px(w);
+	int ret = glint_camera_init(&sc->cam, w, h, f * pitch, pitch, 0, 0,
+				    v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
+	if (ret < 0)
+		return ret;
+	double r = 0.35 * (w < h ? w : h);
+	sc->sphere_radius = 0.05;
+	sc->sphere_centre = v3(0, 0, -0.05 / sin(atan(r / f)));
+	return 0;
+}
+
+int glint_sim_sample_scene(int w, int h, const char *material,
+			   struct glint_image **out)
+{
+	struct glint_scene sc;
+	struct glint_envmap *env = NULL;
+	struct glint_image *map = NULL;
+	const struct glint_model_ops *model;
+	double p[GLINT_MAX_PARAMS], rot[3] = { 0, 0, 0 };
+	int ret = glint_sim_sample_scene_def(w, h, &sc);
+
+	*out = NULL;
+	if (!ret)
+		ret = glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
+					  material, &model, p);
+	if (!ret)
+		ret = glint_sim_rig_map(&map);
+	if (!ret)
+		ret = glint_envmap_new(map, rot, 1, "sim rig map", &env);
+	if (!ret && !(*out = glint_image_new(w, h)))
+		ret = glint_error_set(ENOMEM, "out of memory");
+	if (!ret) {
+		struct glint_reference_opts ro;
+		glint_reference_default_opts(&ro);
+		ro.spp = 4;
+		ret = glint_reference_render(&sc, env, model, p, &ro, *out);
+	}
+	glint_envmap_free(env);
+	if (ret < 0) {
+		glint_image_free(*out);
+		*out = NULL;
+		return glint_error_prefix(ret, "sim sample scene (%s)",
+					  material);
+	}
+	return 0;
 }
 
 struct glint_image *glint_sim_test_card(int w, int h, double decades)
@@ -185,6 +284,7 @@ static int sim_open(const char *device, const struct glint_clock *clock,
 	s->height = 48;
 	s->latency = 2;
 	s->manual = 1;
+	snprintf(s->material, sizeof(s->material), "yellow-plastic");
 	ret = parse_device(device, s);
 	if (ret < 0) {
 		free(s);
@@ -197,8 +297,11 @@ static int sim_open(const char *device, const struct glint_clock *clock,
 		s->clock.sleep_until = scaled_sleep_until;
 		s->clock.ctx = s;
 	}
-	if (s->probe)
+	if (s->scene == SCENE_PROBE)
 		ret = glint_sim_probe_scene(s->width, s->height, &s->radiance);
+	else if (s->scene == SCENE_SAMPLE)
+		ret = glint_sim_sample_scene(s->width, s->height, s->material,
+					     &s->radiance);
 	else
 		s->radiance =
 			glint_sim_test_card(s->width, s->height, s->decades);

@@ -5,17 +5,34 @@
 /* The simulated camera (a backend of capture/camera.h) and its scene. */
 
 #include "core/image.h"
+#include "fit/scene.h"
 
 /* The test card it photographs: `decades` decades of radiance left to
  * right up to 100 (R 0.8, G 1, B 0.6 of that), and a disk of 500 at
  * (0.7 w, 0.5 h), radius 0.1 w.  Ground truth for HDR tests. */
 struct glint_image *glint_sim_test_card(int w, int h, double decades);
 
-/* Its "scene=probe": a chrome ball (n 3.2, k 3.3) reflecting the Venice
- * map shipped with glint, centred, 0.4 of the smaller side in radius,
+/* The sim rig's world: the Venice map shipped with glint turned about +Y
+ * by GLINT_SIM_RIG_MAP_TURN degrees (a whole number of texel columns, so
+ * exactly: world column x = map column x + shift), so that the low sun
+ * lights the sample from the camera's side. */
+#define GLINT_SIM_RIG_MAP_TURN 114.0
+int glint_sim_rig_map(struct glint_image **out);
+
+/* Its "scene=probe": a chrome ball (n 3.2, k 3.3) reflecting the rig's
+ * map (above), centred, 0.4 of the smaller side in radius,
  * seen by a pinhole of focal length glint_sim_probe_focal_px(w) looking
  * along -Z with +Y up (so an unwrap returns the map as it is). */
 int glint_sim_probe_scene(int w, int h, struct glint_image **out);
 double glint_sim_probe_focal_px(int w);
+
+/* Its "scene=sample": a 10 cm sphere of a Table-1 material under the same
+ * map in the same orientation (so the probe's env.exr lights it as it is),
+ * seen by the same camera, 0.35 of the smaller side in radius, in front of
+ * the map itself; rendered by the reference renderer (sim/reference.h).
+ * _def gives the scene (ground truth for tests). */
+int glint_sim_sample_scene_def(int w, int h, struct glint_scene *sc);
+int glint_sim_sample_scene(int w, int h, const char *material,
+			   struct glint_image **out);
 
 #endif

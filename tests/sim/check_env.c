@@ -1,17 +1,20 @@
 /* SPDX-License-Identifier: MIT */
 /*
- * check_env ENV.exr MASK.png TRUTH.hdr MAX_MEDIAN: the median relative
- * luminance error of an unwrapped probe against the map it reflects
+ * check_env ENV.exr MASK.png TRUTH MAX_MEDIAN: the median relative
+ * luminance error of an unwrapped probe against the map it reflects (an
+ * image file, or "sim-rig": the sim rig's map, sim/camera_sim.h)
  * (resampled to the same size), over the texels its mask calls reliable;
  * exit 1 above MAX_MEDIAN.  Scale is free (the sensor's units): the
  * median ratio is divided out.
  */
 #include "capture/probe.h"
 #include "core/error.h"
+#include "sim/camera_sim.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 static int cmp(const void *a, const void *b)
 {
@@ -29,7 +32,8 @@ int main(int argc, char **argv)
 	struct glint_image *env, *mask, *truth, *t;
 	if (argc != 5 || glint_image_read(argv[1], &env) < 0 ||
 	    glint_image_read(argv[2], &mask) < 0 ||
-	    glint_image_read(argv[3], &truth) < 0 ||
+	    (strcmp(argv[3], "sim-rig") ? glint_image_read(argv[3], &truth)
+					: glint_sim_rig_map(&truth)) < 0 ||
 	    glint_probe_convert(truth, GLINT_PROBE_LATLONG, GLINT_PROBE_LATLONG,
 				env->width, env->height, &t) < 0) {
 		fprintf(stderr, "check_env: %s\n", glint_error_msg());

@@ -5,6 +5,7 @@
 
 #include "core/error.h"
 #include "fit/envmap.h"
+#include "fit/irradiance.h"
 #include "fit/sampling.h"
 
 /* A synthetic map with a small bright "sun", a sky gradient, dark ground. */
@@ -189,6 +190,40 @@ static void test_bad_maps(void)
 	CHECK_MSG(glint_error_msg(), "/no/such/map.hdr");
 }
 
+/* Irradiance of a uniform map is pi L for every normal, whatever the map's
+ * size: sizes that the 128-texel reduction does not divide (an unwrapped
+ * probe is 386 x 193) once overran the reduced grid. */
+static void test_irradiance_odd_sizes(void)
+{
+	static const int sizes[][2] = { { 386, 193 },
+					{ 257, 129 },
+					{ 64, 32 } };
+	for (int s = 0; s < 3; s++) {
+		struct glint_image *img =
+			glint_image_new(sizes[s][0], sizes[s][1]);
+		struct glint_envmap *env = NULL;
+		struct glint_irradiance ir;
+		double rot[3] = { 0, 0, 0 };
+		for (size_t i = 0; i < (size_t)img->width * img->height * 3;
+		     i++)
+			img->data[i] = 2.0f;
+		CHECK(glint_envmap_new(img, rot, 1, "uniform", &env) == 0, "%s",
+		      glint_error_msg());
+		CHECK(glint_irradiance_build(env, NULL, 64, 1, &ir) == 0, "%s",
+		      glint_error_msg());
+		struct vec3 n[3] = { v3(0, 1, 0), v3(0.6, 0, -0.8),
+				     v3(0, -1, 0) };
+		for (int k = 0; k < 3; k++) {
+			double e[3];
+			glint_irradiance_lookup(&ir, n[k], e);
+			CHECK_NEAR(e[1], 2 * M_PI, 0.02 * 2 * M_PI,
+				   "irradiance of a uniform odd-size map");
+		}
+		glint_irradiance_free(&ir);
+		glint_envmap_free(env);
+	}
+}
+
 int main(void)
 {
 	RUN(test_uv_dir);
@@ -196,5 +231,6 @@ int main(void)
 	RUN(test_pdf_integrates);
 	RUN(test_sampling_histogram);
 	RUN(test_bad_maps);
+	RUN(test_irradiance_odd_sizes);
 	return test_result();
 }

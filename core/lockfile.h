@@ -1,0 +1,20 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_CORE_LOCKFILE_H
+#define GLINT_CORE_LOCKFILE_H
+
+/*
+ * An advisory lock on a file (flock), for work that one process at a time
+ * may do (a session's fit, the job queue).  The kernel drops it when its
+ * holder dies, even by SIGKILL or a power cut, so it never goes stale.
+ * The holder writes "pid what" into the file so that whoever is refused
+ * can be told who holds it.
+ */
+
+/* Take the lock at `path` (created if missing).  wait = 0: fail at once
+ * with -EBUSY naming the holder; wait = 1: block until it is free.
+ * *fd gets the descriptor to pass to glint_lockfile_release(). */
+int glint_lockfile_acquire(const char *path, const char *what, int wait,
+			   int *fd);
+void glint_lockfile_release(int fd);
+
+#endif

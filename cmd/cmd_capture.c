@@ -6,7 +6,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
-#include "capture_scene.h"
+#include "capture_run.h"
 
 #include "capture/hdr_linear.h"
 #include "capture/probe.h"
@@ -75,216 +75,6 @@ void cmd_cameras_help(void)
 	       "      --json          print JSON on stdout\n");
 }
 
-struct rig {
-	json_t *doc;
-	char *text;
-	const char *backend, *device, *output;
-	struct glint_bracket_opts bracket;
-	struct glint_roi roi;
-	double focal_px, principal[2]; /* optics; 0 = not given */
-	double pitch_um;	       /* optics.pixel_pitch_um */
-	double diameter_m;	       /* sample.diameter_m */
-};
-
-static int load_rig(const char *path, const char *kind, struct rig *r)
-{
-	static const char *const top[] = { "camera", "bracket", "roi",
-					   "output", "sensor",	"optics",
-					   "sample", NULL };
-	static const char *const cam_keys[] = { "backend", "device", NULL };
-	static const char *const br_keys[] = { "step_ev",    "max_frames",
-					       "max_time_s", "floor_dn",
-					       "start_s",    "max_drop",
-					       NULL };
-	static const char *const roi_keys[] = { "probe", "sample", NULL };
-	json_t *cam, *br = NULL, *roi = NULL;
-	int ret;
-
-	memset(r, 0, sizeof(*r));
-	glint_bracket_default_opts(&r->bracket);
-	r->output = "captures";
-	ret = glint_json_load(path, &r->doc);
-	if (ret < 0)
-		return ret;
-	ret = glint_json_known_keys(path, "", r->doc, top);
-	if (!ret)
-		ret = glint_json_object(path, "", r->doc, "camera", 1, &cam);
-	if (!ret)
-		ret = glint_json_known_keys(path, "camera", cam, cam_keys);
-	if (!ret)
-		ret = glint_json_string(path, "camera", cam, "backend", 1,
-					&r->backend);
-	if (!ret)
-		ret = glint_json_string(path, "camera", cam, "device", 0,
-					&r->device);
-	if (!ret)
-		ret = glint_json_string(path, "", r->doc, "output", 0,
-					&r->output);
-	if (!ret)
-		ret = glint_json_object(path, "", r->doc, "bracket", 0, &br);
-	if (!ret && br) {
-		struct glint_bracket_opts *o = &r->bracket;
-		ret = glint_json_known_keys(path, "bracket", br, br_keys);
-		if (!ret)
-			ret = glint_json_number(
-				path, "bracket", br, "step_ev", 0,
-				(struct glint_range){ 0.25, 4, 0, 0 },
-				&o->step_ev);
-		if (!ret)
-			ret = glint_json_int(path, "bracket", br, "max_frames",
-					     0, 1, GLINT_BRACKET_MAX,
-					     &o->max_frames);
-		if (!ret)
-			ret = glint_json_number(
-				path, "bracket", br, "max_time_s", 0,
-				(struct glint_range){ 0, 3600, 0, 1 },
-				&o->max_time_s);
-		if (!ret)
-			ret = glint_json_number(
-				path, "bracket", br, "floor_dn", 0,
-				(struct glint_range){ 0, 1e4, 0, 0 },
-				&o->floor_dn);
-		if (!ret)
-			ret = glint_json_number(
-				path, "bracket", br, "start_s", 0,
-				(struct glint_range){ 0, 60, 0, 0 },
-				&o->start_s);
-		if (!ret)
-			ret = glint_json_int(path, "bracket", br, "max_drop", 0,
-					     0, 64, &o->max_drop);
-	}
-	if (!ret) {
-		static const char *const opt_keys[] = { "focal_px", "principal",
-							"pixel_pitch_um",
-							NULL };
-		static const char *const sample_keys[] = { "diameter_m", NULL };
-		json_t *opt = NULL, *smp = NULL;
-		r->principal[0] = r->principal[1] = -1;
-		r->pitch_um = 1;
-		r->diameter_m = 0.1;
-		ret = glint_json_object(path, "", r->doc, "sample", 0, &smp);
-		if (!ret && smp)
-			ret = glint_json_known_keys(path, "sample", smp,
-						    sample_keys);
-		if (!ret && smp)
-			ret = glint_json_number(
-				path, "sample", smp, "diameter_m", 0,
-				(struct glint_range){ 0, 10, 1, 0 },
-				&r->diameter_m);
-		if (!ret)
-			ret = glint_json_object(path, "", r->doc, "optics", 0,
-						&opt);
-		if (!ret && opt)
-			ret = glint_json_known_keys(path, "optics", opt,
-						    opt_keys);
-		if (!ret && opt)
-			ret = glint_json_number(
-				path, "optics", opt, "focal_px", 1,
-				(struct glint_range){ 1, 1e6, 0, 0 },
-				&r->focal_px);
-		if (!ret && opt)
-			ret = glint_json_numbers(
-				path, "optics", opt, "principal", 0, 2,
-				(struct glint_range){ 0, 1e5, 0, 0 },
-				r->principal);
-		if (!ret && opt)
-			ret = glint_json_number(
-				path, "optics", opt, "pixel_pitch_um", 0,
-				(struct glint_range){ 0, 1000, 1, 0 },
-				&r->pitch_um);
-	}
-	if (!ret)
-		ret = glint_json_object(path, "", r->doc, "roi", 0, &roi);
-	if (!ret && roi)
-		ret = glint_json_known_keys(path, "roi", roi, roi_keys);
-	if (!ret && roi) {
-		double v[4] = { 0, 0, 0, 0 };
-		ret = glint_json_numbers(path, "roi", roi, kind, 0, 4,
-					 (struct glint_range){ 0, 65536, 0, 0 },
-					 v);
-		r->roi = (struct glint_roi){ (int)v[0], (int)v[1], (int)v[2],
-					     (int)v[3] };
-	}
-	if (!ret)
-		r->text = json_dumps(r->doc, JSON_INDENT(2));
-	if (ret < 0)
-		json_decref(r->doc);
-	return ret;
-}
-
-/* The merged probe -> env.exr (+ env-mask.png, env-density.exr): the ball
- * found in it, unwrapped with the rig's focal length. */
-static int unwrap_probe(const char *dir, const struct rig *rig,
-			const struct glint_image *probe)
-{
-	char path[4200];
-	struct glint_image *env = NULL, *mask = NULL, *dens = NULL;
-	struct glint_circle c;
-	struct glint_unwrap_opts o;
-	int ret = glint_sphere_detect(probe, 0, 0, &c);
-	if (ret == 0) {
-		glint_unwrap_default_opts(&o);
-		o.fpx = rig->focal_px;
-		o.cx = rig->principal[0];
-		o.cy = rig->principal[1];
-		o.ball_cx = c.cx;
-		o.ball_cy = c.cy;
-		o.ball_r = c.r;
-		glint_log_info("probe ball at (%.2f, %.2f), radius %.2f px "
-			       "(%d edge points, %.2f px rms)",
-			       c.cx, c.cy, c.r, c.points, c.rms_px);
-		ret = glint_probe_unwrap(probe, &o, &env, &mask, &dens);
-	}
-	const char *names[3] = { "env.exr", "env-mask.png", "env-density.exr" };
-	struct glint_image *imgs[3] = { env, mask, dens };
-	for (int i = 0; i < 3 && ret == 0; i++) {
-		struct glint_write_opts wo = { 0, 0, 0 };
-		snprintf(path, sizeof(path), "%s/%s", dir, names[i]);
-		ret = glint_image_write(path, imgs[i], &wo);
-	}
-	if (ret < 0)
-		glint_error_prefix(ret,
-				   "unwrapping the probe (frames and "
-				   "probe.exr kept in %s)",
-				   dir);
-	glint_image_free(env);
-	glint_image_free(mask);
-	glint_image_free(dens);
-	return ret;
-}
-
-/* A merged sample -> scene.json lit by the probe session's env.exr.  A
- * missing probe is not the sample's fault: its capture stays complete and
- * the warning says what to do; a given --probe that is wrong is an error. */
-static int sample_scene(const char *dir, const char *root, const char *probe,
-			const struct rig *rig, const struct glint_image *rad,
-			char *scene_path, size_t n)
-{
-	char found[4200];
-	struct capture_optics o = { rig->focal_px,
-				    { rig->principal[0], rig->principal[1] },
-				    rig->pitch_um,
-				    rig->diameter_m };
-	int ret = 0;
-
-	if (!probe) {
-		ret = capture_latest_probe(root, found, sizeof(found));
-		probe = found;
-	}
-	if (ret == 0)
-		ret = capture_write_scene(dir, rad, &o, probe, NULL);
-	if (ret == 0) {
-		snprintf(scene_path, n, "%s/scene.json", dir);
-		return 0;
-	}
-	if (probe != found)
-		return ret;
-	glint_log_warn("no scene.json for the sample: %s (session "
-		       "%s is complete; glint fit needs a scene)",
-		       glint_error_msg(), dir);
-	return 0;
-}
-
 static volatile sig_atomic_t interrupted;
 static volatile int cancel_flag;
 
@@ -293,19 +83,6 @@ static void on_sigint(int sig)
 	(void)sig;
 	interrupted = 1;
 	cancel_flag = 1;
-}
-
-struct frame_ctx {
-	struct glint_session *session;
-	struct glint_progress progress;
-};
-
-static int save_frame(const struct glint_frame *f, int index, void *ctx)
-{
-	struct frame_ctx *c = ctx;
-	int ret = glint_session_add_frame(c->session, f, index);
-	glint_progress_add(&c->progress, 1);
-	return ret;
 }
 
 int cmd_capture(int argc, char **argv)
@@ -322,7 +99,7 @@ int cmd_capture(int argc, char **argv)
 		{ NULL, 0, NULL, 0 },
 	};
 	const char *config = NULL, *out = NULL, *probe = NULL;
-	char default_config[4096], scene_path[4200] = "";
+	char default_config[4096];
 	int json = 0, c, ret;
 
 	optind = 1;
@@ -367,140 +144,33 @@ int cmd_capture(int argc, char **argv)
 	}
 
 	struct rig rig;
-	ret = load_rig(config, kind, &rig);
-	if (ret < 0)
+	ret = rig_load(config, &rig);
+	if (ret < 0) {
+		rig_free(&rig);
 		return cmd_fail("capture");
+	}
 	if (!out)
 		out = rig.output;
 
-	struct glint_camera *cam = NULL;
-	struct glint_camera_info info;
-	struct glint_session *session = NULL;
-	char session_dir[4096] = "";
-	struct glint_bracket b;
-	struct frame_ctx fc;
+	struct capture_result res;
 	struct sigaction sa, old_int, old_term;
 
-	ret = glint_camera_open(rig.backend, rig.device, NULL, &cam);
-	if (ret < 0)
-		goto done;
-	glint_camera_describe(cam, &info);
-	ret = glint_session_create(out, kind, rig.text, &info, &session);
-	if (ret < 0)
-		goto done;
-	snprintf(session_dir, sizeof(session_dir), "%s",
-		 glint_session_dir(session));
-	glint_log_info("capturing the %s with %s (%s) into %s", kind, info.name,
-		       info.backend, glint_session_dir(session));
-	memset(&fc, 0, sizeof(fc));
-	fc.session = session;
-	rig.bracket.on_frame = save_frame;
-	rig.bracket.ctx = &fc;
-	rig.bracket.cancel = &cancel_flag;
 	memset(&sa, 0, sizeof(sa));
 	sa.sa_handler = on_sigint;
 	sigaction(SIGINT, &sa, &old_int);
 	sigaction(SIGTERM, &sa, &old_term);
-	glint_progress_start(&fc.progress, "frames", rig.bracket.max_frames);
-	ret = glint_bracket_capture(cam, &rig.roi, &rig.bracket,
-				    &glint_clock_real, &b);
-	glint_progress_finish(&fc.progress);
+	ret = capture_run(&rig, kind, out, probe, &cancel_flag, &res);
 	sigaction(SIGINT, &old_int, NULL);
 	sigaction(SIGTERM, &old_term, NULL);
-	{
-		/* The session records the outcome either way. */
-		char err[512], dir[4096];
-		snprintf(err, sizeof(err), "%s", glint_error_msg());
-		snprintf(dir, sizeof(dir), "%s", glint_session_dir(session));
-		int r2 =
-			glint_session_finish(session, &b, ret < 0 ? err : NULL);
-		if (ret < 0)
-			glint_error_set(-ret,
-					"%s (session %s kept, incomplete)", err,
-					dir);
-		session = NULL;
-		if (ret == 0 && r2 < 0)
-			ret = r2;
-	}
-	/* The merged HDR image of a raw bracket, beside its frames:
-	 * KIND.exr, KIND-variance.exr, KIND-weights.exr, KIND-mask.png. */
-	long valid_px = 0;
-	if (ret == 0 && b.n > 0 && b.frames[0].linear &&
-	    b.frames[0].channels == 1) {
-		char names[5][64];
-		const char *np[5];
-		static const char *const suffix[5] = { ".exr", "-variance.exr",
-						       "-weights.exr",
-						       "-mask.png", ".png" };
-		for (int i = 0; i < 5; i++) {
-			snprintf(names[i], sizeof(names[i]), "%s%s", kind,
-				 suffix[i]);
-			np[i] = names[i];
-		}
-		struct glint_noise_model nm;
-		struct glint_hdr_report rep;
-		struct glint_image *rad = NULL;
-		int w, h;
-		glint_noise_default(&nm);
-		ret = cmd_session_noise(session_dir, &nm);
-		if (ret == 0)
-			ret = cmd_hdr_merge_write(b.frames, b.n, &nm,
-						  session_dir, np, &rep, &w, &h,
-						  &valid_px, &rad);
-		if (ret == 0 && rep.moved)
-			glint_log_warn("the bracket's frames disagree "
-				       "(moved rig or scene?); run glint hdr "
-				       "on the session for details");
-		if (ret < 0)
-			glint_error_prefix(ret,
-					   "merging the bracket (frames "
-					   "kept in %s)",
-					   session_dir);
-		if (ret == 0 && !strcmp(kind, "probe") && rig.focal_px > 0)
-			ret = unwrap_probe(session_dir, &rig, rad);
-		if (ret == 0 && !strcmp(kind, "sample") && rig.focal_px > 0)
-			ret = sample_scene(session_dir, out, probe, &rig, rad,
-					   scene_path, sizeof(scene_path));
-		glint_image_free(rad);
-	}
-	if (ret == 0) {
-		if (json) {
-			cmd_print_json(json_pack(
-				"{s:s, s:s, s:s, s:s*, s:i, s:f, s:f, s:f, "
-				"s:b, "
-				"s:b, s:b, s:b, s:f}",
-				"status", "complete", "kind", kind, "session",
-				session_dir, "scene",
-				scene_path[0] ? scene_path : NULL, "frames",
-				b.n, "shortest_s", b.frames[0].exposure_s,
-				"longest_s", b.frames[b.n - 1].exposure_s,
-				"max_gain", b.frames[b.n - 1].gain,
-				"covered_low", b.covered_low, "covered_high",
-				b.covered_high, "used_gain", b.used_gain,
-				"truncated", b.truncated, "seconds",
-				b.seconds));
-		} else {
-			glint_log_info("%d frames, %.4g s .. %.4g s (gain up "
-				       "to %.3g) in %.1f s%s%s",
-				       b.n, b.frames[0].exposure_s,
-				       b.frames[b.n - 1].exposure_s,
-				       b.frames[b.n - 1].gain, b.seconds,
-				       b.covered_low && b.covered_high
-					       ? ", range covered"
-					       : "",
-				       b.truncated ? " (stopped by a cap)"
-						   : "");
-		}
-		glint_bracket_release(&b);
-	}
-done:
-	glint_camera_close(cam);
-	free(rig.text);
-	json_decref(rig.doc);
+	rig_free(&rig);
 	if (ret < 0) {
 		cmd_fail("capture");
 		return interrupted ? 130 : GLINT_EXIT_FAIL;
 	}
+	if (json)
+		cmd_print_json(res.summary);
+	else
+		json_decref(res.summary);
 	return GLINT_EXIT_OK;
 }
 

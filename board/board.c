@@ -1,0 +1,402 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * The board by role over a backend's lines: debounced presses, the LED's
+ * patterns (a thread), the turntable's moves, safe states.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "board.h"
+
+#include "core/log.h"
+
+#include <errno.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+static const char *const role_names[GLINT_ROLE_COUNT] = {
+	"button",	 "lights",	     "led",	 "turntable_step",
+	"turntable_dir", "turntable_enable", "position",
+};
+
+const char *glint_role_name(enum glint_role r)
+{
+	return (unsigned)r < GLINT_ROLE_COUNT ? role_names[r] : NULL;
+}
+
+int glint_role_is_input(enum glint_role r)
+{
+	return r == GLINT_ROLE_BUTTON || r == GLINT_ROLE_POSITION;
+}
+
+const char *glint_led_name(enum glint_led l)
+{
+	static const char *const n[] = { "off", "idle", "busy", "done",
+					 "error" };
+	return (unsigned)l < 5 ? n[l] : "?";
+}
+
+void glint_board_default_cfg(struct glint_board_cfg *c)
+{
+	memset(c, 0, sizeof(*c));
+	snprintf(c->backend, sizeof(c->backend), "sim");
+	for (int r = 0; r < GLINT_ROLE_COUNT; r++)
+		c->lines[r].offset = -1;
+	c->debounce_s = 0.03;
+	c->steps_per_turn = 3200;
+	c->step_hz = 1600;
+	c->relay_pulse_s = 0.2;
+	c->probe_deg = 0;
+	c->sample_deg = 180;
+	c->settle_s = 0.2;
+}
+
+static int same_line(const struct glint_line_cfg *a,
+		     const struct glint_line_cfg *b)
+{
+	if (strcmp(a->chip, b->chip) != 0)
+		return 0;
+	if (a->name[0] || b->name[0])
+		return !strcmp(a->name, b->name);
+	return a->offset == b->offset;
+}
+
+int glint_board_cfg_check(const char *file, const struct glint_board_cfg *c)
+{
+	const struct glint_line_cfg *l = c->lines;
+
+	if (strcmp(c->backend, "gpiod") && strcmp(c->backend, "sim"))
+		return glint_error_set(EINVAL,
+				       "%s: board.backend = \"%s\": expected "
+				       "gpiod or sim",
+				       file, c->backend);
+	if (!l[GLINT_ROLE_BUTTON].used)
+		return glint_error_set(EINVAL,
+				       "%s: board.lines.button: missing (the "
+				       "rig needs its capture button)",
+				       file);
+	for (int a = 0; a < GLINT_ROLE_COUNT; a++)
+		for (int b = a + 1; b < GLINT_ROLE_COUNT; b++)
+			if (l[a].used && l[b].used && same_line(&l[a], &l[b]))
+				return glint_error_set(
+					EINVAL,
+					"%s: board.lines.%s and "
+					"board.lines.%s are the same line "
+					"(%s %s%.0d): one line per role",
+					file, role_names[a], role_names[b],
+					l[a].chip, l[a].name,
+					l[a].name[0] ? 0 : l[a].offset);
+	if (c->tt_mode == GLINT_TT_STEPPER &&
+	    (!l[GLINT_ROLE_TT_STEP].used || !l[GLINT_ROLE_TT_DIR].used))
+		return glint_error_set(EINVAL,
+				       "%s: board.turntable.mode = \"stepper\" "
+				       "needs board.lines.turntable_step and "
+				       "turntable_dir",
+				       file);
+	if (c->tt_mode == GLINT_TT_RELAY && !l[GLINT_ROLE_TT_STEP].used)
+		return glint_error_set(EINVAL,
+				       "%s: board.turntable.mode = \"relay\" "
+				       "needs board.lines.turntable_step (the "
+				       "relay)",
+				       file);
+	if (c->tt_mode == GLINT_TT_NONE &&
+	    (l[GLINT_ROLE_TT_STEP].used || l[GLINT_ROLE_TT_DIR].used ||
+	     l[GLINT_ROLE_TT_ENABLE].used))
+		return glint_error_set(EINVAL,
+				       "%s: board.lines has turntable lines "
+				       "but no board.turntable.mode (stepper "
+				       "or relay)",
+				       file);
+	return 0;
+}
+
+struct glint_board {
+	const struct glint_board_ops *ops;
+	void *priv;
+	struct glint_board_cfg cfg;
+	pthread_mutex_t lock; /* serialises ops calls */
+	pthread_cond_t led_cond;
+	pthread_t led_thread;
+	int led_running, led_stop;
+	enum glint_led led;
+	double angle_deg; /* where the turntable is believed to be */
+	int tt_known;
+};
+
+static double now_s(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void sleep_s(double s)
+{
+	if (s <= 0)
+		return;
+	struct timespec ts = { (time_t)s, (long)((s - floor(s)) * 1e9) };
+	while (nanosleep(&ts, &ts) < 0 && errno == EINTR) {
+	}
+}
+
+static int set_line(struct glint_board *b, enum glint_role r, int v)
+{
+	if (!b->cfg.lines[r].used)
+		return 0;
+	pthread_mutex_lock(&b->lock);
+	int ret = b->ops->set(b->priv, r, v);
+	pthread_mutex_unlock(&b->lock);
+	return ret;
+}
+
+/* On/off steps of each pattern in seconds, repeated; {0} = steady. */
+static void led_steps(enum glint_led p, const double **steps, int *n, int *on)
+{
+	static const double idle[] = { 0.1, 1.9 }, busy[] = { 0.125, 0.125 },
+			    error[] = { 0.1, 0.1, 0.1, 0.1, 0.1, 1.0 };
+	*steps = NULL;
+	*n = 0;
+	*on = p == GLINT_LED_DONE;
+	if (p == GLINT_LED_IDLE) {
+		*steps = idle;
+		*n = 2;
+	} else if (p == GLINT_LED_BUSY) {
+		*steps = busy;
+		*n = 2;
+	} else if (p == GLINT_LED_ERROR) {
+		*steps = error;
+		*n = 6;
+	}
+}
+
+static void *led_main(void *arg)
+{
+	struct glint_board *b = arg;
+	enum glint_led cur = (enum glint_led) - 1;
+	int k = 0;
+	double next = 0;
+
+	pthread_mutex_lock(&b->lock);
+	while (!b->led_stop) {
+		const double *steps;
+		int n, on;
+		led_steps(b->led, &steps, &n, &on);
+		if (b->led != cur) {
+			cur = b->led;
+			k = 0;
+			next = now_s();
+			if (!n)
+				b->ops->set(b->priv, GLINT_ROLE_LED, on);
+		}
+		if (n && now_s() >= next) {
+			b->ops->set(b->priv, GLINT_ROLE_LED, !(k & 1));
+			next += steps[k % n];
+			k = (k + 1) % n;
+		}
+		double wake = n ? next : now_s() + 3600;
+		struct timespec ts;
+		clock_gettime(CLOCK_MONOTONIC, &ts);
+		double dt = wake - now_s();
+		if (dt > 0) {
+			ts.tv_sec += (time_t)dt;
+			ts.tv_nsec += (long)((dt - floor(dt)) * 1e9);
+			if (ts.tv_nsec >= 1000000000L) {
+				ts.tv_sec++;
+				ts.tv_nsec -= 1000000000L;
+			}
+			pthread_cond_timedwait(&b->led_cond, &b->lock, &ts);
+		}
+	}
+	pthread_mutex_unlock(&b->lock);
+	return NULL;
+}
+
+int glint_board_open(const struct glint_board_cfg *cfg, const char *consumer,
+		     struct glint_board **out)
+{
+	struct glint_board *b;
+	const struct glint_board_ops *ops = NULL;
+	int ret;
+
+	*out = NULL;
+#ifdef GLINT_HAVE_GPIOD
+	if (!strcmp(cfg->backend, "gpiod"))
+		ops = &glint_board_gpiod_ops;
+#endif
+	if (!strcmp(cfg->backend, "sim"))
+		ops = &glint_board_sim_ops;
+	if (!ops)
+		return glint_error_set(
+			EINVAL, "board backend '%s': expected %s", cfg->backend,
+#ifdef GLINT_HAVE_GPIOD
+			"gpiod or sim"
+#else
+			"sim (this glint was built without "
+			"libgpiod)"
+#endif
+		);
+	b = calloc(1, sizeof(*b));
+	if (!b)
+		return glint_error_set(ENOMEM, "out of memory");
+	b->ops = ops;
+	b->cfg = *cfg;
+	ret = ops->open(cfg, consumer, &b->priv);
+	if (ret < 0) {
+		free(b);
+		return ret;
+	}
+	pthread_mutex_init(&b->lock, NULL);
+	pthread_condattr_t ca;
+	pthread_condattr_init(&ca);
+	pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
+	pthread_cond_init(&b->led_cond, &ca);
+	pthread_condattr_destroy(&ca);
+	if (cfg->lines[GLINT_ROLE_LED].used &&
+	    pthread_create(&b->led_thread, NULL, led_main, b) == 0)
+		b->led_running = 1;
+	*out = b;
+	return 0;
+}
+
+void glint_board_safe(struct glint_board *b)
+{
+	if (!b)
+		return;
+	set_line(b, GLINT_ROLE_LIGHTS, 0);
+	set_line(b, GLINT_ROLE_TT_STEP, 0);
+	set_line(b, GLINT_ROLE_TT_ENABLE, 0);
+}
+
+void glint_board_close(struct glint_board *b)
+{
+	if (!b)
+		return;
+	glint_board_safe(b);
+	if (b->led_running) {
+		pthread_mutex_lock(&b->lock);
+		b->led_stop = 1;
+		pthread_cond_signal(&b->led_cond);
+		pthread_mutex_unlock(&b->lock);
+		pthread_join(b->led_thread, NULL);
+	}
+	set_line(b, GLINT_ROLE_LED, 0);
+	b->ops->close(b->priv);
+	pthread_mutex_destroy(&b->lock);
+	pthread_cond_destroy(&b->led_cond);
+	free(b);
+}
+
+int glint_board_has(const struct glint_board *b, enum glint_role r)
+{
+	return b && b->cfg.lines[r].used;
+}
+
+int glint_board_led(struct glint_board *b, enum glint_led pattern)
+{
+	if (!b->led_running)
+		return 0;
+	pthread_mutex_lock(&b->lock);
+	b->led = pattern;
+	pthread_cond_signal(&b->led_cond);
+	pthread_mutex_unlock(&b->lock);
+	return 0;
+}
+
+int glint_board_lights(struct glint_board *b, int on)
+{
+	int ret = set_line(b, GLINT_ROLE_LIGHTS, on);
+	if (ret == 0 && b->cfg.lines[GLINT_ROLE_LIGHTS].used)
+		sleep_s(b->cfg.settle_s); /* lamps warm up */
+	return ret;
+}
+
+/* Edges come in while the line bounces; the press counts when the level
+ * is still 1 once no edge has come for debounce_s. */
+int glint_board_wait_press(struct glint_board *b, double timeout_s,
+			   volatile int *cancel)
+{
+	double t_end = timeout_s < 0 ? INFINITY : now_s() + timeout_s;
+	struct glint_edge e;
+
+	for (;;) {
+		if (cancel && *cancel)
+			return 0;
+		double left = t_end - now_s();
+		if (left <= 0)
+			return 0;
+		int ret = b->ops->wait_edge(b->priv, GLINT_ROLE_BUTTON,
+					    fmin(left, 0.05), &e);
+		if (ret < 0)
+			return ret;
+		if (ret == 0 || e.value != 1)
+			continue;
+		/* Settle: every further edge restarts the window. */
+		int level = 1;
+		for (;;) {
+			ret = b->ops->wait_edge(b->priv, GLINT_ROLE_BUTTON,
+						b->cfg.debounce_s, &e);
+			if (ret < 0)
+				return ret;
+			if (ret == 0)
+				break;
+			level = e.value;
+		}
+		if (level == 1)
+			return 1;
+	}
+}
+
+int glint_board_turntable(struct glint_board *b, int which,
+			  volatile int *cancel)
+{
+	const struct glint_board_cfg *c = &b->cfg;
+	double target = which ? c->sample_deg : c->probe_deg;
+	int ret = 0;
+
+	if (c->tt_mode == GLINT_TT_NONE)
+		return 0;
+	if (c->tt_mode == GLINT_TT_RELAY) {
+		/* An indexing table: one pulse moves it to the next of its
+		 * two positions. */
+		if (b->tt_known && fabs(b->angle_deg - target) < 1e-9)
+			return 0;
+		ret = set_line(b, GLINT_ROLE_TT_STEP, 1);
+		sleep_s(c->relay_pulse_s);
+		if (!ret)
+			ret = set_line(b, GLINT_ROLE_TT_STEP, 0);
+	} else {
+		double from = b->tt_known ? b->angle_deg : c->probe_deg;
+		double d = remainder(target - from, 360.0);
+		long steps = lround(fabs(d) / 360.0 * c->steps_per_turn);
+		double half = 0.5 / c->step_hz;
+		ret = set_line(b, GLINT_ROLE_TT_ENABLE, 1);
+		if (!ret)
+			ret = set_line(b, GLINT_ROLE_TT_DIR, d >= 0);
+		for (long i = 0; i < steps && !ret; i++) {
+			if (cancel && *cancel) {
+				ret = glint_error_set(ECANCELED,
+						      "turntable move "
+						      "cancelled");
+				break;
+			}
+			ret = set_line(b, GLINT_ROLE_TT_STEP, 1);
+			sleep_s(half);
+			if (!ret)
+				ret = set_line(b, GLINT_ROLE_TT_STEP, 0);
+			sleep_s(half);
+		}
+		/* Enable stays on to hold position while capturing. */
+	}
+	if (ret < 0) {
+		b->tt_known = 0;
+		return ret;
+	}
+	b->angle_deg = target;
+	b->tt_known = 1;
+	sleep_s(c->settle_s);
+	glint_log_info("turntable at %s (%.0f deg)", which ? "sample" : "probe",
+		       target);
+	return 0;
+}

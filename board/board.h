@@ -1,0 +1,130 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_BOARD_BOARD_H
+#define GLINT_BOARD_BOARD_H
+
+/*
+ * The rig's board: GPIO lines by role, behind an ops table (libgpiod v1 in
+ * board/gpiod.c, the simulated board in sim/board_sim.c).  Values are
+ * logical (1 = pressed / on / enabled); a line's active_low flag is the
+ * backend's business.  Nothing here knows about images.
+ *
+ * What the roles drive (board/board.c):
+ *   button            input, both edges, debounced: a press is an edge to
+ *                     1 that stays 1 for debounce_s
+ *   lights            output, the lab lights' relay
+ *   led               output, the status LED, blinked in a pattern per
+ *                     state by a thread (glint_board_led)
+ *   turntable_step,   outputs of a stepper driver (step pulses at step_hz,
+ *   turntable_dir,    direction, enable), or, in relay mode, a relay
+ *   turntable_enable  pulsed once per position on turntable_step
+ *   position          optional input: 1 when the probe is in view
+ */
+
+#include "core/error.h"
+
+#include <stdint.h>
+
+enum glint_role {
+	GLINT_ROLE_BUTTON,
+	GLINT_ROLE_LIGHTS,
+	GLINT_ROLE_LED,
+	GLINT_ROLE_TT_STEP,
+	GLINT_ROLE_TT_DIR,
+	GLINT_ROLE_TT_ENABLE,
+	GLINT_ROLE_POSITION,
+	GLINT_ROLE_COUNT
+};
+
+/* "button", "lights", ... as in rig files; NULL past the end. */
+const char *glint_role_name(enum glint_role r);
+int glint_role_is_input(enum glint_role r);
+
+struct glint_line_cfg {
+	int used;
+	char chip[64]; /* "gpiochip0", "/dev/gpiochip0", a number or label */
+	char name[64]; /* line name, or "" to use offset */
+	int offset;    /* -1 when given by name */
+	int active_low;
+};
+
+enum glint_turntable_mode { GLINT_TT_NONE, GLINT_TT_STEPPER, GLINT_TT_RELAY };
+
+struct glint_board_cfg {
+	char backend[16]; /* "gpiod" or "sim" */
+	struct glint_line_cfg lines[GLINT_ROLE_COUNT];
+	double debounce_s;
+	enum glint_turntable_mode tt_mode;
+	int steps_per_turn;	      /* stepper */
+	double step_hz;		      /* stepper */
+	double relay_pulse_s;	      /* relay */
+	double probe_deg, sample_deg; /* turntable positions */
+	double settle_s;	      /* wait after a move */
+	char scenario[4096]; /* sim: scripted presses (sim/board_sim.h) */
+	char log[4096];	     /* sim: where outputs are recorded */
+};
+
+void glint_board_default_cfg(struct glint_board_cfg *c);
+
+/* Check a configuration without touching hardware: roles with lines, no
+ * line used twice, what the turntable mode needs.  Messages name `file`
+ * and the key. */
+int glint_board_cfg_check(const char *file, const struct glint_board_cfg *c);
+
+struct glint_edge {
+	int value; /* logical level after the edge */
+	double t;  /* seconds, CLOCK_MONOTONIC */
+};
+
+struct glint_board_ops {
+	const char *name;
+	/* Look up every configured line (chip present, line present, free),
+	 * then request them: outputs at logical 0.  A failure names chip,
+	 * line and, for a busy line, its current consumer; nothing is left
+	 * requested. */
+	int (*open)(const struct glint_board_cfg *cfg, const char *consumer,
+		    void **priv);
+	void (*close)(void *priv);
+	int (*set)(void *priv, enum glint_role r, int value);
+	int (*get)(void *priv, enum glint_role r, int *value);
+	/* Next edge on an input within timeout_s: 1 with *e, 0 on timeout. */
+	int (*wait_edge)(void *priv, enum glint_role r, double timeout_s,
+			 struct glint_edge *e);
+};
+
+extern const struct glint_board_ops glint_board_gpiod_ops;
+extern const struct glint_board_ops glint_board_sim_ops;
+
+/* LED patterns: idle = a short blink every 2 s, busy = 4 Hz blinking,
+ * done = steady on, error = three fast blinks every 1.5 s, off. */
+enum glint_led {
+	GLINT_LED_OFF,
+	GLINT_LED_IDLE,
+	GLINT_LED_BUSY,
+	GLINT_LED_DONE,
+	GLINT_LED_ERROR
+};
+const char *glint_led_name(enum glint_led l);
+
+struct glint_board;
+
+int glint_board_open(const struct glint_board_cfg *cfg, const char *consumer,
+		     struct glint_board **out);
+/* Outputs to their safe states (lights off, stepper disabled, LED off),
+ * then release every line. */
+void glint_board_close(struct glint_board *b);
+
+/* Wait for a debounced press; 1 pressed, 0 timeout (timeout_s < 0:
+ * forever) or *cancel set (polled every 50 ms). */
+int glint_board_wait_press(struct glint_board *b, double timeout_s,
+			   volatile int *cancel);
+int glint_board_has(const struct glint_board *b, enum glint_role r);
+int glint_board_lights(struct glint_board *b, int on);
+int glint_board_led(struct glint_board *b, enum glint_led pattern);
+/* Turn the turntable to the probe (which = 0) or sample (1) position.
+ * No-op without a turntable.  *cancel stops between steps (-ECANCELED). */
+int glint_board_turntable(struct glint_board *b, int which,
+			  volatile int *cancel);
+/* Lights off, stepper disabled: what SIGTERM and errors leave. */
+void glint_board_safe(struct glint_board *b);
+
+#endif

@@ -1,0 +1,307 @@
+/* SPDX-License-Identifier: MIT */
+#define _DEFAULT_SOURCE /* flock, scandir */
+#include "queue.h"
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/lockfile.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+static const char *const states[] = { "pending", "running", "done", "failed",
+				      "cancelled" };
+
+int glint_queue_init(const char *queue)
+{
+	char path[4200];
+
+	if (mkdir(queue, 0777) < 0 && errno != EEXIST)
+		return glint_error_set(errno, "%s: cannot create the queue: %s",
+				       queue, strerror(errno));
+	for (int i = 0; i < 5; i++) {
+		snprintf(path, sizeof(path), "%s/%s", queue, states[i]);
+		if (mkdir(path, 0777) < 0 && errno != EEXIST)
+			return glint_error_set(errno, "%s: %s", path,
+					       strerror(errno));
+	}
+	return 0;
+}
+
+static int write_job(const char *path, json_t *doc)
+{
+	char *text = json_dumps(doc, JSON_INDENT(2) | JSON_SORT_KEYS);
+	if (!text)
+		return glint_error_set(ENOMEM, "out of memory");
+	int ret = glint_atomic_write_file(path, text, strlen(text));
+	free(text);
+	return ret;
+}
+
+/* compact: 20261121T180000Z (IDs), else 2026-11-21T18:00:00Z. */
+static void utc_now(char *buf, size_t n, int compact)
+{
+	time_t t = time(NULL);
+	struct tm tm;
+	gmtime_r(&t, &tm);
+	if (compact)
+		strftime(buf, n, "%Y%m%dT%H%M%SZ", &tm);
+	else
+		strftime(buf, n, "%Y-%m-%dT%H:%M:%SZ", &tm);
+}
+
+int glint_queue_add(const char *queue, const char *kind, const char *session,
+		    char *id_out)
+{
+	static int counter;
+	char id[64], stamp[32], added[32], path[4300];
+	int ret = glint_queue_init(queue);
+
+	if (ret < 0)
+		return ret;
+	utc_now(stamp, sizeof(stamp), 1);
+	utc_now(added, sizeof(added), 0);
+	snprintf(id, sizeof(id), "%s-%ld-%d", stamp, (long)getpid(), ++counter);
+	json_t *doc = json_pack("{s:s, s:s, s:s, s:s, s:i}", "id", id, "kind",
+				kind, "session", session, "added", added,
+				"added_by_pid", (int)getpid());
+	snprintf(path, sizeof(path), "%s/pending/%s.json", queue, id);
+	ret = doc ? write_job(path, doc) : -ENOMEM;
+	json_decref(doc);
+	if (ret < 0)
+		return ret;
+	if (id_out)
+		snprintf(id_out, 64, "%s", id);
+	return 0;
+}
+
+static int job_name(const struct dirent *e)
+{
+	size_t n = strlen(e->d_name);
+	return n > 5 && !strcmp(e->d_name + n - 5, ".json") &&
+	       !strstr(e->d_name, ".tmp");
+}
+
+static int load_job(const char *queue, const char *state, const char *file,
+		    struct glint_job *job)
+{
+	char path[4400];
+	json_error_t err;
+
+	memset(job, 0, sizeof(*job));
+	job->lock_fd = -1;
+	snprintf(path, sizeof(path), "%s/%s/%s", queue, state, file);
+	job->doc = json_load_file(path, 0, &err);
+	if (!job->doc)
+		return glint_error_set(EINVAL, "%s: %s", path, err.text);
+	snprintf(job->id, sizeof(job->id), "%.*s", (int)(strlen(file) - 5),
+		 file);
+	snprintf(job->state, sizeof(job->state), "%s", state);
+	const char *k = json_string_value(json_object_get(job->doc, "kind"));
+	const char *s = json_string_value(json_object_get(job->doc, "session"));
+	snprintf(job->kind, sizeof(job->kind), "%s", k ? k : "");
+	snprintf(job->session, sizeof(job->session), "%s", s ? s : "");
+	return 0;
+}
+
+void glint_job_release(struct glint_job *job)
+{
+	json_decref(job->doc);
+	job->doc = NULL;
+	glint_lockfile_release(job->lock_fd);
+	job->lock_fd = -1;
+}
+
+int glint_queue_list(const char *queue,
+		     int (*cb)(const struct glint_job *job, void *ctx),
+		     void *ctx)
+{
+	char dir[4200];
+	int stop = 0;
+
+	for (int s = 0; s < 5 && !stop; s++) {
+		struct dirent **names = NULL;
+		snprintf(dir, sizeof(dir), "%s/%s", queue, states[s]);
+		int n = scandir(dir, &names, job_name, alphasort);
+		if (n < 0) {
+			if (errno == ENOENT)
+				continue;
+			return glint_error_set(errno, "%s: %s", dir,
+					       strerror(errno));
+		}
+		for (int i = 0; i < n; i++) {
+			struct glint_job job;
+			/* A job that moved on between listing and reading
+			 * is skipped, not an error. */
+			if (!stop && load_job(queue, states[s],
+					      names[i]->d_name, &job) == 0) {
+				stop = cb(&job, ctx);
+				glint_job_release(&job);
+			}
+			free(names[i]);
+		}
+		free(names);
+	}
+	return 0;
+}
+
+static int move(const char *queue, const char *id, const char *from,
+		const char *to)
+{
+	char a[4300], b[4300];
+	snprintf(a, sizeof(a), "%s/%s/%s.json", queue, from, id);
+	snprintf(b, sizeof(b), "%s/%s/%s.json", queue, to, id);
+	if (rename(a, b) < 0)
+		return -errno;
+	return 0;
+}
+
+int glint_queue_cancel(const char *queue, const char *id)
+{
+	char path[4300];
+	struct stat st;
+
+	if (strchr(id, '/') || !id[0])
+		return glint_error_set(EINVAL, "job id '%s': not an id", id);
+	if (move(queue, id, "pending", "cancelled") == 0)
+		return 0;
+	snprintf(path, sizeof(path), "%s/running/%s.json", queue, id);
+	if (stat(path, &st) == 0) {
+		snprintf(path, sizeof(path), "%s/running/%s.cancel", queue, id);
+		int fd = open(path, O_WRONLY | O_CREAT, 0666);
+		if (fd < 0)
+			return glint_error_set(errno, "%s: %s", path,
+					       strerror(errno));
+		close(fd);
+		return 0;
+	}
+	return glint_error_set(ENOENT,
+			       "job %s: not pending or running in %s (glint "
+			       "jobs lists them)",
+			       id, queue);
+}
+
+/* Is running/ID held by a live worker?  Take its lock to find out. */
+static int orphaned(const char *queue, const char *id)
+{
+	char path[4300];
+	snprintf(path, sizeof(path), "%s/running/%s.lock", queue, id);
+	int fd = open(path, O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+	if (fd < 0)
+		return 0;
+	int free_ = flock(fd, LOCK_EX | LOCK_NB) == 0;
+	close(fd);
+	return free_;
+}
+
+int glint_queue_recover(const char *queue)
+{
+	char dir[4200], path[4300];
+	struct dirent **names = NULL;
+	int n, moved = 0;
+
+	snprintf(dir, sizeof(dir), "%s/running", queue);
+	n = scandir(dir, &names, job_name, alphasort);
+	for (int i = 0; i < n; i++) {
+		char id[256];
+		snprintf(id, sizeof(id), "%.*s",
+			 (int)(strlen(names[i]->d_name) - 5), names[i]->d_name);
+		if (orphaned(queue, id) &&
+		    move(queue, id, "running", "pending") == 0) {
+			moved++;
+			snprintf(path, sizeof(path), "%s/running/%s.cancel",
+				 queue, id);
+			unlink(path);
+		}
+		free(names[i]);
+	}
+	free(names);
+	return moved;
+}
+
+int glint_queue_claim(const char *queue, struct glint_job *job)
+{
+	char dir[4200], path[4300];
+	struct dirent **names = NULL;
+	int n, got = 0, ret = glint_queue_init(queue);
+
+	if (ret < 0)
+		return ret;
+	glint_queue_recover(queue);
+	snprintf(dir, sizeof(dir), "%s/pending", queue);
+	n = scandir(dir, &names, job_name, alphasort);
+	if (n < 0)
+		return glint_error_set(errno, "%s: %s", dir, strerror(errno));
+	for (int i = 0; i < n; i++) {
+		char id[256];
+		snprintf(id, sizeof(id), "%.*s",
+			 (int)(strlen(names[i]->d_name) - 5), names[i]->d_name);
+		if (!got) {
+			/* Lock first, then claim: a claimed job is never
+			 * seen unlocked (which would make it "orphaned"). */
+			int fd;
+			snprintf(path, sizeof(path), "%s/running/%s.lock",
+				 queue, id);
+			if (glint_lockfile_acquire(path, "glint queue worker",
+						   0, &fd) == 0) {
+				if (move(queue, id, "pending", "running") ==
+					    0 &&
+				    load_job(queue, "running", names[i]->d_name,
+					     job) == 0) {
+					job->lock_fd = fd;
+					got = 1;
+				} else {
+					glint_lockfile_release(fd);
+				}
+			}
+		}
+		free(names[i]);
+	}
+	free(names);
+	return got;
+}
+
+int glint_queue_cancel_requested(const char *queue, const struct glint_job *job)
+{
+	char path[4300];
+	struct stat st;
+	snprintf(path, sizeof(path), "%s/running/%s.cancel", queue, job->id);
+	return stat(path, &st) == 0;
+}
+
+int glint_queue_finish(const char *queue, struct glint_job *job,
+		       const char *state, json_t *result)
+{
+	char path[4300], when[32];
+	int ret;
+
+	utc_now(when, sizeof(when), 0);
+	json_object_set_new(job->doc, "finished", json_string(when));
+	json_object_set_new(job->doc, "state", json_string(state));
+	if (result)
+		json_object_update(job->doc, result);
+	json_decref(result);
+	snprintf(path, sizeof(path), "%s/%s/%s.json", queue, state, job->id);
+	ret = write_job(path, job->doc);
+	if (ret == 0) {
+		snprintf(path, sizeof(path), "%s/running/%s.json", queue,
+			 job->id);
+		unlink(path);
+		snprintf(path, sizeof(path), "%s/running/%s.cancel", queue,
+			 job->id);
+		unlink(path);
+		snprintf(path, sizeof(path), "%s/running/%s.lock", queue,
+			 job->id);
+		unlink(path);
+	}
+	glint_job_release(job);
+	return ret;
+}

@@ -1,0 +1,70 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_BOARD_QUEUE_H
+#define GLINT_BOARD_QUEUE_H
+
+/*
+ * The job queue shared by the rig daemon and SSH users: a directory, safe
+ * for any number of processes without a server.
+ *
+ *   QUEUE/pending/ID.json     waiting, oldest ID first
+ *   QUEUE/running/ID.json     claimed by a worker (an atomic rename), which
+ *   QUEUE/running/ID.lock     holds this flock while it works
+ *   QUEUE/running/ID.cancel   asks that worker to stop
+ *   QUEUE/done/ID.json        finished, with its result
+ *   QUEUE/failed/ID.json      finished with an error
+ *   QUEUE/cancelled/ID.json
+ *
+ * Job files are written whole (temp, fsync, rename).  A worker that dies
+ * (SIGKILL, power cut) leaves running/ID.json with no lock held: the next
+ * claim puts it back in pending/, so it is re-run with no manual clean-up.
+ * IDs sort by time added: "YYYYmmddTHHMMSSZ-PID-N".
+ */
+
+#include <jansson.h>
+
+struct glint_job {
+	char id[64];
+	char state[16]; /* pending, running, done, failed, cancelled */
+	char kind[16];	/* "fit" */
+	char session[4096];
+	json_t *doc; /* the job file */
+	int lock_fd; /* running: the worker's lock */
+};
+
+/* Create QUEUE and its folders if missing. */
+int glint_queue_init(const char *queue);
+
+/* Add a job (kind "fit" on a session); *id (may be NULL, >= 64 bytes)
+ * gets its ID. */
+int glint_queue_add(const char *queue, const char *kind, const char *session,
+		    char *id);
+
+/* Every job, oldest first, each state in turn; cb returns nonzero to
+ * stop.  job->doc is valid during the call. */
+int glint_queue_list(const char *queue,
+		     int (*cb)(const struct glint_job *job, void *ctx),
+		     void *ctx);
+
+/* Cancel a pending job (moved to cancelled/) or ask a running one's
+ * worker to stop.  -ENOENT names the ID if it is in no such state. */
+int glint_queue_cancel(const char *queue, const char *id);
+
+/* Put jobs whose worker died back in pending/; returns how many. */
+int glint_queue_recover(const char *queue);
+
+/* Claim the oldest pending job: 1 with *job (running, locked), 0 when
+ * none. */
+int glint_queue_claim(const char *queue, struct glint_job *job);
+
+/* Has someone asked the claimed job to stop? */
+int glint_queue_cancel_requested(const char *queue,
+				 const struct glint_job *job);
+
+/* Move a claimed job to done/, failed/ or cancelled/ with `result` (an
+ * object merged into the job file; consumed) and release it. */
+int glint_queue_finish(const char *queue, struct glint_job *job,
+		       const char *state, json_t *result);
+
+void glint_job_release(struct glint_job *job);
+
+#endif

@@ -1,0 +1,386 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * The rig file (docs/rig.md): camera, bracket, ROIs, optics, sample, the
+ * board's lines by role and the capture sequence.  Validated on load;
+ * every message names the file, the key and what was expected.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "rig_config.h"
+
+#include "core/error.h"
+
+#include <libgen.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+const char *const rig_step_names[RIG_STEP_COUNT] = {
+	"lights on",
+	"lights off",
+	"turntable probe",
+	"turntable sample",
+	"capture probe",
+	"capture sample",
+	"fit",
+};
+
+/* A path in the rig file, relative to the file's folder. */
+static void resolve(const char *rigpath, const char *p, char *out, size_t n)
+{
+	char dir[4096];
+	if (p[0] == '/') {
+		snprintf(out, n, "%s", p);
+		return;
+	}
+	snprintf(dir, sizeof(dir), "%s", rigpath);
+	snprintf(out, n, "%s/%s", dirname(dir), p);
+}
+
+static int load_line(const char *path, const char *where, json_t *o,
+		     struct glint_line_cfg *l)
+{
+	static const char *const keys[] = { "chip", "line", "active_low",
+					    NULL };
+	const char *chip = NULL;
+	json_t *line;
+	int ret = glint_json_known_keys(path, where, o, keys);
+
+	if (!ret)
+		ret = glint_json_string(path, where, o, "chip", 1, &chip);
+	if (ret)
+		return ret;
+	snprintf(l->chip, sizeof(l->chip), "%s", chip);
+	line = json_object_get(o, "line");
+	if (json_is_integer(line) && json_integer_value(line) >= 0 &&
+	    json_integer_value(line) < 4096) {
+		l->offset = (int)json_integer_value(line);
+	} else if (json_is_string(line) && json_string_length(line) > 0 &&
+		   json_string_length(line) < sizeof(l->name)) {
+		snprintf(l->name, sizeof(l->name), "%s",
+			 json_string_value(line));
+	} else {
+		return glint_error_set(EINVAL,
+				       "%s: %s.line: expected a line offset "
+				       "(0..4095) or a line name",
+				       path, where);
+	}
+	json_t *al = json_object_get(o, "active_low");
+	if (al && !json_is_boolean(al))
+		return glint_error_set(EINVAL,
+				       "%s: %s.active_low: expected true or "
+				       "false",
+				       path, where);
+	l->active_low = json_is_true(al);
+	l->used = 1;
+	return 0;
+}
+
+static int load_board(const char *path, struct rig *r)
+{
+	static const char *const keys[] = { "backend",	   "lines",
+					    "debounce_ms", "turntable",
+					    "scenario",	   "log",
+					    NULL };
+	static const char *const tt_keys[] = { "mode",	    "steps_per_turn",
+					       "step_hz",   "relay_pulse_s",
+					       "probe_deg", "sample_deg",
+					       "settle_s",  NULL };
+	struct glint_board_cfg *c = &r->board;
+	json_t *b = NULL, *lines = NULL, *tt = NULL;
+	const char *backend = NULL, *s = NULL;
+	double ms = 30;
+	int ret;
+
+	glint_board_default_cfg(c);
+	ret = glint_json_object(path, "", r->doc, "board", 0, &b);
+	if (ret || !b)
+		return ret;
+	r->has_board = 1;
+	ret = glint_json_known_keys(path, "board", b, keys);
+	if (!ret)
+		ret = glint_json_string(path, "board", b, "backend", 1,
+					&backend);
+	if (!ret)
+		snprintf(c->backend, sizeof(c->backend), "%s", backend);
+	if (!ret)
+		ret = glint_json_number(path, "board", b, "debounce_ms", 0,
+					(struct glint_range){ 0, 1000, 0, 0 },
+					&ms);
+	c->debounce_s = ms / 1000;
+	if (!ret)
+		ret = glint_json_string(path, "board", b, "scenario", 0, &s);
+	if (!ret && s)
+		resolve(path, s, c->scenario, sizeof(c->scenario));
+	s = NULL;
+	if (!ret)
+		ret = glint_json_string(path, "board", b, "log", 0, &s);
+	if (!ret && s)
+		resolve(path, s, c->log, sizeof(c->log));
+	if (!ret)
+		ret = glint_json_object(path, "board", b, "lines", 1, &lines);
+	if (!ret) {
+		const char *key;
+		json_t *v;
+		json_object_foreach(lines, key, v)
+		{
+			int role = 0;
+			while (role < GLINT_ROLE_COUNT &&
+			       strcmp(key, glint_role_name(role)))
+				role++;
+			if (role == GLINT_ROLE_COUNT) {
+				ret = glint_error_set(
+					EINVAL,
+					"%s: board.lines.%s: unknown role; "
+					"expected button, lights, led, "
+					"turntable_step, turntable_dir, "
+					"turntable_enable or position",
+					path, key);
+				break;
+			}
+			char where[64];
+			snprintf(where, sizeof(where), "board.lines.%s", key);
+			ret = load_line(path, where, v, &c->lines[role]);
+			if (ret)
+				break;
+		}
+	}
+	if (!ret)
+		ret = glint_json_object(path, "board", b, "turntable", 0, &tt);
+	if (!ret && tt) {
+		const char *mode = NULL;
+		double steps = c->steps_per_turn;
+		ret = glint_json_known_keys(path, "board.turntable", tt,
+					    tt_keys);
+		if (!ret)
+			ret = glint_json_string(path, "board.turntable", tt,
+						"mode", 1, &mode);
+		if (!ret) {
+			if (!strcmp(mode, "stepper"))
+				c->tt_mode = GLINT_TT_STEPPER;
+			else if (!strcmp(mode, "relay"))
+				c->tt_mode = GLINT_TT_RELAY;
+			else if (!strcmp(mode, "none"))
+				c->tt_mode = GLINT_TT_NONE;
+			else
+				ret = glint_error_set(
+					EINVAL,
+					"%s: board.turntable.mode = \"%s\": "
+					"expected stepper, relay or none",
+					path, mode);
+		}
+		if (!ret)
+			ret = glint_json_number(
+				path, "board.turntable", tt, "steps_per_turn",
+				0, (struct glint_range){ 1, 1e6, 0, 0 },
+				&steps);
+		c->steps_per_turn = (int)steps;
+		if (!ret)
+			ret = glint_json_number(
+				path, "board.turntable", tt, "step_hz", 0,
+				(struct glint_range){ 0, 1e5, 1, 0 },
+				&c->step_hz);
+		if (!ret)
+			ret = glint_json_number(
+				path, "board.turntable", tt, "relay_pulse_s", 0,
+				(struct glint_range){ 0, 10, 1, 0 },
+				&c->relay_pulse_s);
+		if (!ret)
+			ret = glint_json_number(
+				path, "board.turntable", tt, "probe_deg", 0,
+				(struct glint_range){ -360, 360, 0, 0 },
+				&c->probe_deg);
+		if (!ret)
+			ret = glint_json_number(
+				path, "board.turntable", tt, "sample_deg", 0,
+				(struct glint_range){ -360, 360, 0, 0 },
+				&c->sample_deg);
+		if (!ret)
+			ret = glint_json_number(
+				path, "board.turntable", tt, "settle_s", 0,
+				(struct glint_range){ 0, 60, 0, 0 },
+				&c->settle_s);
+	}
+	if (!ret)
+		ret = glint_board_cfg_check(path, c);
+	return ret;
+}
+
+static int load_sequence(const char *path, struct rig *r)
+{
+	json_t *seq = json_object_get(r->doc, "sequence");
+	static const enum rig_step def[] = {
+		RIG_LIGHTS_ON,
+		RIG_TURNTABLE_PROBE,
+		RIG_CAPTURE_PROBE,
+		RIG_TURNTABLE_SAMPLE,
+		RIG_CAPTURE_SAMPLE,
+		RIG_LIGHTS_OFF,
+		RIG_FIT,
+	};
+
+	if (!seq) {
+		r->nsteps = (int)(sizeof(def) / sizeof(def[0]));
+		memcpy(r->steps, def, sizeof(def));
+		return 0;
+	}
+	if (!json_is_array(seq) || json_array_size(seq) == 0 ||
+	    json_array_size(seq) > RIG_MAX_STEPS)
+		return glint_error_set(EINVAL,
+				       "%s: sequence: expected a list of 1..%d "
+				       "steps",
+				       path, RIG_MAX_STEPS);
+	for (size_t i = 0; i < json_array_size(seq); i++) {
+		const char *s = json_string_value(json_array_get(seq, i));
+		int k = 0;
+		while (s && k < RIG_STEP_COUNT && strcmp(s, rig_step_names[k]))
+			k++;
+		if (!s || k == RIG_STEP_COUNT)
+			return glint_error_set(
+				EINVAL,
+				"%s: sequence[%zu] = %s: expected one of "
+				"\"lights on\", \"lights off\", \"turntable "
+				"probe\", \"turntable sample\", \"capture "
+				"probe\", \"capture sample\", \"fit\"",
+				path, i, s ? s : "(not a string)");
+		r->steps[r->nsteps++] = k;
+	}
+	return 0;
+}
+
+int rig_load(const char *path, struct rig *r)
+{
+	static const char *const top[] = { "camera", "bracket", "roi",
+					   "output", "sensor",	"optics",
+					   "sample", "board",	"sequence",
+					   NULL };
+	static const char *const cam_keys[] = { "backend", "device", NULL };
+	static const char *const br_keys[] = { "step_ev",    "max_frames",
+					       "max_time_s", "floor_dn",
+					       "start_s",    "max_drop",
+					       NULL };
+	static const char *const roi_keys[] = { "probe", "sample", NULL };
+	json_t *cam, *br = NULL, *roi = NULL;
+	int ret;
+
+	memset(r, 0, sizeof(*r));
+	snprintf(r->path, sizeof(r->path), "%s", path);
+	glint_bracket_default_opts(&r->bracket);
+	r->output = "captures";
+	ret = glint_json_load(path, &r->doc);
+	if (ret < 0)
+		return ret;
+	ret = glint_json_known_keys(path, "", r->doc, top);
+	if (!ret)
+		ret = glint_json_object(path, "", r->doc, "camera", 1, &cam);
+	if (!ret)
+		ret = glint_json_known_keys(path, "camera", cam, cam_keys);
+	if (!ret)
+		ret = glint_json_string(path, "camera", cam, "backend", 1,
+					&r->backend);
+	if (!ret)
+		ret = glint_json_string(path, "camera", cam, "device", 0,
+					&r->device);
+	if (!ret)
+		ret = glint_json_string(path, "", r->doc, "output", 0,
+					&r->output);
+	if (!ret)
+		ret = glint_json_object(path, "", r->doc, "bracket", 0, &br);
+	if (!ret && br) {
+		struct glint_bracket_opts *o = &r->bracket;
+		ret = glint_json_known_keys(path, "bracket", br, br_keys);
+		if (!ret)
+			ret = glint_json_number(
+				path, "bracket", br, "step_ev", 0,
+				(struct glint_range){ 0.25, 4, 0, 0 },
+				&o->step_ev);
+		if (!ret)
+			ret = glint_json_int(path, "bracket", br, "max_frames",
+					     0, 1, GLINT_BRACKET_MAX,
+					     &o->max_frames);
+		if (!ret)
+			ret = glint_json_number(
+				path, "bracket", br, "max_time_s", 0,
+				(struct glint_range){ 0, 3600, 0, 1 },
+				&o->max_time_s);
+		if (!ret)
+			ret = glint_json_number(
+				path, "bracket", br, "floor_dn", 0,
+				(struct glint_range){ 0, 1e4, 0, 0 },
+				&o->floor_dn);
+		if (!ret)
+			ret = glint_json_number(
+				path, "bracket", br, "start_s", 0,
+				(struct glint_range){ 0, 60, 0, 0 },
+				&o->start_s);
+		if (!ret)
+			ret = glint_json_int(path, "bracket", br, "max_drop", 0,
+					     0, 64, &o->max_drop);
+	}
+	if (!ret) {
+		static const char *const opt_keys[] = { "focal_px", "principal",
+							"pixel_pitch_um",
+							NULL };
+		static const char *const sample_keys[] = { "diameter_m", NULL };
+		json_t *opt = NULL, *smp = NULL;
+		r->principal[0] = r->principal[1] = -1;
+		r->pitch_um = 1;
+		r->diameter_m = 0.1;
+		ret = glint_json_object(path, "", r->doc, "sample", 0, &smp);
+		if (!ret && smp)
+			ret = glint_json_known_keys(path, "sample", smp,
+						    sample_keys);
+		if (!ret && smp)
+			ret = glint_json_number(
+				path, "sample", smp, "diameter_m", 0,
+				(struct glint_range){ 0, 10, 1, 0 },
+				&r->diameter_m);
+		if (!ret)
+			ret = glint_json_object(path, "", r->doc, "optics", 0,
+						&opt);
+		if (!ret && opt)
+			ret = glint_json_known_keys(path, "optics", opt,
+						    opt_keys);
+		if (!ret && opt)
+			ret = glint_json_number(
+				path, "optics", opt, "focal_px", 1,
+				(struct glint_range){ 1, 1e6, 0, 0 },
+				&r->focal_px);
+		if (!ret && opt)
+			ret = glint_json_numbers(
+				path, "optics", opt, "principal", 0, 2,
+				(struct glint_range){ 0, 1e5, 0, 0 },
+				r->principal);
+		if (!ret && opt)
+			ret = glint_json_number(
+				path, "optics", opt, "pixel_pitch_um", 0,
+				(struct glint_range){ 0, 1000, 1, 0 },
+				&r->pitch_um);
+	}
+	if (!ret)
+		ret = glint_json_object(path, "", r->doc, "roi", 0, &roi);
+	if (!ret && roi)
+		ret = glint_json_known_keys(path, "roi", roi, roi_keys);
+	for (int k = 0; k < 2 && !ret && roi; k++) {
+		double v[4] = { 0, 0, 0, 0 };
+		ret = glint_json_numbers(
+			path, "roi", roi, k ? "sample" : "probe", 0, 4,
+			(struct glint_range){ 0, 65536, 0, 0 }, v);
+		r->roi[k] = (struct glint_roi){ (int)v[0], (int)v[1], (int)v[2],
+						(int)v[3] };
+	}
+	if (!ret)
+		ret = load_board(path, r);
+	if (!ret)
+		ret = load_sequence(path, r);
+	if (!ret)
+		r->text = json_dumps(r->doc, JSON_INDENT(2));
+	return ret;
+}
+
+void rig_free(struct rig *r)
+{
+	free(r->text);
+	json_decref(r->doc);
+	r->text = NULL;
+	r->doc = NULL;
+}

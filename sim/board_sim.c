@@ -1,0 +1,264 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * The simulated board (a backend of board/board.h).  Its button is played
+ * from a scenario file; every output change is recorded (in memory and as
+ * JSON lines in cfg->log) and moves the simulated world (sim/world.h):
+ * lights on/off, and the turntable, whose angle follows the step pulses
+ * (stepper: steps_per_turn per turn, direction line) or the relay pulses
+ * (an indexing table: each pulse goes to the other position).  The sim
+ * camera's scene=rig shows what is then in view.
+ *
+ * Scenario (JSON):
+ *   {"presses": [{"at_s": 0.5, "hold_s": 0.2, "bounces": 3}, ...]}
+ * at_s counts from the board's opening; each press starts with `bounces`
+ * extra 2 ms toggles (contact bounce) before the level settles at 1, and
+ * is released (0) hold_s later.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "board/board.h"
+#include "world.h"
+
+#include "core/json.h"
+
+#include <errno.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#define MAX_EDGES 4096
+
+struct sim_board {
+	struct glint_board_cfg cfg;
+	double t0;
+	struct glint_edge edges[MAX_EDGES]; /* the button's, in time order */
+	int nedges, next_edge;
+	int out[GLINT_ROLE_COUNT];
+	double angle; /* turntable, degrees */
+	FILE *log;
+	pthread_mutex_t lock;
+};
+
+static double now_s(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int add_edge(struct sim_board *s, double t, int v)
+{
+	if (s->nedges == MAX_EDGES)
+		return glint_error_set(E2BIG, "%s: more than %d button edges",
+				       s->cfg.scenario, MAX_EDGES);
+	s->edges[s->nedges++] = (struct glint_edge){ v, s->t0 + t };
+	return 0;
+}
+
+static int load_scenario(struct sim_board *s)
+{
+	static const char *const top[] = { "presses", NULL };
+	static const char *const keys[] = { "at_s", "hold_s", "bounces", NULL };
+	const char *f = s->cfg.scenario;
+	json_t *doc, *arr;
+	int ret;
+
+	if (!f[0])
+		return 0;
+	ret = glint_json_load(f, &doc);
+	if (ret < 0)
+		return ret;
+	ret = glint_json_known_keys(f, "", doc, top);
+	arr = json_object_get(doc, "presses");
+	if (!ret && !json_is_array(arr))
+		ret = glint_error_set(EINVAL,
+				      "%s: presses: expected an array of "
+				      "{at_s, hold_s, bounces}",
+				      f);
+	double last = -1;
+	for (size_t i = 0; !ret && i < json_array_size(arr); i++) {
+		json_t *p = json_array_get(arr, i);
+		char where[32];
+		double at = 0, hold = 0.2, bounces = 0;
+		snprintf(where, sizeof(where), "presses[%zu]", i);
+		ret = glint_json_known_keys(f, where, p, keys);
+		if (!ret)
+			ret = glint_json_number(
+				f, where, p, "at_s", 1,
+				(struct glint_range){ 0, 86400, 0, 0 }, &at);
+		if (!ret)
+			ret = glint_json_number(
+				f, where, p, "hold_s", 0,
+				(struct glint_range){ 0.001, 60, 0, 0 }, &hold);
+		if (!ret)
+			ret = glint_json_number(
+				f, where, p, "bounces", 0,
+				(struct glint_range){ 0, 20, 0, 0 }, &bounces);
+		if (!ret && at <= last)
+			ret = glint_error_set(EINVAL,
+					      "%s: %s.at_s = %g: presses must "
+					      "come in time order, after the "
+					      "previous release",
+					      f, where, at);
+		int nb = (int)bounces;
+		for (int k = 0; !ret && k < 2 * nb; k++)
+			ret = add_edge(s, at + 0.002 * k, !(k & 1));
+		if (!ret)
+			ret = add_edge(s, at + 0.002 * 2 * nb, 1);
+		if (!ret)
+			ret = add_edge(s, at + 0.002 * 2 * nb + hold, 0);
+		last = at + 0.002 * 2 * nb + hold;
+	}
+	json_decref(doc);
+	return ret;
+}
+
+static void update_world(struct sim_board *s)
+{
+	struct glint_sim_world w;
+	const struct glint_board_cfg *c = &s->cfg;
+	glint_sim_world_get(&w);
+	w.lights = c->lines[GLINT_ROLE_LIGHTS].used ? s->out[GLINT_ROLE_LIGHTS]
+						    : 1;
+	w.turntable_deg = s->angle;
+	if (c->tt_mode == GLINT_TT_NONE)
+		w.view = GLINT_SIM_VIEW_PROBE;
+	else if (fabs(remainder(s->angle - c->probe_deg, 360)) < 1)
+		w.view = GLINT_SIM_VIEW_PROBE;
+	else if (fabs(remainder(s->angle - c->sample_deg, 360)) < 1)
+		w.view = GLINT_SIM_VIEW_SAMPLE;
+	else
+		w.view = GLINT_SIM_VIEW_NONE;
+	glint_sim_world_set(&w);
+}
+
+static int sim_open(const struct glint_board_cfg *cfg, const char *consumer,
+		    void **priv)
+{
+	struct sim_board *s = calloc(1, sizeof(*s));
+	int ret;
+
+	(void)consumer;
+	*priv = NULL;
+	if (!s)
+		return glint_error_set(ENOMEM, "out of memory");
+	s->cfg = *cfg;
+	s->t0 = now_s();
+	s->angle = cfg->probe_deg;
+	ret = load_scenario(s);
+	if (!ret && cfg->log[0]) {
+		s->log = fopen(cfg->log, "a");
+		if (!s->log)
+			ret = glint_error_set(errno, "%s: %s", cfg->log,
+					      strerror(errno));
+	}
+	if (ret < 0) {
+		free(s);
+		return glint_error_prefix(ret, "sim board");
+	}
+	pthread_mutex_init(&s->lock, NULL);
+	update_world(s);
+	*priv = s;
+	return 0;
+}
+
+static void sim_close(void *priv)
+{
+	struct sim_board *s = priv;
+	if (!s)
+		return;
+	if (s->log)
+		fclose(s->log);
+	pthread_mutex_destroy(&s->lock);
+	glint_sim_world_reset();
+	free(s);
+}
+
+static int sim_set(void *priv, enum glint_role r, int v)
+{
+	struct sim_board *s = priv;
+	const struct glint_board_cfg *c = &s->cfg;
+
+	pthread_mutex_lock(&s->lock);
+	int was = s->out[r];
+	s->out[r] = v;
+	if (r == GLINT_ROLE_TT_STEP && v && !was) {
+		if (c->tt_mode == GLINT_TT_STEPPER &&
+		    (!c->lines[GLINT_ROLE_TT_ENABLE].used ||
+		     s->out[GLINT_ROLE_TT_ENABLE]))
+			s->angle +=
+				(s->out[GLINT_ROLE_TT_DIR] ? 360.0 : -360.0) /
+				c->steps_per_turn;
+		else if (c->tt_mode == GLINT_TT_RELAY)
+			s->angle = fabs(remainder(s->angle - c->probe_deg,
+						  360)) < 1
+					   ? c->sample_deg
+					   : c->probe_deg;
+	}
+	if (s->log && was != v) {
+		fprintf(s->log,
+			"{\"t\": %.4f, \"line\": \"%s\", \"value\": %d, "
+			"\"turntable_deg\": %.3f}\n",
+			now_s() - s->t0, glint_role_name(r), v, s->angle);
+		fflush(s->log);
+	}
+	update_world(s);
+	pthread_mutex_unlock(&s->lock);
+	return 0;
+}
+
+static int level_at(const struct sim_board *s, double t)
+{
+	int v = 0;
+	for (int i = 0; i < s->nedges && s->edges[i].t <= t; i++)
+		v = s->edges[i].value;
+	return v;
+}
+
+static int sim_get(void *priv, enum glint_role r, int *v)
+{
+	struct sim_board *s = priv;
+	pthread_mutex_lock(&s->lock);
+	*v = r == GLINT_ROLE_BUTTON ? level_at(s, now_s()) : s->out[r];
+	pthread_mutex_unlock(&s->lock);
+	return 0;
+}
+
+static int sim_wait_edge(void *priv, enum glint_role r, double timeout_s,
+			 struct glint_edge *e)
+{
+	struct sim_board *s = priv;
+	double t_end = now_s() + timeout_s;
+
+	if (r != GLINT_ROLE_BUTTON)
+		return 0; /* the position sensor never moves by itself */
+	int got = 0;
+	pthread_mutex_lock(&s->lock);
+	int i = s->next_edge;
+	if (i < s->nedges && s->edges[i].t <= t_end) {
+		*e = s->edges[i];
+		s->next_edge++;
+		got = 1;
+	}
+	pthread_mutex_unlock(&s->lock);
+	double until = got ? e->t : t_end;
+	double dt = until - now_s();
+	if (dt > 0) {
+		struct timespec ts = { (time_t)dt,
+				       (long)((dt - floor(dt)) * 1e9) };
+		while (nanosleep(&ts, &ts) < 0 && errno == EINTR) {
+		}
+	}
+	return got;
+}
+
+const struct glint_board_ops glint_board_sim_ops = {
+	.name = "sim",
+	.open = sim_open,
+	.close = sim_close,
+	.set = sim_set,
+	.get = sim_get,
+	.wait_edge = sim_wait_edge,
+};

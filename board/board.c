@@ -297,6 +297,7 @@ int glint_board_led(struct glint_board *b, enum glint_led pattern)
 {
 	if (!b->led_running)
 		return 0;
+	glint_log_info("led: %s", glint_led_name(pattern));
 	pthread_mutex_lock(&b->lock);
 	b->led = pattern;
 	pthread_cond_signal(&b->led_cond);

@@ -50,6 +50,14 @@ int cmd_hdr_merge_write(const struct glint_frame *frames, int n,
  * values for what is absent). */
 int cmd_session_noise(const char *dir, struct glint_noise_model *m);
 void cmd_probe_help(void);
+int cmd_rig(int argc, char **argv);
+void cmd_rig_help(void);
+int cmd_check_rig(int argc, char **argv);
+void cmd_check_rig_help(void);
+int cmd_queue(int argc, char **argv);
+int cmd_jobs(int argc, char **argv);
+int cmd_sessions(int argc, char **argv);
+void cmd_queue_help(void);
 void cmd_hdr_help(void);
 void cmd_cameras_help(void);
 

@@ -8,6 +8,8 @@
 #include "cmd.h"
 #include "capture_run.h"
 
+#include "board/board.h"
+
 #include "capture/hdr_linear.h"
 #include "capture/probe.h"
 #include "capture/sphere_detect.h"
@@ -159,7 +161,22 @@ int cmd_capture(int argc, char **argv)
 	sa.sa_handler = on_sigint;
 	sigaction(SIGINT, &sa, &old_int);
 	sigaction(SIGTERM, &sa, &old_term);
-	ret = capture_run(&rig, kind, out, probe, &cancel_flag, &res);
+	/* A rig with a board: lights on and the turntable to what is being
+	 * captured, lights off after (the board is busy while the rig
+	 * daemon runs: the error says so). */
+	struct glint_board *board = NULL;
+	if (rig.has_board) {
+		ret = glint_board_open(&rig.board, "glint capture", &board);
+		if (ret == 0)
+			ret = glint_board_lights(board, 1);
+		if (ret == 0)
+			ret = glint_board_turntable(board,
+						    strcmp(kind, "sample") == 0,
+						    &cancel_flag);
+	}
+	if (ret == 0)
+		ret = capture_run(&rig, kind, out, probe, &cancel_flag, &res);
+	glint_board_close(board);
 	sigaction(SIGINT, &old_int, NULL);
 	sigaction(SIGTERM, &old_term, NULL);
 	rig_free(&rig);

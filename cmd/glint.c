@@ -32,6 +32,15 @@ static const struct glint_cmd commands[] = {
 	  cmd_hdr, cmd_hdr_help },
 	{ "probe", "unwrap a mirror-ball photo; convert probe formats",
 	  cmd_probe, cmd_probe_help },
+	{ "rig", "the appliance: button -> capture sequence -> queued fit",
+	  cmd_rig, cmd_rig_help },
+	{ "check-rig", "check a rig file, its camera and GPIO lines",
+	  cmd_check_rig, cmd_check_rig_help },
+	{ "sessions", "list capture sessions and their status", cmd_sessions,
+	  cmd_queue_help },
+	{ "jobs", "list the job queue", cmd_jobs, cmd_queue_help },
+	{ "queue", "add, cancel or run queued fits", cmd_queue,
+	  cmd_queue_help },
 };
 
 #define NCOMMANDS (sizeof(commands) / sizeof(commands[0]))

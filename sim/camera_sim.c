@@ -23,10 +23,12 @@
 #include "sensor.h"
 
 #include "reference.h"
+#include "world.h"
 
 #include "core/error.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -34,7 +36,9 @@
 struct sim_cam {
 	struct glint_clock clock, outer;
 	double timescale, decades;
-	enum { SCENE_CARD, SCENE_PROBE, SCENE_SAMPLE } scene;
+	enum { SCENE_CARD, SCENE_PROBE, SCENE_SAMPLE, SCENE_RIG } scene;
+	/* scene=rig: what the board's world shows (sim/world.h) */
+	struct glint_image *probe_img, *sample_img, *dark_img;
 	char material[48]; /* the sample's Table-1 name */
 	struct glint_sensor sensor;
 	struct glint_image *radiance;
@@ -63,18 +67,18 @@ static int parse_device(const char *dev, struct sim_cam *s)
 		int n = 0;
 		if (!strncmp(p, "scene=", 6)) {
 			static const char *const names[] = { "card", "probe",
-							     "sample" };
+							     "sample", "rig" };
 			char word[16];
-			int k = 3;
+			int k = 4;
 			if (sscanf(p + 6, "%15[a-z]%n", word, &n) == 1)
-				for (k = 0; k < 3 && strcmp(word, names[k]);)
+				for (k = 0; k < 4 && strcmp(word, names[k]);)
 					k++;
-			if (k == 3)
+			if (k == 4)
 				return glint_error_set(
 					EINVAL,
 					"sim camera device '%s': "
-					"scene: expected card, probe or "
-					"sample",
+					"scene: expected card, probe, "
+					"sample or rig",
 					dev);
 			s->scene = k;
 			p += 6 + n;
@@ -198,8 +202,54 @@ int glint_sim_sample_scene_def(int w, int h, struct glint_scene *sc)
 	return 0;
 }
 
+static int render_sample(int w, int h, const char *material,
+			 struct glint_image **out);
+
+/* The reference render takes seconds: the last one is kept for the
+ * process (the rig daemon opens the camera once per capture). */
+static struct {
+	pthread_mutex_t lock;
+	int w, h;
+	char material[48];
+	struct glint_image *img;
+} sample_cache = { PTHREAD_MUTEX_INITIALIZER, 0, 0, "", NULL };
+
+static struct glint_image *image_copy(const struct glint_image *src)
+{
+	struct glint_image *d = glint_image_new(src->width, src->height);
+	if (d)
+		memcpy(d->data, src->data,
+		       (size_t)src->width * src->height * 3 * sizeof(float));
+	return d;
+}
+
 int glint_sim_sample_scene(int w, int h, const char *material,
 			   struct glint_image **out)
+{
+	int ret = 0;
+	pthread_mutex_lock(&sample_cache.lock);
+	if (!sample_cache.img || sample_cache.w != w || sample_cache.h != h ||
+	    strcmp(sample_cache.material, material) != 0) {
+		struct glint_image *img = NULL;
+		ret = render_sample(w, h, material, &img);
+		if (ret == 0) {
+			glint_image_free(sample_cache.img);
+			sample_cache.img = img;
+			sample_cache.w = w;
+			sample_cache.h = h;
+			snprintf(sample_cache.material,
+				 sizeof(sample_cache.material), "%s", material);
+		}
+	}
+	*out = NULL;
+	if (ret == 0 && !(*out = image_copy(sample_cache.img)))
+		ret = glint_error_set(ENOMEM, "out of memory");
+	pthread_mutex_unlock(&sample_cache.lock);
+	return ret;
+}
+
+static int render_sample(int w, int h, const char *material,
+			 struct glint_image **out)
 {
 	struct glint_scene sc;
 	struct glint_envmap *env = NULL;
@@ -302,7 +352,23 @@ static int sim_open(const char *device, const struct glint_clock *clock,
 	else if (s->scene == SCENE_SAMPLE)
 		ret = glint_sim_sample_scene(s->width, s->height, s->material,
 					     &s->radiance);
-	else
+	else if (s->scene == SCENE_RIG) {
+		ret = glint_sim_probe_scene(s->width, s->height, &s->probe_img);
+		if (!ret)
+			ret = glint_sim_sample_scene(s->width, s->height,
+						     s->material,
+						     &s->sample_img);
+		s->dark_img = glint_image_new(s->width, s->height);
+		s->radiance = glint_image_new(s->width, s->height);
+		if (!ret && (!s->dark_img || !s->radiance))
+			ret = glint_error_set(ENOMEM, "out of memory");
+		if (ret < 0) {
+			glint_image_free(s->probe_img);
+			glint_image_free(s->sample_img);
+			glint_image_free(s->dark_img);
+			glint_image_free(s->radiance);
+		}
+	} else
 		s->radiance =
 			glint_sim_test_card(s->width, s->height, s->decades);
 	if (ret < 0) {
@@ -330,7 +396,26 @@ static void sim_close(void *priv)
 	if (!s)
 		return;
 	glint_image_free(s->radiance);
+	glint_image_free(s->probe_img);
+	glint_image_free(s->sample_img);
+	glint_image_free(s->dark_img);
 	free(s);
+}
+
+/* scene=rig: the radiance of what is in view, dimmed with the lights
+ * off. */
+static void rig_view(struct sim_cam *s)
+{
+	struct glint_sim_world w;
+	glint_sim_world_get(&w);
+	const struct glint_image *src =
+		w.view == GLINT_SIM_VIEW_PROBE	  ? s->probe_img
+		: w.view == GLINT_SIM_VIEW_SAMPLE ? s->sample_img
+						  : s->dark_img;
+	float k = w.lights ? 1.0f : (float)GLINT_SIM_LIGHTS_OFF_FACTOR;
+	size_t n = (size_t)s->width * s->height * 3;
+	for (size_t i = 0; i < n; i++)
+		s->radiance->data[i] = k * src->data[i];
 }
 
 static int sim_describe(void *priv, struct glint_camera_info *in)
@@ -413,6 +498,8 @@ static int sim_grab(void *priv, struct glint_frame *f)
 		ret = glint_error_set(ENOMEM, "sim camera: out of memory");
 		goto err;
 	}
+	if (s->scene == SCENE_RIG)
+		rig_view(s);
 	ret = glint_sensor_capture(&sn, s->radiance, dn);
 	if (ret < 0)
 		goto err;

@@ -1,0 +1,332 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * glint queue add|cancel|run, glint jobs, glint sessions: the job queue
+ * (board/queue.h) and the capture sessions, as plain commands for SSH
+ * users and the rig daemon alike.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "cmd.h"
+#include "queue_worker.h"
+#include "rig_config.h"
+
+#include "board/queue.h"
+#include "core/error.h"
+#include "core/log.h"
+
+#include <dirent.h>
+#include <getopt.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+void cmd_queue_help(void)
+{
+	printf("usage: glint queue add SESSION [--root DIR]\n"
+	       "       glint queue cancel ID [--root DIR]\n"
+	       "       glint queue run [--until-empty] [--root DIR]\n"
+	       "       glint jobs [--root DIR] [--json]\n"
+	       "       glint sessions [--root DIR] [--json]\n"
+	       "\n"
+	       "The job queue shared by the rig daemon and SSH users, a folder "
+	       "ROOT/queue that\nany number of processes use safely (no "
+	       "server).  add queues a fit of a sample\nsession; cancel "
+	       "removes a pending job or stops a running one; run is a "
+	       "worker:\nit fits queued sessions one at a time (glint fit "
+	       "SESSION --wait), forever or\nuntil the queue is empty.  A "
+	       "worker that dies leaves its job to be re-run by\nthe next.  "
+	       "jobs lists the queue; sessions lists capture sessions with "
+	       "their\nstatus.\n"
+	       "\n"
+	       "  --root DIR       the captures folder (default: the rig "
+	       "file's \"output\")\n"
+	       "  --config FILE    rig file to take the root from (default: "
+	       "data/rig-sim.json)\n"
+	       "  --until-empty    run: stop when no job is left\n"
+	       "  --json           JSON on stdout\n"
+	       "  -q, --quiet      no info messages\n");
+}
+
+struct qopts {
+	char root[4096], queue[4200];
+	int json, until_empty;
+};
+
+static int parse(const char *cmd, int argc, char **argv, struct qopts *q)
+{
+	enum { O_ROOT = 256, O_CONFIG, O_JSON, O_UNTIL };
+	static const struct option opts[] = {
+		{ "root", required_argument, NULL, O_ROOT },
+		{ "config", required_argument, NULL, O_CONFIG },
+		{ "json", no_argument, NULL, O_JSON },
+		{ "until-empty", no_argument, NULL, O_UNTIL },
+		{ "quiet", no_argument, NULL, 'q' },
+		{ "help", no_argument, NULL, 'h' },
+		{ NULL, 0, NULL, 0 },
+	};
+	const char *root = NULL, *config = NULL;
+	char def[4096];
+	int c;
+
+	memset(q, 0, sizeof(*q));
+	optind = 1;
+	while ((c = getopt_long(argc, argv, "qh", opts, NULL)) != -1) {
+		switch (c) {
+		case O_ROOT:
+			root = optarg;
+			break;
+		case O_CONFIG:
+			config = optarg;
+			break;
+		case O_JSON:
+			q->json = 1;
+			glint_log_set_mode(GLINT_LOG_JSON);
+			break;
+		case O_UNTIL:
+			q->until_empty = 1;
+			break;
+		case 'q':
+			glint_log_set_mode(GLINT_LOG_QUIET);
+			break;
+		case 'h':
+			cmd_queue_help();
+			return 1;
+		default:
+			return -1;
+		}
+	}
+	if (!root) {
+		struct rig rig;
+		if (!config) {
+			snprintf(def, sizeof(def), "%s/rig-sim.json",
+				 glint_data_dir());
+			config = def;
+		}
+		if (rig_load(config, &rig) < 0) {
+			rig_free(&rig);
+			cmd_fail(cmd);
+			return -2;
+		}
+		snprintf(q->root, sizeof(q->root), "%s", rig.output);
+		rig_free(&rig);
+	} else {
+		snprintf(q->root, sizeof(q->root), "%s", root);
+	}
+	snprintf(q->queue, sizeof(q->queue), "%s/queue", q->root);
+	return 0;
+}
+
+static int parse_status(int r)
+{
+	return r == 1	 ? GLINT_EXIT_OK
+	       : r == -2 ? GLINT_EXIT_FAIL
+			 : GLINT_EXIT_USAGE;
+}
+
+static int print_job(const struct glint_job *j, void *ctx)
+{
+	json_t *arr = ctx;
+	if (arr) {
+		json_t *d = json_deep_copy(j->doc);
+		json_object_set_new(d, "state", json_string(j->state));
+		json_array_append_new(arr, d);
+		return 0;
+	}
+	const char *err = json_string_value(json_object_get(j->doc, "error"));
+	printf("%-34s %-9s %-4s %s%s%s\n", j->id, j->state, j->kind, j->session,
+	       err ? "  -- " : "", err ? err : "");
+	return 0;
+}
+
+int cmd_jobs(int argc, char **argv)
+{
+	struct qopts q;
+	int r = parse("jobs", argc, argv, &q);
+	if (r)
+		return parse_status(r);
+	if (optind != argc)
+		return cmd_usage_error("jobs", "unexpected argument '%s'",
+				       argv[optind]);
+	json_t *arr = q.json ? json_array() : NULL;
+	if (!q.json)
+		printf("%-34s %-9s %-4s %s\n", "ID", "STATE", "KIND",
+		       "SESSION");
+	if (glint_queue_list(q.queue, print_job, arr) < 0) {
+		json_decref(arr);
+		return cmd_fail("jobs");
+	}
+	if (arr)
+		cmd_print_json(
+			json_pack("{s:s, s:o}", "queue", q.queue, "jobs", arr));
+	return GLINT_EXIT_OK;
+}
+
+static int cmp_str(const void *a, const void *b)
+{
+	return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+/* Sessions under root and one level down (the daemon's run-* folders). */
+static void collect(const char *dir, int depth, char ***list, int *n)
+{
+	DIR *d = opendir(dir);
+	struct dirent *e;
+	char path[4400];
+
+	if (!d)
+		return;
+	while ((e = readdir(d))) {
+		if (e->d_name[0] == '.' || !strcmp(e->d_name, "queue"))
+			continue;
+		snprintf(path, sizeof(path), "%s/%s", dir, e->d_name);
+		struct stat st;
+		char sj[4500];
+		snprintf(sj, sizeof(sj), "%s/session.json", path);
+		if (stat(sj, &st) == 0) {
+			*list = realloc(*list,
+					(size_t)(*n + 1) * sizeof(char *));
+			(*list)[(*n)++] = strdup(path);
+		} else if (depth == 0 && stat(path, &st) == 0 &&
+			   S_ISDIR(st.st_mode)) {
+			collect(path, 1, list, n);
+		}
+	}
+	closedir(d);
+}
+
+int cmd_sessions(int argc, char **argv)
+{
+	struct qopts q;
+	char **list = NULL;
+	int n = 0;
+	int r = parse("sessions", argc, argv, &q);
+	if (r)
+		return parse_status(r);
+	if (optind != argc)
+		return cmd_usage_error("sessions", "unexpected argument '%s'",
+				       argv[optind]);
+	collect(q.root, 0, &list, &n);
+	qsort(list, (size_t)n, sizeof(char *), cmp_str);
+	json_t *arr = json_array();
+	if (!q.json)
+		printf("%-9s %-6s %-11s %-5s %s\n", "KIND", "FRAMES", "STATUS",
+		       "FIT", "SESSION");
+	for (int i = 0; i < n; i++) {
+		char path[4500];
+		struct stat st;
+		snprintf(path, sizeof(path), "%s/session.json", list[i]);
+		json_t *doc = json_load_file(path, 0, NULL);
+		const char *kind =
+			json_string_value(json_object_get(doc, "kind"));
+		const char *status =
+			json_string_value(json_object_get(doc, "status"));
+		int frames =
+			(int)json_array_size(json_object_get(doc, "frames"));
+		snprintf(path, sizeof(path), "%s/fit/params.json", list[i]);
+		int fitted = stat(path, &st) == 0;
+		const char *err =
+			json_string_value(json_object_get(doc, "error"));
+		if (q.json)
+			json_array_append_new(
+				arr, json_pack("{s:s, s:s, s:s, s:i, s:b, "
+					       "s:s*}",
+					       "session", list[i], "kind",
+					       kind ? kind : "?", "status",
+					       status ? status : "unreadable",
+					       "frames", frames, "fitted",
+					       fitted, "error", err));
+		else
+			printf("%-9s %6d %-11s %-5s %s%s%s\n",
+			       kind ? kind : "?", frames,
+			       status ? status : "unreadable",
+			       fitted ? "yes" : "-", list[i],
+			       err ? "  -- " : "", err ? err : "");
+		json_decref(doc);
+		free(list[i]);
+	}
+	free(list);
+	if (q.json)
+		cmd_print_json(json_pack("{s:s, s:o}", "root", q.root,
+					 "sessions", arr));
+	else
+		json_decref(arr);
+	return GLINT_EXIT_OK;
+}
+
+static volatile sig_atomic_t stop_worker;
+
+static void on_stop(int sig)
+{
+	(void)sig;
+	stop_worker = 1;
+}
+
+int cmd_queue(int argc, char **argv)
+{
+	struct qopts q;
+
+	if (argc < 2 || argv[1][0] == '-') {
+		if (argc >= 2 &&
+		    (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help"))) {
+			cmd_queue_help();
+			return GLINT_EXIT_OK;
+		}
+		return cmd_usage_error("queue", "expected add, cancel or run");
+	}
+	const char *what = argv[1];
+	int r = parse("queue", argc - 1, argv + 1, &q);
+	if (r)
+		return parse_status(r);
+	int nargs = argc - 1 - optind;
+	char **args = argv + 1 + optind;
+	if (!strcmp(what, "add")) {
+		char id[64];
+		if (nargs != 1)
+			return cmd_usage_error("queue",
+					       "add: expected SESSION");
+		struct stat st;
+		char sj[4200];
+		snprintf(sj, sizeof(sj), "%s/session.json", args[0]);
+		if (stat(sj, &st) < 0) {
+			glint_error_set(ENOENT,
+					"%s: not a capture session (no "
+					"session.json)",
+					args[0]);
+			return cmd_fail("queue");
+		}
+		if (glint_queue_add(q.queue, "fit", args[0], id) < 0)
+			return cmd_fail("queue");
+		if (q.json)
+			cmd_print_json(json_pack("{s:s}", "id", id));
+		else
+			printf("%s\n", id);
+		return GLINT_EXIT_OK;
+	}
+	if (!strcmp(what, "cancel")) {
+		if (nargs != 1)
+			return cmd_usage_error("queue", "cancel: expected ID");
+		if (glint_queue_cancel(q.queue, args[0]) < 0)
+			return cmd_fail("queue");
+		return GLINT_EXIT_OK;
+	}
+	if (!strcmp(what, "run")) {
+		struct sigaction sa;
+		if (nargs != 0)
+			return cmd_usage_error("queue",
+					       "run: unexpected argument '%s'",
+					       args[0]);
+		memset(&sa, 0, sizeof(sa));
+		sa.sa_handler = on_stop;
+		sigaction(SIGINT, &sa, NULL);
+		sigaction(SIGTERM, &sa, NULL);
+		int done = queue_work(q.queue, q.until_empty, &stop_worker);
+		if (done < 0)
+			return cmd_fail("queue");
+		return GLINT_EXIT_OK;
+	}
+	return cmd_usage_error("queue",
+			       "'%s': expected add, cancel or run (glint jobs "
+			       "lists the queue)",
+			       what);
+}

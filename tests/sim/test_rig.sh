@@ -1,0 +1,191 @@
+#!/bin/bash
+# The appliance on the simulated rig (sim camera scene=rig + sim board):
+# a scripted press runs the whole sequence to a fit; a second press
+# cancels; SIGTERM mid-capture stops cleanly; bad rig files are refused
+# before any output moves; the job queue survives a killed worker.
+# usage: test_rig.sh GLINT DATA_DIR
+set -u
+glint=$1
+data=$2
+tmp=$(mktemp -d)
+trap 'kill $(jobs -p) 2>/dev/null; rm -rf "$tmp"' EXIT
+fails=0 checks=0
+check() {
+	local what=$1
+	shift
+	checks=$((checks + 1))
+	if "$@"; then
+		echo "ok   $what"
+	else
+		echo "FAIL $what"
+		fails=$((fails + 1))
+	fi
+}
+run() { # EXPECTED_STATUS FRAGMENT ARGS...
+	local want=$1 frag=$2
+	shift 2
+	"$glint" "$@" >"$tmp/out" 2>"$tmp/err"
+	local got=$?
+	if [ "$got" != "$want" ]; then
+		echo "  glint $*: exit $got, expected $want; stderr:" >&2
+		tail -20 "$tmp/err" >&2
+		return 1
+	fi
+	if [ -n "$frag" ] && ! grep -qF -- "$frag" "$tmp/err"; then
+		echo "  glint $*: stderr lacks '$frag':" >&2
+		tail -20 "$tmp/err" >&2
+		return 1
+	fi
+}
+# rig NAME PRESSES [W H]: the shipped sim rig, output and log in $tmp.
+rig() {
+	echo "{\"presses\": [$2]}" >"$tmp/$1-press.json"
+	python3 - "$data/rig-sim.json" "$tmp/$1.json" "$tmp/$1" "$tmp/$1-press.json" "$tmp/$1-board.log" "${3:-160}" "${4:-120}" <<'PY'
+import json, sys
+src, dst, out, press, log, w, h = sys.argv[1:]
+r = json.load(open(src))
+r["output"] = out
+r["board"]["scenario"] = press
+r["board"]["log"] = log
+r["camera"]["device"] = "sim:width=%s,height=%s,scene=rig,timescale=0.05" % (w, h)
+r["optics"]["focal_px"] = 2 * int(w)
+json.dump(r, open(dst, "w"), indent=1)
+PY
+}
+# outputs NAME: the final value of each output line in the board log
+final() {
+	python3 - "$tmp/$1-board.log" "$2" <<'PY'
+import json, sys
+last = {}
+for l in open(sys.argv[1]):
+    e = json.loads(l)
+    last[e["line"]] = e["value"]
+want = dict(kv.split("=") for kv in sys.argv[2].split(","))
+bad = {k: last.get(k, 0) for k, v in want.items() if last.get(k, 0) != int(v)}
+print("  final outputs", last)
+sys.exit(1 if bad else 0)
+PY
+}
+
+check "rig --help" run 0 "" rig --help
+check "check-rig of the shipped sim rig" run 0 "" check-rig
+
+# 1. One press -> complete run with a fit.
+rig one '{"at_s": 0.3, "hold_s": 0.1, "bounces": 3}'
+check "one press: run, capture, fit" run 0 "run complete" rig --config "$tmp/one.json" --once --json
+cp "$tmp/out" "$tmp/one.out"
+cp "$tmp/err" "$tmp/one.err"
+check "... result names the run's sessions and the fit" python3 -c "
+import json, os, sys
+d = json.load(open('$tmp/one.out'))
+for k in ('probe', 'sample'):
+    s = json.load(open(os.path.join(d[k], 'session.json')))
+    assert s['status'] == 'complete', (k, s['status'])
+for f in ('probe.exr', 'env.exr', 'env-mask.png'):
+    assert os.path.getsize(os.path.join(d['probe'], f)) > 0, f
+for f in ('sample.exr', 'scene.json', 'fit/params.json', 'fit/compare.png'):
+    assert os.path.getsize(os.path.join(d['sample'], f)) > 0, f
+p = {q['name']: q['value'] for q in d['fit']['parameters']}
+print('  fitted', {k: round(v, 3) for k, v in p.items()})
+assert abs(p['diffuse.r'] - 0.292) < 0.02 and abs(p['diffuse.g'] - 0.117) < 0.02
+"
+check "... bounces were debounced into one press" bash -c "test \$(grep -c 'button pressed: starting' '$tmp/one.err') = 1"
+check "... outputs safe at the end (lights off, stepper disabled, LED off)" final one "lights=0,turntable_enable=0,led=0,turntable_step=0"
+check "... lights were on while capturing, turntable went to 180 deg" python3 -c "
+import json
+ev = [json.loads(l) for l in open('$tmp/one-board.log')]
+on = [e for e in ev if e['line'] == 'lights' and e['value'] == 1]
+assert on, 'lights never on'
+assert max(e['turntable_deg'] for e in ev) > 179.9, 'turntable never at the sample'
+"
+check "... LED: idle, busy, done (logged)" python3 -c "
+import json
+leds = [json.loads(l)['msg'][5:] for l in open('$tmp/one.err') if '\"led: ' in l]
+print('  led', leds)
+assert leds[:3] == ['idle', 'busy', 'done'], leds
+"
+check "... LED blinked at 4 Hz while busy" python3 -c "
+import json
+ev = [json.loads(l) for l in open('$tmp/one-board.log')]
+t_on = [e['t'] for e in ev if e['line'] == 'lights' and e['value'] == 1][0]
+t_off = [e['t'] for e in ev if e['line'] == 'lights' and e['value'] == 0][-1]
+led = [e['t'] for e in ev if e['line'] == 'led' and t_on < e['t'] < t_off]
+d = sorted(b - a for a, b in zip(led, led[1:]))
+print('  busy toggles', len(led), 'median interval %.3f s' % d[len(d) // 2])
+assert len(led) > 10 and abs(d[len(d) // 2] - 0.125) < 0.03
+"
+check "sessions lists the run's sessions" run 0 "" sessions --root "$tmp/one"
+check "... complete, fitted" bash -c "grep -q 'sample .*complete *yes' '$tmp/out' && grep -q 'probe .*complete' '$tmp/out'"
+check "jobs lists the done job" run 0 "" jobs --root "$tmp/one"
+check "... done" grep -q " done " "$tmp/out"
+
+# 2. A second press during the run cancels it.
+rig two '{"at_s": 0.3, "hold_s": 0.1}, {"at_s": 1.5, "hold_s": 0.1}'
+check "second press cancels the run" run 1 "cancelled (button)" rig --config "$tmp/two.json" --once
+check "... the probe session is kept, incomplete" bash -c "grep -q '\"status\": \"incomplete\"' '$tmp'/two/run-*/probe-*/session.json"
+check "... no sample captured, no fit queued" bash -c "! ls -d '$tmp'/two/run-*/sample-* 2>/dev/null && ! ls '$tmp'/two/queue/pending/*.json 2>/dev/null"
+check "... outputs safe" final two "lights=0,turntable_enable=0,led=0"
+
+# 3. SIGTERM mid-capture: clean stop.
+rig term '{"at_s": 0.2, "hold_s": 0.1}'
+"$glint" rig --config "$tmp/term.json" 2>"$tmp/term.err" &
+pid=$!
+for _ in $(seq 300); do
+	ls "$tmp"/term/run-*/probe-*/frame-001.png >/dev/null 2>&1 && break
+	sleep 0.05
+done
+kill -TERM $pid
+wait $pid
+st=$?
+check "SIGTERM mid-capture: exit 0 (clean shutdown)" test "$st" = 0
+check "... says so" grep -q "stopping: outputs safe" "$tmp/term.err"
+check "... the session is incomplete with its frames" python3 -c "
+import glob, json
+s = glob.glob('$tmp/term/run-*/probe-*/session.json')[0]
+d = json.load(open(s))
+print('  status', d['status'], 'frames', len(d['frames']))
+assert d['status'] == 'incomplete' and len(d['frames']) >= 1
+"
+check "... outputs safe" final term "lights=0,turntable_enable=0,led=0,turntable_step=0"
+
+# 4. Bad rig files: refused before any output moves (no board log).
+bad() { # NAME EXPECTED-FRAGMENT PYTHON-EDIT
+	rig "$1" '{"at_s": 0.2}'
+	python3 -c "
+import json
+r = json.load(open('$tmp/$1.json'))
+$3
+json.dump(r, open('$tmp/$1.json', 'w'))"
+	check "bad rig ($1): refused, named" run 1 "$2" rig --config "$tmp/$1.json" --once
+	check "... no output touched" test ! -s "$tmp/$1-board.log"
+}
+bad role "board.lines.fan: unknown role" "r['board']['lines']['fan'] = {'chip': 'gpiochip0', 'line': 3}"
+bad twice "are the same line" "r['board']['lines']['lights']['line'] = 27"
+bad nocam "/dev/video9" "r['camera'] = {'backend': 'v4l2', 'device': '/dev/video9'}"
+bad nobutton "board.lines.button: missing" "del r['board']['lines']['button']"
+bad mode "turntable.mode" "r['board']['turntable']['mode'] = 'spin'"
+bad step "sequence[1]" "r['sequence'] = ['lights on', 'dance']"
+
+# 5. The queue: a worker killed mid-fit leaves its job re-runnable.
+sess=$(ls -d "$tmp"/one/run-*/sample-*)
+check "queue add" run 0 "" queue add "$sess" --root "$tmp/one"
+"$glint" queue run --until-empty --root "$tmp/one" -q &
+wpid=$!
+for _ in $(seq 200); do
+	ls "$tmp"/one/queue/running/*.json >/dev/null 2>&1 && break
+	sleep 0.05
+done
+sleep 0.3
+kill -KILL $wpid
+wait $wpid 2>/dev/null
+pkill -KILL -f "glint fit $sess" 2>/dev/null
+check "killed worker: its job is still listed as running" bash -c "'$glint' jobs --root '$tmp/one' | grep -q ' running '"
+check "a new worker re-runs it" run 0 "put back in the queue" queue run --until-empty --root "$tmp/one"
+check "... and it is done" bash -c "'$glint' jobs --root '$tmp/one' --json | python3 -c 'import json,sys; j=json.load(sys.stdin)[\"jobs\"]; s=[x[\"state\"] for x in j]; print(\"  states\", s); sys.exit(s.count(\"done\") != 2 or \"running\" in s or \"pending\" in s)'"
+id=$("$glint" queue add "$sess" --root "$tmp/one")
+check "cancel a pending job" run 0 "" queue cancel "$id" --root "$tmp/one"
+check "... listed as cancelled" bash -c "'$glint' jobs --root '$tmp/one' | grep -q '$id *cancelled'"
+check "cancel of an unknown job: named" run 1 "nosuchjob" queue cancel nosuchjob --root "$tmp/one"
+
+echo "$((checks - fails)) passed, $fails failed"
+[ "$fails" = 0 ]

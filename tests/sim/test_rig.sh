@@ -3,10 +3,14 @@
 # a scripted press runs the whole sequence to a fit; a second press
 # cancels; SIGTERM mid-capture stops cleanly; bad rig files are refused
 # before any output moves; the job queue survives a killed worker.
-# usage: test_rig.sh GLINT DATA_DIR
+# With FAKE_GPIO_LIB (the fake GPIO chip), the same daemon on the libgpiod
+# backend.
+# usage: test_rig.sh GLINT DATA_DIR [FAKE_GPIO_LIB|none]
 set -u
 glint=$1
 data=$2
+fakegpio=${3:-none}
+export ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}verify_asan_link_order=0"
 tmp=$(mktemp -d)
 trap 'kill $(jobs -p) 2>/dev/null; rm -rf "$tmp"' EXIT
 fails=0 checks=0
@@ -186,6 +190,34 @@ id=$("$glint" queue add "$sess" --root "$tmp/one")
 check "cancel a pending job" run 0 "" queue cancel "$id" --root "$tmp/one"
 check "... listed as cancelled" bash -c "'$glint' jobs --root '$tmp/one' | grep -q '$id *cancelled'"
 check "cancel of an unknown job: named" run 1 "nosuchjob" queue cancel nosuchjob --root "$tmp/one"
+
+# 6. The same appliance on the libgpiod backend, through the fake chip.
+if [ "$fakegpio" != none ]; then
+	rig gpio '{"at_s": 0.3}'
+	python3 -c "
+import json
+r = json.load(open('$tmp/gpio.json'))
+r['board']['backend'] = 'gpiod'
+del r['board']['scenario'], r['board']['log']
+json.dump(r, open('$tmp/gpio.json', 'w'))"
+	gpio() { # EXPECTED FRAGMENT FAKE_GPIO ARGS...
+		local want=$1 frag=$2 opts=$3
+		shift 3
+		FAKE_GPIO="$opts" LD_PRELOAD="$fakegpio" run "$want" "$frag" "$@"
+	}
+	check "gpiod: check-rig finds the lines free" gpio 0 "line(s) present and free" "" check-rig --config "$tmp/gpio.json"
+	check "gpiod: a busy line is named with its consumer" gpio 1 "in use by \"pigpiod\"" "busy=22:pigpiod" check-rig --config "$tmp/gpio.json"
+	check "gpiod: one press runs the whole sequence" gpio 0 "run complete" "press=0.3:0.1:2,log=$tmp/gpio.log" rig --config "$tmp/gpio.json" --once
+	check "... lights (line 22) ended off, enable (25, active low) high" python3 -c "
+import json
+last = {}
+for l in open('$tmp/gpio.log'):
+    e = json.loads(l)
+    last[e['offset']] = (e['value'], e['phys'])
+print('  final (logical, physical)', last)
+assert last[22] == (0, 0) and last[25] == (0, 1) and last[27][0] == 0
+"
+fi
 
 echo "$((checks - fails)) passed, $fails failed"
 [ "$fails" = 0 ]

@@ -397,6 +397,25 @@ int glint_board_turntable(struct glint_board *b, int which,
 	b->angle_deg = target;
 	b->tt_known = 1;
 	sleep_s(c->settle_s);
+	/* With a position sensor, trust it over the step count. */
+	if (c->lines[GLINT_ROLE_POSITION].used) {
+		int at_probe = 0;
+		pthread_mutex_lock(&b->lock);
+		ret = b->ops->get(b->priv, GLINT_ROLE_POSITION, &at_probe);
+		pthread_mutex_unlock(&b->lock);
+		if (ret < 0)
+			return ret;
+		if (at_probe != !which) {
+			b->tt_known = 0;
+			return glint_error_set(EIO,
+					       "turntable: moved to the %s but "
+					       "the position sensor "
+					       "(board.lines.position) reads "
+					       "%d: stalled or slipped?",
+					       which ? "sample" : "probe",
+					       at_probe);
+		}
+	}
 	glint_log_info("turntable at %s (%.0f deg)", which ? "sample" : "probe",
 		       target);
 	return 0;

@@ -221,7 +221,12 @@ static int sim_get(void *priv, enum glint_role r, int *v)
 {
 	struct sim_board *s = priv;
 	pthread_mutex_lock(&s->lock);
-	*v = r == GLINT_ROLE_BUTTON ? level_at(s, now_s()) : s->out[r];
+	if (r == GLINT_ROLE_BUTTON)
+		*v = level_at(s, now_s());
+	else if (r == GLINT_ROLE_POSITION) /* 1: the probe faces the camera */
+		*v = fabs(remainder(s->angle - s->cfg.probe_deg, 360)) < 1;
+	else
+		*v = s->out[r];
 	pthread_mutex_unlock(&s->lock);
 	return 0;
 }

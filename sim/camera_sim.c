@@ -13,7 +13,8 @@
  * scene (card, the default; probe: a chrome ball reflecting the Venice
  * map; sample: a sphere of a Table-1 material under the same map, see
  * sim/camera_sim.h), material (the sample's Table-1 name, default
- * yellow-plastic), decades (the test card's dynamic range, default 6, plus
+ * yellow-plastic; rig: what the sim board put in view, sim/world.h),
+ * decades (the test card's dynamic range, default 6, plus
  * its bright disk), timescale (real seconds per simulated second, default
  * 1: tests and demos run a 2 s exposure in 20 ms with 0.01).
  */

@@ -198,6 +198,30 @@ static void test_vanish(void)
 	glint_board_close(b); /* must not crash or hang */
 }
 
+/* A position sensor that disagrees with the step count is an error (the
+ * fake's inputs read 0: "probe not in view"). */
+static void test_position_sensor(void)
+{
+	struct glint_board_cfg c;
+	struct glint_board *b = NULL;
+	cfg_default(&c);
+	c.lines[GLINT_ROLE_POSITION].used = 1;
+	snprintf(c.lines[GLINT_ROLE_POSITION].chip,
+		 sizeof(c.lines[GLINT_ROLE_POSITION].chip), "gpiochip0");
+	c.lines[GLINT_ROLE_POSITION].offset = 5;
+	fake("");
+	CHECK(glint_board_open(&c, "glint test", &b) == 0, "%s",
+	      glint_error_msg());
+	if (!b)
+		return;
+	CHECK(glint_board_turntable(b, 1, NULL) == 0, "to the sample: %s",
+	      glint_error_msg());
+	CHECK(glint_board_turntable(b, 0, NULL) < 0,
+	      "to the probe with the sensor reading 0 must fail");
+	CHECK_MSG(glint_error_msg(), "position sensor");
+	glint_board_close(b);
+}
+
 int main(void)
 {
 	snprintf(logpath, sizeof(logpath), "/tmp/glint-fake-gpio-%ld.log",
@@ -210,6 +234,7 @@ int main(void)
 	RUN(test_press);
 	RUN(test_refusals);
 	RUN(test_vanish);
+	RUN(test_position_sensor);
 	remove(logpath);
 	return test_result();
 }

@@ -123,6 +123,17 @@ check "... complete, fitted" bash -c "grep -q 'sample .*complete *yes' '$tmp/out
 check "jobs lists the done job" run 0 "" jobs --root "$tmp/one"
 check "... done" grep -q " done " "$tmp/out"
 
+# 1b. With a position sensor (the sim reports the probe in view at 0 deg),
+# the moves are checked against it.
+rig pos '{"at_s": 0.2}'
+python3 -c "
+import json
+r = json.load(open('$tmp/pos.json'))
+r['board']['lines']['position'] = {'chip': 'gpiochip0', 'line': 5}
+r['sequence'] = ['lights on', 'turntable sample', 'turntable probe', 'capture probe', 'lights off']
+json.dump(r, open('$tmp/pos.json', 'w'))"
+check "position sensor agrees with the moves" run 0 "run complete" rig --config "$tmp/pos.json" --once
+
 # 2. A second press during the run cancels it.
 rig two '{"at_s": 0.3, "hold_s": 0.1}, {"at_s": 1.5, "hold_s": 0.1}'
 check "second press cancels the run" run 1 "cancelled (button)" rig --config "$tmp/two.json" --once
@@ -190,6 +201,12 @@ id=$("$glint" queue add "$sess" --root "$tmp/one")
 check "cancel a pending job" run 0 "" queue cancel "$id" --root "$tmp/one"
 check "... listed as cancelled" bash -c "'$glint' jobs --root '$tmp/one' | grep -q '$id *cancelled'"
 check "cancel of an unknown job: named" run 1 "nosuchjob" queue cancel nosuchjob --root "$tmp/one"
+
+# The systemd unit is valid (with this build's glint in ExecStart).
+if command -v systemd-analyze >/dev/null; then
+	sed "s#/usr/local/bin/glint#$glint#" "$data/../scripts/systemd/glint-rig.service" >"$tmp/glint-rig.service"
+	check "systemd unit verifies" bash -c "systemd-analyze verify '$tmp/glint-rig.service' 2>&1 | tee '$tmp/verify' >&2; ! grep -q . '$tmp/verify'"
+fi
 
 # 6. The same appliance on the libgpiod backend, through the fake chip.
 if [ "$fakegpio" != none ]; then

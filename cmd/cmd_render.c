@@ -87,8 +87,7 @@ int render_job_run(const struct render_job *job, json_t **result)
 	};
 	double t0 = glint_now();
 	glint_progress_start(&prog, "shade", sc->cam.height);
-	ret = glint_render_shade(&r.gb, r.tracer, r.env, job->model,
-				 job->params, &so, img, cov);
+	ret = glint_renderer_shade(&r, job->model, job->params, &so, img, cov);
 	glint_progress_finish(&prog);
 	double shade_s = glint_now() - t0;
 	if (ret < 0)

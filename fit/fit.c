@@ -1,5 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 #include "fit.h"
+#include "fit_data.h"
+#include "anneal.h"
 
 #include "core/error.h"
 #include "core/log.h"
@@ -43,16 +45,26 @@ void glint_fit_default_opts(struct glint_fit_opts *o)
 	o->lobe_samples = 8;
 	o->static_samples = 128;
 	o->max_iter = 60;
+	o->optimizer = GLINT_OPT_AUTO;
+	o->seed = 1;
+	o->anneal_evals = 150;
 }
 
-/* The pixels of a fit ("universe") with their photo values and weights. */
-struct fit_data {
-	int n;
-	int32_t *pix; /* image pixel index */
-	int *xy;      /* x, y pairs */
-	double *y;    /* photo, 3 per pixel */
-	double *sw;   /* sqrt of the weights, 3 per pixel */
-};
+int glint_fit_optimizer_parse(const char *s, enum glint_fit_optimizer *o)
+{
+	if (!strcmp(s, "auto"))
+		*o = GLINT_OPT_AUTO;
+	else if (!strcmp(s, "lm"))
+		*o = GLINT_OPT_LM;
+	else if (!strcmp(s, "anneal"))
+		*o = GLINT_OPT_ANNEAL;
+	else
+		return glint_error_set(EINVAL,
+				       "optimizer '%s': expected lm, anneal or "
+				       "auto",
+				       s);
+	return 0;
+}
 
 /* What one LM pass optimises. */
 struct objective {
@@ -405,6 +417,78 @@ static int rescan_roughness(struct objective *ob, const int *sel, int nsel,
 	return 0;
 }
 
+struct anneal_ctx {
+	struct objective *ob;
+	double *r;
+};
+
+static int opaque_cost(void *ctx, const double *q, double *c)
+{
+	struct anneal_ctx *a = ctx;
+	int ret = obj_residuals(a->ob, q, a->r);
+	double s = 0;
+	for (int k = 0; k < 3 * a->ob->nsel; k++)
+		s += a->r[k] * a->r[k];
+	*c = 0.5 * s;
+	return ret;
+}
+
+/* Adaptive simulated annealing over every parameter on selection sel
+ * (fit/anneal.h); the caller polishes with LM. */
+static int anneal_pass(struct objective *ob, const int *sel, int nsel,
+		       struct glint_fit_result *res)
+{
+	const struct glint_model_ops *m = ob->m;
+	double q[GLINT_MAX_PARAMS], lo[GLINT_MAX_PARAMS], hi[GLINT_MAX_PARAMS];
+	struct glint_anneal_opts ao;
+	struct glint_anneal_result ar;
+	struct anneal_ctx a = { ob, malloc((size_t)3 * nsel * sizeof(double)) };
+	double t0 = glint_now();
+
+	if (!a.r)
+		return glint_error_set(ENOMEM, "out of memory");
+	ob->sel = sel;
+	ob->nsel = nsel;
+	ob->varpro = 0;
+	ob->memo_valid = 0;
+	ob->nfree = m->nparams;
+	ob->evals = 0;
+	for (int k = 0; k < m->nparams; k++) {
+		ob->free_idx[k] = k;
+		q[k] = ob->p[k];
+		lo[k] = m->params[k].lo;
+		if (k == m->roughness_param)
+			lo[k] = fmax(lo[k], ob->rough_lo);
+		hi[k] = m->params[k].hi;
+	}
+	glint_anneal_default_opts(&ao);
+	ao.seed = ob->o->seed;
+	ao.max_evals = ob->o->anneal_evals * m->nparams;
+	ao.stall_evals = ao.max_evals / 3;
+	int ret =
+		glint_anneal(m->nparams, lo, hi, opaque_cost, &a, &ao, q, &ar);
+	free(a.r);
+	if (ret < 0)
+		return ret;
+	memcpy(ob->p, q, sizeof(double) * (size_t)m->nparams);
+	ob->memo_valid = 0;
+	if (res->npasses < GLINT_FIT_MAX_PASSES) {
+		struct glint_fit_pass *ps = &res->passes[res->npasses++];
+		snprintf(ps->name, sizeof(ps->name), "anneal");
+		ps->pixels = nsel;
+		ps->iterations = ar.accepted;
+		ps->evaluations = ar.evals;
+		ps->cost0 = ar.cost0;
+		ps->cost = ar.cost;
+		ps->seconds = glint_now() - t0;
+	}
+	glint_log_info("anneal: %d evaluations (%d accepted, %d re-anneals), "
+		       "cost %.4g -> %.4g: %s",
+		       ar.evals, ar.accepted, ar.reanneals, ar.cost0, ar.cost,
+		       ar.reason);
+	return 0;
+}
+
 /* Run LM over the parameters `freev` of ob->p on selection sel. */
 static int run_pass(struct objective *ob, const char *name, const int *sel,
 		    int nsel, const int *freev, int varpro,
@@ -480,109 +564,6 @@ static int run_pass(struct objective *ob, const char *name, const int *sel,
 	return 0;
 }
 
-static int covered(const struct glint_gbuffer *gb, int x, int y)
-{
-	if (x < 0 || y < 0 || x >= gb->width || y >= gb->height)
-		return 0;
-	size_t i = (size_t)y * gb->width + x;
-	for (int s = 0; s < gb->spp; s++)
-		if (gb->hits[i * gb->spp + s].geom < 0)
-			return 0;
-	return 1;
-}
-
-/*
- * Pixels wholly on the sphere, every `stride`-th row and column.  A pixel
- * whose primary samples all hit can still be partly background between
- * them, which mixes the backdrop into the photo's value: only pixels whose
- * whole 3x3 neighbourhood is covered are used.
- */
-static int collect_pixels(const struct glint_gbuffer *gb, int stride,
-			  const struct glint_image *photo,
-			  const struct glint_image *weight, struct fit_data *d,
-			  int *interior)
-{
-	int n = 0, cap = (gb->width / stride + 1) * (gb->height / stride + 1);
-
-	*interior = 0;
-	d->pix = malloc((size_t)cap * sizeof(*d->pix));
-	d->xy = malloc((size_t)cap * 2 * sizeof(int));
-	d->y = malloc((size_t)cap * 3 * sizeof(double));
-	d->sw = malloc((size_t)cap * 3 * sizeof(double));
-	if (!d->pix || !d->xy || !d->y || !d->sw)
-		return glint_error_set(ENOMEM, "out of memory");
-	for (int y = 0; y < gb->height; y++)
-		for (int x = 0; x < gb->width; x++) {
-			size_t i = (size_t)y * gb->width + x;
-			int on = 1;
-			for (int dy = -1; dy <= 1 && on; dy++)
-				for (int dx = -1; dx <= 1 && on; dx++)
-					on = covered(gb, x + dx, y + dy);
-			if (!on)
-				continue;
-			(*interior)++;
-			if (x % stride || y % stride)
-				continue;
-			const float *v = glint_image_px(photo, x, y);
-			const float *w =
-				weight ? glint_image_px(weight, x, y) : NULL;
-			d->pix[n] = (int32_t)i;
-			d->xy[2 * n] = x;
-			d->xy[2 * n + 1] = y;
-			for (int c = 0; c < 3; c++) {
-				double wc = w ? w[c] : 1;
-				int ok = isfinite(v[c]) && isfinite(wc) &&
-					 wc > 0;
-				d->y[3 * n + c] = ok ? v[c] : 0;
-				d->sw[3 * n + c] = ok ? sqrt(wc) : 0;
-			}
-			n++;
-		}
-	d->n = n;
-	return 0;
-}
-
-static void free_data(struct fit_data *d)
-{
-	free(d->pix);
-	free(d->xy);
-	free(d->y);
-	free(d->sw);
-}
-
-/* Check the photo carries a signal where the sphere should be. */
-static int check_photo(const struct fit_data *d)
-{
-	double sum = 0, mx = 0;
-	int usable = 0;
-
-	for (int i = 0; i < 3 * d->n; i++) {
-		if (d->sw[i] > 0) {
-			usable++;
-			sum += d->y[i];
-			mx = fmax(mx, d->y[i]);
-		}
-	}
-	if (!usable)
-		return glint_error_set(EINVAL,
-				       "the photo has no usable pixel on the "
-				       "sphere (all saturated, invalid or "
-				       "zero-weight): nothing to fit");
-	if (!(mx > 0))
-		return glint_error_set(EINVAL,
-				       "the photo is black where the scene "
-				       "puts the sphere (%d pixels, maximum "
-				       "%g): nothing to fit",
-				       d->n, mx);
-	if (usable < d->n * 3 / 10)
-		return glint_error_set(EINVAL,
-				       "only %d of %d values on the sphere are "
-				       "usable (the rest saturated or "
-				       "invalid): expected at least 30 %%",
-				       usable, 3 * d->n);
-	return 0;
-}
-
 static int cmp_double(const void *a, const void *b)
 {
 	double x = *(const double *)a, y = *(const double *)b;
@@ -628,13 +609,6 @@ static double backdrop_error(const struct glint_gbuffer *gb,
 		}
 	}
 	return n && sy > 0 ? sqrt(se / n) / (sy / n) : INFINITY;
-}
-
-/* Every s-th row and column, keeping at least about max_pixels. */
-static int stride_for(int interior, int max_pixels)
-{
-	int s = (int)floor(sqrt((double)interior / max_pixels));
-	return s < 1 ? 1 : s;
 }
 
 static void finish_stats(struct objective *ob, const int *sel, int nsel,
@@ -692,6 +666,9 @@ static int fit_or_eval(struct glint_renderer *r,
 	int ret, interior;
 	double t0 = glint_now();
 
+	if (model->transparent)
+		return glint_fit_dielectric(r, model, photo, weight, o, NULL,
+					    eval_p, res);
 	memset(res, 0, sizeof(*res));
 	memset(&ob, 0, sizeof(ob));
 	res->model = model;
@@ -700,52 +677,10 @@ static int fit_or_eval(struct glint_renderer *r,
 				       "model %s cannot be fitted by LM here "
 				       "(no linear lobes)",
 				       model->name);
-	if (photo->width != gb->width || photo->height != gb->height)
-		return glint_error_set(EINVAL,
-				       "photo is %dx%d: expected the scene "
-				       "camera's %dx%d",
-				       photo->width, photo->height, gb->width,
-				       gb->height);
-	if (weight &&
-	    (weight->width != gb->width || weight->height != gb->height))
-		return glint_error_set(
-			EINVAL, "weight image is %dx%d: expected %dx%d",
-			weight->width, weight->height, gb->width, gb->height);
-	/* The fine pixel set: every stride-th interior pixel. */
-	int count;
-	ret = collect_pixels(gb, 1, photo, NULL, &d, &interior);
-	free_data(&d);
-	if (ret < 0)
-		return ret;
-	if (interior < 16)
-		return glint_error_set(EINVAL,
-				       "only %d pixels lie wholly on the "
-				       "sphere: expected at least 16 (is the "
-				       "sphere in view?)",
-				       interior);
-	int stride = stride_for(interior, o->max_pixels);
-	memset(&d, 0, sizeof(d));
-	ret = collect_pixels(gb, stride, photo, weight, &d, &count);
+	ret = fit_data_prepare(gb, photo, weight, o, &d, &interior);
 	if (ret < 0)
 		goto out;
 	res->interior = interior;
-	ret = check_photo(&d);
-	if (ret < 0)
-		goto out;
-	if (!weight && o->weighting == GLINT_WEIGHT_POISSON) {
-		double mean = 0;
-		int nv = 0;
-		for (int i = 0; i < 3 * d.n; i++)
-			if (d.sw[i] > 0) {
-				mean += fmax(0, d.y[i]);
-				nv++;
-			}
-		mean /= nv;
-		for (int i = 0; i < 3 * d.n; i++)
-			if (d.sw[i] > 0)
-				d.sw[i] =
-					1 / sqrt(fmax(0, d.y[i]) + 0.1 * mean);
-	}
 
 	ob.r = r;
 	ob.m = model;
@@ -891,8 +826,8 @@ static int fit_or_eval(struct glint_renderer *r,
 		goto out;
 	}
 	for (int s = 0; s < d.n; s++) {
-		int on_grid = d.xy[2 * s] % (4 * stride) == 0 &&
-			      d.xy[2 * s + 1] % (4 * stride) == 0;
+		int on_grid = d.xy[2 * s] % (4 * d.stride) == 0 &&
+			      d.xy[2 * s + 1] % (4 * d.stride) == 0;
 		if (is_spec[s])
 			spec[nspec++] = s;
 		if (on_grid || is_spec[s])
@@ -918,108 +853,123 @@ static int fit_or_eval(struct glint_renderer *r,
 	 */
 	if (ncoarse < nall) {
 		double radius_px = sqrt(interior / M_PI);
-		ob.rough_lo = 4.0 * stride / radius_px;
+		ob.rough_lo = 4.0 * d.stride / radius_px;
 	}
 
-	switch (o->method) {
-	case GLINT_FIT_THREE_PASS: {
-		/* Pass 1: constant lobes only, the others switched off. */
-		for (int k = 0; k < model->nparams; k++) {
-			int j = ob.lobe_of[k];
-			freev[k] = j >= 0 && !model->lobe_varies[j];
-			if (j >= 0 && model->lobe_varies[j])
-				ob.p[k] = 0;
-		}
-		if (ndiff < 8) {
-			memcpy(diff, coarse, (size_t)ncoarse * sizeof(int));
-			ndiff = ncoarse;
-		}
-		ret = run_pass(&ob, "1 diffuse", diff, ndiff, freev, 0, res,
-			       &lr);
-		if (ret < 0)
-			goto out;
-		/* Pass 2: the rest from the paper's values, diffuse held. */
-		int any = 0;
-		for (int k = 0; k < model->nparams; k++) {
-			int j = ob.lobe_of[k];
-			freev[k] = !(j >= 0 && !model->lobe_varies[j]);
-			any |= freev[k];
-			if (freev[k])
-				ob.p[k] = model->params[k].def;
-		}
-		if (any) {
-			const int *sel = nspec >= 8 ? spec : coarse;
-			int nsel = nspec >= 8 ? nspec : ncoarse;
-			ret = run_pass(&ob, "2 specular", sel, nsel, freev, 0,
+	if (o->optimizer == GLINT_OPT_ANNEAL && !eval_p) {
+		/* Annealing over everything, then LM over everything. */
+		ret = anneal_pass(&ob, coarse, ncoarse, res);
+		for (int k = 0; k < model->nparams && ret == 0; k++)
+			freev[k] = 1;
+		if (ret == 0)
+			ret = run_pass(&ob, "anneal-polish", coarse, ncoarse,
+				       freev, 0, res, &lr);
+	} else
+		switch (o->method) {
+		case GLINT_FIT_THREE_PASS: {
+			/* Pass 1: constant lobes only, the others switched off.
+			 */
+			for (int k = 0; k < model->nparams; k++) {
+				int j = ob.lobe_of[k];
+				freev[k] = j >= 0 && !model->lobe_varies[j];
+				if (j >= 0 && model->lobe_varies[j])
+					ob.p[k] = 0;
+			}
+			if (ndiff < 8) {
+				memcpy(diff, coarse,
+				       (size_t)ncoarse * sizeof(int));
+				ndiff = ncoarse;
+			}
+			ret = run_pass(&ob, "1 diffuse", diff, ndiff, freev, 0,
 				       res, &lr);
 			if (ret < 0)
 				goto out;
+			/* Pass 2: the rest from the paper's values, diffuse
+			 * held. */
+			int any = 0;
+			for (int k = 0; k < model->nparams; k++) {
+				int j = ob.lobe_of[k];
+				freev[k] = !(j >= 0 && !model->lobe_varies[j]);
+				any |= freev[k];
+				if (freev[k])
+					ob.p[k] = model->params[k].def;
+			}
+			if (any) {
+				const int *sel = nspec >= 8 ? spec : coarse;
+				int nsel = nspec >= 8 ? nspec : ncoarse;
+				ret = run_pass(&ob, "2 specular", sel, nsel,
+					       freev, 0, res, &lr);
+				if (ret < 0)
+					goto out;
+			}
+			/* Pass 3: everything, all pixels. */
+			for (int k = 0; k < model->nparams; k++)
+				freev[k] = 1;
+			ret = run_pass(&ob, "3 all", coarse, ncoarse, freev, 0,
+				       res, &lr);
+			break;
 		}
-		/* Pass 3: everything, all pixels. */
-		for (int k = 0; k < model->nparams; k++)
-			freev[k] = 1;
-		ret = run_pass(&ob, "3 all", coarse, ncoarse, freev, 0, res,
-			       &lr);
-		break;
-	}
-	case GLINT_FIT_NAIVE:
-		for (int k = 0; k < model->nparams; k++)
-			freev[k] = 1;
-		ret = run_pass(&ob, "all at once", coarse, ncoarse, freev, 0,
-			       res, &lr);
-		break;
-	case GLINT_FIT_VARPRO: {
-		if (o->faithful) {
-			ret = glint_error_set(EINVAL,
-					      "variable projection needs the "
-					      "shade cache (not --faithful)");
-			goto out;
-		}
-		/* Coarse scan of the first nonlinear parameter (roughness
-		 * for Torrance-Sparrow), log-spaced, then LM. */
-		int nl = -1;
-		for (int k = 0; k < model->nparams; k++) {
-			freev[k] = ob.lobe_of[k] < 0;
-			if (freev[k] && nl < 0)
-				nl = k;
-		}
-		if (nl >= 0) {
-			const struct glint_param *pi = &model->params[nl];
-			double best = INFINITY, bestv = pi->def;
-			double lo = fmax(pi->lo, 1e-3), hi = fmin(pi->hi, 0.6);
-			if (nl == model->roughness_param)
-				lo = fmax(lo, ob.rough_lo);
-			double *scratch =
-				malloc((size_t)3 * ncoarse * sizeof(double));
-			if (!scratch) {
-				ret = -ENOMEM;
+		case GLINT_FIT_NAIVE:
+			for (int k = 0; k < model->nparams; k++)
+				freev[k] = 1;
+			ret = run_pass(&ob, "all at once", coarse, ncoarse,
+				       freev, 0, res, &lr);
+			break;
+		case GLINT_FIT_VARPRO: {
+			if (o->faithful) {
+				ret = glint_error_set(
+					EINVAL, "variable projection needs the "
+						"shade cache (not --faithful)");
 				goto out;
 			}
-			ob.sel = coarse;
-			ob.nsel = ncoarse;
-			ob.varpro = 1;
-			ob.nfree = 0;
-			for (int i = 0; i < 10; i++) {
-				double v = lo * pow(hi / lo, i / 9.0);
-				ob.p[nl] = v;
-				ob.memo_valid = 0;
-				obj_residuals(&ob, ob.p, scratch);
-				double c = 0;
-				for (int k = 0; k < 3 * ncoarse; k++)
-					c += scratch[k] * scratch[k];
-				if (c < best) {
-					best = c;
-					bestv = v;
-				}
+			/* Coarse scan of the first nonlinear parameter
+			 * (roughness for Torrance-Sparrow), log-spaced, then
+			 * LM. */
+			int nl = -1;
+			for (int k = 0; k < model->nparams; k++) {
+				freev[k] = ob.lobe_of[k] < 0;
+				if (freev[k] && nl < 0)
+					nl = k;
 			}
-			free(scratch);
-			ob.p[nl] = bestv;
-			ret = run_pass(&ob, "varpro", coarse, ncoarse, freev, 1,
-				       res, &lr);
+			if (nl >= 0) {
+				const struct glint_param *pi =
+					&model->params[nl];
+				double best = INFINITY, bestv = pi->def;
+				double lo = fmax(pi->lo, 1e-3),
+				       hi = fmin(pi->hi, 0.6);
+				if (nl == model->roughness_param)
+					lo = fmax(lo, ob.rough_lo);
+				double *scratch = malloc((size_t)3 * ncoarse *
+							 sizeof(double));
+				if (!scratch) {
+					ret = -ENOMEM;
+					goto out;
+				}
+				ob.sel = coarse;
+				ob.nsel = ncoarse;
+				ob.varpro = 1;
+				ob.nfree = 0;
+				for (int i = 0; i < 10; i++) {
+					double v = lo * pow(hi / lo, i / 9.0);
+					ob.p[nl] = v;
+					ob.memo_valid = 0;
+					obj_residuals(&ob, ob.p, scratch);
+					double c = 0;
+					for (int k = 0; k < 3 * ncoarse; k++)
+						c += scratch[k] * scratch[k];
+					if (c < best) {
+						best = c;
+						bestv = v;
+					}
+				}
+				free(scratch);
+				ob.p[nl] = bestv;
+				ret = run_pass(&ob, "varpro", coarse, ncoarse,
+					       freev, 1, res, &lr);
+			}
+			break;
 		}
-		break;
-	}
-	}
+		}
 	if (ret < 0)
 		goto out;
 	/* Coarse to fine: polish everything on the full pixel set. */
@@ -1030,7 +980,7 @@ static int fit_or_eval(struct glint_renderer *r,
 		 * rougher lobes at full resolution, albedos solved exactly for
 		 * each, and start from the best. */
 		ret = rescan_roughness(&ob, all, nall,
-				       4.0 * stride / sqrt(interior / M_PI));
+				       4.0 * d.stride / sqrt(interior / M_PI));
 		if (ret < 0)
 			goto out;
 	}

@@ -28,6 +28,8 @@
 #include "render.h"
 #include "shade_cache.h"
 
+#include <stdint.h>
+
 enum glint_fit_method {
 	GLINT_FIT_THREE_PASS,
 	GLINT_FIT_NAIVE,
@@ -36,6 +38,12 @@ enum glint_fit_method {
 
 const char *glint_fit_method_name(enum glint_fit_method m);
 int glint_fit_method_parse(const char *s, enum glint_fit_method *m);
+
+/* lm: Levenberg-Marquardt (the method's passes); anneal: adaptive
+ * simulated annealing (fit/anneal.h) then an LM polish; auto: anneal for
+ * transparent models, LM otherwise. */
+enum glint_fit_optimizer { GLINT_OPT_AUTO, GLINT_OPT_LM, GLINT_OPT_ANNEAL };
+int glint_fit_optimizer_parse(const char *s, enum glint_fit_optimizer *o);
 
 /* Weights when no weight image is given. */
 enum glint_fit_weighting {
@@ -57,6 +65,9 @@ struct glint_fit_opts {
 	int lobe_samples;      /* shade cache: lobe samples per hit */
 	int static_samples;    /* shade cache: for constant lobes */
 	int max_iter;	       /* per LM pass */
+	enum glint_fit_optimizer optimizer;
+	uint64_t seed;	  /* annealing's random stream */
+	int anneal_evals; /* annealing's budget */
 	int nthreads;
 	/* Called as passes run (may be NULL). */
 	void (*progress)(void *ctx, const char *pass, int iter, double cost);
@@ -101,6 +112,15 @@ struct glint_fit_result {
  * per-channel weights, 0 for saturated or invalid pixels; non-finite photo
  * values get weight 0 too.
  */
+/* The transparent models' fitter (fit_dielectric.c), which glint_fit()
+ * hands them to. */
+int glint_fit_dielectric(struct glint_renderer *r,
+			 const struct glint_model_ops *model,
+			 const struct glint_image *photo,
+			 const struct glint_image *weight,
+			 const struct glint_fit_opts *o, const double *start,
+			 const double *eval_p, struct glint_fit_result *res);
+
 int glint_fit(struct glint_renderer *r, const struct glint_model_ops *model,
 	      const struct glint_image *photo, const struct glint_image *weight,
 	      const struct glint_fit_opts *o, struct glint_fit_result *res);

@@ -70,10 +70,14 @@ struct glint_model_ops {
 	/* Angle (radians) from the mirror direction beyond which lobe j is
 	 * below 1e-12 of its peak, or <= 0 when it has no such bound. */
 	double (*lobe_extent)(const double *p, int j);
+	/* A transparent sphere (fit/dielectric.h): no BRDF (eval, sample
+	 * and pdf are NULL); rendered and fitted by following its paths. */
+	int transparent;
 };
 
 extern const struct glint_model_ops glint_model_lambert;
 extern const struct glint_model_ops glint_model_torrance_sparrow;
+extern const struct glint_model_ops glint_model_dielectric;
 
 /* Cosine-weighted direction about +z from two uniforms; returns its pdf. */
 double glint_sample_cosine(const double u[2], struct vec3 *wi);

@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 #include "render.h"
+#include "dielectric.h"
 
 #include "sampling.h"
 
@@ -224,4 +225,19 @@ void glint_renderer_release(struct glint_renderer *r)
 	glint_envmap_free(r->env);
 	r->tracer = NULL;
 	r->env = NULL;
+}
+
+int glint_renderer_shade(struct glint_renderer *r,
+			 const struct glint_model_ops *model,
+			 const double *params,
+			 const struct glint_shade_opts *opts,
+			 struct glint_image *out, struct glint_image *coverage)
+{
+	if (model->transparent)
+		return glint_dielectric_render(r->tracer, &r->gb, r->env,
+					       r->scene.sphere_centre,
+					       r->scene.sphere_radius, params,
+					       opts->nthreads, out, coverage);
+	return glint_render_shade(&r->gb, r->tracer, r->env, model, params,
+				  opts, out, coverage);
 }

@@ -64,4 +64,13 @@ int glint_renderer_init(struct glint_renderer *r,
 			struct glint_progress *progress);
 void glint_renderer_release(struct glint_renderer *r);
 
+/* Render the scene's sphere of any model (BRDF models by
+ * glint_render_shade, transparent ones by following their paths) with
+ * the renderer's G-buffer. */
+int glint_renderer_shade(struct glint_renderer *r,
+			 const struct glint_model_ops *model,
+			 const double *params,
+			 const struct glint_shade_opts *opts,
+			 struct glint_image *out, struct glint_image *coverage);
+
 #endif

@@ -608,3 +608,30 @@ void glint_tracer_intersect_raw(struct glint_tracer *t, const float *rays,
 					: (int32_t)rh.hit.geomID[k];
 	}
 }
+
+int glint_tracer_intersect1(struct glint_tracer *t, struct vec3 org,
+			    struct vec3 dir, double tnear, double *thit,
+			    struct vec3 *ng)
+{
+	struct RTCIntersectContext ctx;
+	struct RTCRayHit rh = {
+		.ray = { .org_x = (float)org.x,
+			 .org_y = (float)org.y,
+			 .org_z = (float)org.z,
+			 .tnear = (float)tnear,
+			 .dir_x = (float)dir.x,
+			 .dir_y = (float)dir.y,
+			 .dir_z = (float)dir.z,
+			 .tfar = INFINITY,
+			 .mask = 0xffffffffu },
+		.hit = { .geomID = RTC_INVALID_GEOMETRY_ID },
+	};
+
+	rtcInitIntersectContext(&ctx);
+	rtcIntersect1(t->scene, &ctx, &rh);
+	if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
+		return -1;
+	*thit = rh.ray.tfar;
+	*ng = v3_norm(v3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z));
+	return (int)rh.hit.geomID;
+}

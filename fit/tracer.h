@@ -57,6 +57,14 @@ int glint_tracer_primary(struct glint_tracer *t, const struct glint_camera *cam,
 			 struct glint_gbuffer *gb);
 void glint_gbuffer_free(struct glint_gbuffer *gb);
 
+/* Nearest hit of one ray beyond tnear: its geometry id (-1 for none),
+ * distance and unit geometric normal (outward for the sphere; not flipped
+ * towards the ray).  For secondary rays, e.g. inside a transparent
+ * sphere; call glint_thread_ftz() once per thread first. */
+int glint_tracer_intersect1(struct glint_tracer *t, struct vec3 org,
+			    struct vec3 dir, double tnear, double *thit,
+			    struct vec3 *ng);
+
 /* 1 when the segment org + t dir, t in (tnear, tfar), hits anything. */
 int glint_tracer_occluded(struct glint_tracer *t, struct vec3 org,
 			  struct vec3 dir, double tnear, double tfar);

@@ -119,6 +119,93 @@ static void shade(const struct ref_job *job, struct vec3 pos, struct vec3 d,
 	}
 }
 
+/* Fresnel reflectance in its angle form (Rs = sin^2(i - t) / sin^2(i + t),
+ * Rp = tan^2(i - t) / tan^2(i + t)), written independently of
+ * fit/dielectric.c's coefficient form.  n1 -> n2; sets *tt (angle of
+ * refraction), returns 1 on total internal reflection. */
+static double fresnel_angles(double ti, double n1, double n2, double *tt)
+{
+	double st = n1 / n2 * sin(ti);
+	if (st >= 1) {
+		*tt = M_PI / 2;
+		return 1;
+	}
+	*tt = asin(st);
+	if (ti < 1e-6) {
+		double r = (n1 - n2) / (n1 + n2);
+		return r * r;
+	}
+	double a = sin(ti - *tt) / sin(ti + *tt);
+	double b = tan(ti - *tt) / tan(ti + *tt);
+	return 0.5 * (a * a + b * b);
+}
+
+/* A transparent sphere, stochastically: the first interface is split (its
+ * reflection, the sharpest and brightest part, is added with weight R and
+ * the path goes on refracted with 1 - R); inside, each interface reflects
+ * with probability R, else refracts (unbiased); absorption by
+ * Beer-Lambert; the path ends in the env map when it leaves. */
+static void shade_dielectric(const struct ref_job *job, struct vec3 pos,
+			     struct vec3 d, struct rng *rng, double rgb[3])
+{
+	const double *T = job->p;
+	double ior = job->p[3], diam = 2 * job->sc->sphere_radius;
+	double thr[3] = { 1, 1, 1 }, acc[3] = { 0, 0, 0 };
+	int in = 0;
+	struct vec3 c = job->sc->sphere_centre;
+
+	for (int depth = 0; depth < 200; depth++) {
+		struct vec3 n = v3_norm(v3_sub(pos, c)); /* outward */
+		if (in)
+			n = v3_scale(n, -1); /* facing the ray */
+		double cos_i = -v3_dot(d, n), tt;
+		double n1 = in ? ior : 1, n2 = in ? 1 : ior;
+		double R = fresnel_angles(acos(fmin(1, cos_i)), n1, n2, &tt);
+		if (depth == 0) {
+			struct vec3 rd =
+				v3_sub(d, v3_scale(n, 2 * v3_dot(d, n)));
+			double l[3];
+			glint_envmap_lookup(job->env, rd, l);
+			for (int k = 0; k < 3; k++)
+				acc[k] = R * l[k];
+			if (R >= 1) {
+				memcpy(rgb, acc, sizeof(acc));
+				return;
+			}
+			for (int k = 0; k < 3; k++)
+				thr[k] = 1 - R;
+			R = 0; /* the refracted part goes on */
+		}
+		if (rng_u01(rng) < R) {
+			d = v3_sub(d, v3_scale(n, 2 * v3_dot(d, n)));
+		} else {
+			/* tangential part scales by n1 / n2, the normal part
+			 * follows from unit length */
+			struct vec3 dt = v3_add(d, v3_scale(n, cos_i));
+			struct vec3 tv = v3_scale(dt, n1 / n2);
+			double nn = sqrt(fmax(0, 1 - v3_dot(tv, tv)));
+			d = v3_norm(v3_sub(tv, v3_scale(n, nn)));
+			in = !in;
+		}
+		if (!in) {
+			glint_envmap_lookup(job->env, d, rgb);
+			for (int k = 0; k < 3; k++)
+				rgb[k] = acc[k] + rgb[k] * thr[k];
+			return;
+		}
+		/* Across the sphere to the far side: the chord. */
+		struct vec3 oc = v3_sub(pos, c);
+		double b = v3_dot(oc, d);
+		double cc = v3_dot(oc, oc) -
+			    job->sc->sphere_radius * job->sc->sphere_radius;
+		double len = -b + sqrt(fmax(0, b * b - cc));
+		for (int k = 0; k < 3; k++)
+			thr[k] *= pow(fmax(T[k], 1e-300), len / diam);
+		pos = v3_add(pos, v3_scale(d, len));
+	}
+	memcpy(rgb, acc, sizeof(acc));
+}
+
 static void ref_rows(void *ctx, int y0, int y1, int thread)
 {
 	struct ref_job *job = ctx;
@@ -144,6 +231,10 @@ static void ref_rows(void *ctx, int y0, int y1, int thread)
 						   job->sc->sphere_radius);
 				if (th < 0)
 					glint_envmap_lookup(job->env, d, rgb);
+				else if (job->m->transparent)
+					shade_dielectric(
+						job, v3_add(o, v3_scale(d, th)),
+						d, &rng, rgb);
 				else
 					shade(job, v3_add(o, v3_scale(d, th)),
 					      d, &rng, rgb);
@@ -164,7 +255,7 @@ int glint_reference_render(const struct glint_scene *scene,
 {
 	struct ref_job job = { scene, env, model, p, opts, out };
 
-	if (model->nlobes <= 0)
+	if (model->nlobes <= 0 && !model->transparent)
 		return glint_error_set(EINVAL,
 				       "reference renderer: model %s has no "
 				       "lobe structure",

@@ -14,7 +14,7 @@
 
 #include <stdio.h>
 
-static void sim_scene_192(struct glint_scene *s, const char *map, double rot_y)
+static inline void sim_scene_192(struct glint_scene *s, const char *map, double rot_y)
 {
 	glint_scene_defaults(s);
 	glint_camera_init(&s->cam, 192, 192, 0.1, 0.036 / 192, 0, 0,
@@ -27,7 +27,7 @@ static void sim_scene_192(struct glint_scene *s, const char *map, double rot_y)
 }
 
 /* The reference photo of (m, p) in r's scene; NULL on failure. */
-static struct glint_image *sim_photo(const struct glint_renderer *r,
+static inline struct glint_image *sim_photo(const struct glint_renderer *r,
 				     const struct glint_model_ops *m,
 				     const double *p)
 {

@@ -1,0 +1,35 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_FIT_FIT_DATA_H
+#define GLINT_FIT_FIT_DATA_H
+
+/* The pixels a fit uses, shared by the opaque (fit.c) and transparent
+ * (fit_dielectric.c) fitters. */
+
+#include "fit.h"
+
+/* The pixels of a fit ("universe") with their photo values and weights. */
+struct fit_data {
+	int n;
+	int32_t *pix; /* image pixel index */
+	int *xy;      /* x, y pairs */
+	double *y;    /* photo, 3 per pixel */
+	double *sw;   /* sqrt of the weights, 3 per pixel */
+	int stride;   /* every stride-th row and column was taken */
+};
+
+void free_data(struct fit_data *d);
+
+/*
+ * Check photo and weight against the camera, collect the pixels wholly on
+ * the sphere (every stride-th, about o->max_pixels of them) with their
+ * values and sqrt weights (o->weighting when weight is NULL), and check
+ * the photo shows something there.  *interior gets the count before
+ * subsampling.
+ */
+int fit_data_prepare(const struct glint_gbuffer *gb,
+		     const struct glint_image *photo,
+		     const struct glint_image *weight,
+		     const struct glint_fit_opts *o, struct fit_data *d,
+		     int *interior);
+
+#endif

@@ -6,7 +6,11 @@
  * rendered by the independent reference renderer (cached in bench-out/).
  * Fast-path methods run `rounds` times interleaved (medians reported); the
  * paper-faithful path (a full trace and render per evaluation) runs once.
- *   bench/fit [ROUNDS] [--no-faithful] [--material NAME]
+ * Then the transparent spheres (Table 1's quartz, 256x256, reference photo
+ * with 64 random-branching paths per pixel): annealing + LM polish (the
+ * default) against LM alone, and what a change of transmission costs (a
+ * re-sum of cached paths) against a change of ior (a re-trace).
+ *   bench/fit [ROUNDS] [--no-faithful] [--no-dielectric] [--material NAME]
  */
 #define _POSIX_C_SOURCE 200809L
 #include "bench.h"
@@ -14,10 +18,12 @@
 #include "core/error.h"
 #include "core/formats.h"
 #include "core/log.h"
+#include "fit/dielectric.h"
 #include "fit/fit.h"
 #include "sim/reference.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -38,14 +44,15 @@ static const struct variant variants[] = {
 };
 #define NV ((int)(sizeof(variants) / sizeof(variants[0])))
 
-static void scene_512(struct glint_scene *s)
+/* A w x w photo, the sphere 180 / 512 of the width in radius. */
+static void scene_px(struct glint_scene *s, int w)
 {
 	glint_scene_defaults(s);
-	double fpx = 1422.2;
-	glint_camera_init(&s->cam, 512, 512, fpx * 0.036 / 512, 0.036 / 512, 0,
-			  0, v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
+	double fpx = 1422.2 * w / 512;
+	glint_camera_init(&s->cam, w, w, fpx * 0.036 / w, 0.036 / w, 0, 0,
+			  v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
 	s->sphere_radius = 0.05;
-	s->sphere_centre = v3(0, 0, -0.05 * fpx / 180);
+	s->sphere_centre = v3(0, 0, -0.05 * 1422.2 / 180);
 	snprintf(s->env_path, sizeof(s->env_path), "%s",
 		 GLINT_DATA_DIR "/env/venice_sunset_1k.hdr");
 	s->env_rotation[1] = -114;
@@ -64,9 +71,118 @@ static void errors(const double *p, const double *t, double e[3])
 	e[2] = fabs(p[7] - t[7]);
 }
 
+/* The quartz spheres: annealing vs LM, re-sum vs re-trace. */
+static int dielectric_rows(int rounds)
+{
+	static const char *const mats[] = { "blue-quartz", "purple-quartz" };
+	printf("\ntransparent spheres (Table 1) under venice_sunset_1k, "
+	       "256x256 photo, radius 90 px\n");
+	printf("%-15s %-26s %9s %7s %9s %7s\n", "material", "optimizer",
+	       "median s", "evals", "transm.", "ior");
+	FILE *csv = fopen("bench-out/fit-dielectric.csv", "w");
+	fprintf(csv, "material,optimizer,median_s,evaluations,"
+		     "transmission_err,ior_err\n");
+	for (int mi = 0; mi < 2; mi++) {
+		struct glint_scene sc;
+		struct glint_renderer r;
+		const struct glint_model_ops *m;
+		double truth[GLINT_MAX_PARAMS];
+		char path[512];
+		scene_px(&sc, 256);
+		if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
+					mats[mi], &m, truth) < 0 ||
+		    glint_renderer_init(&r, &sc, 0, NULL) < 0)
+			return -1;
+		snprintf(path, sizeof(path), "bench-out/photo-%s-256.exr",
+			 mats[mi]);
+		struct glint_image *photo = NULL;
+		if (glint_image_read(path, &photo) < 0) {
+			struct glint_reference_opts ro;
+			glint_reference_default_opts(&ro);
+			ro.spp = 64;
+			photo = glint_image_new(256, 256);
+			if (glint_reference_render(&sc, r.env, m, truth, &ro,
+						   photo) < 0 ||
+			    glint_image_write(path, photo, NULL) < 0)
+				return -1;
+		}
+		for (int a = 0; a < 2; a++) {
+			double t[16];
+			struct glint_fit_result res;
+			int evals = 0;
+			for (int k = 0; k < rounds; k++) {
+				struct glint_fit_opts o;
+				glint_fit_default_opts(&o);
+				o.optimizer = a ? GLINT_OPT_LM : GLINT_OPT_AUTO;
+				double t0 = glint_now();
+				if (glint_fit(&r, m, photo, NULL, &o, &res) < 0)
+					return -1;
+				t[k] = glint_now() - t0;
+			}
+			for (int i = 0; i < res.npasses; i++)
+				evals += res.passes[i].evaluations;
+			double et = 0;
+			for (int c = 0; c < 3; c++)
+				et = fmax(et, fabs(res.p[c] - truth[c]));
+			double med = bench_median(t, rounds);
+			const char *name = a ? "LM from the paper's start"
+					     : "annealing + LM polish";
+			printf("%-15s %-26s %9.2f %7d %9.4f %7.4f\n", mats[mi],
+			       name, med, evals, et, fabs(res.p[3] - truth[3]));
+			fprintf(csv, "%s,\"%s\",%.4f,%d,%.5f,%.5f\n", mats[mi],
+				name, med, evals, et,
+				fabs(res.p[3] - truth[3]));
+		}
+		/* What each kind of change costs, on the fit's own pixels. */
+		if (mi == 0) {
+			int n = 0;
+			int32_t *pix =
+				malloc((size_t)256 * 256 * sizeof(int32_t));
+			for (int i = 0; i < 256 * 256; i++)
+				if (r.gb.hits[(size_t)i * r.gb.spp].geom >= 0)
+					pix[n++] = i;
+			struct glint_dielectric_cache c;
+			double *rgb = malloc((size_t)n * 3 * sizeof(double));
+			double tt[16], ts[16];
+			for (int k = 0; k < rounds; k++) {
+				double t0 = glint_now();
+				glint_dielectric_trace(r.tracer, &r.gb, pix, n,
+						       r.env, sc.sphere_centre,
+						       sc.sphere_radius,
+						       truth[3], NULL, 0, &c);
+				tt[k] = glint_now() - t0;
+				t0 = glint_now();
+				glint_dielectric_shade(&c, truth, rgb);
+				ts[k] = glint_now() - t0;
+				if (k + 1 < rounds)
+					glint_dielectric_cache_free(&c);
+			}
+			printf("  %d sphere pixels x %d samples: a new ior "
+			       "re-traces %lld paths in %.1f ms; a new "
+			       "transmission re-sums them in %.2f ms (%.0fx "
+			       "cheaper)\n",
+			       n, r.gb.spp, (long long)c.npaths,
+			       1e3 * bench_median(tt, rounds),
+			       1e3 * bench_median(ts, rounds),
+			       bench_median(tt, rounds) /
+				       bench_median(ts, rounds));
+			glint_dielectric_cache_free(&c);
+			free(rgb);
+			free(pix);
+		}
+		glint_image_free(photo);
+		glint_renderer_release(&r);
+	}
+	fclose(csv);
+	printf("errors: largest |transmission - truth| and |ior - truth|; "
+	       "medians of %d rounds\n",
+	       rounds);
+	return 0;
+}
+
 int main(int argc, char **argv)
 {
-	int rounds = 3, faithful = 1;
+	int rounds = 3, faithful = 1, dielectric = 1;
 	const char *material = "yellow-plastic";
 	struct glint_scene sc;
 	struct glint_renderer r;
@@ -77,13 +193,15 @@ int main(int argc, char **argv)
 	for (int i = 1; i < argc; i++) {
 		if (!strcmp(argv[i], "--no-faithful"))
 			faithful = 0;
+		else if (!strcmp(argv[i], "--no-dielectric"))
+			dielectric = 0;
 		else if (!strcmp(argv[i], "--material") && i + 1 < argc)
 			material = argv[++i];
 		else
 			rounds = atoi(argv[i]) > 0 ? atoi(argv[i]) : 1;
 	}
 	glint_log_set_mode(GLINT_LOG_QUIET);
-	scene_512(&sc);
+	scene_px(&sc, 512);
 	if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json", material,
 				&m, truth) < 0 ||
 	    glint_renderer_init(&r, &sc, 0, NULL) < 0) {
@@ -173,6 +291,11 @@ int main(int argc, char **argv)
 	       "|ior - truth|;\nspeedup = paper-faithful time / this time; "
 	       "medians of %d rounds (faithful: 1 run)\n",
 	       rounds);
+	if (dielectric && dielectric_rows(rounds) < 0) {
+		fprintf(stderr, "bench/fit: dielectric: %s\n",
+			glint_error_msg());
+		return 1;
+	}
 	printf("peak memory: %.1f MiB\n", bench_peak_mib());
 	FILE *gp = fopen("bench-out/fit.gp", "w");
 	fprintf(gp,

@@ -1,0 +1,387 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * Speed against accuracy: every fitting configuration on the same
+ * simulated captures, charted error against time with the Pareto front.
+ *
+ * Captures: Table-1 materials under the Venice map, photographed at 512 px
+ * by the reference renderer (cached in bench-out/), noise-free and through
+ * the sensor model (one 12-bit exposure, shot + read noise, clipped pixels
+ * dropped); lower resolutions are box-averaged from the 512 px photo with
+ * the camera's focal length scaled to match.
+ * Configurations vary one thing at a time from the default (three-pass,
+ * 256 px, 8 + 8 fixed samples, full-size map): the method (three-pass,
+ * naive, variable projection, annealing + LM), the image resolution
+ * (128 .. 512), the samples per hit (4 .. 16), the env-map resolution
+ * (1024 or 256 wide).
+ * Each fit runs in its own process (fork): wall time and that process's
+ * peak memory (wait4) are its own.
+ * Error: the worst parameter error in units of the fitting issue's
+ * tolerances (albedo 0.01, roughness 5 % relative, ior 0.05): <= 1 meets
+ * them all; and the fit's relative RMSE.
+ *   bench/pareto [--quick]
+ * Writes bench-out/pareto.csv, pareto.gp, pareto.png, pareto.svg.
+ */
+#define _DEFAULT_SOURCE
+#include "bench.h"
+
+#include "core/error.h"
+#include "core/log.h"
+#include "fit/fit.h"
+#include "sim/reference.h"
+#include "sim/sensor.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+struct config {
+	const char *method; /* label, one curve per method */
+	enum glint_fit_method m;
+	enum glint_fit_optimizer opt;
+	int px, samples, env_w;
+};
+
+static const struct config configs[] = {
+	{ "three-pass", GLINT_FIT_THREE_PASS, GLINT_OPT_LM, 256, 8, 1024 },
+	{ "three-pass", GLINT_FIT_THREE_PASS, GLINT_OPT_LM, 128, 8, 1024 },
+	{ "three-pass", GLINT_FIT_THREE_PASS, GLINT_OPT_LM, 512, 8, 1024 },
+	{ "three-pass", GLINT_FIT_THREE_PASS, GLINT_OPT_LM, 256, 4, 1024 },
+	{ "three-pass", GLINT_FIT_THREE_PASS, GLINT_OPT_LM, 256, 16, 1024 },
+	{ "three-pass", GLINT_FIT_THREE_PASS, GLINT_OPT_LM, 256, 8, 256 },
+	{ "naive", GLINT_FIT_NAIVE, GLINT_OPT_LM, 256, 8, 1024 },
+	{ "naive", GLINT_FIT_NAIVE, GLINT_OPT_LM, 128, 8, 1024 },
+	{ "varpro", GLINT_FIT_VARPRO, GLINT_OPT_LM, 256, 8, 1024 },
+	{ "varpro", GLINT_FIT_VARPRO, GLINT_OPT_LM, 128, 8, 1024 },
+	{ "varpro", GLINT_FIT_VARPRO, GLINT_OPT_LM, 512, 8, 1024 },
+	{ "anneal", GLINT_FIT_THREE_PASS, GLINT_OPT_ANNEAL, 256, 8, 1024 },
+	{ "anneal", GLINT_FIT_THREE_PASS, GLINT_OPT_ANNEAL, 128, 8, 1024 },
+};
+#define NC ((int)(sizeof(configs) / sizeof(configs[0])))
+
+static const char *const materials[] = { "yellow-plastic", "copper",
+					 "satin-paint" };
+#define NM 3
+
+static void scene_px(struct glint_scene *s, int w, const char *env)
+{
+	glint_scene_defaults(s);
+	double fpx = 1422.2 * w / 512;
+	glint_camera_init(&s->cam, w, w, fpx * 0.036 / w, 0.036 / w, 0, 0,
+			  v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
+	s->sphere_radius = 0.05;
+	s->sphere_centre = v3(0, 0, -0.05 * 1422.2 / 180);
+	snprintf(s->env_path, sizeof(s->env_path), "%s", env);
+	s->env_rotation[1] = -114;
+}
+
+/* Box-average by an integer factor. */
+static struct glint_image *shrink(const struct glint_image *src, int f)
+{
+	int w = src->width / f, h = src->height / f;
+	struct glint_image *d = glint_image_new(w, h);
+	for (int y = 0; d && y < h; y++)
+		for (int x = 0; x < w; x++)
+			for (int c = 0; c < 3; c++) {
+				double s = 0;
+				for (int j = 0; j < f; j++)
+					for (int i = 0; i < f; i++)
+						s += glint_image_px(
+							src, f * x + i,
+							f * y + j)[c];
+				glint_image_px(d, x, y)[c] =
+					(float)(s / (f * f));
+			}
+	return d;
+}
+
+/* The 512 px reference photo of a material (cached). */
+static struct glint_image *photo_512(const char *mat, const double *truth,
+				     const struct glint_model_ops *m)
+{
+	char path[256];
+	struct glint_image *img = NULL;
+	snprintf(path, sizeof(path), "bench-out/photo-%s-512.exr", mat);
+	if (glint_image_read(path, &img) == 0)
+		return img;
+	struct glint_scene sc;
+	struct glint_renderer r;
+	scene_px(&sc, 512, GLINT_DATA_DIR "/env/venice_sunset_1k.hdr");
+	if (glint_renderer_init(&r, &sc, 0, NULL) < 0)
+		return NULL;
+	struct glint_reference_opts ro;
+	glint_reference_default_opts(&ro);
+	ro.spp = 4;
+	img = glint_image_new(512, 512);
+	fprintf(stderr, "bench/pareto: reference photo of %s (cached in %s)\n",
+		mat, path);
+	if (glint_reference_render(&sc, r.env, m, truth, &ro, img) < 0 ||
+	    glint_image_write(path, img, NULL) < 0) {
+		glint_image_free(img);
+		img = NULL;
+	}
+	glint_renderer_release(&r);
+	return img;
+}
+
+/* One exposure of the sensor model, back to radiance with weights. */
+static int add_noise(struct glint_image *photo, struct glint_image **weight)
+{
+	struct glint_sensor s;
+	struct glint_image *dn = glint_image_new(photo->width, photo->height);
+	*weight = glint_image_new(photo->width, photo->height);
+	glint_sensor_default(&s);
+	double mean = 0;
+	for (int i = 0; i < photo->width * photo->height * 3; i++)
+		mean += photo->data[i];
+	mean /= photo->width * photo->height * 3.0;
+	s.exposure_s = glint_sensor_exposure_for(&s, mean, 0.1);
+	int ret = glint_sensor_capture(&s, photo, dn);
+	if (!ret)
+		ret = glint_sensor_to_radiance(&s, dn, photo, *weight);
+	glint_image_free(dn);
+	return ret;
+}
+
+/* Worst parameter error in tolerance units. */
+static double param_error(const double *p, const double *t)
+{
+	double e = 0;
+	for (int k = 0; k < 6; k++)
+		e = fmax(e, fabs(p[k] - t[k]) / 0.01);
+	e = fmax(e, fabs(p[6] / t[6] - 1) / 0.05);
+	e = fmax(e, fabs(p[7] - t[7]) / 0.05);
+	return e;
+}
+
+struct outcome {
+	double seconds, perr, rel_rmse;
+	int ok;
+};
+
+/* Fit one capture with one configuration, in this (child) process. */
+static struct outcome run_one(const struct config *c, const char *mat,
+			      int noisy)
+{
+	struct outcome out = { NAN, NAN, NAN, 0 };
+	const struct glint_model_ops *m;
+	double truth[GLINT_MAX_PARAMS];
+	char env[256];
+	struct glint_scene sc;
+	struct glint_renderer r;
+	struct glint_image *weight = NULL;
+
+	if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json", mat, &m,
+				truth) < 0)
+		return out;
+	struct glint_image *big = photo_512(mat, truth, m);
+	if (!big)
+		return out;
+	struct glint_image *photo = shrink(big, 512 / c->px);
+	glint_image_free(big);
+	if (noisy && add_noise(photo, &weight) < 0)
+		return out;
+	if (c->env_w == 1024)
+		snprintf(env, sizeof(env), "%s",
+			 GLINT_DATA_DIR "/env/venice_sunset_1k.hdr");
+	else
+		snprintf(env, sizeof(env), "bench-out/venice-%d.exr", c->env_w);
+	double t0 = glint_now();
+	scene_px(&sc, c->px, env);
+	if (glint_renderer_init(&r, &sc, 0, NULL) < 0)
+		return out;
+	struct glint_fit_opts o;
+	struct glint_fit_result res;
+	glint_fit_default_opts(&o);
+	o.method = c->m;
+	o.optimizer = c->opt;
+	o.light_samples = o.lobe_samples = c->samples;
+	if (glint_fit(&r, m, photo, weight, &o, &res) == 0) {
+		out.seconds = glint_now() - t0;
+		out.perr = param_error(res.p, truth);
+		out.rel_rmse = res.rel_rmse;
+		out.ok = 1;
+	}
+	glint_renderer_release(&r);
+	glint_image_free(photo);
+	glint_image_free(weight);
+	return out;
+}
+
+/* The map at a quarter of its width, box-averaged (once). */
+static int small_env(int w)
+{
+	char path[256];
+	struct stat st;
+	snprintf(path, sizeof(path), "bench-out/venice-%d.exr", w);
+	if (stat(path, &st) == 0)
+		return 0;
+	struct glint_image *src = NULL;
+	if (glint_image_read(GLINT_DATA_DIR "/env/venice_sunset_1k.hdr", &src) <
+	    0)
+		return -1;
+	struct glint_image *d = shrink(src, src->width / w);
+	int ret = d ? glint_image_write(path, d, NULL) : -1;
+	glint_image_free(src);
+	glint_image_free(d);
+	return ret;
+}
+
+int main(int argc, char **argv)
+{
+	int quick = argc > 1 && !strcmp(argv[1], "--quick");
+	int nm = quick ? 1 : NM;
+	glint_log_set_mode(GLINT_LOG_QUIET);
+	mkdir("bench-out", 0777);
+	if (small_env(256) < 0) {
+		fprintf(stderr, "bench/pareto: %s\n", glint_error_msg());
+		return 1;
+	}
+	/* Reference photos first, in this process, so children only read. */
+	for (int i = 0; i < nm; i++) {
+		const struct glint_model_ops *m;
+		double t[GLINT_MAX_PARAMS];
+		if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
+					materials[i], &m, t) < 0)
+			return 1;
+		glint_image_free(photo_512(materials[i], t, m));
+	}
+	FILE *csv = fopen("bench-out/pareto.csv", "w");
+	fprintf(csv, "method,px,samples,env_w,material,noise,seconds,peak_mib,"
+		     "param_err,rel_rmse\n");
+	/* Per configuration: medians over the captures. */
+	double med_t[NC], med_e[NC], max_e[NC], peak[NC];
+	printf("%-11s %4s %4s %5s %9s %9s %10s %10s %8s\n", "method", "px",
+	       "spp", "env", "median s", "peak MiB", "med error", "worst err",
+	       "rel RMSE");
+	for (int c = 0; c < NC; c++) {
+		double ts[2 * NM], es[2 * NM], rr[2 * NM], worst = 0, pk = 0;
+		int n = 0;
+		for (int i = 0; i < nm; i++)
+			for (int noisy = 0; noisy < 2; noisy++) {
+				int fd[2];
+				struct outcome o = { NAN, NAN, NAN, 0 };
+				struct rusage ru;
+				int st;
+				if (pipe(fd) < 0)
+					return 1;
+				pid_t pid = fork();
+				if (pid == 0) {
+					close(fd[0]);
+					o = run_one(&configs[c], materials[i],
+						    noisy);
+					if (write(fd[1], &o, sizeof(o)) < 0)
+						_exit(1);
+					_exit(0);
+				}
+				close(fd[1]);
+				if (read(fd[0], &o, sizeof(o)) != sizeof(o))
+					o.ok = 0;
+				close(fd[0]);
+				wait4(pid, &st, 0, &ru);
+				double mib = ru.ru_maxrss / 1024.0;
+				fprintf(csv,
+					"%s,%d,%d,%d,%s,%d,%.4f,%.1f,%.4f,"
+					"%.5f\n",
+					configs[c].method, configs[c].px,
+					configs[c].samples, configs[c].env_w,
+					materials[i], noisy, o.seconds, mib,
+					o.perr, o.rel_rmse);
+				if (!o.ok)
+					continue;
+				ts[n] = o.seconds;
+				es[n] = o.perr;
+				rr[n] = o.rel_rmse;
+				worst = fmax(worst, o.perr);
+				pk = fmax(pk, mib);
+				n++;
+			}
+		med_t[c] = n ? bench_median(ts, n) : NAN;
+		med_e[c] = n ? bench_median(es, n) : NAN;
+		max_e[c] = n ? worst : NAN;
+		peak[c] = pk;
+		printf("%-11s %4d %4d %5d %9.2f %9.1f %10.2f %10.2f %8.4f\n",
+		       configs[c].method, configs[c].px, configs[c].samples,
+		       configs[c].env_w, med_t[c], peak[c], med_e[c], max_e[c],
+		       n ? bench_median(rr, n) : NAN);
+		fflush(stdout);
+	}
+	fclose(csv);
+	/* The Pareto front of (median time, median error). */
+	FILE *fr = fopen("bench-out/pareto-front.csv", "w");
+	fprintf(fr, "seconds,param_err,label\n");
+	printf("\nPareto front (no other configuration is both faster and "
+	       "more accurate):\n");
+	int order[NC];
+	for (int c = 0; c < NC; c++)
+		order[c] = c;
+	for (int a = 0; a < NC; a++)
+		for (int b = a + 1; b < NC; b++)
+			if (med_t[order[b]] < med_t[order[a]]) {
+				int t = order[a];
+				order[a] = order[b];
+				order[b] = t;
+			}
+	double best = INFINITY;
+	for (int k = 0; k < NC; k++) {
+		int c = order[k];
+		if (!(med_e[c] < best))
+			continue;
+		best = med_e[c];
+		printf("  %-11s %3d px, %2d samples, map %4d: %.2f s, error "
+		       "%.2f\n",
+		       configs[c].method, configs[c].px, configs[c].samples,
+		       configs[c].env_w, med_t[c], med_e[c]);
+		fprintf(fr, "%.4f,%.4f,\"%s %dpx s%d e%d\"\n", med_t[c],
+			med_e[c], configs[c].method, configs[c].px,
+			configs[c].samples, configs[c].env_w);
+	}
+	fclose(fr);
+	printf("error: worst parameter error in units of the tolerances "
+	       "(albedo 0.01, roughness 5 %%, ior 0.05), median over %d "
+	       "captures (%d materials x noise-free / noisy)\n",
+	       2 * nm, nm);
+	FILE *gp = fopen("bench-out/pareto.gp", "w");
+	fprintf(gp,
+		"set datafile separator ','\n"
+		"set logscale xy\nset key outside right\n"
+		"set xlabel 'median fit time (s)'\n"
+		"set ylabel 'median worst parameter error (tolerance units)'\n"
+		"set title 'glint: speed against accuracy (Pareto front "
+		"marked)'\n"
+		"set arrow from graph 0, first 1 to graph 1, first 1 nohead "
+		"dt 2\n"
+		"plot_it = \"plot ");
+	const char *methods[] = { "three-pass", "naive", "varpro", "anneal" };
+	for (int k = 0; k < 4; k++)
+		fprintf(gp,
+			"'bench-out/pareto-%s.csv' using 1:2 with "
+			"linespoints pt 7 title '%s', ",
+			methods[k], methods[k]);
+	fprintf(gp, "'bench-out/pareto-front.csv' skip 1 using 1:2 with "
+		    "steps lw 2 lc rgb 'black' title 'Pareto front'\"\n"
+		    "set terminal pngcairo noenhanced size 1000,560\n"
+		    "set output 'bench-out/pareto.png'\neval plot_it\n"
+		    "set terminal svg noenhanced size 1000,560\n"
+		    "set output 'bench-out/pareto.svg'\neval plot_it\n");
+	fclose(gp);
+	for (int k = 0; k < 4; k++) {
+		char p[128];
+		snprintf(p, sizeof(p), "bench-out/pareto-%s.csv", methods[k]);
+		FILE *f = fopen(p, "w");
+		/* one curve per method, sorted by time */
+		for (int j = 0; j < NC; j++) {
+			int c = order[j];
+			if (!strcmp(configs[c].method, methods[k]))
+				fprintf(f, "%.4f,%.4f\n", med_t[c], med_e[c]);
+		}
+		fclose(f);
+	}
+	if (system("command -v gnuplot >/dev/null 2>&1") == 0 &&
+	    system("gnuplot bench-out/pareto.gp") == 0)
+		printf("chart: bench-out/pareto.png, bench-out/pareto.svg\n");
+	return 0;
+}

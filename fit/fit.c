@@ -687,7 +687,7 @@ static int fit_or_eval(struct glint_renderer *r,
 	ob.d = &d;
 	ob.o = o;
 	for (int k = 0; k < model->nparams; k++) {
-		ob.p[k] = model->params[k].def;
+		ob.p[k] = o->start ? o->start[k] : model->params[k].def;
 		ob.lobe_of[k] = ob.chan_of[k] = -1;
 	}
 	for (int j = 0; j < model->nlobes; j++)
@@ -892,7 +892,9 @@ static int fit_or_eval(struct glint_renderer *r,
 				freev[k] = !(j >= 0 && !model->lobe_varies[j]);
 				any |= freev[k];
 				if (freev[k])
-					ob.p[k] = model->params[k].def;
+					ob.p[k] =
+						o->start ? o->start[k]
+							 : model->params[k].def;
 			}
 			if (any) {
 				const int *sel = nspec >= 8 ? spec : coarse;

@@ -66,8 +66,10 @@ struct glint_fit_opts {
 	int static_samples;    /* shade cache: for constant lobes */
 	int max_iter;	       /* per LM pass */
 	enum glint_fit_optimizer optimizer;
-	uint64_t seed;	  /* annealing's random stream */
-	int anneal_evals; /* annealing's budget */
+	uint64_t seed;	     /* annealing's random stream */
+	int anneal_evals;    /* annealing's budget */
+	const double *start; /* initial values (NULL: the method's own, the
+				paper's) */
 	int nthreads;
 	/* Called as passes run (may be NULL). */
 	void (*progress)(void *ctx, const char *pass, int iter, double cost);

@@ -303,9 +303,10 @@ int glint_fit_dielectric(struct glint_renderer *r,
 	for (int k = 0; k < 4; k++) {
 		lo[k] = model->params[k].lo;
 		hi[k] = model->params[k].hi;
-		p[k] = eval_p  ? eval_p[k]
-		       : start ? start[k]
-			       : model->params[k].def;
+		p[k] = eval_p	  ? eval_p[k]
+		       : start	  ? start[k]
+		       : o->start ? o->start[k]
+				  : model->params[k].def;
 	}
 	res->setup_seconds = glint_now() - t0;
 

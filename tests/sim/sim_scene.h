@@ -14,7 +14,8 @@
 
 #include <stdio.h>
 
-static inline void sim_scene_192(struct glint_scene *s, const char *map, double rot_y)
+static inline void sim_scene_192(struct glint_scene *s, const char *map,
+				 double rot_y)
 {
 	glint_scene_defaults(s);
 	glint_camera_init(&s->cam, 192, 192, 0.1, 0.036 / 192, 0, 0,
@@ -28,8 +29,8 @@ static inline void sim_scene_192(struct glint_scene *s, const char *map, double 
 
 /* The reference photo of (m, p) in r's scene; NULL on failure. */
 static inline struct glint_image *sim_photo(const struct glint_renderer *r,
-				     const struct glint_model_ops *m,
-				     const double *p)
+					    const struct glint_model_ops *m,
+					    const double *p)
 {
 	struct glint_image *photo =
 		glint_image_new(r->scene.cam.width, r->scene.cam.height);

@@ -1,0 +1,296 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * Stability: each method from random starts inside the bounds, on the
+ * materials at Table 1's edges (roughness 0.005 and 0.22, a diffuse
+ * channel of 0, ior 1.15 and 3.23, a dark and a very bright specular),
+ * noise-free and through the sensor model.  128 px photos (box-averaged
+ * from the cached 512 px reference photos), fast.
+ *
+ * Outcome of a fit, against the truth and the fit from the paper's start:
+ *   converged     every parameter within the tolerances of that fit
+ *                 (albedo 0.01, roughness 5 %, ior 0.05);
+ *   hit a bound   otherwise, with a parameter on a bound the truth is not;
+ *   stalled       otherwise, when LM ran out of iterations;
+ *   wrong minimum otherwise (it stopped, converged, somewhere else).
+ *   bench/stability [STARTS]   (default 6)
+ * Writes bench-out/stability.csv, stability.gp and stability.png.
+ */
+#define _DEFAULT_SOURCE
+#include "bench.h"
+
+#include "core/error.h"
+#include "core/log.h"
+#include "fit/fit.h"
+#include "sim/reference.h"
+#include "sim/sensor.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/stat.h>
+
+static const char *const materials[] = { "green-acrylic", "teflon",
+					 "satin-paint",	  "nylon",
+					 "silver",	  "copper" };
+#define NM 6
+
+struct method {
+	const char *name;
+	enum glint_fit_method m;
+	enum glint_fit_optimizer opt;
+};
+static const struct method methods[] = {
+	{ "three-pass", GLINT_FIT_THREE_PASS, GLINT_OPT_LM },
+	{ "naive", GLINT_FIT_NAIVE, GLINT_OPT_LM },
+	{ "varpro", GLINT_FIT_VARPRO, GLINT_OPT_LM },
+	{ "anneal", GLINT_FIT_THREE_PASS, GLINT_OPT_ANNEAL },
+};
+#define NMETH 4
+
+enum { CONVERGED, BOUND, STALLED, WRONG, NOUT };
+static const char *const outcome_names[NOUT] = { "converged", "hit a bound",
+						 "stalled", "wrong minimum" };
+
+static void scene_px(struct glint_scene *s, int w)
+{
+	glint_scene_defaults(s);
+	double fpx = 1422.2 * w / 512;
+	glint_camera_init(&s->cam, w, w, fpx * 0.036 / w, 0.036 / w, 0, 0,
+			  v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
+	s->sphere_radius = 0.05;
+	s->sphere_centre = v3(0, 0, -0.05 * 1422.2 / 180);
+	snprintf(s->env_path, sizeof(s->env_path), "%s",
+		 GLINT_DATA_DIR "/env/venice_sunset_1k.hdr");
+	s->env_rotation[1] = -114;
+}
+
+static struct glint_image *shrink4(const struct glint_image *src)
+{
+	int w = src->width / 4, h = src->height / 4;
+	struct glint_image *d = glint_image_new(w, h);
+	for (int y = 0; d && y < h; y++)
+		for (int x = 0; x < w; x++)
+			for (int c = 0; c < 3; c++) {
+				double s = 0;
+				for (int j = 0; j < 4; j++)
+					for (int i = 0; i < 4; i++)
+						s += glint_image_px(
+							src, 4 * x + i,
+							4 * y + j)[c];
+				glint_image_px(d, x, y)[c] = (float)(s / 16);
+			}
+	return d;
+}
+
+static struct glint_image *
+photo_128(const char *mat, const struct glint_model_ops *m, const double *truth)
+{
+	char path[256];
+	struct glint_image *big = NULL;
+	snprintf(path, sizeof(path), "bench-out/photo-%s-512.exr", mat);
+	if (glint_image_read(path, &big) < 0) {
+		struct glint_scene sc;
+		struct glint_renderer r;
+		struct glint_reference_opts ro;
+		scene_px(&sc, 512);
+		if (glint_renderer_init(&r, &sc, 0, NULL) < 0)
+			return NULL;
+		glint_reference_default_opts(&ro);
+		ro.spp = 4;
+		big = glint_image_new(512, 512);
+		fprintf(stderr, "bench/stability: reference photo of %s\n",
+			mat);
+		if (glint_reference_render(&sc, r.env, m, truth, &ro, big) <
+			    0 ||
+		    glint_image_write(path, big, NULL) < 0) {
+			glint_image_free(big);
+			big = NULL;
+		}
+		glint_renderer_release(&r);
+		if (!big)
+			return NULL;
+	}
+	struct glint_image *img = shrink4(big);
+	glint_image_free(big);
+	return img;
+}
+
+static int add_noise(struct glint_image *photo, struct glint_image **weight)
+{
+	struct glint_sensor s;
+	struct glint_image *dn = glint_image_new(photo->width, photo->height);
+	*weight = glint_image_new(photo->width, photo->height);
+	glint_sensor_default(&s);
+	double mean = 0;
+	for (int i = 0; i < photo->width * photo->height * 3; i++)
+		mean += photo->data[i];
+	mean /= photo->width * photo->height * 3.0;
+	s.exposure_s = glint_sensor_exposure_for(&s, mean, 0.1);
+	int ret = glint_sensor_capture(&s, photo, dn);
+	if (!ret)
+		ret = glint_sensor_to_radiance(&s, dn, photo, *weight);
+	glint_image_free(dn);
+	return ret;
+}
+
+static int within(const double *p, const double *q)
+{
+	for (int k = 0; k < 6; k++)
+		if (fabs(p[k] - q[k]) > 0.01)
+			return 0;
+	return fabs(p[6] / q[6] - 1) <= 0.05 && fabs(p[7] - q[7]) <= 0.05;
+}
+
+int main(int argc, char **argv)
+{
+	int starts = argc > 1 && atoi(argv[1]) > 0 ? atoi(argv[1]) : 6;
+	int count[NMETH][NOUT] = { { 0 } };
+	double secs[NMETH] = { 0 };
+	int fits[NMETH] = { 0 };
+	uint64_t rs = 2026;
+
+	glint_log_set_mode(GLINT_LOG_QUIET);
+	mkdir("bench-out", 0777);
+	FILE *csv = fopen("bench-out/stability.csv", "w");
+	fprintf(csv, "method,material,noise,start,outcome,seconds\n");
+	for (int mi = 0; mi < NM; mi++) {
+		const struct glint_model_ops *m;
+		double truth[GLINT_MAX_PARAMS];
+		struct glint_scene sc;
+		struct glint_renderer r;
+		if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
+					materials[mi], &m, truth) < 0)
+			return 1;
+		struct glint_image *clean = photo_128(materials[mi], m, truth);
+		scene_px(&sc, 128);
+		if (!clean || glint_renderer_init(&r, &sc, 0, NULL) < 0) {
+			fprintf(stderr, "bench/stability: %s\n",
+				glint_error_msg());
+			return 1;
+		}
+		for (int noisy = 0; noisy < 2; noisy++) {
+			struct glint_image *photo =
+				glint_image_new(clean->width, clean->height);
+			struct glint_image *weight = NULL;
+			memcpy(photo->data, clean->data,
+			       (size_t)clean->width * clean->height * 3 *
+				       sizeof(float));
+			if (noisy && add_noise(photo, &weight) < 0)
+				return 1;
+			/* The reference: the default fit from the paper's
+			 * start. */
+			struct glint_fit_opts o;
+			struct glint_fit_result ref;
+			glint_fit_default_opts(&o);
+			if (glint_fit(&r, m, photo, weight, &o, &ref) < 0)
+				return 1;
+			for (int s = 0; s < starts; s++) {
+				double start[GLINT_MAX_PARAMS];
+				for (int k = 0; k < m->nparams; k++) {
+					rs = rs * 6364136223846793005ull +
+					     1442695040888963407ull;
+					double u = (double)(rs >> 11) /
+						   9007199254740992.0;
+					start[k] = m->params[k].lo +
+						   u * (m->params[k].hi -
+							m->params[k].lo);
+				}
+				for (int me = 0; me < NMETH; me++) {
+					struct glint_fit_result res;
+					glint_fit_default_opts(&o);
+					o.method = methods[me].m;
+					o.optimizer = methods[me].opt;
+					o.start = start;
+					o.seed = (uint64_t)s + 1;
+					double t0 = glint_now();
+					if (glint_fit(&r, m, photo, weight, &o,
+						      &res) < 0)
+						return 1;
+					double dt = glint_now() - t0;
+					int out = WRONG;
+					if (within(res.p, ref.p))
+						out = CONVERGED;
+					else {
+						int bound = 0, stall = 0;
+						for (int k = 0; k < m->nparams;
+						     k++) {
+							const struct glint_param *
+								pi = &m->params
+									      [k];
+							int tb =
+								truth[k] <=
+									pi->lo ||
+								truth[k] >=
+									pi->hi;
+							bound |= res.at_bound
+									 [k] &&
+								 !tb;
+						}
+						for (int q = 0; q < res.npasses;
+						     q++)
+							stall |=
+								res.passes[q]
+									.iterations >=
+								o.max_iter;
+						out = bound   ? BOUND
+						      : stall ? STALLED
+							      : WRONG;
+					}
+					count[me][out]++;
+					secs[me] += dt;
+					fits[me]++;
+					fprintf(csv, "%s,%s,%d,%d,%s,%.3f\n",
+						methods[me].name, materials[mi],
+						noisy, s, outcome_names[out],
+						dt);
+				}
+			}
+			glint_image_free(photo);
+			glint_image_free(weight);
+		}
+		fprintf(stderr, "bench/stability: %s done\n", materials[mi]);
+		glint_image_free(clean);
+		glint_renderer_release(&r);
+	}
+	fclose(csv);
+	printf("%d materials at Table 1's edges x noise-free / noisy x %d "
+	       "random starts, 128 px photos\n",
+	       NM, starts);
+	printf("%-11s %10s %12s %9s %14s %9s\n", "method", "converged",
+	       "hit a bound", "stalled", "wrong minimum", "s / fit");
+	FILE *dat = fopen("bench-out/stability.dat", "w");
+	for (int me = 0; me < NMETH; me++) {
+		double n = fits[me];
+		printf("%-11s %9.0f%% %11.0f%% %8.0f%% %13.0f%% %9.2f\n",
+		       methods[me].name, 100 * count[me][CONVERGED] / n,
+		       100 * count[me][BOUND] / n, 100 * count[me][STALLED] / n,
+		       100 * count[me][WRONG] / n, secs[me] / n);
+		fprintf(dat, "%s %.1f %.1f %.1f %.1f\n", methods[me].name,
+			100 * count[me][CONVERGED] / n,
+			100 * count[me][BOUND] / n,
+			100 * count[me][STALLED] / n,
+			100 * count[me][WRONG] / n);
+	}
+	fclose(dat);
+	printf("converged: within albedo 0.01, roughness 5 %%, ior 0.05 of "
+	       "the fit from the paper's start; per-fit outcomes in "
+	       "bench-out/stability.csv\n");
+	FILE *gp = fopen("bench-out/stability.gp", "w");
+	fprintf(gp,
+		"set terminal pngcairo noenhanced size 900,480\n"
+		"set output 'bench-out/stability.png'\n"
+		"set style data histograms\nset style histogram rowstacked\n"
+		"set style fill solid border -1\nset boxwidth 0.6\n"
+		"set ylabel 'fits from random starts (%%)'\nset yrange "
+		"[0:100]\n"
+		"set key outside right\n"
+		"set title 'glint: outcome of fits from random starts'\n"
+		"plot 'bench-out/stability.dat' using 2:xtic(1) title "
+		"'converged', '' using 3 title 'hit a bound', '' using 4 "
+		"title 'stalled', '' using 5 title 'wrong minimum'\n");
+	fclose(gp);
+	if (system("command -v gnuplot >/dev/null 2>&1") == 0 &&
+	    system("gnuplot bench-out/stability.gp") == 0)
+		printf("chart: bench-out/stability.png\n");
+	return 0;
+}

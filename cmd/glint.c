@@ -14,9 +14,11 @@
 #endif
 
 static const struct glint_cmd commands[] = {
+	{ "rig",
+	  "the appliance: button -> captures -> fit (--once: the main job)",
+	  cmd_rig, cmd_rig_help },
 	{ "demo",
-	  "render a Table-1 material on the simulated rig (no "
-	  "arguments needed)",
+	  "the fitter alone: simulate a photo of a Table-1 material, fit it",
 	  cmd_demo, cmd_demo_help },
 	{ "fit", "recover a material from an HDR photo of the sphere", cmd_fit,
 	  cmd_fit_help },
@@ -32,8 +34,6 @@ static const struct glint_cmd commands[] = {
 	  cmd_hdr, cmd_hdr_help },
 	{ "probe", "unwrap a mirror-ball photo; convert probe formats",
 	  cmd_probe, cmd_probe_help },
-	{ "rig", "the appliance: button -> capture sequence -> queued fit",
-	  cmd_rig, cmd_rig_help },
 	{ "check-rig", "check a rig file, its camera and GPIO lines",
 	  cmd_check_rig, cmd_check_rig_help },
 	{ "sessions", "list capture sessions and their status", cmd_sessions,

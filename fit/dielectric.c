@@ -315,8 +315,8 @@ int glint_dielectric_render(struct glint_tracer *tracer,
 			    struct glint_image *out, struct glint_image *cov)
 {
 	int n = gb->width * gb->height;
-	int32_t *pix = malloc((size_t)n * sizeof(int32_t));
-	double *rgb = malloc((size_t)n * 3 * sizeof(double));
+	int32_t *pix = calloc((size_t)n, sizeof(int32_t));
+	double *rgb = calloc((size_t)n * 3, sizeof(double));
 	struct glint_dielectric_cache c;
 	int ret = 0;
 

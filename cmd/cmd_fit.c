@@ -54,6 +54,8 @@ void cmd_fit_help(void)
 	       "otherwise)\n"
 	       "  --seed N              annealing's random stream (default "
 	       "1; runs repeat)\n"
+	       "  --anneal-evals N      annealing's budget per parameter "
+	       "searched (default 150)\n"
 	       "  --method M            three-pass (the paper's, default), "
 	       "naive, varpro\n"
 	       "  --no-coarse           fit on the full pixel set from the "
@@ -419,7 +421,8 @@ int cmd_fit(int argc, char **argv)
 		O_JSON,
 		O_WAIT,
 		O_OPTIMIZER,
-		O_SEED
+		O_SEED,
+		O_ANNEAL_EVALS
 	};
 	static const struct option opts[] = {
 		{ "out", required_argument, NULL, 'o' },
@@ -438,6 +441,7 @@ int cmd_fit(int argc, char **argv)
 		{ "wait", no_argument, NULL, O_WAIT },
 		{ "optimizer", required_argument, NULL, O_OPTIMIZER },
 		{ "seed", required_argument, NULL, O_SEED },
+		{ "anneal-evals", required_argument, NULL, O_ANNEAL_EVALS },
 		{ "quiet", no_argument, NULL, 'q' },
 		{ "help", no_argument, NULL, 'h' },
 		{ NULL, 0, NULL, 0 },
@@ -458,6 +462,11 @@ int cmd_fit(int argc, char **argv)
 						      &job.opts.optimizer) < 0)
 				return cmd_usage_error("fit", "%s",
 						       glint_error_msg());
+			break;
+		case O_ANNEAL_EVALS:
+			if (cmd_parse_int("fit", "--anneal-evals", optarg, 10,
+					  1000000, &job.opts.anneal_evals) < 0)
+				return GLINT_EXIT_USAGE;
 			break;
 		case O_SEED:
 			if (cmd_parse_int("fit", "--seed", optarg, 0,

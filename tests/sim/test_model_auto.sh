@@ -36,7 +36,7 @@ assert d['chosen'] == 'dielectric' and d['dielectric_rel_rmse'] < d['torrance_sp
 "
 check "an opaque photo" bash -c "'$glint' render '$data/demo-scene.json' --paper copper -o cu.exr 2>/dev/null"
 check "--model auto picks torrance-sparrow for it" bash -c "'$glint' fit '$data/demo-scene.json' cu.exr --model auto -o auto-cu 2>a2.err && grep -q 'auto: torrance-sparrow' a2.err"
-check "--optimizer anneal on an opaque model runs and polishes" bash -c "'$glint' fit '$data/demo-scene.json' cu.exr --optimizer anneal --max-pixels 512 -o ann --json >ann.json 2>/dev/null && python3 -c \"
+check "--optimizer anneal on an opaque model runs and polishes" bash -c "'$glint' fit '$data/demo-scene.json' cu.exr --optimizer anneal --anneal-evals 30 --max-pixels 512 -o ann --json >ann.json 2>/dev/null && python3 -c \"
 import json
 d = json.load(open('ann.json'))
 print('  passes', [p['name'] for p in d['passes']])

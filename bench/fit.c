@@ -14,6 +14,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "bench.h"
+#include "captures.h"
 
 #include "core/error.h"
 #include "core/formats.h"
@@ -44,23 +45,6 @@ static const struct variant variants[] = {
 };
 #define NV ((int)(sizeof(variants) / sizeof(variants[0])))
 
-/* A w x w photo, the sphere 180 / 512 of the width in radius. */
-static void scene_px(struct glint_scene *s, int w)
-{
-	glint_scene_defaults(s);
-	double fpx = 1422.2 * w / 512;
-	glint_camera_init(&s->cam, w, w, fpx * 0.036 / w, 0.036 / w, 0, 0,
-			  v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
-	s->sphere_radius = 0.05;
-	s->sphere_centre = v3(0, 0, -0.05 * 1422.2 / 180);
-	snprintf(s->env_path, sizeof(s->env_path), "%s",
-		 GLINT_DATA_DIR "/env/venice_sunset_1k.hdr");
-	s->env_rotation[1] = -114;
-	s->env_scale = 1;
-	s->light_samples = 16;
-	s->brdf_samples = 16;
-}
-
 /* Worst errors against the truth: albedo (abs), roughness (rel), ior. */
 static void errors(const double *p, const double *t, double e[3])
 {
@@ -88,7 +72,7 @@ static int dielectric_rows(int rounds)
 		const struct glint_model_ops *m;
 		double truth[GLINT_MAX_PARAMS];
 		char path[512];
-		scene_px(&sc, 256);
+		bench_scene(&sc, 256, NULL);
 		if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
 					mats[mi], &m, truth) < 0 ||
 		    glint_renderer_init(&r, &sc, 0, NULL) < 0)
@@ -201,7 +185,9 @@ int main(int argc, char **argv)
 			rounds = atoi(argv[i]) > 0 ? atoi(argv[i]) : 1;
 	}
 	glint_log_set_mode(GLINT_LOG_QUIET);
-	scene_px(&sc, 512);
+	bench_scene(&sc, 512, NULL);
+	sc.light_samples = 16;
+	sc.brdf_samples = 16;
 	if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json", material,
 				&m, truth) < 0 ||
 	    glint_renderer_init(&r, &sc, 0, NULL) < 0) {

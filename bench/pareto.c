@@ -23,6 +23,7 @@
  */
 #define _DEFAULT_SOURCE
 #include "bench.h"
+#include "captures.h"
 
 #include "core/error.h"
 #include "core/log.h"
@@ -66,86 +67,6 @@ static const char *const materials[] = { "yellow-plastic", "copper",
 					 "satin-paint" };
 #define NM 3
 
-static void scene_px(struct glint_scene *s, int w, const char *env)
-{
-	glint_scene_defaults(s);
-	double fpx = 1422.2 * w / 512;
-	glint_camera_init(&s->cam, w, w, fpx * 0.036 / w, 0.036 / w, 0, 0,
-			  v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
-	s->sphere_radius = 0.05;
-	s->sphere_centre = v3(0, 0, -0.05 * 1422.2 / 180);
-	snprintf(s->env_path, sizeof(s->env_path), "%s", env);
-	s->env_rotation[1] = -114;
-}
-
-/* Box-average by an integer factor. */
-static struct glint_image *shrink(const struct glint_image *src, int f)
-{
-	int w = src->width / f, h = src->height / f;
-	struct glint_image *d = glint_image_new(w, h);
-	for (int y = 0; d && y < h; y++)
-		for (int x = 0; x < w; x++)
-			for (int c = 0; c < 3; c++) {
-				double s = 0;
-				for (int j = 0; j < f; j++)
-					for (int i = 0; i < f; i++)
-						s += glint_image_px(
-							src, f * x + i,
-							f * y + j)[c];
-				glint_image_px(d, x, y)[c] =
-					(float)(s / (f * f));
-			}
-	return d;
-}
-
-/* The 512 px reference photo of a material (cached). */
-static struct glint_image *photo_512(const char *mat, const double *truth,
-				     const struct glint_model_ops *m)
-{
-	char path[256];
-	struct glint_image *img = NULL;
-	snprintf(path, sizeof(path), "bench-out/photo-%s-512.exr", mat);
-	if (glint_image_read(path, &img) == 0)
-		return img;
-	struct glint_scene sc;
-	struct glint_renderer r;
-	scene_px(&sc, 512, GLINT_DATA_DIR "/env/venice_sunset_1k.hdr");
-	if (glint_renderer_init(&r, &sc, 0, NULL) < 0)
-		return NULL;
-	struct glint_reference_opts ro;
-	glint_reference_default_opts(&ro);
-	ro.spp = 4;
-	img = glint_image_new(512, 512);
-	fprintf(stderr, "bench/pareto: reference photo of %s (cached in %s)\n",
-		mat, path);
-	if (glint_reference_render(&sc, r.env, m, truth, &ro, img) < 0 ||
-	    glint_image_write(path, img, NULL) < 0) {
-		glint_image_free(img);
-		img = NULL;
-	}
-	glint_renderer_release(&r);
-	return img;
-}
-
-/* One exposure of the sensor model, back to radiance with weights. */
-static int add_noise(struct glint_image *photo, struct glint_image **weight)
-{
-	struct glint_sensor s;
-	struct glint_image *dn = glint_image_new(photo->width, photo->height);
-	*weight = glint_image_new(photo->width, photo->height);
-	glint_sensor_default(&s);
-	double mean = 0;
-	for (int i = 0; i < photo->width * photo->height * 3; i++)
-		mean += photo->data[i];
-	mean /= photo->width * photo->height * 3.0;
-	s.exposure_s = glint_sensor_exposure_for(&s, mean, 0.1);
-	int ret = glint_sensor_capture(&s, photo, dn);
-	if (!ret)
-		ret = glint_sensor_to_radiance(&s, dn, photo, *weight);
-	glint_image_free(dn);
-	return ret;
-}
-
 /* Worst parameter error in tolerance units. */
 static double param_error(const double *p, const double *t)
 {
@@ -177,12 +98,12 @@ static struct outcome run_one(const struct config *c, const char *mat,
 	if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json", mat, &m,
 				truth) < 0)
 		return out;
-	struct glint_image *big = photo_512(mat, truth, m);
+	struct glint_image *big = bench_photo_512(mat, m, truth);
 	if (!big)
 		return out;
-	struct glint_image *photo = shrink(big, 512 / c->px);
+	struct glint_image *photo = bench_shrink(big, 512 / c->px);
 	glint_image_free(big);
-	if (noisy && add_noise(photo, &weight) < 0)
+	if (noisy && bench_add_noise(photo, &weight) < 0)
 		return out;
 	if (c->env_w == 1024)
 		snprintf(env, sizeof(env), "%s",
@@ -190,7 +111,7 @@ static struct outcome run_one(const struct config *c, const char *mat,
 	else
 		snprintf(env, sizeof(env), "bench-out/venice-%d.exr", c->env_w);
 	double t0 = glint_now();
-	scene_px(&sc, c->px, env);
+	bench_scene(&sc, c->px, env);
 	if (glint_renderer_init(&r, &sc, 0, NULL) < 0)
 		return out;
 	struct glint_fit_opts o;
@@ -223,7 +144,7 @@ static int small_env(int w)
 	if (glint_image_read(GLINT_DATA_DIR "/env/venice_sunset_1k.hdr", &src) <
 	    0)
 		return -1;
-	struct glint_image *d = shrink(src, src->width / w);
+	struct glint_image *d = bench_shrink(src, src->width / w);
 	int ret = d ? glint_image_write(path, d, NULL) : -1;
 	glint_image_free(src);
 	glint_image_free(d);
@@ -247,7 +168,7 @@ int main(int argc, char **argv)
 		if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
 					materials[i], &m, t) < 0)
 			return 1;
-		glint_image_free(photo_512(materials[i], t, m));
+		glint_image_free(bench_photo_512(materials[i], m, t));
 	}
 	FILE *csv = fopen("bench-out/pareto.csv", "w");
 	fprintf(csv, "method,px,samples,env_w,material,noise,seconds,peak_mib,"

@@ -17,6 +17,7 @@
  */
 #define _DEFAULT_SOURCE
 #include "bench.h"
+#include "captures.h"
 
 #include "core/error.h"
 #include "core/log.h"
@@ -51,86 +52,13 @@ enum { CONVERGED, BOUND, STALLED, WRONG, NOUT };
 static const char *const outcome_names[NOUT] = { "converged", "hit a bound",
 						 "stalled", "wrong minimum" };
 
-static void scene_px(struct glint_scene *s, int w)
-{
-	glint_scene_defaults(s);
-	double fpx = 1422.2 * w / 512;
-	glint_camera_init(&s->cam, w, w, fpx * 0.036 / w, 0.036 / w, 0, 0,
-			  v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
-	s->sphere_radius = 0.05;
-	s->sphere_centre = v3(0, 0, -0.05 * 1422.2 / 180);
-	snprintf(s->env_path, sizeof(s->env_path), "%s",
-		 GLINT_DATA_DIR "/env/venice_sunset_1k.hdr");
-	s->env_rotation[1] = -114;
-}
-
-static struct glint_image *shrink4(const struct glint_image *src)
-{
-	int w = src->width / 4, h = src->height / 4;
-	struct glint_image *d = glint_image_new(w, h);
-	for (int y = 0; d && y < h; y++)
-		for (int x = 0; x < w; x++)
-			for (int c = 0; c < 3; c++) {
-				double s = 0;
-				for (int j = 0; j < 4; j++)
-					for (int i = 0; i < 4; i++)
-						s += glint_image_px(
-							src, 4 * x + i,
-							4 * y + j)[c];
-				glint_image_px(d, x, y)[c] = (float)(s / 16);
-			}
-	return d;
-}
-
 static struct glint_image *
 photo_128(const char *mat, const struct glint_model_ops *m, const double *truth)
 {
-	char path[256];
-	struct glint_image *big = NULL;
-	snprintf(path, sizeof(path), "bench-out/photo-%s-512.exr", mat);
-	if (glint_image_read(path, &big) < 0) {
-		struct glint_scene sc;
-		struct glint_renderer r;
-		struct glint_reference_opts ro;
-		scene_px(&sc, 512);
-		if (glint_renderer_init(&r, &sc, 0, NULL) < 0)
-			return NULL;
-		glint_reference_default_opts(&ro);
-		ro.spp = 4;
-		big = glint_image_new(512, 512);
-		fprintf(stderr, "bench/stability: reference photo of %s\n",
-			mat);
-		if (glint_reference_render(&sc, r.env, m, truth, &ro, big) <
-			    0 ||
-		    glint_image_write(path, big, NULL) < 0) {
-			glint_image_free(big);
-			big = NULL;
-		}
-		glint_renderer_release(&r);
-		if (!big)
-			return NULL;
-	}
-	struct glint_image *img = shrink4(big);
+	struct glint_image *big = bench_photo_512(mat, m, truth);
+	struct glint_image *img = big ? bench_shrink(big, 4) : NULL;
 	glint_image_free(big);
 	return img;
-}
-
-static int add_noise(struct glint_image *photo, struct glint_image **weight)
-{
-	struct glint_sensor s;
-	struct glint_image *dn = glint_image_new(photo->width, photo->height);
-	*weight = glint_image_new(photo->width, photo->height);
-	glint_sensor_default(&s);
-	double mean = 0;
-	for (int i = 0; i < photo->width * photo->height * 3; i++)
-		mean += photo->data[i];
-	mean /= photo->width * photo->height * 3.0;
-	s.exposure_s = glint_sensor_exposure_for(&s, mean, 0.1);
-	int ret = glint_sensor_capture(&s, photo, dn);
-	if (!ret)
-		ret = glint_sensor_to_radiance(&s, dn, photo, *weight);
-	glint_image_free(dn);
-	return ret;
 }
 
 static int within(const double *p, const double *q)
@@ -162,7 +90,7 @@ int main(int argc, char **argv)
 					materials[mi], &m, truth) < 0)
 			return 1;
 		struct glint_image *clean = photo_128(materials[mi], m, truth);
-		scene_px(&sc, 128);
+		bench_scene(&sc, 128, NULL);
 		if (!clean || glint_renderer_init(&r, &sc, 0, NULL) < 0) {
 			fprintf(stderr, "bench/stability: %s\n",
 				glint_error_msg());
@@ -175,7 +103,7 @@ int main(int argc, char **argv)
 			memcpy(photo->data, clean->data,
 			       (size_t)clean->width * clean->height * 3 *
 				       sizeof(float));
-			if (noisy && add_noise(photo, &weight) < 0)
+			if (noisy && bench_add_noise(photo, &weight) < 0)
 				return 1;
 			/* The reference: the default fit from the paper's
 			 * start. */

@@ -1,0 +1,107 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_BENCH_CAPTURES_H
+#define GLINT_BENCH_CAPTURES_H
+
+/*
+ * The simulated captures the fitting benchmarks share: the 512 px scene
+ * (a 10 cm sphere 180 / 512 of the width in radius under the Venice map),
+ * its reference photos (cached in bench-out/), box-averaged lower
+ * resolutions, and one noisy exposure of the sensor model.
+ */
+
+#include "core/error.h"
+#include "fit/render.h"
+#include "sim/reference.h"
+#include "sim/sensor.h"
+
+#include <stdio.h>
+
+/* A w x w photo, the sphere 180 / 512 of the width in radius; env NULL:
+ * the Venice map. */
+static inline void bench_scene(struct glint_scene *s, int w, const char *env)
+{
+	glint_scene_defaults(s);
+	double fpx = 1422.2 * w / 512;
+	glint_camera_init(&s->cam, w, w, fpx * 0.036 / w, 0.036 / w, 0, 0,
+			  v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
+	s->sphere_radius = 0.05;
+	s->sphere_centre = v3(0, 0, -0.05 * 1422.2 / 180);
+	snprintf(s->env_path, sizeof(s->env_path), "%s",
+		 env ? env : GLINT_DATA_DIR "/env/venice_sunset_1k.hdr");
+	s->env_rotation[1] = -114;
+	s->env_scale = 1;
+}
+
+/* Box-average by an integer factor. */
+static inline struct glint_image *bench_shrink(const struct glint_image *src,
+					       int f)
+{
+	int w = src->width / f, h = src->height / f;
+	struct glint_image *d = glint_image_new(w, h);
+	for (int y = 0; d && y < h; y++)
+		for (int x = 0; x < w; x++)
+			for (int c = 0; c < 3; c++) {
+				double s = 0;
+				for (int j = 0; j < f; j++)
+					for (int i = 0; i < f; i++)
+						s += glint_image_px(
+							src, f * x + i,
+							f * y + j)[c];
+				glint_image_px(d, x, y)[c] =
+					(float)(s / (f * f));
+			}
+	return d;
+}
+
+/* The 512 px reference photo of a material (rendered once, cached). */
+static inline struct glint_image *
+bench_photo_512(const char *mat, const struct glint_model_ops *m,
+		const double *truth)
+{
+	char path[256];
+	struct glint_image *img = NULL;
+	snprintf(path, sizeof(path), "bench-out/photo-%s-512.exr", mat);
+	if (glint_image_read(path, &img) == 0)
+		return img;
+	struct glint_scene sc;
+	struct glint_renderer r;
+	bench_scene(&sc, 512, NULL);
+	if (glint_renderer_init(&r, &sc, 0, NULL) < 0)
+		return NULL;
+	struct glint_reference_opts ro;
+	glint_reference_default_opts(&ro);
+	ro.spp = 4;
+	img = glint_image_new(512, 512);
+	fprintf(stderr, "bench: reference photo of %s (cached in %s)\n", mat,
+		path);
+	if (glint_reference_render(&sc, r.env, m, truth, &ro, img) < 0 ||
+	    glint_image_write(path, img, NULL) < 0) {
+		glint_image_free(img);
+		img = NULL;
+	}
+	glint_renderer_release(&r);
+	return img;
+}
+
+/* One exposure of the sensor model (exposed for the mean), back to
+ * radiance with 1/variance weights (0 where clipped). */
+static inline int bench_add_noise(struct glint_image *photo,
+				  struct glint_image **weight)
+{
+	struct glint_sensor s;
+	struct glint_image *dn = glint_image_new(photo->width, photo->height);
+	*weight = glint_image_new(photo->width, photo->height);
+	glint_sensor_default(&s);
+	double mean = 0;
+	for (int i = 0; i < photo->width * photo->height * 3; i++)
+		mean += photo->data[i];
+	mean /= photo->width * photo->height * 3.0;
+	s.exposure_s = glint_sensor_exposure_for(&s, mean, 0.1);
+	int ret = glint_sensor_capture(&s, photo, dn);
+	if (!ret)
+		ret = glint_sensor_to_radiance(&s, dn, photo, *weight);
+	glint_image_free(dn);
+	return ret;
+}
+
+#endif

@@ -6,6 +6,8 @@
 
 #include <jansson.h>
 
+#include <stddef.h>
+
 /* Exit codes shared by every command. */
 enum {
 	GLINT_EXIT_OK = 0,
@@ -63,6 +65,9 @@ void cmd_cameras_help(void);
 
 /* Folder of glint's own data (embedded env map, Table 1). */
 const char *glint_data_dir(void);
+/* The rig file to use: `config`, or the simulated rig (data/rig-sim.json)
+ * when it is NULL; into buf. */
+const char *cmd_rig_config(char *buf, size_t n, const char *config);
 
 /* Report the current error (human or JSON) and return GLINT_EXIT_FAIL. */
 int cmd_fail(const char *cmd);

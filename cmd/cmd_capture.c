@@ -139,11 +139,7 @@ int cmd_capture(int argc, char **argv)
 				       "expected what to capture: probe or "
 				       "sample");
 	const char *kind = argv[optind];
-	if (!config) {
-		snprintf(default_config, sizeof(default_config),
-			 "%s/rig-sim.json", glint_data_dir());
-		config = default_config;
-	}
+	config = cmd_rig_config(default_config, sizeof(default_config), config);
 
 	struct rig rig;
 	ret = rig_load(config, &rig);

@@ -98,11 +98,7 @@ static int parse(const char *cmd, int argc, char **argv, struct qopts *q)
 	}
 	if (!root) {
 		struct rig rig;
-		if (!config) {
-			snprintf(def, sizeof(def), "%s/rig-sim.json",
-				 glint_data_dir());
-			config = def;
-		}
+		config = cmd_rig_config(def, sizeof(def), config);
 		if (rig_load(config, &rig) < 0) {
 			rig_free(&rig);
 			cmd_fail(cmd);

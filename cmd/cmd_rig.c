@@ -83,14 +83,6 @@ static void on_signal(int sig)
 	cancel_flag = 1;
 }
 
-static void default_config(char *buf, size_t n, const char *config)
-{
-	if (config)
-		snprintf(buf, n, "%s", config);
-	else
-		snprintf(buf, n, "%s/rig-sim.json", glint_data_dir());
-}
-
 /* The camera must be there before any output is touched. */
 static int check_camera(const struct rig *rig)
 {
@@ -304,7 +296,7 @@ int cmd_rig(int argc, char **argv)
 	if (optind != argc)
 		return cmd_usage_error("rig", "unexpected argument '%s'",
 				       argv[optind]);
-	default_config(path, sizeof(path), config);
+	cmd_rig_config(path, sizeof(path), config);
 
 	struct rig rig;
 	struct glint_board *board = NULL;
@@ -452,7 +444,7 @@ int cmd_check_rig(int argc, char **argv)
 	if (optind != argc)
 		return cmd_usage_error("check-rig", "unexpected argument '%s'",
 				       argv[optind]);
-	default_config(path, sizeof(path), config);
+	cmd_rig_config(path, sizeof(path), config);
 	struct rig rig;
 	struct glint_board *board = NULL;
 	ret = rig_load(path, &rig);

@@ -51,6 +51,15 @@ const char *glint_data_dir(void)
 	return env && env[0] ? env : GLINT_DATA_DIR;
 }
 
+const char *cmd_rig_config(char *buf, size_t n, const char *config)
+{
+	if (config)
+		snprintf(buf, n, "%s", config);
+	else
+		snprintf(buf, n, "%s/rig-sim.json", glint_data_dir());
+	return buf;
+}
+
 int cmd_fail(const char *cmd)
 {
 	glint_log_error("%s: %s", cmd, glint_error_msg());

@@ -36,21 +36,7 @@ static inline void bench_scene(struct glint_scene *s, int w, const char *env)
 static inline struct glint_image *bench_shrink(const struct glint_image *src,
 					       int f)
 {
-	int w = src->width / f, h = src->height / f;
-	struct glint_image *d = glint_image_new(w, h);
-	for (int y = 0; d && y < h; y++)
-		for (int x = 0; x < w; x++)
-			for (int c = 0; c < 3; c++) {
-				double s = 0;
-				for (int j = 0; j < f; j++)
-					for (int i = 0; i < f; i++)
-						s += glint_image_px(
-							src, f * x + i,
-							f * y + j)[c];
-				glint_image_px(d, x, y)[c] =
-					(float)(s / (f * f));
-			}
-	return d;
+	return glint_image_downsample(src, f);
 }
 
 /* The 512 px reference photo of a material (rendered once, cached). */
@@ -83,10 +69,12 @@ bench_photo_512(const char *mat, const struct glint_model_ops *m,
 	return img;
 }
 
-/* One exposure of the sensor model (exposed for the mean), back to
- * radiance with 1/variance weights (0 where clipped). */
+/* One exposure of the sensor model, exposed so that the mean radiance
+ * sits at fraction `level` of the ADC range (0.1: a normal exposure; less
+ * is darker and noisier), back to radiance with 1/variance weights (0
+ * where clipped). */
 static inline int bench_add_noise(struct glint_image *photo,
-				  struct glint_image **weight)
+				  struct glint_image **weight, double level)
 {
 	struct glint_sensor s;
 	struct glint_image *dn = glint_image_new(photo->width, photo->height);
@@ -96,7 +84,7 @@ static inline int bench_add_noise(struct glint_image *photo,
 	for (int i = 0; i < photo->width * photo->height * 3; i++)
 		mean += photo->data[i];
 	mean /= photo->width * photo->height * 3.0;
-	s.exposure_s = glint_sensor_exposure_for(&s, mean, 0.1);
+	s.exposure_s = glint_sensor_exposure_for(&s, mean, level);
 	int ret = glint_sensor_capture(&s, photo, dn);
 	if (!ret)
 		ret = glint_sensor_to_radiance(&s, dn, photo, *weight);

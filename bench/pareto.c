@@ -103,7 +103,7 @@ static struct outcome run_one(const struct config *c, const char *mat,
 		return out;
 	struct glint_image *photo = bench_shrink(big, 512 / c->px);
 	glint_image_free(big);
-	if (noisy && bench_add_noise(photo, &weight) < 0)
+	if (noisy && bench_add_noise(photo, &weight, 0.1) < 0)
 		return out;
 	if (c->env_w == 1024)
 		snprintf(env, sizeof(env), "%s",

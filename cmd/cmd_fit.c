@@ -11,6 +11,8 @@
 #include "core/lockfile.h"
 #include "core/log.h"
 #include "fit/compare.h"
+#include "fit/ladder.h"
+#include "fit/select.h"
 
 #include <getopt.h>
 #include <math.h>
@@ -56,6 +58,28 @@ void cmd_fit_help(void)
 	       "1; runs repeat)\n"
 	       "  --anneal-evals N      annealing's budget per parameter "
 	       "searched (default 150)\n"
+	       "  --select-model        fit torrance-sparrow, the same with a "
+	       "grey specular,\n"
+	       "                        without Fresnel variation, and "
+	       "lambert; keep the one\n"
+	       "                        with the lowest BIC on the "
+	       "weighted residual (all four\n"
+	       "                        with AIC, BIC and standard errors "
+	       "in params.json)\n"
+	       "  --ladder              fidelity ladder: try cheaper "
+	       "modelling (no depth of\n"
+	       "                        field, fewer samples per pixel, "
+	       "smaller image and map,\n"
+	       "                        fewer shading samples) and keep "
+	       "each that moves no\n"
+	       "                        parameter by 0.5 standard errors "
+	       "or more; the choices\n"
+	       "                        and their measured effects go "
+	       "into params.json\n"
+	       "                        (\"fidelity\"). A dozen fits: "
+	       "minutes at 512 px\n"
+	       "  --ladder-limit SE     the ladder's limit (implies "
+	       "--ladder; default 0.5)\n"
 	       "  --method M            three-pass (the paper's, default), "
 	       "naive, varpro\n"
 	       "  --no-coarse           fit on the full pixel set from the "
@@ -171,6 +195,44 @@ static int pick_model(struct glint_renderer *r, const struct fit_job *job,
 	return 0;
 }
 
+/*
+ * --select-model: the opaque candidates scored by BIC (fit/select.h); the
+ * chosen one's fit is the result.
+ */
+static int select_model(struct glint_renderer *r, const struct fit_job *job,
+			const struct glint_fit_opts *o,
+			const struct glint_model_ops **model,
+			struct glint_fit_result *res, json_t **why)
+{
+	struct glint_selection *sel = calloc(1, sizeof(*sel));
+	int ret = sel ? glint_select_model(r, job->photo, job->weight, o, sel)
+		      : -ENOMEM;
+	if (ret < 0) {
+		free(sel);
+		return glint_error_prefix(ret, "--select-model");
+	}
+	const struct glint_select_candidate *c = &sel->c[sel->chosen];
+	switch (sel->chosen) {
+	case GLINT_SEL_LAMBERT:
+		ret = glint_fit(r, &glint_model_lambert, job->photo,
+				job->weight, o, res);
+		break;
+	case GLINT_SEL_CONST_FRESNEL:
+		*res = sel->nf;
+		break;
+	default:
+		*res = sel->full;
+		memcpy(res->p, c->p, sizeof(res->p));
+		memcpy(res->se, c->se, sizeof(res->se));
+	}
+	*model = c->model;
+	res->model = c->model;
+	glint_log_info("--select-model: %s", sel->why);
+	*why = glint_selection_to_json(sel);
+	free(sel);
+	return ret;
+}
+
 int fit_job_run(const struct fit_job *job, json_t **result)
 {
 	struct glint_renderer r;
@@ -197,7 +259,29 @@ int fit_job_run(const struct fit_job *job, json_t **result)
 		if (ret < 0)
 			goto out;
 	}
-	ret = glint_fit(&r, model, job->photo, job->weight, &o, &res);
+	json_t *fidelity = NULL, *selection = NULL;
+	if (job->select && !model->transparent) {
+		ret = select_model(&r, job, &o, &model, &res, &selection);
+		if (ret < 0)
+			goto out;
+	}
+	if (selection)
+		; /* fitted already */
+	else if (job->ladder > 0 && !model->transparent) {
+		struct glint_ladder_result *lr = calloc(1, sizeof(*lr));
+		ret = lr ? glint_ladder_run(&job->scene, model, job->photo,
+					    job->weight, &o, job->ladder, 0,
+					    job->nthreads, lr)
+			 : -ENOMEM;
+		if (!ret) {
+			res = lr->chosen_fit;
+			fidelity = glint_ladder_to_json(lr);
+			if (glint_log_get_mode() == GLINT_LOG_HUMAN)
+				glint_ladder_print(lr, stderr);
+		}
+		free(lr);
+	} else
+		ret = glint_fit(&r, model, job->photo, job->weight, &o, &res);
 	if (glint_log_get_mode() == GLINT_LOG_HUMAN && isatty(2))
 		fprintf(stderr, "\r%*s\r", 70, "");
 	if (ret < 0)
@@ -258,6 +342,14 @@ int fit_job_run(const struct fit_job *job, json_t **result)
 		json_object_set_new(doc, "model_choice", why);
 		why = NULL;
 	}
+	if (fidelity) {
+		json_object_set_new(doc, "fidelity", fidelity);
+		fidelity = NULL;
+	}
+	if (selection) {
+		json_object_set_new(doc, "model_selection", selection);
+		selection = NULL;
+	}
 	ret = glint_atomic_dir_open(&ad, job->out_dir);
 	if (ret < 0) {
 		json_decref(doc);
@@ -290,6 +382,8 @@ int fit_job_run(const struct fit_job *job, json_t **result)
 	*result = doc;
 out:
 	json_decref(why);
+	json_decref(fidelity);
+	json_decref(selection);
 	glint_image_free(img);
 	glint_image_free(cov);
 	glint_renderer_release(&r);
@@ -422,7 +516,10 @@ int cmd_fit(int argc, char **argv)
 		O_WAIT,
 		O_OPTIMIZER,
 		O_SEED,
-		O_ANNEAL_EVALS
+		O_ANNEAL_EVALS,
+		O_LADDER,
+		O_LADDER_LIMIT,
+		O_SELECT
 	};
 	static const struct option opts[] = {
 		{ "out", required_argument, NULL, 'o' },
@@ -442,6 +539,9 @@ int cmd_fit(int argc, char **argv)
 		{ "optimizer", required_argument, NULL, O_OPTIMIZER },
 		{ "seed", required_argument, NULL, O_SEED },
 		{ "anneal-evals", required_argument, NULL, O_ANNEAL_EVALS },
+		{ "ladder", no_argument, NULL, O_LADDER },
+		{ "select-model", no_argument, NULL, O_SELECT },
+		{ "ladder-limit", required_argument, NULL, O_LADDER_LIMIT },
 		{ "quiet", no_argument, NULL, 'q' },
 		{ "help", no_argument, NULL, 'h' },
 		{ NULL, 0, NULL, 0 },
@@ -468,6 +568,24 @@ int cmd_fit(int argc, char **argv)
 					  1000000, &job.opts.anneal_evals) < 0)
 				return GLINT_EXIT_USAGE;
 			break;
+		case O_SELECT:
+			job.select = 1;
+			break;
+		case O_LADDER:
+			if (!(job.ladder > 0))
+				job.ladder = 0.5;
+			break;
+		case O_LADDER_LIMIT: {
+			char *end;
+			job.ladder = strtod(optarg, &end);
+			if (*end || !(job.ladder > 0 && job.ladder <= 10))
+				return cmd_usage_error("fit",
+						       "--ladder-limit '%s': "
+						       "expected standard "
+						       "errors in (0, 10]",
+						       optarg);
+			break;
+		}
 		case O_SEED:
 			if (cmd_parse_int("fit", "--seed", optarg, 0,
 					  2147483647, &n) < 0)

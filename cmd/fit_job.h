@@ -17,6 +17,11 @@ struct fit_job {
 	struct glint_fit_opts opts;
 	const char *out_dir;
 	int nthreads;
+	/* > 0: run the fidelity ladder (fit/ladder.h) with this limit in
+	 * standard errors and report its fit */
+	double ladder;
+	/* choose among the opaque models by BIC (fit/select.h) */
+	int select;
 };
 
 /*

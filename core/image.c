@@ -147,3 +147,22 @@ int glint_image_write(const char *path, const struct glint_image *img,
 			       ".exr, .hdr, .pfm or .png",
 			       path, ext);
 }
+
+struct glint_image *glint_image_downsample(const struct glint_image *src, int f)
+{
+	int w = src->width / f, h = src->height / f;
+	struct glint_image *d = glint_image_new(w, h);
+	for (int y = 0; d && y < h; y++)
+		for (int x = 0; x < w; x++)
+			for (int c = 0; c < 3; c++) {
+				double s = 0;
+				for (int j = 0; j < f; j++)
+					for (int i = 0; i < f; i++)
+						s += glint_image_px(
+							src, f * x + i,
+							f * y + j)[c];
+				glint_image_px(d, x, y)[c] =
+					(float)(s / (f * f));
+			}
+	return d;
+}

@@ -23,6 +23,10 @@ struct glint_image {
 struct glint_image *glint_image_new(int width, int height);
 void glint_image_free(struct glint_image *img);
 struct glint_image *glint_image_dup(const struct glint_image *img);
+/* Box-average by an integer factor f (width / f x height / f, the
+ * remainder rows and columns dropped); NULL if out of memory. */
+struct glint_image *glint_image_downsample(const struct glint_image *src,
+					   int f);
 
 static inline float *glint_image_px(const struct glint_image *img, int x, int y)
 {

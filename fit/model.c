@@ -10,6 +10,7 @@
 static const struct glint_model_ops *const registry[] = {
 	&glint_model_lambert,
 	&glint_model_torrance_sparrow,
+	&glint_model_ts_constant_fresnel,
 	&glint_model_dielectric,
 };
 

@@ -77,6 +77,7 @@ struct glint_model_ops {
 
 extern const struct glint_model_ops glint_model_lambert;
 extern const struct glint_model_ops glint_model_torrance_sparrow;
+extern const struct glint_model_ops glint_model_ts_constant_fresnel;
 extern const struct glint_model_ops glint_model_dielectric;
 
 /* Cosine-weighted direction about +z from two uniforms; returns its pdf. */

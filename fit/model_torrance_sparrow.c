@@ -12,6 +12,8 @@
 #include "microfacet.h"
 #include "model.h"
 
+#include <string.h>
+
 enum { KD = 0, KS = 3, ROUGH = 6, IOR = 7 };
 
 static const struct glint_param ts_params[] = {
@@ -25,6 +27,12 @@ static const struct glint_param ts_params[] = {
 	{ "ior", "ior", -1, 1, 5, 1.5 },
 };
 
+/* F, or 1 for the constant-Fresnel variant (ior passed as 0). */
+static double fresnel(double c, double ior)
+{
+	return ior > 0 ? glint_fresnel_dielectric(c, ior) : 1;
+}
+
 /* The specular lobe without its albedo: D G F / (4 cos_i cos_o). */
 static double ts_spec(const double *p, struct vec3 wo, struct vec3 wi)
 {
@@ -33,8 +41,8 @@ static double ts_spec(const double *p, struct vec3 wo, struct vec3 wi)
 	struct vec3 h = v3_norm(v3_add(wo, wi));
 	double oh = v3_dot(wo, h);
 	return glint_beckmann_d(h.z, p[ROUGH]) *
-	       glint_vcavity_g(h.z, wo.z, wi.z, oh) *
-	       glint_fresnel_dielectric(oh, p[IOR]) / (4 * wi.z * wo.z);
+	       glint_vcavity_g(h.z, wo.z, wi.z, oh) * fresnel(oh, p[IOR]) /
+	       (4 * wi.z * wo.z);
 }
 
 static void ts_eval(const double *p, struct vec3 wo, struct vec3 wi,
@@ -55,7 +63,7 @@ static double spec_prob(const double *p, struct vec3 wo)
 {
 	double d = rgb_luminance(p[KD], p[KD + 1], p[KD + 2]);
 	double s = rgb_luminance(p[KS], p[KS + 1], p[KS + 2]) *
-		   glint_fresnel_dielectric(wo.z, p[IOR]);
+		   fresnel(wo.z, p[IOR]);
 
 	if (s <= 0)
 		return d > 0 ? 0 : 0.5;
@@ -167,6 +175,64 @@ const struct glint_model_ops glint_model_torrance_sparrow = {
 	.lobe_param = ts_lobe_param,
 	.lobe_varies = ts_lobe_varies,
 	.eval_lobes = ts_lobes,
+	.sample_lobe = ts_sample_lobe,
+	.pdf_lobe = ts_pdf_lobe,
+	.lobe_extent = ts_lobe_extent,
+};
+
+/*
+ * The same without Fresnel variation (F = 1: the specular albedo is the
+ * reflectance at every angle): 7 parameters, no ior.  The model selection
+ * (fit/select.h) weighs it against the full one.
+ */
+#define NF_P(q, p)                                                             \
+	double q[8];                                                           \
+	memcpy(q, p, 7 * sizeof(double));                                      \
+	q[IOR] = 0
+
+static void nf_eval(const double *p, struct vec3 wo, struct vec3 wi,
+		    double f[3])
+{
+	NF_P(q, p);
+	ts_eval(q, wo, wi, f);
+}
+
+static double nf_sample(const double *p, struct vec3 wo, const double u[3],
+			struct vec3 *wi)
+{
+	NF_P(q, p);
+	return ts_sample(q, wo, u, wi);
+}
+
+static double nf_pdf(const double *p, struct vec3 wo, struct vec3 wi)
+{
+	NF_P(q, p);
+	return ts_pdf(q, wo, wi);
+}
+
+static void nf_lobes(const double *p, struct vec3 wo, struct vec3 wi, double *b)
+{
+	NF_P(q, p);
+	ts_lobes(q, wo, wi, b);
+}
+
+const struct glint_model_ops glint_model_ts_constant_fresnel = {
+	.name = "torrance-sparrow-constant-fresnel",
+	.conventions =
+		"Torrance-Sparrow without Fresnel variation: f = diffuse/pi + "
+		"specular*D*G/(4 cos_i cos_o), D Beckmann with roughness = "
+		"RMS microfacet slope, G V-cavity; F = 1 (specular is the "
+		"reflectance at every angle).",
+	.nparams = 7,
+	.params = ts_params,
+	.eval = nf_eval,
+	.sample = nf_sample,
+	.pdf = nf_pdf,
+	.roughness_param = ROUGH,
+	.nlobes = 2,
+	.lobe_param = ts_lobe_param,
+	.lobe_varies = ts_lobe_varies,
+	.eval_lobes = nf_lobes,
 	.sample_lobe = ts_sample_lobe,
 	.pdf_lobe = ts_pdf_lobe,
 	.lobe_extent = ts_lobe_extent,

@@ -189,14 +189,24 @@ int glint_renderer_init(struct glint_renderer *r,
 			const struct glint_scene *scene, int nthreads,
 			struct glint_progress *progress)
 {
+	struct glint_envmap *env;
+	int ret = glint_envmap_load(scene->env_path, scene->env_rotation,
+				    scene->env_scale, &env);
+	if (ret < 0)
+		return ret;
+	return glint_renderer_init_env(r, scene, env, nthreads, progress);
+}
+
+int glint_renderer_init_env(struct glint_renderer *r,
+			    const struct glint_scene *scene,
+			    struct glint_envmap *env, int nthreads,
+			    struct glint_progress *progress)
+{
 	int ret;
 
 	memset(r, 0, sizeof(*r));
 	r->scene = *scene;
-	ret = glint_envmap_load(scene->env_path, scene->env_rotation,
-				scene->env_scale, &r->env);
-	if (ret < 0)
-		return ret;
+	r->env = env;
 	ret = glint_tracer_new(&r->tracer);
 	if (!ret)
 		ret = glint_tracer_add_sphere(r->tracer, scene->sphere_centre,

@@ -62,6 +62,12 @@ struct glint_renderer {
 int glint_renderer_init(struct glint_renderer *r,
 			const struct glint_scene *scene, int nthreads,
 			struct glint_progress *progress);
+/* The same with an env map already built (scene->env_path is not read);
+ * the renderer owns env from then on, also on failure. */
+int glint_renderer_init_env(struct glint_renderer *r,
+			    const struct glint_scene *scene,
+			    struct glint_envmap *env, int nthreads,
+			    struct glint_progress *progress);
 void glint_renderer_release(struct glint_renderer *r);
 
 /* Render the scene's sphere of any model (BRDF models by

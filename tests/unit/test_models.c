@@ -169,6 +169,38 @@ static void test_ts_pdf_and_sampling(void)
 	}
 }
 
+/* Without Fresnel variation: the full model's specular divided by F. */
+static void test_constant_fresnel(void)
+{
+	const struct glint_model_ops *nf = &glint_model_ts_constant_fresnel;
+	const struct glint_model_ops *ts = &glint_model_torrance_sparrow;
+	double p[8] = { 0, 0, 0, 0.5, 0.4, 0.3, 0.2, 1.5 };
+	int bad = 0, mismatch = 0;
+
+	CHECK(nf->nparams == 7 && glint_model_find(nf->name) == nf,
+	      "%s: %d parameters", nf->name, nf->nparams);
+	for (int s = 0; s < 2000; s++) {
+		double u[3] = { glint_u01(glint_hash3(s, 7, 1)),
+				glint_u01(glint_hash3(s, 7, 2)),
+				glint_u01(glint_hash3(s, 7, 3)) };
+		struct vec3 wo = dir_at(70 * glint_u01(glint_hash3(s, 7, 4)));
+		struct vec3 wi;
+		double pdf = nf->sample(p, wo, u, &wi);
+		if (pdf == 0)
+			continue;
+		mismatch += fabs(pdf - nf->pdf(p, wo, wi)) > 1e-9 * pdf;
+		double fn[3], ft[3];
+		nf->eval(p, wo, wi, fn);
+		ts->eval(p, wo, wi, ft);
+		struct vec3 h = v3_norm(v3_add(wo, wi));
+		double F = glint_fresnel_dielectric(v3_dot(wo, h), p[7]);
+		for (int c = 0; c < 3; c++)
+			bad += fabs(fn[c] * F - ft[c]) > 1e-9 * (ft[c] + 1e-30);
+	}
+	CHECK(bad == 0, "%d values are not the full model's over F", bad);
+	CHECK(mismatch == 0, "%d sample pdfs differ from pdf()", mismatch);
+}
+
 static void test_lambert(void)
 {
 	const struct glint_model_ops *m = &glint_model_lambert;
@@ -274,6 +306,7 @@ int main(void)
 	RUN(test_vcavity);
 	RUN(test_ts_pdf_and_sampling);
 	RUN(test_lambert);
+	RUN(test_constant_fresnel);
 	RUN(test_ts_energy);
 	RUN(test_material_json);
 	RUN(test_paper_table);

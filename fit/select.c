@@ -1,0 +1,323 @@
+/* SPDX-License-Identifier: MIT */
+/* Model selection by information criteria (select.h). */
+#include "select.h"
+
+#include "fit_data.h"
+#include "lm.h"
+
+#include "core/error.h"
+#include "core/log.h"
+
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_linalg.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* The pixels, their lobes at the current parameters, and scratch. */
+struct sel {
+	struct fit_data d;
+	struct glint_shade_cache *cache;
+	double *lobes; /* d.n x 2 lobes x 3 */
+	double x[4];   /* grey: the linear unknowns at the last call */
+	double xse[4];
+};
+
+/* Weighted residuals sw (y - sum albedo_j A_j) for albedos alb[j*3 + c]. */
+static double residuals(const struct sel *s, const double *alb, double *r)
+{
+	double cost = 0;
+	for (int i = 0; i < s->d.n; i++)
+		for (int c = 0; c < 3; c++) {
+			const double *a = s->lobes + (size_t)i * 6;
+			double v = s->d.y[i * 3 + c] - alb[c] * a[c] -
+				   alb[3 + c] * a[3 + c];
+			double e = s->d.sw[i * 3 + c] * v;
+			if (r)
+				r[i * 3 + c] = e;
+			cost += e * e;
+		}
+	return cost / 2;
+}
+
+/*
+ * The bounded linear least squares of the unknowns x (free[u] says which)
+ * over sums M x = b, by a small active set: solve the free ones, fix any
+ * that leave [0, 1] at the bound, again.  Small (4 unknowns).
+ */
+static void solve_box(int nu, const double *M, const double *b, double *x,
+		      double *xse, double s2)
+{
+	int fixed[4] = { 0 };
+	for (int round = 0; round < 8; round++) {
+		int idx[4], nf = 0;
+		double A[16], rhs[4];
+		for (int u = 0; u < nu; u++)
+			if (!fixed[u])
+				idx[nf++] = u;
+		for (int a = 0; a < nf; a++) {
+			rhs[a] = b[idx[a]];
+			for (int u = 0; u < nu; u++)
+				if (fixed[u])
+					rhs[a] -= M[idx[a] * nu + u] * x[u];
+			for (int c = 0; c < nf; c++)
+				A[a * nf + c] = M[idx[a] * nu + idx[c]];
+		}
+		gsl_matrix_view mv = gsl_matrix_view_array(A, nf, nf);
+		gsl_vector_view bv = gsl_vector_view_array(rhs, nf);
+		gsl_error_handler_t *old = gsl_set_error_handler_off();
+		int st = nf ? gsl_linalg_cholesky_decomp1(&mv.matrix) : 0;
+		if (!st && nf)
+			st = gsl_linalg_cholesky_svx(&mv.matrix, &bv.vector);
+		if (!st && nf)
+			gsl_linalg_cholesky_invert(&mv.matrix);
+		gsl_set_error_handler(old);
+		int again = 0;
+		for (int a = 0; a < nf; a++) {
+			double v = st ? 0 : rhs[a];
+			x[idx[a]] = v;
+			xse[idx[a]] = st ? NAN : sqrt(s2 * A[a * nf + a]);
+			if (v < 0 || v > 1) {
+				x[idx[a]] = v < 0 ? 0 : 1;
+				xse[idx[a]] = 0;
+				fixed[idx[a]] = again = 1;
+			}
+		}
+		for (int u = 0; u < nu; u++)
+			if (fixed[u])
+				xse[u] = 0;
+		if (!again)
+			return;
+	}
+}
+
+/* Lambert: per channel, the diffuse albedo alone (lobe 0). */
+static double fit_lambert(struct sel *s, double *alb, double *se, int nres)
+{
+	double M[3] = { 0 }, b[3] = { 0 };
+	for (int i = 0; i < s->d.n; i++)
+		for (int c = 0; c < 3; c++) {
+			double w = s->d.sw[i * 3 + c] * s->d.sw[i * 3 + c];
+			double a = s->lobes[(size_t)i * 6 + c];
+			M[c] += w * a * a;
+			b[c] += w * a * s->d.y[i * 3 + c];
+		}
+	for (int c = 0; c < 3; c++) {
+		alb[c] = M[c] > 0 ? fmin(1, fmax(0, b[c] / M[c])) : 0;
+		alb[3 + c] = 0;
+	}
+	double cost = residuals(s, alb, NULL);
+	for (int c = 0; c < 3; c++)
+		se[c] = alb[c] > 0 && alb[c] < 1
+				? sqrt(2 * cost / (nres - 3) / M[c])
+				: 0;
+	return cost;
+}
+
+/* Grey specular at (roughness, ior) = q: lobes there, then the four
+ * albedos (RGB diffuse, one specular) by bounded linear least squares. */
+static int grey_residuals(void *ctx, const double *q, double *r)
+{
+	struct sel *s = ctx;
+	double p[8] = { 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, q[0], q[1] };
+	double M[16] = { 0 }, b[4] = { 0 }, alb[6];
+	glint_shade_cache_lobes(s->cache, p, s->lobes);
+	for (int i = 0; i < s->d.n; i++)
+		for (int c = 0; c < 3; c++) {
+			double w = s->d.sw[i * 3 + c] * s->d.sw[i * 3 + c];
+			double a0 = s->lobes[(size_t)i * 6 + c];
+			double a1 = s->lobes[(size_t)i * 6 + 3 + c];
+			double y = s->d.y[i * 3 + c];
+			M[c * 4 + c] += w * a0 * a0;
+			M[c * 4 + 3] += w * a0 * a1;
+			M[3 * 4 + c] += w * a0 * a1;
+			M[15] += w * a1 * a1;
+			b[c] += w * a0 * y;
+			b[3] += w * a1 * y;
+		}
+	solve_box(4, M, b, s->x, s->xse, 1);
+	for (int c = 0; c < 3; c++) {
+		alb[c] = s->x[c];
+		alb[3 + c] = s->x[3];
+	}
+	residuals(s, alb, r);
+	return 0;
+}
+
+static void score(struct glint_select_candidate *c, int n)
+{
+	double l = n * log(2 * c->cost / n);
+	c->bic = l + c->k * log(n);
+	c->aic = l + 2.0 * c->k;
+}
+
+int glint_select_model(struct glint_renderer *r,
+		       const struct glint_image *photo,
+		       const struct glint_image *weight,
+		       const struct glint_fit_opts *o,
+		       struct glint_selection *out)
+{
+	const struct glint_model_ops *ts = &glint_model_torrance_sparrow,
+				     *nf = &glint_model_ts_constant_fresnel;
+	struct sel s = { 0 };
+	int interior, ret;
+	double *rv = NULL;
+
+	memset(out, 0, sizeof(*out));
+	ret = glint_fit(r, ts, photo, weight, o, &out->full);
+	if (!ret)
+		ret = glint_fit(r, nf, photo, weight, o, &out->nf);
+	if (!ret)
+		ret = fit_data_prepare(&r->gb, photo, weight, o, &s.d,
+				       &interior);
+	if (ret < 0)
+		return ret;
+	struct glint_shade_cache_opts co = {
+		.light_samples = o->light_samples,
+		.lobe_samples = o->lobe_samples,
+		.static_samples = o->static_samples,
+		.nthreads = o->nthreads,
+	};
+	ret = glint_shade_cache_new(&r->gb, s.d.pix, s.d.n, r->env, ts, &co,
+				    &s.cache);
+	s.lobes = malloc((size_t)s.d.n * 6 * sizeof(double));
+	rv = malloc((size_t)s.d.n * 3 * sizeof(double));
+	if (!ret && (!s.lobes || !rv))
+		ret = -ENOMEM;
+	if (ret < 0)
+		goto out;
+	int n = 0;
+	for (int i = 0; i < 3 * s.d.n; i++)
+		n += s.d.sw[i] > 0;
+	out->n = n;
+
+	/* The full model, and the constant-Fresnel one on its own cache,
+	 * at their fits (costs by the same sums). */
+	struct glint_select_candidate *c = &out->c[GLINT_SEL_RGB];
+	c->name = "torrance-sparrow (RGB specular)";
+	c->k = 8;
+	c->model = ts;
+	memcpy(c->p, out->full.p, sizeof(c->p));
+	memcpy(c->se, out->full.se, sizeof(c->se));
+	glint_shade_cache_lobes(s.cache, c->p, s.lobes);
+	c->cost = residuals(&s, c->p, NULL);
+
+	c = &out->c[GLINT_SEL_LAMBERT];
+	c->name = "lambert";
+	c->k = 3;
+	c->model = &glint_model_lambert;
+	c->cost = fit_lambert(&s, c->p, c->se, n);
+
+	/* Grey specular: LM over roughness and ior from the full fit's. */
+	c = &out->c[GLINT_SEL_GREY];
+	c->name = "torrance-sparrow, grey specular";
+	c->k = 6;
+	c->model = ts;
+	{
+		double lo[2] = { ts->params[6].lo, ts->params[7].lo },
+		       hi[2] = { ts->params[6].hi, ts->params[7].hi };
+		double q[2] = { out->full.p[6], out->full.p[7] };
+		struct glint_lm_problem pr = { 2,  3 * s.d.n,	   lo,
+					       hi, grey_residuals, NULL,
+					       &s };
+		struct glint_lm_opts lo_ = { 0 };
+		struct glint_lm_result lr;
+		glint_lm_default_opts(&lo_);
+		lo_.max_iter = 40;
+		ret = glint_lm_solve(&pr, &lo_, q, &lr);
+		if (ret < 0)
+			goto out;
+		grey_residuals(&s, q, rv);
+		c->cost = lr.cost;
+		double s2 = 2 * lr.cost / (n - c->k);
+		for (int u = 0; u < 4; u++)
+			s.xse[u] *= sqrt(s2);
+		for (int k = 0; k < 3; k++) {
+			c->p[k] = s.x[k];
+			c->se[k] = s.xse[k];
+			c->p[3 + k] = s.x[3];
+			c->se[3 + k] = s.xse[3];
+		}
+		c->p[6] = q[0];
+		c->p[7] = q[1];
+		c->se[6] = lr.se[0];
+		c->se[7] = lr.se[1];
+	}
+
+	c = &out->c[GLINT_SEL_CONST_FRESNEL];
+	c->name = "torrance-sparrow, constant Fresnel";
+	c->k = 7;
+	c->model = nf;
+	memcpy(c->p, out->nf.p, sizeof(c->p));
+	memcpy(c->se, out->nf.se, sizeof(c->se));
+	{
+		struct glint_shade_cache *nc;
+		ret = glint_shade_cache_new(&r->gb, s.d.pix, s.d.n, r->env, nf,
+					    &co, &nc);
+		if (ret < 0)
+			goto out;
+		glint_shade_cache_lobes(nc, c->p, s.lobes);
+		glint_shade_cache_free(nc);
+		c->cost = residuals(&s, c->p, NULL);
+	}
+
+	out->chosen = out->chosen_aic = GLINT_SEL_RGB;
+	for (int k = 0; k < GLINT_SEL_N; k++) {
+		score(&out->c[k], n);
+		if (out->c[k].bic < out->c[out->chosen].bic)
+			out->chosen = k;
+		if (out->c[k].aic < out->c[out->chosen_aic].aic)
+			out->chosen_aic = k;
+	}
+	/* Why, in the terms of the full fit's standard errors. */
+	const double *p = out->full.p, *se = out->full.se;
+	double spread = fmax(fabs(p[3] - p[4]),
+			     fmax(fabs(p[4] - p[5]), fabs(p[3] - p[5])));
+	double sse = sqrt(se[3] * se[3] + se[4] * se[4] + se[5] * se[5]);
+	double spec = (p[3] + p[4] + p[5]) / 3;
+	snprintf(out->why, sizeof(out->why),
+		 "lowest BIC: %s (BIC above it: grey specular %+.1f, "
+		 "constant Fresnel %+.1f, RGB %+.1f, lambert %+.1f; n = %d "
+		 "residuals). Full fit: specular channels spread %.4f against "
+		 "standard errors about %.4f; mean specular %.4f +- %.4f",
+		 out->c[out->chosen].name,
+		 out->c[GLINT_SEL_GREY].bic - out->c[out->chosen].bic,
+		 out->c[GLINT_SEL_CONST_FRESNEL].bic - out->c[out->chosen].bic,
+		 out->c[GLINT_SEL_RGB].bic - out->c[out->chosen].bic,
+		 out->c[GLINT_SEL_LAMBERT].bic - out->c[out->chosen].bic, n,
+		 spread, sse, spec, sse / 3);
+	ret = 0;
+out:
+	free(rv);
+	free(s.lobes);
+	glint_shade_cache_free(s.cache);
+	free_data(&s.d);
+	return ret;
+}
+
+json_t *glint_selection_to_json(const struct glint_selection *s)
+{
+	json_t *cands = json_array();
+	for (int k = 0; k < GLINT_SEL_N; k++) {
+		const struct glint_select_candidate *c = &s->c[k];
+		json_t *ps = json_object();
+		for (int j = 0; j < c->model->nparams; j++)
+			json_object_set_new(
+				ps, c->model->params[j].name,
+				json_pack("{s:f, s:o}", "value", c->p[j],
+					  "stderr",
+					  isfinite(c->se[j])
+						  ? json_real(c->se[j])
+						  : json_null()));
+		json_array_append_new(
+			cands,
+			json_pack("{s:s, s:s, s:i, s:f, s:f, s:f, s:o}", "name",
+				  c->name, "model", c->model->name, "k", c->k,
+				  "cost", c->cost, "bic", c->bic, "aic", c->aic,
+				  "parameters", ps));
+	}
+	return json_pack("{s:s, s:s, s:i, s:s, s:o}", "chosen",
+			 s->c[s->chosen].name, "chosen_by_aic",
+			 s->c[s->chosen_aic].name, "residuals", s->n, "why",
+			 s->why, "candidates", cands);
+}

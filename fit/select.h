@@ -1,0 +1,66 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_FIT_SELECT_H
+#define GLINT_FIT_SELECT_H
+
+/*
+ * Model no more of the material than the photo supports.  Four nested
+ * candidates, each fitted to the same pixels with the same weights and the
+ * same fixed-sample estimator:
+ *   torrance-sparrow   RGB diffuse, RGB specular, roughness, ior (8)
+ *   grey specular      RGB diffuse, one specular, roughness, ior (6)
+ *   constant Fresnel   RGB diffuse, RGB specular, roughness; F = 1 (7)
+ *   lambert            RGB diffuse (3)
+ * and scored by the information criteria on the weighted residual, for n
+ * residuals and k parameters at the minimum weighted SSD S:
+ *   BIC = n ln(S / n) + k ln n,   AIC = n ln(S / n) + 2 k
+ * (Gaussian residuals of unknown variance: the fast renderer's own bias
+ * is part of what the models leave).  The lowest BIC is chosen; the
+ * standard errors of the full fit are reported beside it (e.g. the
+ * spread of the specular channels against their errors).
+ */
+
+#include "fit.h"
+
+#include <jansson.h>
+
+enum {
+	GLINT_SEL_RGB,
+	GLINT_SEL_GREY,
+	GLINT_SEL_CONST_FRESNEL,
+	GLINT_SEL_LAMBERT,
+	GLINT_SEL_N
+};
+
+struct glint_select_candidate {
+	const char *name;
+	int k;	     /* free parameters */
+	double cost; /* 1/2 weighted SSD at its minimum */
+	double bic, aic;
+	/* the parameters, in the terms of `model` (the grey one as a
+	 * torrance-sparrow with equal specular channels) */
+	const struct glint_model_ops *model;
+	double p[GLINT_MAX_PARAMS], se[GLINT_MAX_PARAMS];
+};
+
+struct glint_selection {
+	struct glint_select_candidate c[GLINT_SEL_N];
+	int n;			      /* residuals (pixels x 3) */
+	int chosen;		      /* lowest BIC */
+	int chosen_aic;		      /* lowest AIC */
+	struct glint_fit_result full; /* the torrance-sparrow fit */
+	struct glint_fit_result nf;   /* the constant-Fresnel fit */
+	char why[512];
+};
+
+/* Fit and score the candidates on photo in r's scene (o: the fit's
+ * options; the same pixels and samples for every candidate). */
+int glint_select_model(struct glint_renderer *r,
+		       const struct glint_image *photo,
+		       const struct glint_image *weight,
+		       const struct glint_fit_opts *o,
+		       struct glint_selection *out);
+
+/* Caller json_decref()s. */
+json_t *glint_selection_to_json(const struct glint_selection *s);
+
+#endif

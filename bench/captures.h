@@ -17,19 +17,26 @@
 #include <stdio.h>
 
 /* A w x w photo, the sphere 180 / 512 of the width in radius; env NULL:
- * the Venice map. */
-static inline void bench_scene(struct glint_scene *s, int w, const char *env)
+ * the Venice map; a 100 mm lens at f_number (0: a pinhole) focused on the
+ * sphere's front. */
+static inline void bench_scene_lens(struct glint_scene *s, int w,
+				    const char *env, double fnum)
 {
 	glint_scene_defaults(s);
-	double fpx = 1422.2 * w / 512;
-	glint_camera_init(&s->cam, w, w, fpx * 0.036 / w, 0.036 / w, 0, 0,
-			  v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
+	double fpx = 1422.2 * w / 512, dist = 0.05 * 1422.2 / 180;
+	glint_camera_init(&s->cam, w, w, fpx * 0.036 / w, 0.036 / w, fnum,
+			  dist - 0.05, v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
 	s->sphere_radius = 0.05;
 	s->sphere_centre = v3(0, 0, -0.05 * 1422.2 / 180);
 	snprintf(s->env_path, sizeof(s->env_path), "%s",
 		 env ? env : GLINT_DATA_DIR "/env/venice_sunset_1k.hdr");
 	s->env_rotation[1] = -114;
 	s->env_scale = 1;
+}
+
+static inline void bench_scene(struct glint_scene *s, int w, const char *env)
+{
+	bench_scene_lens(s, w, env, 0);
 }
 
 /* Box-average by an integer factor. */
@@ -39,19 +46,24 @@ static inline struct glint_image *bench_shrink(const struct glint_image *src,
 	return glint_image_downsample(src, f);
 }
 
-/* The 512 px reference photo of a material (rendered once, cached). */
+/* The 512 px reference photo of a material through a lens at fnum (0: a
+ * pinhole; rendered once, cached). */
 static inline struct glint_image *
-bench_photo_512(const char *mat, const struct glint_model_ops *m,
-		const double *truth)
+bench_photo_512_lens(const char *mat, const struct glint_model_ops *m,
+		     const double *truth, double fnum)
 {
 	char path[256];
 	struct glint_image *img = NULL;
-	snprintf(path, sizeof(path), "bench-out/photo-%s-512.exr", mat);
+	if (fnum > 0)
+		snprintf(path, sizeof(path), "bench-out/photo-%s-f%g-512.exr",
+			 mat, fnum);
+	else
+		snprintf(path, sizeof(path), "bench-out/photo-%s-512.exr", mat);
 	if (glint_image_read(path, &img) == 0)
 		return img;
 	struct glint_scene sc;
 	struct glint_renderer r;
-	bench_scene(&sc, 512, NULL);
+	bench_scene_lens(&sc, 512, NULL, fnum);
 	if (glint_renderer_init(&r, &sc, 0, NULL) < 0)
 		return NULL;
 	struct glint_reference_opts ro;
@@ -67,6 +79,14 @@ bench_photo_512(const char *mat, const struct glint_model_ops *m,
 	}
 	glint_renderer_release(&r);
 	return img;
+}
+
+/* The same through a pinhole. */
+static inline struct glint_image *
+bench_photo_512(const char *mat, const struct glint_model_ops *m,
+		const double *truth)
+{
+	return bench_photo_512_lens(mat, m, truth, 0);
 }
 
 /* One exposure of the sensor model, exposed so that the mean radiance

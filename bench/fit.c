@@ -33,15 +33,22 @@ struct variant {
 	const char *name;
 	enum glint_fit_method method;
 	int coarse, faithful;
+	int samples, pixels; /* 0: the defaults (8 + 8, 4096) */
 };
 
 static const struct variant variants[] = {
-	{ "three-pass, coarse-to-fine (default)", GLINT_FIT_THREE_PASS, 1, 0 },
-	{ "three-pass, full resolution", GLINT_FIT_THREE_PASS, 0, 0 },
-	{ "naive single pass, coarse-to-fine", GLINT_FIT_NAIVE, 1, 0 },
-	{ "variable projection, coarse-to-fine", GLINT_FIT_VARPRO, 1, 0 },
-	{ "three-pass, paper-faithful (re-render)", GLINT_FIT_THREE_PASS, 0,
-	  1 },
+	{ "three-pass, coarse-to-fine (default)", GLINT_FIT_THREE_PASS, 1, 0, 0,
+	  0 },
+	{ "three-pass, full resolution", GLINT_FIT_THREE_PASS, 0, 0, 0, 0 },
+	{ "naive single pass, coarse-to-fine", GLINT_FIT_NAIVE, 1, 0, 0, 0 },
+	{ "variable projection, coarse-to-fine", GLINT_FIT_VARPRO, 1, 0, 0, 0 },
+	{ "three-pass, 4 + 4 samples", GLINT_FIT_THREE_PASS, 1, 0, 4, 0 },
+	{ "three-pass, 16 + 16 samples", GLINT_FIT_THREE_PASS, 1, 0, 16, 0 },
+	{ "three-pass, 2048 pixels", GLINT_FIT_THREE_PASS, 1, 0, 0, 2048 },
+	{ "three-pass, 2048 pixels, 4 + 4 samples", GLINT_FIT_THREE_PASS, 1, 0,
+	  4, 2048 },
+	{ "three-pass, paper-faithful (re-render)", GLINT_FIT_THREE_PASS, 0, 1,
+	  0, 0 },
 };
 #define NV ((int)(sizeof(variants) / sizeof(variants[0])))
 
@@ -229,6 +236,11 @@ int main(int argc, char **argv)
 			o.method = variants[v].method;
 			o.coarse_to_fine = variants[v].coarse;
 			o.faithful = variants[v].faithful;
+			if (variants[v].samples)
+				o.light_samples = o.lobe_samples =
+					variants[v].samples;
+			if (variants[v].pixels)
+				o.max_pixels = variants[v].pixels;
 			if (o.faithful)
 				o.max_iter = 30;
 			double t0 = glint_now();

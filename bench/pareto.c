@@ -4,15 +4,19 @@
  * simulated captures, charted error against time with the Pareto front.
  *
  * Captures: Table-1 materials under the Venice map, photographed at 512 px
- * by the reference renderer (cached in bench-out/), noise-free and through
+ * by the reference renderer (cached in bench-out/), noise-free or through
  * the sensor model (one 12-bit exposure, shot + read noise, clipped pixels
  * dropped); lower resolutions are box-averaged from the 512 px photo with
  * the camera's focal length scaled to match.
+ * Four captures per material: noise-free, a normal exposure (mean at 10 %
+ * of the ADC range) and a dim one (1 %) through a pinhole, and a normal
+ * one through a 100 mm lens at f/4 focused on the sphere's front.
  * Configurations vary one thing at a time from the default (three-pass,
- * 256 px, 8 + 8 fixed samples, full-size map): the method (three-pass,
- * naive, variable projection, annealing + LM), the image resolution
- * (128 .. 512), the samples per hit (4 .. 16), the env-map resolution
- * (1024 or 256 wide).
+ * 256 px, 8 + 8 fixed samples, full-size map, the lens modelled): the
+ * method (three-pass, naive, variable projection, annealing + LM), the
+ * image resolution (128 .. 512), the samples per hit (4 .. 16), the
+ * env-map resolution (1024 or 256 wide), depth of field (the lens, or a
+ * pinhole: the same on the pinhole captures).
  * Each fit runs in its own process (fork): wall time and that process's
  * peak memory (wait4) are its own.
  * Error: the worst parameter error in units of the fitting issue's
@@ -44,28 +48,45 @@ struct config {
 	enum glint_fit_method m;
 	enum glint_fit_optimizer opt;
 	int px, samples, env_w;
+	int dof; /* model the capture's lens (else a pinhole) */
 };
 
 static const struct config configs[] = {
-	{ "three-pass", GLINT_FIT_THREE_PASS, GLINT_OPT_LM, 256, 8, 1024 },
-	{ "three-pass", GLINT_FIT_THREE_PASS, GLINT_OPT_LM, 128, 8, 1024 },
-	{ "three-pass", GLINT_FIT_THREE_PASS, GLINT_OPT_LM, 512, 8, 1024 },
-	{ "three-pass", GLINT_FIT_THREE_PASS, GLINT_OPT_LM, 256, 4, 1024 },
-	{ "three-pass", GLINT_FIT_THREE_PASS, GLINT_OPT_LM, 256, 16, 1024 },
-	{ "three-pass", GLINT_FIT_THREE_PASS, GLINT_OPT_LM, 256, 8, 256 },
-	{ "naive", GLINT_FIT_NAIVE, GLINT_OPT_LM, 256, 8, 1024 },
-	{ "naive", GLINT_FIT_NAIVE, GLINT_OPT_LM, 128, 8, 1024 },
-	{ "varpro", GLINT_FIT_VARPRO, GLINT_OPT_LM, 256, 8, 1024 },
-	{ "varpro", GLINT_FIT_VARPRO, GLINT_OPT_LM, 128, 8, 1024 },
-	{ "varpro", GLINT_FIT_VARPRO, GLINT_OPT_LM, 512, 8, 1024 },
-	{ "anneal", GLINT_FIT_THREE_PASS, GLINT_OPT_ANNEAL, 256, 8, 1024 },
-	{ "anneal", GLINT_FIT_THREE_PASS, GLINT_OPT_ANNEAL, 128, 8, 1024 },
+	{ "three-pass", GLINT_FIT_THREE_PASS, GLINT_OPT_LM, 256, 8, 1024, 1 },
+	{ "three-pass", GLINT_FIT_THREE_PASS, GLINT_OPT_LM, 128, 8, 1024, 1 },
+	{ "three-pass", GLINT_FIT_THREE_PASS, GLINT_OPT_LM, 512, 8, 1024, 1 },
+	{ "three-pass", GLINT_FIT_THREE_PASS, GLINT_OPT_LM, 256, 4, 1024, 1 },
+	{ "three-pass", GLINT_FIT_THREE_PASS, GLINT_OPT_LM, 256, 16, 1024, 1 },
+	{ "three-pass", GLINT_FIT_THREE_PASS, GLINT_OPT_LM, 256, 8, 256, 1 },
+	{ "naive", GLINT_FIT_NAIVE, GLINT_OPT_LM, 256, 8, 1024, 1 },
+	{ "naive", GLINT_FIT_NAIVE, GLINT_OPT_LM, 128, 8, 1024, 1 },
+	{ "varpro", GLINT_FIT_VARPRO, GLINT_OPT_LM, 256, 8, 1024, 1 },
+	{ "varpro", GLINT_FIT_VARPRO, GLINT_OPT_LM, 128, 8, 1024, 1 },
+	{ "varpro", GLINT_FIT_VARPRO, GLINT_OPT_LM, 512, 8, 1024, 1 },
+	{ "anneal", GLINT_FIT_THREE_PASS, GLINT_OPT_ANNEAL, 256, 8, 1024, 1 },
+	{ "three-pass", GLINT_FIT_THREE_PASS, GLINT_OPT_LM, 256, 8, 1024, 0 },
 };
 #define NC ((int)(sizeof(configs) / sizeof(configs[0])))
 
 static const char *const materials[] = { "yellow-plastic", "copper",
 					 "satin-paint" };
 #define NM 3
+
+/* The captures of each material: noise-free, one normal exposure (mean at
+ * 10 % of the ADC range), a dim one (1 %), all through a pinhole; and a
+ * normal exposure through the 100 mm lens at f/4 focused on the sphere's
+ * front (its rim about 5 px out of focus at 256 px). */
+struct capture {
+	double noise; /* 0: noise-free, else the exposure level */
+	double fnum;  /* 0: pinhole */
+};
+static const struct capture captures[] = {
+	{ 0, 0 },
+	{ 0.1, 0 },
+	{ 0.01, 0 },
+	{ 0.1, 4 },
+};
+#define NCAP 4
 
 /* Worst parameter error in tolerance units. */
 static double param_error(const double *p, const double *t)
@@ -85,7 +106,7 @@ struct outcome {
 
 /* Fit one capture with one configuration, in this (child) process. */
 static struct outcome run_one(const struct config *c, const char *mat,
-			      int noisy)
+			      const struct capture *cap)
 {
 	struct outcome out = { NAN, NAN, NAN, 0 };
 	const struct glint_model_ops *m;
@@ -98,12 +119,13 @@ static struct outcome run_one(const struct config *c, const char *mat,
 	if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json", mat, &m,
 				truth) < 0)
 		return out;
-	struct glint_image *big = bench_photo_512(mat, m, truth);
+	struct glint_image *big =
+		bench_photo_512_lens(mat, m, truth, cap->fnum);
 	if (!big)
 		return out;
 	struct glint_image *photo = bench_shrink(big, 512 / c->px);
 	glint_image_free(big);
-	if (noisy && bench_add_noise(photo, &weight, 0.1) < 0)
+	if (cap->noise > 0 && bench_add_noise(photo, &weight, cap->noise) < 0)
 		return out;
 	if (c->env_w == 1024)
 		snprintf(env, sizeof(env), "%s",
@@ -111,7 +133,7 @@ static struct outcome run_one(const struct config *c, const char *mat,
 	else
 		snprintf(env, sizeof(env), "bench-out/venice-%d.exr", c->env_w);
 	double t0 = glint_now();
-	bench_scene(&sc, c->px, env);
+	bench_scene_lens(&sc, c->px, env, c->dof ? cap->fnum : 0);
 	if (glint_renderer_init(&r, &sc, 0, NULL) < 0)
 		return out;
 	struct glint_fit_opts o;
@@ -168,21 +190,26 @@ int main(int argc, char **argv)
 		if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
 					materials[i], &m, t) < 0)
 			return 1;
-		glint_image_free(bench_photo_512(materials[i], m, t));
+		for (int k = 0; k < NCAP; k++)
+			glint_image_free(bench_photo_512_lens(
+				materials[i], m, t, captures[k].fnum));
 	}
 	FILE *csv = fopen("bench-out/pareto.csv", "w");
-	fprintf(csv, "method,px,samples,env_w,material,noise,seconds,peak_mib,"
-		     "param_err,rel_rmse\n");
+	fprintf(csv, "method,px,samples,env_w,dof,material,noise,f_number,"
+		     "seconds,peak_mib,param_err,rel_rmse\n");
 	/* Per configuration: medians over the captures. */
 	double med_t[NC], med_e[NC], max_e[NC], peak[NC];
-	printf("%-11s %4s %4s %5s %9s %9s %10s %10s %8s\n", "method", "px",
-	       "spp", "env", "median s", "peak MiB", "med error", "worst err",
-	       "rel RMSE");
+	printf("%-11s %4s %4s %5s %4s %9s %9s %10s %10s %8s   median error "
+	       "per capture: clean / normal / dim / f4\n",
+	       "method", "px", "spp", "env", "dof", "median s", "peak MiB",
+	       "med error", "worst err", "rel RMSE");
 	for (int c = 0; c < NC; c++) {
-		double ts[2 * NM], es[2 * NM], rr[2 * NM], worst = 0, pk = 0;
-		int n = 0;
+		double ts[NCAP * NM], es[NCAP * NM], rr[NCAP * NM], worst = 0,
+								    pk = 0;
+		double ek[NCAP][NM];
+		int n = 0, nk[NCAP] = { 0 };
 		for (int i = 0; i < nm; i++)
-			for (int noisy = 0; noisy < 2; noisy++) {
+			for (int k = 0; k < NCAP; k++) {
 				int fd[2];
 				struct outcome o = { NAN, NAN, NAN, 0 };
 				struct rusage ru;
@@ -193,7 +220,7 @@ int main(int argc, char **argv)
 				if (pid == 0) {
 					close(fd[0]);
 					o = run_one(&configs[c], materials[i],
-						    noisy);
+						    &captures[k]);
 					if (write(fd[1], &o, sizeof(o)) < 0)
 						_exit(1);
 					_exit(0);
@@ -205,14 +232,16 @@ int main(int argc, char **argv)
 				wait4(pid, &st, 0, &ru);
 				double mib = ru.ru_maxrss / 1024.0;
 				fprintf(csv,
-					"%s,%d,%d,%d,%s,%d,%.4f,%.1f,%.4f,"
-					"%.5f\n",
+					"%s,%d,%d,%d,%d,%s,%g,%g,%.4f,%.1f,"
+					"%.4f,%.5f\n",
 					configs[c].method, configs[c].px,
 					configs[c].samples, configs[c].env_w,
-					materials[i], noisy, o.seconds, mib,
-					o.perr, o.rel_rmse);
+					configs[c].dof, materials[i],
+					captures[k].noise, captures[k].fnum,
+					o.seconds, mib, o.perr, o.rel_rmse);
 				if (!o.ok)
 					continue;
+				ek[k][nk[k]++] = o.perr;
 				ts[n] = o.seconds;
 				es[n] = o.perr;
 				rr[n] = o.rel_rmse;
@@ -224,10 +253,16 @@ int main(int argc, char **argv)
 		med_e[c] = n ? bench_median(es, n) : NAN;
 		max_e[c] = n ? worst : NAN;
 		peak[c] = pk;
-		printf("%-11s %4d %4d %5d %9.2f %9.1f %10.2f %10.2f %8.4f\n",
+		printf("%-11s %4d %4d %5d %4s %9.2f %9.1f %10.2f %10.2f %8.4f "
+		       " ",
 		       configs[c].method, configs[c].px, configs[c].samples,
-		       configs[c].env_w, med_t[c], peak[c], med_e[c], max_e[c],
+		       configs[c].env_w, configs[c].dof ? "on" : "off",
+		       med_t[c], peak[c], med_e[c], max_e[c],
 		       n ? bench_median(rr, n) : NAN);
+		for (int k = 0; k < NCAP; k++)
+			printf(" %6.2f",
+			       nk[k] ? bench_median(ek[k], nk[k]) : NAN);
+		printf("\n");
 		fflush(stdout);
 	}
 	fclose(csv);
@@ -252,10 +287,11 @@ int main(int argc, char **argv)
 		if (!(med_e[c] < best))
 			continue;
 		best = med_e[c];
-		printf("  %-11s %3d px, %2d samples, map %4d: %.2f s, error "
-		       "%.2f\n",
+		printf("  %-11s %3d px, %2d samples, map %4d, DoF %s: %.2f s, "
+		       "error %.2f\n",
 		       configs[c].method, configs[c].px, configs[c].samples,
-		       configs[c].env_w, med_t[c], med_e[c]);
+		       configs[c].env_w, configs[c].dof ? "on" : "off",
+		       med_t[c], med_e[c]);
 		fprintf(fr, "%.4f,%.4f,\"%s %dpx s%d e%d\"\n", med_t[c],
 			med_e[c], configs[c].method, configs[c].px,
 			configs[c].samples, configs[c].env_w);
@@ -263,8 +299,9 @@ int main(int argc, char **argv)
 	fclose(fr);
 	printf("error: worst parameter error in units of the tolerances "
 	       "(albedo 0.01, roughness 5 %%, ior 0.05), median over %d "
-	       "captures (%d materials x noise-free / noisy)\n",
-	       2 * nm, nm);
+	       "captures (%d materials x noise-free, normal and dim exposures "
+	       "through a pinhole, a normal one through f/4)\n",
+	       NCAP * nm, nm);
 	FILE *gp = fopen("bench-out/pareto.gp", "w");
 	fprintf(gp,
 		"set datafile separator ','\n"

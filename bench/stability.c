@@ -15,7 +15,7 @@
  *   stalled       otherwise, when LM ran out of iterations;
  *   wrong minimum otherwise (it stopped, converged, somewhere else).
  *   bench/stability [STARTS] [ANNEAL_STARTS]   (default 6 and 1:
- *   annealing is 20x slower)
+ *   annealing is 20x slower; it runs at the normal noise level only)
  * Writes bench-out/stability.csv, stability.gp and stability.png.
  */
 #define _DEFAULT_SOURCE
@@ -150,7 +150,8 @@ int main(int argc, char **argv)
 					if ((mi >= NEDGE && me) ||
 					    (methods[me].opt ==
 						     GLINT_OPT_ANNEAL &&
-					     s >= anneal_starts))
+					     (s >= anneal_starts ||
+					      noise_levels[nl] != 0.1)))
 						continue;
 					glint_fit_default_opts(&o);
 					o.method = methods[me].m;
@@ -207,6 +208,7 @@ int main(int argc, char **argv)
 						noise_levels[nl], s,
 						outcome_names[out], dt,
 						deviation(res.p, ref.p));
+					fflush(csv);
 				}
 			}
 			glint_image_free(photo);

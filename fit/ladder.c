@@ -268,9 +268,25 @@ int glint_ladder_run(const struct glint_scene *scene,
 	if (ret < 0)
 		return glint_error_prefix(ret, "fidelity ladder");
 	set_levels(&l, out);
+	/* Knobs not tried stay as the scene and options have them. */
+	for (int k = 0; k < GLINT_LADDER_NKNOBS; k++)
+		if (knobs && !(knobs & 1u << k)) {
+			struct glint_ladder_knob *kn = &out->knob[k];
+			int v = k == GLINT_LADDER_SPP ? scene->spp
+				: k == GLINT_LADDER_SAMPLES
+					? base->light_samples
+				: k == GLINT_LADDER_DOF
+					? scene->cam.aperture_radius > 0
+					: 1;
+			kn->nlevels = 1;
+			kn->level[0].value = v;
+			*knob_value(&out->reference, k) = v;
+			snprintf(kn->why, sizeof(kn->why),
+				 "not tried: as the scene and options have it");
+		}
 
-	glint_log_info("fidelity ladder: reference fit (every knob at its "
-		       "richest)");
+	glint_log_info("fidelity ladder: reference fit (every knob tried at "
+		       "its richest)");
 	ret = fit_at(&l, &out->reference, base->start, &out->ref_fit,
 		     &out->ref_seconds);
 	if (ret < 0)
@@ -279,11 +295,6 @@ int glint_ladder_run(const struct glint_scene *scene,
 		struct glint_ladder_knob *kn = &out->knob[k];
 		kn->level[0].seconds = out->ref_seconds;
 		kn->level[0].tried = 1;
-		if (knobs && !(knobs & 1u << k)) {
-			kn->nlevels = 1;
-			snprintf(kn->why, sizeof(kn->why), "not tried");
-			continue;
-		}
 		for (int i = 1; i < kn->nlevels; i++) {
 			struct glint_ladder_setting s = out->reference;
 			struct glint_fit_result fr;

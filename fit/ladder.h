@@ -85,8 +85,8 @@ struct glint_ladder_result {
  * counts and progress are overridden).  threshold: the largest effect a
  * knob's level may have, in standard errors (0.5 is a good choice: the
  * knobs' effects add up).  knobs: which to try (bit 1 << GLINT_LADDER_*;
- * 0 for all), the others stay at their richest.  The chosen setting's fit
- * ends in out->chosen_fit.
+ * 0 for all); the others stay as scene and base have them.  The chosen
+ * setting's fit ends in out->chosen_fit.
  */
 int glint_ladder_run(const struct glint_scene *scene,
 		     const struct glint_model_ops *model,

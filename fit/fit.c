@@ -385,8 +385,11 @@ static double projected_cost(struct objective *ob, const int *sel, int nsel,
 	return c;
 }
 
+/* Start from the best of ob->p and roughness at n log-spaced values in
+ * [lo, hi] (the other nonlinear parameters held), albedos solved exactly
+ * for each. */
 static int rescan_roughness(struct objective *ob, const int *sel, int nsel,
-			    double coarse_lo)
+			    double lo, double hi, int n)
 {
 	const struct glint_model_ops *m = ob->m;
 	int rk = m->roughness_param;
@@ -399,12 +402,9 @@ static int rescan_roughness(struct objective *ob, const int *sel, int nsel,
 	memcpy(p, ob->p, sizeof(p));
 	double best = projected_cost(ob, sel, nsel, p, scratch);
 	memcpy(best_p, p, sizeof(best_p));
-	/* Below the coarse bound (which the coarse level could not
-	 * resolve), log-spaced down to the model's bound. */
-	double lo = fmax(m->params[rk].lo, 1e-3), hi = coarse_lo;
-	for (int i = 0; i < 6 && hi > lo; i++) {
+	for (int i = 0; i < n && hi > lo; i++) {
 		memcpy(p, best_p, sizeof(p));
-		p[rk] = lo * pow(hi / lo, i / 5.0);
+		p[rk] = lo * pow(hi / lo, i / (n - 1.0));
 		double c = projected_cost(ob, sel, nsel, p, scratch);
 		if (c < best) {
 			best = c;
@@ -414,6 +414,66 @@ static int rescan_roughness(struct objective *ob, const int *sel, int nsel,
 	memcpy(ob->p, best_p, sizeof(ob->p));
 	ob->memo_valid = 0;
 	free(scratch);
+	return 0;
+}
+
+/*
+ * Before LM from a start: a lobe far wider than the truth's sees no
+ * gradient toward a small highlight, and LM walks to a bound (green
+ * acrylic from roughness 0.69: bench/stability, tests/sim/
+ * test_stability_cases.c).  So LM starts from the best of the start and a
+ * log-spaced scan of roughness over what the level can resolve, albedos
+ * solved exactly for each, and the same at four other values of ior (45
+ * cheap evaluations).
+ */
+static int scan_start(struct objective *ob, const int *sel, int nsel)
+{
+	const struct glint_model_ops *m = ob->m;
+	if (m->roughness_param < 0 || !ob->cache || ob->o->no_start_scan)
+		return 0;
+	const struct glint_param *pr = &m->params[m->roughness_param];
+	double lo = fmax(fmax(pr->lo, 1e-3), ob->rough_lo);
+	/* The other nonlinear parameter (ior), if one: its start and four
+	 * values across its bounds, for specular x F(ior) trades off and LM
+	 * stays where it starts (naive from ior 4.86). */
+	int other = -1, nother = 0;
+	for (int k = 0; k < m->nparams; k++)
+		if (ob->lobe_of[k] < 0 && k != m->roughness_param) {
+			other = k;
+			nother++;
+		}
+	if (nother != 1)
+		return rescan_roughness(ob, sel, nsel, lo, fmin(pr->hi, 0.5),
+					8);
+	static const double frac[4] = { 0.05, 0.15, 0.35, 0.65 };
+	double start[GLINT_MAX_PARAMS], best_p[GLINT_MAX_PARAMS];
+	double best = INFINITY;
+	double *scratch = malloc((size_t)3 * nsel * sizeof(double));
+	if (!scratch)
+		return glint_error_set(ENOMEM, "out of memory");
+	memcpy(start, ob->p, sizeof(start));
+	for (int i = 0; i <= 4; i++) {
+		const struct glint_param *po = &m->params[other];
+		memcpy(ob->p, start, sizeof(start));
+		if (i > 0)
+			ob->p[other] = po->lo + frac[i - 1] * (po->hi - po->lo);
+		int ret = rescan_roughness(ob, sel, nsel, lo, fmin(pr->hi, 0.5),
+					   8);
+		if (ret < 0) {
+			free(scratch);
+			return ret;
+		}
+		double p[GLINT_MAX_PARAMS];
+		memcpy(p, ob->p, sizeof(p));
+		double c = projected_cost(ob, sel, nsel, p, scratch);
+		if (c < best) {
+			best = c;
+			memcpy(best_p, p, sizeof(best_p));
+		}
+	}
+	free(scratch);
+	memcpy(ob->p, best_p, sizeof(ob->p));
+	ob->memo_valid = 0;
 	return 0;
 }
 
@@ -899,6 +959,9 @@ static int fit_or_eval(struct glint_renderer *r,
 			if (any) {
 				const int *sel = nspec >= 8 ? spec : coarse;
 				int nsel = nspec >= 8 ? nspec : ncoarse;
+				ret = scan_start(&ob, sel, nsel);
+				if (ret < 0)
+					goto out;
 				ret = run_pass(&ob, "2 specular", sel, nsel,
 					       freev, 0, res, &lr);
 				if (ret < 0)
@@ -912,6 +975,9 @@ static int fit_or_eval(struct glint_renderer *r,
 			break;
 		}
 		case GLINT_FIT_NAIVE:
+			ret = scan_start(&ob, coarse, ncoarse);
+			if (ret < 0)
+				goto out;
 			for (int k = 0; k < model->nparams; k++)
 				freev[k] = 1;
 			ret = run_pass(&ob, "all at once", coarse, ncoarse,
@@ -981,8 +1047,12 @@ static int fit_or_eval(struct glint_renderer *r,
 		 * before polishing, compare the coarse result with sharper and
 		 * rougher lobes at full resolution, albedos solved exactly for
 		 * each, and start from the best. */
-		ret = rescan_roughness(&ob, all, nall,
-				       4.0 * d.stride / sqrt(interior / M_PI));
+		/* Below the coarse bound (which the coarse level could not
+		 * resolve), log-spaced down to the model's bound. */
+		ret = rescan_roughness(
+			&ob, all, nall,
+			fmax(model->params[model->roughness_param].lo, 1e-3),
+			4.0 * d.stride / sqrt(interior / M_PI), 6);
 		if (ret < 0)
 			goto out;
 	}

@@ -70,6 +70,9 @@ struct glint_fit_opts {
 	int anneal_evals;    /* annealing's budget */
 	const double *start; /* initial values (NULL: the method's own, the
 				paper's) */
+	int no_start_scan;   /* LM from the start as given, without the
+				roughness scan (fit.c, scan_start): for the
+				stability study's failure cases */
 	int nthreads;
 	/* Called as passes run (may be NULL). */
 	void (*progress)(void *ctx, const char *pass, int iter, double cost);

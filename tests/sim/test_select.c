@@ -8,7 +8,7 @@
  *   no Fresnel      copper's parameters rendered with F = 1: the
  *                   constant-Fresnel model must win.
  * And the chosen model's parameters must match the truth's (albedos 0.02).
- *   test_select [CASE]
+ *   test_select [CASE...]   (names or parts of them; all without)
  */
 #include "test.h"
 
@@ -86,9 +86,13 @@ int main(int argc, char **argv)
 		  GLINT_SEL_CONST_FRESNEL },
 	};
 	glint_log_set_mode(GLINT_LOG_QUIET);
-	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++)
-		if (argc < 2 || strstr(cases[i].name, argv[1]))
+	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+		int want = argc < 2;
+		for (int a = 1; a < argc; a++)
+			want |= strstr(cases[i].name, argv[a]) != NULL;
+		if (want)
 			CHECK(run(&cases[i]) == 0, "%s: %s", cases[i].name,
 			      glint_error_msg());
+	}
 	return test_result();
 }

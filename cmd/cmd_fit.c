@@ -80,6 +80,11 @@ void cmd_fit_help(void)
 	       "minutes at 512 px\n"
 	       "  --ladder-limit SE     the ladder's limit (implies "
 	       "--ladder; default 0.5)\n"
+	       "  --ladder-knobs LIST   only these (implies --ladder): dof, "
+	       "spp, resolution,\n"
+	       "                        env, samples, comma-separated; the "
+	       "others stay as the\n"
+	       "                        scene and options have them\n"
 	       "  --method M            three-pass (the paper's, default), "
 	       "naive, varpro\n"
 	       "  --no-coarse           fit on the full pixel set from the "
@@ -270,8 +275,9 @@ int fit_job_run(const struct fit_job *job, json_t **result)
 	else if (job->ladder > 0 && !model->transparent) {
 		struct glint_ladder_result *lr = calloc(1, sizeof(*lr));
 		ret = lr ? glint_ladder_run(&job->scene, model, job->photo,
-					    job->weight, &o, job->ladder, 0,
-					    job->nthreads, lr)
+					    job->weight, &o, job->ladder,
+					    job->ladder_knobs, job->nthreads,
+					    lr)
 			 : -ENOMEM;
 		if (!ret) {
 			res = lr->chosen_fit;
@@ -519,7 +525,8 @@ int cmd_fit(int argc, char **argv)
 		O_ANNEAL_EVALS,
 		O_LADDER,
 		O_LADDER_LIMIT,
-		O_SELECT
+		O_SELECT,
+		O_LADDER_KNOBS
 	};
 	static const struct option opts[] = {
 		{ "out", required_argument, NULL, 'o' },
@@ -541,6 +548,7 @@ int cmd_fit(int argc, char **argv)
 		{ "anneal-evals", required_argument, NULL, O_ANNEAL_EVALS },
 		{ "ladder", no_argument, NULL, O_LADDER },
 		{ "select-model", no_argument, NULL, O_SELECT },
+		{ "ladder-knobs", required_argument, NULL, O_LADDER_KNOBS },
 		{ "ladder-limit", required_argument, NULL, O_LADDER_LIMIT },
 		{ "quiet", no_argument, NULL, 'q' },
 		{ "help", no_argument, NULL, 'h' },
@@ -567,6 +575,15 @@ int cmd_fit(int argc, char **argv)
 			if (cmd_parse_int("fit", "--anneal-evals", optarg, 10,
 					  1000000, &job.opts.anneal_evals) < 0)
 				return GLINT_EXIT_USAGE;
+			break;
+		case O_LADDER_KNOBS:
+			if (glint_ladder_knobs_parse(optarg,
+						     &job.ladder_knobs) < 0)
+				return cmd_usage_error("fit",
+						       "--ladder-knobs %s",
+						       glint_error_msg());
+			if (!(job.ladder > 0))
+				job.ladder = 0.5;
 			break;
 		case O_SELECT:
 			job.select = 1;

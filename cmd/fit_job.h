@@ -20,6 +20,7 @@ struct fit_job {
 	/* > 0: run the fidelity ladder (fit/ladder.h) with this limit in
 	 * standard errors and report its fit */
 	double ladder;
+	unsigned ladder_knobs; /* 0: all */
 	/* choose among the opaque models by BIC (fit/select.h) */
 	int select;
 };

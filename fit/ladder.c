@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /* The fidelity ladder (ladder.h). */
+#define _POSIX_C_SOURCE 200809L
 #include "ladder.h"
 
 #include "core/error.h"
@@ -175,7 +176,7 @@ static double effect_of(const struct glint_fit_result *p,
 
 static void set_levels(struct ladder *l, struct glint_ladder_result *out)
 {
-	static const int spp[] = { 16, 4, 1 }, res[] = { 1, 2, 4 },
+	static const int spp[] = { 8, 4, 1 }, res[] = { 1, 2, 4 },
 			 samples[] = { 16, 8, 4 };
 	const struct glint_camera *c = &l->scene.cam;
 	struct vec3 d = v3_sub(l->scene.sphere_centre, c->pos);
@@ -439,4 +440,31 @@ void glint_ladder_print(const struct glint_ladder_result *r, FILE *f)
 			? r->ref_fit.model->params[r->final_param].name
 			: "-",
 		r->backoffs ? ", after stepping back" : "");
+}
+
+int glint_ladder_knobs_parse(const char *list, unsigned *knobs)
+{
+	static const char *const short_names[GLINT_LADDER_NKNOBS] = {
+		"dof", "spp", "resolution", "env", "samples"
+	};
+	char buf[256];
+	*knobs = 0;
+	snprintf(buf, sizeof(buf), "%s", list);
+	for (char *save = NULL, *t = strtok_r(buf, ",", &save); t;
+	     t = strtok_r(NULL, ",", &save)) {
+		int k = 0;
+		while (k < GLINT_LADDER_NKNOBS && strcmp(t, short_names[k]))
+			k++;
+		if (k == GLINT_LADDER_NKNOBS)
+			return glint_error_set(
+				EINVAL,
+				"'%s': expected knobs among dof, "
+				"spp, resolution, env, samples "
+				"(comma-separated)",
+				t);
+		*knobs |= 1u << k;
+	}
+	if (!*knobs)
+		return glint_error_set(EINVAL, "'%s': no knob named", list);
+	return 0;
 }

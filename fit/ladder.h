@@ -6,7 +6,7 @@
  * The fidelity ladder: model the scene no more finely than the photo can
  * tell.  Each modelling choice (knob) has levels from rich to cheap:
  *   depth of field    the lens's aperture, or a pinhole camera;
- *   samples per pixel primary rays per pixel (16, 4, 1);
+ *   samples per pixel primary rays per pixel (8, 4, 1);
  *   image resolution  photo and camera box-averaged by 1, 2, 4;
  *   env-map resolution the map box-averaged by 1, 2, 4;
  *   shading samples   fixed env + lobe samples per hit (16, 8, 4).
@@ -95,6 +95,9 @@ int glint_ladder_run(const struct glint_scene *scene,
 		     const struct glint_fit_opts *base, double threshold,
 		     unsigned knobs, int nthreads,
 		     struct glint_ladder_result *out);
+
+/* "dof,spp,resolution,env,samples" (any of them) to a knob mask. */
+int glint_ladder_knobs_parse(const char *list, unsigned *knobs);
 
 /* Apply a setting to a scene (camera, spp) and fit options (samples). */
 void glint_ladder_apply(const struct glint_ladder_setting *s,

@@ -122,6 +122,25 @@ assert abs(r['material']['diffuse'][0]-0.124)<0.02, r['material']
 assert all('stderr' in p for p in r['parameters'])"
 check "fit wrote params.json, render.exr, compare.png" test -s "$tmp/fit1/params.json" -a -s "$tmp/fit1/render.exr" -a -s "$tmp/fit1/compare.png"
 cp -r "$tmp/fit1" "$tmp/fit1.keep"
+check "fit --select-model" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fitsel" --select-model --json -q
+check "--select-model reports every candidate with AIC, BIC, errors" python3 -c "
+import json; r=json.load(open('$tmp/out'))['model_selection']
+names=[c['name'] for c in r['candidates']]
+assert len(names)==4 and r['chosen'] in names and 'BIC' in r['why'], r
+for c in r['candidates']:
+    assert c['bic']==c['bic'] and c['aic']==c['aic'] and c['k'] in (3,6,7,8), c
+    assert all('stderr' in v for v in c['parameters'].values()), c"
+check "fit --ladder-knobs env,samples" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fitlad" --ladder-knobs env,samples --json -q
+check "--ladder reports each knob's levels, choice and why" python3 -c "
+import json; r=json.load(open('$tmp/out'))['fidelity']
+names=[k['name'] for k in r['knobs']]
+assert names==['depth of field','samples per pixel','image resolution','env-map resolution','shading samples'], names
+assert r['final']['effect_se'] < 1 and r['threshold_se']==0.5, r['final']
+for k in r['knobs']:
+    assert k['why'] and k['chosen'] in [l['value'] for l in k['levels']], k
+assert [d['name'] for d in r['decided']]==['bounce depth','stand'], r['decided']"
+check "--ladder-limit out of range" run 2 "--ladder-limit" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/x" --ladder-limit 0
+check "--ladder-knobs unknown" run 2 "expected knobs among dof" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/x" --ladder-knobs env,focus
 
 cat >"$tmp/wide.json" <<JSON
 {"camera": {"width": 100, "height": 96, "focal_length_mm": 100,

@@ -246,6 +246,7 @@ int fit_job_run(const struct fit_job *job, json_t **result)
 	struct glint_atomic_dir ad;
 	struct glint_image *img = NULL, *cov = NULL;
 	char path[4300];
+	json_t *fidelity = NULL, *selection = NULL;
 	int ret;
 
 	*result = NULL;
@@ -264,7 +265,6 @@ int fit_job_run(const struct fit_job *job, json_t **result)
 		if (ret < 0)
 			goto out;
 	}
-	json_t *fidelity = NULL, *selection = NULL;
 	if (job->select && !model->transparent) {
 		ret = select_model(&r, job, &o, &model, &res, &selection);
 		if (ret < 0)

@@ -14,6 +14,7 @@
 #include "sim/reference.h"
 #include "sim/sensor.h"
 
+#include <math.h>
 #include <stdio.h>
 
 /* A w x w photo, the sphere 180 / 512 of the width in radius; env NULL:
@@ -110,6 +111,18 @@ static inline int bench_add_noise(struct glint_image *photo,
 		ret = glint_sensor_to_radiance(&s, dn, photo, *weight);
 	glint_image_free(dn);
 	return ret;
+}
+
+/* The largest difference of Torrance-Sparrow parameters p from q in units
+ * of the fitting tolerances (albedo 0.01, roughness 5 % relative, ior
+ * 0.05): <= 1 meets them all. */
+static inline double bench_tolerance_error(const double *p, const double *q)
+{
+	double e = 0;
+	for (int k = 0; k < 6; k++)
+		e = fmax(e, fabs(p[k] - q[k]) / 0.01);
+	e = fmax(e, fabs(p[6] / q[6] - 1) / 0.05);
+	return fmax(e, fabs(p[7] - q[7]) / 0.05);
 }
 
 #endif

@@ -88,17 +88,6 @@ static const struct capture captures[] = {
 };
 #define NCAP 4
 
-/* Worst parameter error in tolerance units. */
-static double param_error(const double *p, const double *t)
-{
-	double e = 0;
-	for (int k = 0; k < 6; k++)
-		e = fmax(e, fabs(p[k] - t[k]) / 0.01);
-	e = fmax(e, fabs(p[6] / t[6] - 1) / 0.05);
-	e = fmax(e, fabs(p[7] - t[7]) / 0.05);
-	return e;
-}
-
 struct outcome {
 	double seconds, perr, rel_rmse;
 	int ok;
@@ -148,7 +137,7 @@ static struct outcome run_one(const struct config *c, const char *mat,
 	o.light_samples = o.lobe_samples = c->samples;
 	if (glint_fit(&r, m, photo, weight, &o, &res) == 0) {
 		out.seconds = glint_now() - t0;
-		out.perr = param_error(res.p, truth);
+		out.perr = bench_tolerance_error(res.p, truth);
 		out.rel_rmse = res.rel_rmse;
 		out.ok = 1;
 	}

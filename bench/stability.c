@@ -70,19 +70,9 @@ photo_128(const char *mat, const struct glint_model_ops *m, const double *truth)
 	return img;
 }
 
-/* Largest difference in units of the tolerances. */
-static double deviation(const double *p, const double *q)
-{
-	double e = 0;
-	for (int k = 0; k < 6; k++)
-		e = fmax(e, fabs(p[k] - q[k]) / 0.01);
-	e = fmax(e, fabs(p[6] / q[6] - 1) / 0.05);
-	return fmax(e, fabs(p[7] - q[7]) / 0.05);
-}
-
 static int within(const double *p, const double *q)
 {
-	return deviation(p, q) <= 1;
+	return bench_tolerance_error(p, q) <= 1;
 }
 
 int main(int argc, char **argv)
@@ -207,7 +197,8 @@ int main(int argc, char **argv)
 						methods[me].name, materials[mi],
 						noise_levels[nl], s,
 						outcome_names[out], dt,
-						deviation(res.p, ref.p));
+						bench_tolerance_error(res.p,
+								      ref.p));
 					fflush(csv);
 				}
 			}

@@ -22,17 +22,6 @@
 #include "core/log.h"
 #include "fit/fit.h"
 
-/* Largest difference in tolerance units (albedo 0.01, roughness 5 %,
- * ior 0.05). */
-static double deviation(const double *p, const double *q)
-{
-	double e = 0;
-	for (int k = 0; k < 6; k++)
-		e = fmax(e, fabs(p[k] - q[k]) / 0.01);
-	e = fmax(e, fabs(p[6] / q[6] - 1) / 0.05);
-	return fmax(e, fabs(p[7] - q[7]) / 0.05);
-}
-
 int main(void)
 {
 	static const double start[8] = { 0.8315, 0.3886, 0.3343, 0.5963,
@@ -76,7 +65,7 @@ int main(void)
 			int bound = 0;
 			for (int k = 0; k < m->nparams; k++)
 				bound |= res.at_bound[k];
-			double dev = deviation(res.p, ref.p);
+			double dev = bench_tolerance_error(res.p, ref.p);
 			printf("%-10s %-16s roughness %.4f ior %.3f: %.1f "
 			       "tolerances from it%s\n",
 			       glint_fit_method_name(methods[i]),
@@ -100,7 +89,7 @@ int main(void)
 	o.start = start1;
 	CHECK(glint_fit(&r, m, photo, NULL, &o, &res) == 0, "%s",
 	      glint_error_msg());
-	double dev = deviation(res.p, ref.p);
+	double dev = bench_tolerance_error(res.p, ref.p);
 	printf("varpro     from start 1     roughness %.4f ior %.3f: %.1f "
 	       "tolerances from it (recorded failure)\n",
 	       res.p[6], res.p[7], dev);

@@ -18,6 +18,7 @@
  *        bench-out/capture.csv and bench-out/capture.png (gnuplot).
  */
 #define _POSIX_C_SOURCE 200809L
+#include "cmd/backends.h"
 #include "bench.h"
 
 #include "capture/bracket.h"
@@ -100,6 +101,7 @@ static int run_sequential(const char *dev, const struct glint_bracket *plan,
 
 int main(int argc, char **argv)
 {
+	glint_backends_register();
 	const char *dev = "sim:width=128,height=96";
 	int runs = 3;
 	double wall[NM][MAXRUNS], flr[NM][MAXRUNS], ratio[NM][MAXRUNS];

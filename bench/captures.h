@@ -10,7 +10,7 @@
  */
 
 #include "core/error.h"
-#include "fit/render.h"
+#include "fit/render/render.h"
 #include "sim/reference.h"
 #include "sim/sensor.h"
 
@@ -25,8 +25,8 @@ static inline void bench_scene_lens(struct glint_scene *s, int w,
 {
 	glint_scene_defaults(s);
 	double fpx = 1422.2 * w / 512, dist = 0.05 * 1422.2 / 180;
-	glint_camera_init(&s->cam, w, w, fpx * 0.036 / w, 0.036 / w, fnum,
-			  dist - 0.05, v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
+	glint_pinhole_init(&s->cam, w, w, fpx * 0.036 / w, 0.036 / w, fnum,
+			   dist - 0.05, v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
 	s->sphere_radius = 0.05;
 	s->sphere_centre = v3(0, 0, -0.05 * 1422.2 / 180);
 	snprintf(s->env_path, sizeof(s->env_path), "%s",

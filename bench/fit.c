@@ -19,7 +19,7 @@
 #include "core/error.h"
 #include "core/formats.h"
 #include "core/log.h"
-#include "fit/dielectric.h"
+#include "fit/render/dielectric_paths.h"
 #include "fit/fit.h"
 #include "sim/reference.h"
 

@@ -6,6 +6,7 @@
 // scale); plus glint's raw (linear) merge throughput on a simulated
 // bracket.  usage: bench/hdr [ROUNDS]   (default 5)
 extern "C" {
+#include "cmd/backends.h"
 #include "capture/bracket.h"
 #include "capture/hdr_linear.h"
 #include "capture/hdr_response.h"
@@ -83,6 +84,7 @@ void accuracy(const float *ours, const float *ref, size_t n, double *corr,
 
 int main(int argc, char **argv)
 {
+	glint_backends_register();
 	int rounds = argc > 1 ? std::max(1, atoi(argv[1])) : 5;
 	const std::string dir = GLINT_SHARED_DATA "/exposures/memorial/";
 	const int n = 16;

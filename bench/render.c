@@ -18,7 +18,7 @@
 #include "core/error.h"
 #include "core/log.h"
 #include "core/parallel.h"
-#include "fit/render.h"
+#include "fit/render/render.h"
 
 #include <stdio.h>
 #include <string.h>

@@ -63,15 +63,54 @@ static int same_line(const struct glint_line_cfg *a,
 	return a->offset == b->offset;
 }
 
+static const struct glint_board_ops *const no_backends[] = { NULL };
+static const struct glint_board_ops *const *registered = no_backends;
+
+void glint_board_backends_set(const struct glint_board_ops *const *list)
+{
+	registered = list ? list : no_backends;
+}
+
+const struct glint_board_ops *const *glint_board_backends(void)
+{
+	return registered;
+}
+
+const struct glint_board_ops *glint_board_backend(const char *name)
+{
+	for (int i = 0; registered[i]; i++)
+		if (!strcmp(registered[i]->name, name))
+			return registered[i];
+	return NULL;
+}
+
+/* "gpiod or sim": the registered backends' names, for messages. */
+static void backend_names(char *buf, size_t n)
+{
+	buf[0] = 0;
+	for (int i = 0; registered[i]; i++) {
+		size_t len = strlen(buf);
+		snprintf(buf + len, n - len, "%s%s",
+			 !i		     ? ""
+			 : registered[i + 1] ? ", "
+					     : " or ",
+			 registered[i]->name);
+	}
+}
+
 int glint_board_cfg_check(const char *file, const struct glint_board_cfg *c)
 {
 	const struct glint_line_cfg *l = c->lines;
+	char names[128];
 
-	if (strcmp(c->backend, "gpiod") && strcmp(c->backend, "sim"))
+	backend_names(names, sizeof(names));
+	/* "gpiod" is a valid rig file on a glint built without libgpiod:
+	 * opening the board says what is missing. */
+	if (!glint_board_backend(c->backend) && strcmp(c->backend, "gpiod"))
 		return glint_error_set(EINVAL,
 				       "%s: board.backend = \"%s\": expected "
-				       "gpiod or sim",
-				       file, c->backend);
+				       "%s",
+				       file, c->backend, names);
 	if (!l[GLINT_ROLE_BUTTON].used)
 		return glint_error_set(EINVAL,
 				       "%s: board.lines.button: missing (the "
@@ -221,22 +260,17 @@ int glint_board_open(const struct glint_board_cfg *cfg, const char *consumer,
 	int ret;
 
 	*out = NULL;
-#ifdef GLINT_HAVE_GPIOD
-	if (!strcmp(cfg->backend, "gpiod"))
-		ops = &glint_board_gpiod_ops;
-#endif
-	if (!strcmp(cfg->backend, "sim"))
-		ops = &glint_board_sim_ops;
-	if (!ops)
+	ops = glint_board_backend(cfg->backend);
+	if (!ops) {
+		char names[128];
+		backend_names(names, sizeof(names));
 		return glint_error_set(
-			EINVAL, "board backend '%s': expected %s", cfg->backend,
-#ifdef GLINT_HAVE_GPIOD
-			"gpiod or sim"
-#else
-			"sim (this glint was built without "
-			"libgpiod)"
-#endif
-		);
+			EINVAL, "board backend '%s': this glint has %s%s",
+			cfg->backend, names,
+			strcmp(cfg->backend, "gpiod")
+				? ""
+				: " (built without libgpiod)");
+	}
 	b = calloc(1, sizeof(*b));
 	if (!b)
 		return glint_error_set(ENOMEM, "out of memory");

@@ -22,6 +22,7 @@
 
 #include "core/error.h"
 
+#include <jansson.h>
 #include <stdint.h>
 
 enum glint_role {
@@ -59,8 +60,12 @@ struct glint_board_cfg {
 	double relay_pulse_s;	      /* relay */
 	double probe_deg, sample_deg; /* turntable positions */
 	double settle_s;	      /* wait after a move */
-	char scenario[4096]; /* sim: scripted presses (sim/board_sim.h) */
-	char log[4096];	     /* sim: where outputs are recorded */
+	/* The rig file's "board" object, for the keys only the backend
+	 * reads (its ops' cfg_keys); borrowed: valid while the rig file is
+	 * loaded, may be NULL.  rig_file names the file in messages and
+	 * anchors relative paths in those keys. */
+	const json_t *backend_opts;
+	const char *rig_file;
 };
 
 void glint_board_default_cfg(struct glint_board_cfg *c);
@@ -77,6 +82,9 @@ struct glint_edge {
 
 struct glint_board_ops {
 	const char *name;
+	/* Keys of the rig file's "board" object that this backend reads from
+	 * cfg->backend_opts (NULL-terminated; may be NULL). */
+	const char *const *cfg_keys;
 	/* Look up every configured line (chip present, line present, free),
 	 * then request them: outputs at logical 0.  A failure names chip,
 	 * line and, for a busy line, its current consumer; nothing is left
@@ -91,8 +99,17 @@ struct glint_board_ops {
 			 struct glint_edge *e);
 };
 
+/* The real backend (libgpiod v1), when built; the simulated board is
+ * sim/'s. */
 extern const struct glint_board_ops glint_board_gpiod_ops;
-extern const struct glint_board_ops glint_board_sim_ops;
+
+/* The backends glint_board_open() chooses from by cfg->backend: a
+ * NULL-terminated list in static storage, set once by the program
+ * (cmd/backends.c) before any board is opened. */
+void glint_board_backends_set(const struct glint_board_ops *const *list);
+/* The registered list, or the backend named `name` (NULL if none). */
+const struct glint_board_ops *const *glint_board_backends(void);
+const struct glint_board_ops *glint_board_backend(const char *name);
 
 /* LED patterns: idle = a short blink every 2 s, busy = 4 Hz blinking,
  * done = steady on, error = three fast blinks every 1.5 s, off. */

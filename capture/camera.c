@@ -76,6 +76,19 @@ struct glint_camera {
 	struct glint_camera_info info;
 };
 
+static const struct glint_camera_ops *const no_backends[] = { NULL };
+static const struct glint_camera_ops *const *registered = no_backends;
+
+void glint_camera_backends_set(const struct glint_camera_ops *const *list)
+{
+	registered = list ? list : no_backends;
+}
+
+const struct glint_camera_ops *const *glint_camera_backends(void)
+{
+	return registered;
+}
+
 int glint_camera_open(const char *backend, const char *device,
 		      const struct glint_clock *clock,
 		      struct glint_camera **out)
@@ -86,12 +99,13 @@ int glint_camera_open(const char *backend, const char *device,
 
 	*out = NULL;
 	char names[64] = "";
-	for (int i = 0; glint_camera_backends[i]; i++) {
+	const struct glint_camera_ops *const *list = glint_camera_backends();
+	for (int i = 0; list[i]; i++) {
 		size_t n = strlen(names);
-		if (!strcmp(glint_camera_backends[i]->name, backend))
-			ops = glint_camera_backends[i];
+		if (!strcmp(list[i]->name, backend))
+			ops = list[i];
 		snprintf(names + n, sizeof(names) - n, "%s%s", i ? ", " : "",
-			 glint_camera_backends[i]->name);
+			 list[i]->name);
 	}
 	if (!ops)
 		return glint_error_set(EINVAL,

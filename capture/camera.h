@@ -144,13 +144,20 @@ int glint_camera_stream(struct glint_camera *cam,
 			const struct glint_stream_cb *cb, int max_drop,
 			int *dropped);
 
-/* Backends (v4l2 and libcamera when built). */
-extern const struct glint_camera_ops glint_camera_sim_ops;
+/* The real backends built into capture/ (V4L2 and libcamera when their
+ * meson features are on).  The simulated camera is sim/'s. */
 extern const struct glint_camera_ops glint_camera_v4l2_ops;
 extern const struct glint_camera_ops glint_camera_libcamera_ops;
 
-/* The backends built into this binary, NULL-terminated. */
-extern const struct glint_camera_ops *const glint_camera_backends[];
+/*
+ * The backends glint_camera_open() chooses from by name: a NULL-terminated
+ * list in static storage, set once by the program before any camera is
+ * opened (cmd/backends.c registers the real ones and sim's).  Until then
+ * the list is empty and every open fails naming no backend.
+ */
+void glint_camera_backends_set(const struct glint_camera_ops *const *list);
+/* The registered list (never NULL; valid for the program's lifetime). */
+const struct glint_camera_ops *const *glint_camera_backends(void);
 
 /* Backend libraries' own logging (libcamera's): silenced unless on. */
 void glint_camera_set_verbose(int on);

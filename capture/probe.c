@@ -2,8 +2,8 @@
 #include "probe.h"
 
 #include "core/error.h"
-#include "fit/camera.h"
-#include "fit/envmap.h"
+#include "fit/scene/pinhole.h"
+#include "fit/scene/envmap.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -346,7 +346,7 @@ int glint_probe_unwrap(const struct glint_image *photo,
 		       struct glint_image **density)
 {
 	struct ball b;
-	struct glint_camera cam;
+	struct glint_pinhole cam;
 	int w = o->width, h = o->height, ret;
 
 	*env = NULL;
@@ -376,12 +376,12 @@ int glint_probe_unwrap(const struct glint_image *photo,
 	b.bcy = o->ball_cy;
 	b.br = o->ball_r;
 	/* The ball's centre from its circle (exact for the pinhole). */
-	ret = glint_camera_init(&cam, photo->width, photo->height, o->fpx, 1.0,
-				0, 0, v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
+	ret = glint_pinhole_init(&cam, photo->width, photo->height, o->fpx, 1.0,
+				 0, 0, v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
 	cam.cx = b.cx;
 	cam.cy = b.cy;
 	if (ret == 0)
-		ret = glint_camera_sphere_from_circle(
+		ret = glint_pinhole_sphere_from_circle(
 			&cam, o->ball_cx, o->ball_cy, o->ball_r, 1, &b.c);
 	if (ret < 0)
 		return ret;

@@ -19,7 +19,7 @@
  *      (a dark ball against a dark floor shows only part of its rim).
  * The pinhole image of an off-axis sphere is an ellipse; this fits its
  * circle of best fit (centre and tangential radius to well under a pixel
- * for the rig's small angles; glint_camera_sphere_from_circle() inverts it).
+ * for the rig's small angles; glint_pinhole_sphere_from_circle() inverts it).
  */
 
 #include "core/image.h"

@@ -22,7 +22,7 @@
 
 /* The merged probe -> env.exr (+ env-mask.png, env-density.exr): the ball
  * found in it, unwrapped with the rig's focal length. */
-static int unwrap_probe(const char *dir, const struct rig *rig,
+static int unwrap_probe(const char *dir, const struct glint_rig *rig,
 			const struct glint_image *probe)
 {
 	char path[4200];
@@ -65,8 +65,9 @@ static int unwrap_probe(const char *dir, const struct rig *rig,
  * missing probe is not the sample's fault: its capture stays complete and
  * the warning says what to do; a given --probe that is wrong is an error. */
 static int sample_scene(const char *dir, const char *root, const char *probe,
-			const struct rig *rig, const struct glint_image *rad,
-			char *scene_path, size_t n)
+			const struct glint_rig *rig,
+			const struct glint_image *rad, char *scene_path,
+			size_t n)
 {
 	char found[4200];
 	struct capture_optics o = { rig->focal_px,
@@ -105,8 +106,8 @@ static int save_frame(const struct glint_frame *f, int index, void *ctx)
 	glint_progress_add(&c->progress, 1);
 	return ret;
 }
-int capture_run(const struct rig *rig_in, const char *kind, const char *out,
-		const char *probe, volatile int *cancel,
+int capture_run(const struct glint_rig *rig_in, const char *kind,
+		const char *out, const char *probe, volatile int *cancel,
 		struct capture_result *res)
 {
 	struct glint_camera *cam = NULL;
@@ -116,7 +117,7 @@ int capture_run(const struct rig *rig_in, const char *kind, const char *out,
 	struct glint_bracket b;
 	struct frame_ctx fc;
 
-	struct rig rig = *rig_in;
+	struct glint_rig rig = *rig_in;
 	int ret;
 
 	memset(res, 0, sizeof(*res));

@@ -2,7 +2,7 @@
 #ifndef GLINT_CMD_CAPTURE_RUN_H
 #define GLINT_CMD_CAPTURE_RUN_H
 
-#include "rig_config.h"
+#include "board/rig.h"
 
 #include <jansson.h>
 
@@ -20,7 +20,7 @@ struct capture_result {
  * session under out).  *cancel stops it (-ECANCELED).  The error message
  * names the session kept.
  */
-int capture_run(const struct rig *rig, const char *kind, const char *out,
+int capture_run(const struct glint_rig *rig, const char *kind, const char *out,
 		const char *probe, volatile int *cancel,
 		struct capture_result *res);
 

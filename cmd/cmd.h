@@ -4,6 +4,8 @@
 
 /* The glint command: a thin layer over the libraries. */
 
+#include "core/path.h"
+
 #include <jansson.h>
 
 #include <stddef.h>
@@ -63,8 +65,6 @@ void cmd_queue_help(void);
 void cmd_hdr_help(void);
 void cmd_cameras_help(void);
 
-/* Folder of glint's own data (embedded env map, Table 1). */
-const char *glint_data_dir(void);
 /* The rig file to use: `config`, or the simulated rig (data/rig-sim.json)
  * when it is NULL; into buf. */
 const char *cmd_rig_config(char *buf, size_t n, const char *config);

@@ -141,10 +141,10 @@ int cmd_capture(int argc, char **argv)
 	const char *kind = argv[optind];
 	config = cmd_rig_config(default_config, sizeof(default_config), config);
 
-	struct rig rig;
-	ret = rig_load(config, &rig);
+	struct glint_rig rig;
+	ret = glint_rig_load(config, &rig);
 	if (ret < 0) {
-		rig_free(&rig);
+		glint_rig_free(&rig);
 		return cmd_fail("capture");
 	}
 	if (!out)
@@ -175,7 +175,7 @@ int cmd_capture(int argc, char **argv)
 	glint_board_close(board);
 	sigaction(SIGINT, &old_int, NULL);
 	sigaction(SIGTERM, &old_term, NULL);
-	rig_free(&rig);
+	glint_rig_free(&rig);
 	if (ret < 0) {
 		cmd_fail("capture");
 		return interrupted ? 130 : GLINT_EXIT_FAIL;
@@ -297,8 +297,8 @@ int cmd_cameras(int argc, char **argv)
 						       : "libcamera";
 	l.arr = json_array();
 	int found = 0;
-	for (int i = 0; glint_camera_backends[i]; i++) {
-		const struct glint_camera_ops *ops = glint_camera_backends[i];
+	for (int i = 0; glint_camera_backends()[i]; i++) {
+		const struct glint_camera_ops *ops = glint_camera_backends()[i];
 		if (backend && strcmp(backend, ops->name) != 0)
 			continue;
 		found = 1;

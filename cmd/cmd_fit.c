@@ -10,7 +10,7 @@
 #include "core/json.h"
 #include "core/lockfile.h"
 #include "core/log.h"
-#include "fit/compare.h"
+#include "fit/render/compare.h"
 #include "fit/ladder.h"
 #include "fit/select.h"
 

@@ -7,7 +7,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
 #include "queue_worker.h"
-#include "rig_config.h"
+#include "board/rig.h"
 
 #include "board/queue.h"
 #include "core/error.h"
@@ -97,15 +97,15 @@ static int parse(const char *cmd, int argc, char **argv, struct qopts *q)
 		}
 	}
 	if (!root) {
-		struct rig rig;
+		struct glint_rig rig;
 		config = cmd_rig_config(def, sizeof(def), config);
-		if (rig_load(config, &rig) < 0) {
-			rig_free(&rig);
+		if (glint_rig_load(config, &rig) < 0) {
+			glint_rig_free(&rig);
 			cmd_fail(cmd);
 			return -2;
 		}
 		snprintf(q->root, sizeof(q->root), "%s", rig.output);
-		rig_free(&rig);
+		glint_rig_free(&rig);
 	} else {
 		snprintf(q->root, sizeof(q->root), "%s", root);
 	}

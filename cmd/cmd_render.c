@@ -5,7 +5,7 @@
 #include "core/error.h"
 #include "core/formats.h"
 #include "core/log.h"
-#include "fit/render.h"
+#include "fit/render/render.h"
 
 #include <getopt.h>
 #include <math.h>
@@ -106,8 +106,8 @@ int render_job_run(const struct render_job *job, json_t **result)
 	if (ret < 0)
 		goto out;
 	struct glint_ellipse el;
-	glint_camera_sphere_ellipse(&sc->cam, sc->sphere_centre,
-				    sc->sphere_radius, &el);
+	glint_pinhole_sphere_ellipse(&sc->cam, sc->sphere_centre,
+				     sc->sphere_radius, &el);
 	*result = json_pack(
 		"{s:s,s:s?,s:s?,s:i,s:i,s:i,s:i,s:i,s:o,s:o,s:{s:f,s:f,s:f,"
 		"s:f},s:s,s:f,s:f,s:f}",

@@ -12,7 +12,7 @@
 #include "capture_run.h"
 #include "cmd.h"
 #include "queue_worker.h"
-#include "rig_config.h"
+#include "board/rig.h"
 
 #include "board/board.h"
 #include "board/queue.h"
@@ -84,7 +84,7 @@ static void on_signal(int sig)
 }
 
 /* The camera must be there before any output is touched. */
-static int check_camera(const struct rig *rig)
+static int check_camera(const struct glint_rig *rig)
 {
 	struct glint_camera *cam;
 	struct glint_camera_info in;
@@ -129,7 +129,7 @@ struct run_out {
 	char job[64];
 };
 
-static int run_sequence(const struct rig *rig, struct glint_board *b,
+static int run_sequence(const struct glint_rig *rig, struct glint_board *b,
 			const char *queue, struct run_out *ro)
 {
 	char stamp[32];
@@ -151,27 +151,28 @@ static int run_sequence(const struct rig *rig, struct glint_board *b,
 	}
 	glint_log_info("run %s", ro->dir);
 	for (int i = 0; i < rig->nsteps && ret == 0; i++) {
-		enum rig_step s = rig->steps[i];
+		enum glint_rig_step s = rig->steps[i];
 		if (cancel_flag) {
 			ret = glint_error_set(ECANCELED, "run cancelled");
 			break;
 		}
 		glint_log_info("step %d/%d: %s", i + 1, rig->nsteps,
-			       rig_step_names[s]);
+			       glint_rig_step_names[s]);
 		switch (s) {
-		case RIG_LIGHTS_ON:
-		case RIG_LIGHTS_OFF:
-			ret = glint_board_lights(b, s == RIG_LIGHTS_ON);
+		case GLINT_RIG_LIGHTS_ON:
+		case GLINT_RIG_LIGHTS_OFF:
+			ret = glint_board_lights(b, s == GLINT_RIG_LIGHTS_ON);
 			break;
-		case RIG_TURNTABLE_PROBE:
-		case RIG_TURNTABLE_SAMPLE:
+		case GLINT_RIG_TURNTABLE_PROBE:
+		case GLINT_RIG_TURNTABLE_SAMPLE:
 			ret = glint_board_turntable(
-				b, s == RIG_TURNTABLE_SAMPLE, &cancel_flag);
+				b, s == GLINT_RIG_TURNTABLE_SAMPLE,
+				&cancel_flag);
 			break;
-		case RIG_CAPTURE_PROBE:
-		case RIG_CAPTURE_SAMPLE: {
+		case GLINT_RIG_CAPTURE_PROBE:
+		case GLINT_RIG_CAPTURE_SAMPLE: {
 			struct capture_result res;
-			int probe = s == RIG_CAPTURE_PROBE;
+			int probe = s == GLINT_RIG_CAPTURE_PROBE;
 			ret = capture_run(rig, probe ? "probe" : "sample",
 					  ro->dir, NULL, &cancel_flag, &res);
 			snprintf(probe ? ro->probe : ro->sample,
@@ -184,7 +185,7 @@ static int run_sequence(const struct rig *rig, struct glint_board *b,
 					"scene.json (see the warning above)");
 			break;
 		}
-		case RIG_FIT:
+		case GLINT_RIG_FIT:
 			if (!ro->sample[0]) {
 				ret = glint_error_set(EINVAL,
 						      "%s: sequence: \"fit\" "
@@ -298,9 +299,9 @@ int cmd_rig(int argc, char **argv)
 				       argv[optind]);
 	cmd_rig_config(path, sizeof(path), config);
 
-	struct rig rig;
+	struct glint_rig rig;
 	struct glint_board *board = NULL;
-	ret = rig_load(path, &rig);
+	ret = glint_rig_load(path, &rig);
 	if (ret == 0 && !rig.has_board)
 		ret = glint_error_set(EINVAL,
 				      "%s: no \"board\" section: the daemon "
@@ -312,7 +313,7 @@ int cmd_rig(int argc, char **argv)
 	if (ret == 0)
 		ret = glint_board_open(&rig.board, "glint rig", &board);
 	if (ret < 0) {
-		rig_free(&rig);
+		glint_rig_free(&rig);
 		return cmd_fail("rig");
 	}
 	snprintf(queue, sizeof(queue), "%s/queue", rig.output);
@@ -406,7 +407,7 @@ int cmd_rig(int argc, char **argv)
 		status = GLINT_EXIT_OK; /* a clean shutdown */
 	}
 	glint_board_close(board);
-	rig_free(&rig);
+	glint_rig_free(&rig);
 	(void)runs;
 	return status;
 }
@@ -445,9 +446,9 @@ int cmd_check_rig(int argc, char **argv)
 		return cmd_usage_error("check-rig", "unexpected argument '%s'",
 				       argv[optind]);
 	cmd_rig_config(path, sizeof(path), config);
-	struct rig rig;
+	struct glint_rig rig;
 	struct glint_board *board = NULL;
-	ret = rig_load(path, &rig);
+	ret = glint_rig_load(path, &rig);
 	if (ret == 0)
 		ret = check_camera(&rig);
 	if (ret == 0 && rig.has_board) {
@@ -462,7 +463,7 @@ int cmd_check_rig(int argc, char **argv)
 		}
 		glint_board_close(board);
 	}
-	rig_free(&rig);
+	glint_rig_free(&rig);
 	if (ret < 0)
 		return cmd_fail("check-rig");
 	if (json)

@@ -1,4 +1,5 @@
 /* SPDX-License-Identifier: MIT */
+#include "backends.h"
 #include "cmd.h"
 
 #include "core/error.h"
@@ -44,12 +45,6 @@ static const struct glint_cmd commands[] = {
 };
 
 #define NCOMMANDS (sizeof(commands) / sizeof(commands[0]))
-
-const char *glint_data_dir(void)
-{
-	const char *env = getenv("GLINT_DATA_DIR");
-	return env && env[0] ? env : GLINT_DATA_DIR;
-}
 
 const char *cmd_rig_config(char *buf, size_t n, const char *config)
 {
@@ -120,6 +115,7 @@ static void usage(FILE *fp)
 
 int main(int argc, char **argv)
 {
+	glint_backends_register();
 	if (argc < 2) {
 		usage(stderr);
 		return GLINT_EXIT_USAGE;

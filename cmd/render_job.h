@@ -2,8 +2,8 @@
 #ifndef GLINT_CMD_RENDER_JOB_H
 #define GLINT_CMD_RENDER_JOB_H
 
-#include "fit/model.h"
-#include "fit/scene.h"
+#include "fit/brdf/model.h"
+#include "fit/scene/scene.h"
 
 #include <jansson.h>
 

@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 #include "fit.h"
 #include "fit_data.h"
-#include "anneal.h"
+#include "fit/optim/anneal.h"
 
 #include "core/error.h"
 #include "core/log.h"

@@ -24,9 +24,9 @@
  * the paper's way, a full trace and render per evaluation (the baseline).
  */
 
-#include "lm.h"
-#include "render.h"
-#include "shade_cache.h"
+#include "fit/optim/lm.h"
+#include "fit/render/render.h"
+#include "fit/render/shade_cache.h"
 
 #include <stdint.h>
 

@@ -8,8 +8,8 @@
  * an LM polish on all of them (the paper's choice for these spheres), or
  * LM alone from the start values.
  */
-#include "anneal.h"
-#include "dielectric.h"
+#include "fit/optim/anneal.h"
+#include "fit/render/dielectric_paths.h"
 #include "fit.h"
 #include "fit_data.h"
 

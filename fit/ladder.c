@@ -46,7 +46,7 @@ static int *knob_value(struct glint_ladder_setting *s, int k)
 void glint_ladder_apply(const struct glint_ladder_setting *s,
 			struct glint_scene *scene, struct glint_fit_opts *o)
 {
-	struct glint_camera *c = &scene->cam;
+	struct glint_pinhole *c = &scene->cam;
 	if (!s->dof)
 		c->aperture_radius = 0;
 	scene->spp = s->spp;
@@ -178,7 +178,7 @@ static void set_levels(struct ladder *l, struct glint_ladder_result *out)
 {
 	static const int spp[] = { 8, 4, 1 }, res[] = { 1, 2, 4 },
 			 samples[] = { 16, 8, 4 };
-	const struct glint_camera *c = &l->scene.cam;
+	const struct glint_pinhole *c = &l->scene.cam;
 	struct vec3 d = v3_sub(l->scene.sphere_centre, c->pos);
 	double radius_px = c->fpx * l->scene.sphere_radius / v3_len(d);
 

@@ -3,7 +3,7 @@
 #include "select.h"
 
 #include "fit_data.h"
-#include "lm.h"
+#include "fit/optim/lm.h"
 
 #include "core/error.h"
 #include "core/log.h"

@@ -2,9 +2,9 @@
 /*
  * The simulated board (a backend of board/board.h).  Its button is played
  * from a scenario file; every output change is recorded (in memory and as
- * JSON lines in cfg->log) and moves the simulated world (sim/world.h):
- * lights on/off, and the turntable, whose angle follows the step pulses
- * (stepper: steps_per_turn per turn, direction line) or the relay pulses
+ * JSON lines in the rig file's board.log) and moves the simulated world
+ * (sim/world.h): lights on/off, and the turntable, whose angle follows the step
+ * pulses (stepper: steps_per_turn per turn, direction line) or the relay pulses
  * (an indexing table: each pulse goes to the other position).  The sim
  * camera's scene=rig shows what is then in view.
  *
@@ -15,10 +15,11 @@
  * is released (0) hold_s later.
  */
 #define _POSIX_C_SOURCE 200809L
-#include "board/board.h"
+#include "board_sim.h"
 #include "world.h"
 
 #include "core/json.h"
+#include "core/path.h"
 
 #include <errno.h>
 #include <math.h>
@@ -32,6 +33,8 @@
 
 struct sim_board {
 	struct glint_board_cfg cfg;
+	char scenario[GLINT_PATH_MAX]; /* board.scenario, resolved; "" none */
+	char log_path[GLINT_PATH_MAX]; /* board.log, resolved; "" none */
 	double t0;
 	struct glint_edge edges[MAX_EDGES]; /* the button's, in time order */
 	int nedges, next_edge;
@@ -52,7 +55,7 @@ static int add_edge(struct sim_board *s, double t, int v)
 {
 	if (s->nedges == MAX_EDGES)
 		return glint_error_set(E2BIG, "%s: more than %d button edges",
-				       s->cfg.scenario, MAX_EDGES);
+				       s->scenario, MAX_EDGES);
 	s->edges[s->nedges++] = (struct glint_edge){ v, s->t0 + t };
 	return 0;
 }
@@ -61,7 +64,7 @@ static int load_scenario(struct sim_board *s)
 {
 	static const char *const top[] = { "presses", NULL };
 	static const char *const keys[] = { "at_s", "hold_s", "bounces", NULL };
-	const char *f = s->cfg.scenario;
+	const char *f = s->scenario;
 	json_t *doc, *arr;
 	int ret;
 
@@ -134,6 +137,27 @@ static void update_world(struct sim_board *s)
 	glint_sim_world_set(&w);
 }
 
+/* board.scenario and board.log, relative to the rig file. */
+static int load_paths(struct sim_board *s)
+{
+	static const char *const keys[] = { "scenario", "log" };
+	char *out[] = { s->scenario, s->log_path };
+	const char *file = s->cfg.rig_file ? s->cfg.rig_file : "rig";
+
+	for (int i = 0; i < 2; i++) {
+		const char *v = NULL;
+		int ret = glint_json_string(file, "board",
+					    (json_t *)s->cfg.backend_opts,
+					    keys[i], 0, &v);
+		if (ret == 0 && v)
+			ret = glint_path_resolve(out[i], GLINT_PATH_MAX, file,
+						 v);
+		if (ret < 0)
+			return ret;
+	}
+	return 0;
+}
+
 static int sim_open(const struct glint_board_cfg *cfg, const char *consumer,
 		    void **priv)
 {
@@ -147,11 +171,13 @@ static int sim_open(const struct glint_board_cfg *cfg, const char *consumer,
 	s->cfg = *cfg;
 	s->t0 = now_s();
 	s->angle = cfg->probe_deg;
-	ret = load_scenario(s);
-	if (!ret && cfg->log[0]) {
-		s->log = fopen(cfg->log, "a");
+	ret = s->cfg.backend_opts ? load_paths(s) : 0;
+	if (!ret)
+		ret = load_scenario(s);
+	if (!ret && s->log_path[0]) {
+		s->log = fopen(s->log_path, "a");
 		if (!s->log)
-			ret = glint_error_set(errno, "%s: %s", cfg->log,
+			ret = glint_error_set(errno, "%s: %s", s->log_path,
 					      strerror(errno));
 	}
 	if (ret < 0) {
@@ -259,8 +285,11 @@ static int sim_wait_edge(void *priv, enum glint_role r, double timeout_s,
 	return got;
 }
 
+static const char *const sim_cfg_keys[] = { "scenario", "log", NULL };
+
 const struct glint_board_ops glint_board_sim_ops = {
 	.name = "sim",
+	.cfg_keys = sim_cfg_keys,
 	.open = sim_open,
 	.close = sim_close,
 	.set = sim_set,

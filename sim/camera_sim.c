@@ -27,6 +27,7 @@
 #include "world.h"
 
 #include "core/error.h"
+#include "core/path.h"
 
 #include <math.h>
 #include <pthread.h>
@@ -139,9 +140,12 @@ static int parse_device(const char *dev, struct sim_cam *s)
 int glint_sim_rig_map(struct glint_image **out)
 {
 	struct glint_image *src = NULL, *dst;
-	int ret = glint_image_read(GLINT_DATA_DIR "/env/venice_sunset_1k.hdr",
-				   &src);
+	char path[GLINT_PATH_MAX];
+	int ret =
+		glint_data_path(path, sizeof(path), "env/venice_sunset_1k.hdr");
 	*out = NULL;
+	if (ret == 0)
+		ret = glint_image_read(path, &src);
 	if (ret < 0)
 		return ret;
 	dst = glint_image_new(src->width, src->height);
@@ -193,8 +197,8 @@ int glint_sim_sample_scene_def(int w, int h, struct glint_scene *sc)
 	glint_scene_defaults(sc);
 	/* Pixel pitch 1 um; only focal length / pitch matters to a pinhole. */
 	double pitch = 1e-6, f = glint_sim_probe_focal_px(w);
-	int ret = glint_camera_init(&sc->cam, w, h, f * pitch, pitch, 0, 0,
-				    v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
+	int ret = glint_pinhole_init(&sc->cam, w, h, f * pitch, pitch, 0, 0,
+				     v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
 	if (ret < 0)
 		return ret;
 	double r = 0.35 * (w < h ? w : h);
@@ -260,9 +264,12 @@ static int render_sample(int w, int h, const char *material,
 	int ret = glint_sim_sample_scene_def(w, h, &sc);
 
 	*out = NULL;
+	char table[GLINT_PATH_MAX];
 	if (!ret)
-		ret = glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
-					  material, &model, p);
+		ret = glint_data_path(table, sizeof(table),
+				      "paper-table1.json");
+	if (!ret)
+		ret = glint_material_load(table, material, &model, p);
 	if (!ret)
 		ret = glint_sim_rig_map(&map);
 	if (!ret)

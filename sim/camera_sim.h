@@ -4,8 +4,12 @@
 
 /* The simulated camera (a backend of capture/camera.h) and its scene. */
 
+#include "capture/camera.h"
 #include "core/image.h"
-#include "fit/scene.h"
+#include "fit/scene/scene.h"
+
+/* The backend ("sim"), registered by the program (cmd/backends.c). */
+extern const struct glint_camera_ops glint_camera_sim_ops;
 
 /* The test card it photographs: `decades` decades of radiance left to
  * right up to 100 (R 0.8, G 1, B 0.6 of that), and a disk of 500 at

@@ -209,7 +209,7 @@ static void shade_dielectric(const struct ref_job *job, struct vec3 pos,
 static void ref_rows(void *ctx, int y0, int y1, int thread)
 {
 	struct ref_job *job = ctx;
-	const struct glint_camera *cam = &job->sc->cam;
+	const struct glint_pinhole *cam = &job->sc->cam;
 	int spp = job->o->spp;
 
 	(void)thread;
@@ -225,7 +225,7 @@ static void ref_rows(void *ctx, int y0, int y1, int thread)
 				double px = x + rng_u01(&rng);
 				double py = y + rng_u01(&rng);
 				double lu = rng_u01(&rng), lv = rng_u01(&rng);
-				glint_camera_ray(cam, px, py, lu, lv, &o, &d);
+				glint_pinhole_ray(cam, px, py, lu, lv, &o, &d);
 				double th =
 					hit_sphere(o, d, job->sc->sphere_centre,
 						   job->sc->sphere_radius);

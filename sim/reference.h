@@ -15,9 +15,9 @@
  * camera model, the env map's lookup and sampler, the BRDF.
  */
 
-#include "fit/envmap.h"
-#include "fit/model.h"
-#include "fit/scene.h"
+#include "fit/scene/envmap.h"
+#include "fit/brdf/model.h"
+#include "fit/scene/scene.h"
 
 #include "core/image.h"
 

@@ -10,7 +10,7 @@
  * the renderer's Monte Carlo estimator.
  */
 
-#include "fit/model.h"
+#include "fit/brdf/model.h"
 
 static inline void albedo_quadrature(const struct glint_model_ops *m,
 				     const double *p, struct vec3 wo,

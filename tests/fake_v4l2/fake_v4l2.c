@@ -39,6 +39,7 @@
 #define _GNU_SOURCE
 #include "capture/camera.h"
 #include "capture/v4l2_format.h"
+#include "sim/camera_sim.h"
 
 #include <dlfcn.h>
 #include <errno.h>

@@ -9,7 +9,7 @@
  */
 
 #include "core/error.h"
-#include "fit/render.h"
+#include "fit/render/render.h"
 #include "sim/reference.h"
 
 #include <stdio.h>
@@ -18,8 +18,8 @@ static inline void sim_scene_192(struct glint_scene *s, const char *map,
 				 double rot_y)
 {
 	glint_scene_defaults(s);
-	glint_camera_init(&s->cam, 192, 192, 0.1, 0.036 / 192, 0, 0,
-			  v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
+	glint_pinhole_init(&s->cam, 192, 192, 0.1, 0.036 / 192, 0, 0,
+			   v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
 	s->sphere_centre = v3(0, 0, -0.5);
 	s->sphere_radius = 0.05;
 	snprintf(s->env_path, sizeof(s->env_path), "%s", map);

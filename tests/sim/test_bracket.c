@@ -6,6 +6,7 @@
  * its longest; the darkest need more than the 2 s maximum exposure, so the
  * planner must raise gain and say so.
  */
+#include "cmd/backends.h"
 #include "test.h"
 
 #include "capture/bracket.h"
@@ -94,6 +95,7 @@ static void test_caps_and_refusal(void)
 
 int main(void)
 {
+	glint_backends_register();
 	RUN(test_covers_range);
 	RUN(test_caps_and_refusal);
 	return test_result();

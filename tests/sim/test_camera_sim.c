@@ -5,6 +5,7 @@
  * frames late, as real sensors do, and glint_camera_capture() drops those
  * frames), real frame timing on a fake clock, and refusals.
  */
+#include "cmd/backends.h"
 #include "test.h"
 
 #include "capture/camera.h"
@@ -110,6 +111,7 @@ static void test_refusals(void)
 
 int main(void)
 {
+	glint_backends_register();
 	RUN(test_describe);
 	RUN(test_applied_exposure);
 	RUN(test_refusals);

@@ -31,7 +31,7 @@
 
 #include "core/error.h"
 #include "fit/fit.h"
-#include "fit/microfacet.h"
+#include "fit/brdf/microfacet.h"
 #include "sim/reference.h"
 #include "sim_scene.h"
 

@@ -6,6 +6,7 @@
  * unknown by name, a missing chip, a chip that vanishes.
  */
 #define _POSIX_C_SOURCE 200809L
+#include "cmd/backends.h"
 #include "test.h"
 
 #include "board/board.h"
@@ -224,6 +225,7 @@ static void test_position_sensor(void)
 
 int main(void)
 {
+	glint_backends_register();
 	snprintf(logpath, sizeof(logpath), "/tmp/glint-fake-gpio-%ld.log",
 		 (long)getpid());
 	if (!getenv("LD_PRELOAD")) {

@@ -7,6 +7,7 @@
  * clipped samples do not leak in; a bumped frame is flagged; bad brackets
  * fail clearly; the demosaic keeps values and propagates variances.
  */
+#include "cmd/backends.h"
 #include "test.h"
 
 #include "capture/bracket.h"
@@ -205,6 +206,7 @@ static void test_bad_brackets(void)
 
 int main(void)
 {
+	glint_backends_register();
 	RUN(test_round_trip);
 	RUN(test_bad_brackets);
 	return test_result();

@@ -58,8 +58,8 @@ static int write_sky(const char *path, int sun)
 static void scene_128(struct glint_scene *s, const char *map, double fnum)
 {
 	glint_scene_defaults(s);
-	glint_camera_init(&s->cam, 128, 128, 0.1, 0.036 / 128, fnum, 0.45,
-			  v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
+	glint_pinhole_init(&s->cam, 128, 128, 0.1, 0.036 / 128, fnum, 0.45,
+			   v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
 	s->sphere_centre = v3(0, 0, -0.5);
 	s->sphere_radius = 0.05;
 	snprintf(s->env_path, sizeof(s->env_path), "%s", map);

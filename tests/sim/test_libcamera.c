@@ -5,6 +5,7 @@
  * and the test skips (77) saying so; with one, it captures a frame at a
  * requested exposure and checks the metadata-confirmed exposure.
  */
+#include "cmd/backends.h"
 #include "test.h"
 
 #include "capture/camera.h"
@@ -12,6 +13,7 @@
 
 int main(void)
 {
+	glint_backends_register();
 	struct glint_camera *cam = NULL;
 	struct glint_camera_info in;
 	struct glint_frame f;

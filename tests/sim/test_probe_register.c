@@ -12,7 +12,7 @@
 #include "capture/probe.h"
 #include "capture/probe_register.h"
 #include "core/error.h"
-#include "fit/envmap.h"
+#include "fit/scene/envmap.h"
 
 #include <stdint.h>
 #include "sim/probe_sim.h"

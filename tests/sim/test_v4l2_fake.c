@@ -6,6 +6,7 @@
  * reads, brackets whose labelled exposures match the pixels, and each
  * injected fault ending in a clear error.
  */
+#include "cmd/backends.h"
 #include "test.h"
 
 #include "capture/bracket.h"
@@ -255,6 +256,7 @@ static void test_faults(void)
 
 int main(void)
 {
+	glint_backends_register();
 	if (!getenv("LD_PRELOAD") ||
 	    !strstr(getenv("LD_PRELOAD"), "fakev4l2")) {
 		fprintf(stderr, "skip: run with LD_PRELOAD=libfakev4l2.so "

@@ -7,7 +7,7 @@
  */
 #include "test.h"
 
-#include "fit/anneal.h"
+#include "fit/optim/anneal.h"
 
 #include <math.h>
 

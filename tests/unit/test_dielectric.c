@@ -9,7 +9,7 @@
 #include "test.h"
 
 #include "core/error.h"
-#include "fit/dielectric.h"
+#include "fit/render/dielectric_paths.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -59,19 +59,20 @@ static void test_fresnel(void)
 	CHECK_NEAR(sin(ti), n * t.x, 1e-12, "Snell's law");
 }
 
-struct rig {
-	struct glint_camera cam;
+struct glint_rig {
+	struct glint_pinhole cam;
 	struct glint_tracer *tr;
 	struct glint_gbuffer gb;
 	struct glint_envmap *env;
 };
 
 /* A 0.1 m sphere 0.5 m in front of a w x w camera that it fills. */
-static void make_rig(struct rig *r, int w, int spp, struct glint_image *map)
+static void make_rig(struct glint_rig *r, int w, int spp,
+		     struct glint_image *map)
 {
 	double pitch = 1e-5, fpx = 0.9 * w / 2 / tan(asin(0.05 / 0.5));
-	glint_camera_init(&r->cam, w, w, fpx * pitch, pitch, 0, 0, v3(0, 0, 0),
-			  v3(0, 0, -1), v3(0, 1, 0));
+	glint_pinhole_init(&r->cam, w, w, fpx * pitch, pitch, 0, 0, v3(0, 0, 0),
+			   v3(0, 0, -1), v3(0, 1, 0));
 	glint_tracer_new(&r->tr);
 	glint_tracer_add_sphere(r->tr, v3(0, 0, -0.5), 0.05, GLINT_SPHERE_USER);
 	glint_tracer_commit(r->tr);
@@ -81,7 +82,7 @@ static void make_rig(struct rig *r, int w, int spp, struct glint_image *map)
 	      glint_error_msg());
 }
 
-static void free_rig(struct rig *r)
+static void free_rig(struct glint_rig *r)
 {
 	glint_gbuffer_free(&r->gb);
 	glint_tracer_free(r->tr);
@@ -107,7 +108,7 @@ static int covered(const struct glint_gbuffer *gb, int i)
 
 static void test_furnace(void)
 {
-	struct rig r;
+	struct glint_rig r;
 	struct glint_dielectric_cache c;
 	make_rig(&r, 24, 4, const_map(1));
 	int n = 24 * 24, worst_i = -1;
@@ -144,7 +145,7 @@ static void test_furnace(void)
  * (1 for T = 1: nothing is lost). */
 /* One primary sample straight down the axis (0, 0, -1) onto the sphere's
  * front pole. */
-static void axis_rig(struct rig *r, struct glint_image *map)
+static void axis_rig(struct glint_rig *r, struct glint_image *map)
 {
 	static struct glint_hit hit = {
 		{ 0, 0, -0.45f }, { 0, 0, 1 }, { 0, 0, -1 }, 0
@@ -162,7 +163,7 @@ static void axis_rig(struct rig *r, struct glint_image *map)
 
 static void test_axis(void)
 {
-	struct rig r;
+	struct glint_rig r;
 	struct glint_dielectric_cache c;
 	axis_rig(&r, const_map(1));
 	int32_t pix[1] = { 0 };
@@ -207,7 +208,7 @@ static void test_axis(void)
 /* The cut-off's effect, measured: 1e-4 (the default) against 1e-7. */
 static void test_cutoff(void)
 {
-	struct rig r;
+	struct glint_rig r;
 	struct glint_dielectric_cache a, b;
 	struct glint_dielectric_opts o;
 	struct glint_image *m = glint_image_new(128, 64);

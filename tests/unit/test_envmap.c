@@ -4,9 +4,9 @@
 #include "test.h"
 
 #include "core/error.h"
-#include "fit/envmap.h"
-#include "fit/irradiance.h"
-#include "fit/sampling.h"
+#include "fit/scene/envmap.h"
+#include "fit/render/irradiance.h"
+#include "fit/render/sampling.h"
 
 /* A synthetic map with a small bright "sun", a sky gradient, dark ground. */
 static struct glint_envmap *make_env(int w, int h, const double rot[3])

@@ -3,7 +3,7 @@
 #include "test.h"
 
 #include "core/error.h"
-#include "fit/lm.h"
+#include "fit/optim/lm.h"
 
 static int rosenbrock(void *ctx, const double *p, double *r)
 {

@@ -5,9 +5,9 @@
 #include "test.h"
 
 #include "core/error.h"
-#include "fit/microfacet.h"
-#include "fit/model.h"
-#include "fit/sampling.h"
+#include "fit/brdf/microfacet.h"
+#include "fit/brdf/model.h"
+#include "fit/render/sampling.h"
 
 static void test_beckmann_normalised(void)
 {

@@ -4,7 +4,7 @@
 #include "test.h"
 
 #include "core/error.h"
-#include "fit/render.h"
+#include "fit/render/render.h"
 
 static struct glint_envmap *constant_env(double l)
 {
@@ -17,16 +17,16 @@ static struct glint_envmap *constant_env(double l)
 }
 
 /* Camera at the origin looking down -Z; fpx pixels of focal length. */
-static void make_camera(struct glint_camera *cam, int w, int h, double fpx,
+static void make_camera(struct glint_pinhole *cam, int w, int h, double fpx,
 			double fnum, double focus)
 {
 	double pitch = 1e-5;
-	glint_camera_init(cam, w, h, fpx * pitch, pitch, fnum, focus,
-			  v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
+	glint_pinhole_init(cam, w, h, fpx * pitch, pitch, fnum, focus,
+			   v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
 }
 
 struct setup {
-	struct glint_camera cam;
+	struct glint_pinhole cam;
 	struct glint_tracer *t;
 	struct glint_gbuffer gb;
 };
@@ -178,14 +178,14 @@ static void test_silhouette(void)
 	struct glint_ellipse e;
 	int w = 200, h = 150;
 	make_camera(&s.cam, w, h, 260, 0, 0);
-	CHECK(glint_camera_sphere_ellipse(&s.cam, c, r, &e) == 0, "%s",
+	CHECK(glint_pinhole_sphere_ellipse(&s.cam, c, r, &e) == 0, "%s",
 	      glint_error_msg());
 	CHECK(e.a > e.b * 1.01,
 	      "off-axis silhouette should be elongated: "
 	      "a %g b %g",
 	      e.a, e.b);
 	/* The circle (centre, tangential radius) gives back the centre. */
-	glint_camera_sphere_from_circle(&s.cam, e.cx, e.cy, e.b, r, &back);
+	glint_pinhole_sphere_from_circle(&s.cam, e.cx, e.cy, e.b, r, &back);
 	CHECK(v3_len(v3_sub(back, c)) < 1e-9, "circle -> 3-D off by %g m",
 	      v3_len(v3_sub(back, c)));
 
@@ -364,8 +364,9 @@ static void test_sample_pattern(void)
 				glint_pixel_sample(x, y, k, 5, pix, lens);
 				outside += pix[0] < 0 || pix[0] >= 1 ||
 					   pix[1] < 0 || pix[1] >= 1;
-				glint_camera_ray(&s.cam, x + pix[0], y + pix[1],
-						 lens[0], lens[1], &o, &d);
+				glint_pinhole_ray(&s.cam, x + pix[0],
+						  y + pix[1], lens[0], lens[1],
+						  &o, &d);
 				const float *g =
 					s.gb.hits[(y * 20 + x) * 5 + k].d;
 				bad += fabs(g[0] - d.x) > 1e-6 ||

@@ -3,7 +3,7 @@
 #include "test.h"
 
 #include "core/error.h"
-#include "fit/scene.h"
+#include "fit/scene/scene.h"
 
 #include <jansson.h>
 

@@ -8,12 +8,12 @@
  * angles in degrees; pixel coordinates with (0, 0) the top-left corner.
  */
 
-#include "camera.h"
+#include "pinhole.h"
 
 #define GLINT_PATH_MAX 4096
 
 struct glint_scene {
-	struct glint_camera cam;
+	struct glint_pinhole cam;
 	struct vec3 sphere_centre;     /* metres, world */
 	double sphere_radius;	       /* metres */
 	char env_path[GLINT_PATH_MAX]; /* resolved against the scene's dir */

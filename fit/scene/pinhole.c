@@ -1,14 +1,14 @@
 /* SPDX-License-Identifier: MIT */
-#include "camera.h"
+#include "pinhole.h"
 
 #include "core/error.h"
 
 #include <math.h>
 
-int glint_camera_init(struct glint_camera *cam, int width, int height,
-		      double focal_m, double pitch_m, double f_number,
-		      double focus_m, struct vec3 pos, struct vec3 look_at,
-		      struct vec3 up)
+int glint_pinhole_init(struct glint_pinhole *cam, int width, int height,
+		       double focal_m, double pitch_m, double f_number,
+		       double focus_m, struct vec3 pos, struct vec3 look_at,
+		       struct vec3 up)
 {
 	struct vec3 fwd = v3_norm(v3_sub(look_at, pos));
 	struct vec3 right = v3_cross(fwd, up);
@@ -52,8 +52,8 @@ static void concentric_disk(double u, double v, double *x, double *y)
 	*y = r * sin(phi);
 }
 
-void glint_camera_ray(const struct glint_camera *cam, double px, double py,
-		      double lu, double lv, struct vec3 *org, struct vec3 *dir)
+void glint_pinhole_ray(const struct glint_pinhole *cam, double px, double py,
+		       double lu, double lv, struct vec3 *org, struct vec3 *dir)
 {
 	double x = (px - cam->cx) / cam->fpx, y = -(py - cam->cy) / cam->fpx;
 	struct vec3 d = v3_add(cam->fwd, v3_add(v3_scale(cam->right, x),
@@ -74,8 +74,8 @@ void glint_camera_ray(const struct glint_camera *cam, double px, double py,
 	*dir = v3_norm(v3_sub(focus, *org));
 }
 
-int glint_camera_project(const struct glint_camera *cam, struct vec3 p,
-			 double *px, double *py)
+int glint_pinhole_project(const struct glint_pinhole *cam, struct vec3 p,
+			  double *px, double *py)
 {
 	struct vec3 q = v3_sub(p, cam->pos);
 	double z = v3_dot(q, cam->fwd);
@@ -95,9 +95,9 @@ int glint_camera_project(const struct glint_camera *cam, struct vec3 p,
  * and tangential semi-axis f sin(a) / sqrt(k), where
  * k = cos^2(beta) - sin^2(alpha).
  */
-int glint_camera_sphere_ellipse(const struct glint_camera *cam,
-				struct vec3 centre, double radius,
-				struct glint_ellipse *out)
+int glint_pinhole_sphere_ellipse(const struct glint_pinhole *cam,
+				 struct vec3 centre, double radius,
+				 struct glint_ellipse *out)
 {
 	struct vec3 q = v3_sub(centre, cam->pos);
 	double d = v3_len(q);
@@ -132,9 +132,9 @@ int glint_camera_sphere_ellipse(const struct glint_camera *cam,
 	return 0;
 }
 
-int glint_camera_sphere_from_circle(const struct glint_camera *cam, double cx,
-				    double cy, double b, double radius,
-				    struct vec3 *centre)
+int glint_pinhole_sphere_from_circle(const struct glint_pinhole *cam, double cx,
+				     double cy, double b, double radius,
+				     struct vec3 *centre)
 {
 	double f = cam->fpx;
 	double dx = cx - cam->cx, dy = cy - cam->cy;

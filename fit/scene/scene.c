@@ -84,10 +84,10 @@ static int load_camera(const char *file, json_t *o, struct glint_scene *s)
 				       "%s: camera.f_number = %g needs "
 				       "camera.focus_distance_m (a number > 0)",
 				       file, fnum);
-	ret = glint_camera_init(&s->cam, w, h, focal * 1e-3, pitch_m, fnum,
-				focus, v3(pos[0], pos[1], pos[2]),
-				v3(at[0], at[1], at[2]),
-				v3(up[0], up[1], up[2]));
+	ret = glint_pinhole_init(&s->cam, w, h, focal * 1e-3, pitch_m, fnum,
+				 focus, v3(pos[0], pos[1], pos[2]),
+				 v3(at[0], at[1], at[2]),
+				 v3(up[0], up[1], up[2]));
 	if (ret < 0)
 		return glint_error_prefix(ret, "%s", file);
 	return 0;
@@ -139,7 +139,7 @@ static int load_sphere(const char *file, json_t *o, struct glint_scene *s)
 			ret = glint_json_number(file, "sphere.circle_px",
 						circle, "r", 1, positive, &r);
 		if (!ret)
-			ret = glint_camera_sphere_from_circle(
+			ret = glint_pinhole_sphere_from_circle(
 				&s->cam, cx, cy, r, s->sphere_radius,
 				&s->sphere_centre);
 		if (ret < 0)

@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-#ifndef GLINT_FIT_CAMERA_H
-#define GLINT_FIT_CAMERA_H
+#ifndef GLINT_FIT_SCENE_PINHOLE_H
+#define GLINT_FIT_SCENE_PINHOLE_H
 
 /*
  * Pinhole camera, with an optional thin lens for depth of field.
@@ -11,7 +11,7 @@
 
 #include "core/vec.h"
 
-struct glint_camera {
+struct glint_pinhole {
 	int width, height;
 	double fpx;		/* focal length in pixels */
 	double cx, cy;		/* principal point, pixels */
@@ -25,22 +25,23 @@ struct glint_camera {
  * pinhole, pose from position / look-at / up.  Returns -EINVAL if the pose
  * is degenerate (up parallel to the view direction).
  */
-int glint_camera_init(struct glint_camera *cam, int width, int height,
-		      double focal_m, double pitch_m, double f_number,
-		      double focus_m, struct vec3 pos, struct vec3 look_at,
-		      struct vec3 up);
+int glint_pinhole_init(struct glint_pinhole *cam, int width, int height,
+		       double focal_m, double pitch_m, double f_number,
+		       double focus_m, struct vec3 pos, struct vec3 look_at,
+		       struct vec3 up);
 
 /*
  * The ray through image point (px, py) (pixel coordinates, continuous);
  * (lu, lv) in [0, 1)^2 pick the point on the lens (ignored for a pinhole).
  * dir is unit length.
  */
-void glint_camera_ray(const struct glint_camera *cam, double px, double py,
-		      double lu, double lv, struct vec3 *org, struct vec3 *dir);
+void glint_pinhole_ray(const struct glint_pinhole *cam, double px, double py,
+		       double lu, double lv, struct vec3 *org,
+		       struct vec3 *dir);
 
 /* Project a world point; returns 0 if it is in front of the camera. */
-int glint_camera_project(const struct glint_camera *cam, struct vec3 p,
-			 double *px, double *py);
+int glint_pinhole_project(const struct glint_pinhole *cam, struct vec3 p,
+			  double *px, double *py);
 
 /* The pinhole image of a sphere: an ellipse (a circle on the axis). */
 struct glint_ellipse {
@@ -50,9 +51,9 @@ struct glint_ellipse {
 };
 
 /* Silhouette of the sphere (centre, radius) through the pinhole model. */
-int glint_camera_sphere_ellipse(const struct glint_camera *cam,
-				struct vec3 centre, double radius,
-				struct glint_ellipse *out);
+int glint_pinhole_sphere_ellipse(const struct glint_pinhole *cam,
+				 struct vec3 centre, double radius,
+				 struct glint_ellipse *out);
 
 /*
  * Inverse: the 3-D centre of a sphere of known radius whose silhouette is
@@ -60,8 +61,8 @@ int glint_camera_sphere_ellipse(const struct glint_camera *cam,
  * sphere on the axis), exact for the pinhole model (the silhouette is the
  * section of the tangent cone by the image plane).
  */
-int glint_camera_sphere_from_circle(const struct glint_camera *cam, double cx,
-				    double cy, double b, double radius,
-				    struct vec3 *centre);
+int glint_pinhole_sphere_from_circle(const struct glint_pinhole *cam, double cx,
+				     double cy, double b, double radius,
+				     struct vec3 *centre);
 
 #endif

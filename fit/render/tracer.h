@@ -8,7 +8,7 @@
  * re-shades).  Build: _new, _add_*, _commit; then trace.
  */
 
-#include "camera.h"
+#include "fit/scene/pinhole.h"
 
 #include "core/log.h"
 
@@ -52,8 +52,9 @@ struct glint_gbuffer {
  * samples for a thin lens) with rtcIntersect16 packets on nthreads threads
  * (0 = all CPUs).  progress may be NULL.  Free with glint_gbuffer_free().
  */
-int glint_tracer_primary(struct glint_tracer *t, const struct glint_camera *cam,
-			 int spp, int nthreads, struct glint_progress *progress,
+int glint_tracer_primary(struct glint_tracer *t,
+			 const struct glint_pinhole *cam, int spp, int nthreads,
+			 struct glint_progress *progress,
 			 struct glint_gbuffer *gb);
 void glint_gbuffer_free(struct glint_gbuffer *gb);
 

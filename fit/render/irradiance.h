@@ -12,7 +12,7 @@
  * texels integrated elsewhere) are left out.
  */
 
-#include "envmap.h"
+#include "fit/scene/envmap.h"
 
 struct glint_irradiance {
 	int w, h;

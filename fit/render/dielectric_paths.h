@@ -24,7 +24,7 @@
  *   I_c = 1/spp * sum over paths  w * T_c^(L / d) * L_env,c.
  */
 
-#include "envmap.h"
+#include "fit/scene/envmap.h"
 #include "tracer.h"
 
 #include "core/image.h"

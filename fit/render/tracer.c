@@ -382,7 +382,7 @@ void glint_pixel_sample(int x, int y, int s, int spp, double pix[2],
 
 struct primary_job {
 	struct glint_tracer *t;
-	const struct glint_camera *cam;
+	const struct glint_pinhole *cam;
 	struct glint_gbuffer *gb;
 	struct glint_progress *progress;
 	struct pixel_pattern pattern;
@@ -469,9 +469,9 @@ static void primary_rows(void *ctx, int y0, int y1, int thread)
 				struct vec3 o, d;
 				pattern_sample(&job->pattern, &ps, s, pix,
 					       lens);
-				glint_camera_ray(job->cam, x + pix[0],
-						 y + pix[1], lens[0], lens[1],
-						 &o, &d);
+				glint_pinhole_ray(job->cam, x + pix[0],
+						  y + pix[1], lens[0], lens[1],
+						  &o, &d);
 				set_lane(&rh, count, o, d);
 				valid[count] = -1;
 				dst[count] = &gb->hits[((size_t)y * gb->width +
@@ -491,8 +491,9 @@ static void primary_rows(void *ctx, int y0, int y1, int thread)
 		flush_packet(job->t, &rh, valid, count, dst);
 }
 
-int glint_tracer_primary(struct glint_tracer *t, const struct glint_camera *cam,
-			 int spp, int nthreads, struct glint_progress *progress,
+int glint_tracer_primary(struct glint_tracer *t,
+			 const struct glint_pinhole *cam, int spp, int nthreads,
+			 struct glint_progress *progress,
 			 struct glint_gbuffer *gb)
 {
 	struct primary_job job = { t, cam, gb, progress, { 0 } };

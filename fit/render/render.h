@@ -12,9 +12,9 @@
  * scene is not a single convex sphere.
  */
 
-#include "envmap.h"
-#include "model.h"
-#include "scene.h"
+#include "fit/scene/envmap.h"
+#include "fit/brdf/model.h"
+#include "fit/scene/scene.h"
 #include "tracer.h"
 
 #include "core/image.h"

@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: MIT */
-#include "dielectric.h"
+#include "dielectric_paths.h"
 
 #include "core/error.h"
 #include "core/parallel.h"

@@ -26,8 +26,8 @@
  * coarse subset of it).
  */
 
-#include "envmap.h"
-#include "model.h"
+#include "fit/scene/envmap.h"
+#include "fit/brdf/model.h"
 #include "tracer.h"
 
 struct glint_shade_cache;

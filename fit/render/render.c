@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 #include "render.h"
-#include "dielectric.h"
+#include "dielectric_paths.h"
 
 #include "sampling.h"
 

@@ -5,16 +5,15 @@
  * every message names the file, the key and what was expected.
  */
 #define _POSIX_C_SOURCE 200809L
-#include "rig_config.h"
+#include "rig.h"
 
 #include "core/error.h"
 
-#include <libgen.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-const char *const rig_step_names[RIG_STEP_COUNT] = {
+const char *const glint_rig_step_names[GLINT_RIG_STEP_COUNT] = {
 	"lights on",
 	"lights off",
 	"turntable probe",
@@ -23,18 +22,6 @@ const char *const rig_step_names[RIG_STEP_COUNT] = {
 	"capture sample",
 	"fit",
 };
-
-/* A path in the rig file, relative to the file's folder. */
-static void resolve(const char *rigpath, const char *p, char *out, size_t n)
-{
-	char dir[4096];
-	if (p[0] == '/') {
-		snprintf(out, n, "%s", p);
-		return;
-	}
-	snprintf(dir, sizeof(dir), "%s", rigpath);
-	snprintf(out, n, "%s/%s", dirname(dir), p);
-}
 
 static int load_line(const char *path, const char *where, json_t *o,
 		     struct glint_line_cfg *l)
@@ -75,19 +62,18 @@ static int load_line(const char *path, const char *where, json_t *o,
 	return 0;
 }
 
-static int load_board(const char *path, struct rig *r)
+static int load_board(const char *path, struct glint_rig *r)
 {
-	static const char *const keys[] = { "backend",	   "lines",
-					    "debounce_ms", "turntable",
-					    "scenario",	   "log",
-					    NULL };
+	static const char *const common[] = { "backend", "lines", "debounce_ms",
+					      "turntable" };
+	const char *keys[16];
 	static const char *const tt_keys[] = { "mode",	    "steps_per_turn",
 					       "step_hz",   "relay_pulse_s",
 					       "probe_deg", "sample_deg",
 					       "settle_s",  NULL };
 	struct glint_board_cfg *c = &r->board;
 	json_t *b = NULL, *lines = NULL, *tt = NULL;
-	const char *backend = NULL, *s = NULL;
+	const char *backend = NULL;
 	double ms = 30;
 	int ret;
 
@@ -96,26 +82,29 @@ static int load_board(const char *path, struct rig *r)
 	if (ret || !b)
 		return ret;
 	r->has_board = 1;
-	ret = glint_json_known_keys(path, "board", b, keys);
-	if (!ret)
-		ret = glint_json_string(path, "board", b, "backend", 1,
-					&backend);
+	c->backend_opts = b;
+	c->rig_file = r->path;
+	ret = glint_json_string(path, "board", b, "backend", 1, &backend);
 	if (!ret)
 		snprintf(c->backend, sizeof(c->backend), "%s", backend);
+	if (!ret) {
+		/* The common keys and those the named backend reads. */
+		const struct glint_board_ops *ops =
+			glint_board_backend(backend);
+		int n = 0;
+		for (size_t i = 0; i < sizeof(common) / sizeof(*common); i++)
+			keys[n++] = common[i];
+		for (int i = 0;
+		     ops && ops->cfg_keys && ops->cfg_keys[i] && n < 15; i++)
+			keys[n++] = ops->cfg_keys[i];
+		keys[n] = NULL;
+		ret = glint_json_known_keys(path, "board", b, keys);
+	}
 	if (!ret)
 		ret = glint_json_number(path, "board", b, "debounce_ms", 0,
 					(struct glint_range){ 0, 1000, 0, 0 },
 					&ms);
 	c->debounce_s = ms / 1000;
-	if (!ret)
-		ret = glint_json_string(path, "board", b, "scenario", 0, &s);
-	if (!ret && s)
-		resolve(path, s, c->scenario, sizeof(c->scenario));
-	s = NULL;
-	if (!ret)
-		ret = glint_json_string(path, "board", b, "log", 0, &s);
-	if (!ret && s)
-		resolve(path, s, c->log, sizeof(c->log));
 	if (!ret)
 		ret = glint_json_object(path, "board", b, "lines", 1, &lines);
 	if (!ret) {
@@ -205,17 +194,17 @@ static int load_board(const char *path, struct rig *r)
 	return ret;
 }
 
-static int load_sequence(const char *path, struct rig *r)
+static int load_sequence(const char *path, struct glint_rig *r)
 {
 	json_t *seq = json_object_get(r->doc, "sequence");
-	static const enum rig_step def[] = {
-		RIG_LIGHTS_ON,
-		RIG_TURNTABLE_PROBE,
-		RIG_CAPTURE_PROBE,
-		RIG_TURNTABLE_SAMPLE,
-		RIG_CAPTURE_SAMPLE,
-		RIG_LIGHTS_OFF,
-		RIG_FIT,
+	static const enum glint_rig_step def[] = {
+		GLINT_RIG_LIGHTS_ON,
+		GLINT_RIG_TURNTABLE_PROBE,
+		GLINT_RIG_CAPTURE_PROBE,
+		GLINT_RIG_TURNTABLE_SAMPLE,
+		GLINT_RIG_CAPTURE_SAMPLE,
+		GLINT_RIG_LIGHTS_OFF,
+		GLINT_RIG_FIT,
 	};
 
 	if (!seq) {
@@ -224,17 +213,18 @@ static int load_sequence(const char *path, struct rig *r)
 		return 0;
 	}
 	if (!json_is_array(seq) || json_array_size(seq) == 0 ||
-	    json_array_size(seq) > RIG_MAX_STEPS)
+	    json_array_size(seq) > GLINT_RIG_MAX_STEPS)
 		return glint_error_set(EINVAL,
 				       "%s: sequence: expected a list of 1..%d "
 				       "steps",
-				       path, RIG_MAX_STEPS);
+				       path, GLINT_RIG_MAX_STEPS);
 	for (size_t i = 0; i < json_array_size(seq); i++) {
 		const char *s = json_string_value(json_array_get(seq, i));
 		int k = 0;
-		while (s && k < RIG_STEP_COUNT && strcmp(s, rig_step_names[k]))
+		while (s && k < GLINT_RIG_STEP_COUNT &&
+		       strcmp(s, glint_rig_step_names[k]))
 			k++;
-		if (!s || k == RIG_STEP_COUNT)
+		if (!s || k == GLINT_RIG_STEP_COUNT)
 			return glint_error_set(
 				EINVAL,
 				"%s: sequence[%zu] = %s: expected one of "
@@ -247,7 +237,7 @@ static int load_sequence(const char *path, struct rig *r)
 	return 0;
 }
 
-int rig_load(const char *path, struct rig *r)
+int glint_rig_load(const char *path, struct glint_rig *r)
 {
 	static const char *const top[] = { "camera", "bracket", "roi",
 					   "output", "sensor",	"optics",
@@ -377,7 +367,7 @@ int rig_load(const char *path, struct rig *r)
 	return ret;
 }
 
-void rig_free(struct rig *r)
+void glint_rig_free(struct glint_rig *r)
 {
 	free(r->text);
 	json_decref(r->doc);

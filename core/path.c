@@ -1,0 +1,78 @@
+/* SPDX-License-Identifier: MIT */
+#define _POSIX_C_SOURCE 200809L
+#include "path.h"
+#include "error.h"
+
+#include <stdarg.h>
+#include <stdlib.h>
+#include <unistd.h>
+#include <stdio.h>
+#include <string.h>
+
+static int too_long(const char *start, size_t n)
+{
+	return glint_error_set(ENAMETOOLONG,
+			       "path too long (over %zu bytes): %.60s...", n,
+			       start);
+}
+
+int glint_path_fmt(char *buf, size_t n, const char *fmt, ...)
+{
+	va_list ap;
+	va_start(ap, fmt);
+	int len = vsnprintf(buf, n, fmt, ap);
+	va_end(ap);
+	if (len < 0 || (size_t)len >= n)
+		return too_long(buf, n);
+	return 0;
+}
+
+int glint_path_join(char *buf, size_t n, const char *dir, const char *name)
+{
+	if (!dir || !dir[0] || name[0] == '/')
+		return glint_path_fmt(buf, n, "%s", name);
+	size_t d = strlen(dir);
+	const char *sep = dir[d - 1] == '/' ? "" : "/";
+	return glint_path_fmt(buf, n, "%s%s%s", dir, sep, name);
+}
+
+int glint_path_dirname(char *buf, size_t n, const char *path)
+{
+	const char *slash = strrchr(path, '/');
+	if (!slash)
+		return glint_path_fmt(buf, n, ".");
+	if (slash == path)
+		return glint_path_fmt(buf, n, "/");
+	return glint_path_fmt(buf, n, "%.*s", (int)(slash - path), path);
+}
+
+int glint_path_resolve(char *buf, size_t n, const char *base, const char *rel)
+{
+	char dir[GLINT_PATH_MAX];
+	if (rel[0] == '/')
+		return glint_path_fmt(buf, n, "%s", rel);
+	int ret = glint_path_dirname(dir, sizeof(dir), base);
+	return ret < 0 ? ret : glint_path_join(buf, n, dir, rel);
+}
+
+const char *glint_data_dir(void)
+{
+	static char exe[GLINT_PATH_MAX];
+	const char *env = getenv("GLINT_DATA_DIR");
+	size_t root = strlen(GLINT_BUILD_ROOT);
+
+	if (env && env[0])
+		return env;
+	ssize_t len = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
+	if (len > 0 && (size_t)len > root) {
+		exe[len] = 0;
+		if (!strncmp(exe, GLINT_BUILD_ROOT, root) && exe[root] == '/')
+			return GLINT_SOURCE_DATA_DIR;
+	}
+	return GLINT_INSTALL_DATA_DIR;
+}
+
+int glint_data_path(char *buf, size_t n, const char *name)
+{
+	return glint_path_join(buf, n, glint_data_dir(), name);
+}

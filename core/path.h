@@ -1,0 +1,44 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_CORE_PATH_H
+#define GLINT_CORE_PATH_H
+
+/*
+ * Paths built into caller-owned buffers.  Every function either writes the
+ * whole path or fails with -ENAMETOOLONG and a message naming the start of
+ * the path that did not fit: a path is never silently cut short.
+ */
+
+#include "error.h"
+
+#include <stddef.h>
+
+/* GLINT_PATH_MAX: the buffer size glint uses for paths (PATH_MAX). */
+#define GLINT_PATH_MAX 4096
+
+/* buf = "dir/name" (just name when dir is NULL or "", or name is
+ * absolute).  Returns 0 or -ENAMETOOLONG. */
+int glint_path_join(char *buf, size_t n, const char *dir, const char *name);
+
+/* buf = printf(fmt, ...); 0 or -ENAMETOOLONG. */
+int glint_path_fmt(char *buf, size_t n, const char *fmt, ...)
+	GLINT_PRINTF(3, 4);
+
+/* A path given relative to the file `base` (a rig or scene file): `rel`
+ * itself when absolute, else base's folder joined with rel. */
+int glint_path_resolve(char *buf, size_t n, const char *base, const char *rel);
+
+/* The folder part of `path` ("." when it has none) into buf. */
+int glint_path_dirname(char *buf, size_t n, const char *path);
+
+/*
+ * The folder of glint's own data (the sim rig's map, Table 1, rig files):
+ * $GLINT_DATA_DIR when set; else the source tree's data/ for a binary run
+ * from its build folder (tests, benches, a checkout), else the installed
+ * one (meson's datadir/glint).  Static storage; no trailing slash.
+ */
+const char *glint_data_dir(void);
+
+/* Into buf: glint_data_dir() joined with name. */
+int glint_data_path(char *buf, size_t n, const char *name);
+
+#endif

@@ -350,7 +350,7 @@ int glint_board_lights(struct glint_board *b, int on)
 /* Edges come in while the line bounces; the press counts when the level
  * is still 1 once no edge has come for debounce_s. */
 int glint_board_wait_press(struct glint_board *b, double timeout_s,
-			   volatile int *cancel)
+			   atomic_int *cancel)
 {
 	double t_end = timeout_s < 0 ? INFINITY : now_s() + timeout_s;
 	struct glint_edge e;
@@ -383,8 +383,7 @@ int glint_board_wait_press(struct glint_board *b, double timeout_s,
 	}
 }
 
-int glint_board_turntable(struct glint_board *b, int which,
-			  volatile int *cancel)
+int glint_board_turntable(struct glint_board *b, int which, atomic_int *cancel)
 {
 	const struct glint_board_cfg *c = &b->cfg;
 	double target = which ? c->sample_deg : c->probe_deg;

@@ -20,6 +20,7 @@
  *   position          optional input: 1 when the probe is in view
  */
 
+#include "core/atomic.h"
 #include "core/error.h"
 
 #include <jansson.h>
@@ -133,14 +134,13 @@ void glint_board_close(struct glint_board *b);
 /* Wait for a debounced press; 1 pressed, 0 timeout (timeout_s < 0:
  * forever) or *cancel set (polled every 50 ms). */
 int glint_board_wait_press(struct glint_board *b, double timeout_s,
-			   volatile int *cancel);
+			   atomic_int *cancel);
 int glint_board_has(const struct glint_board *b, enum glint_role r);
 int glint_board_lights(struct glint_board *b, int on);
 int glint_board_led(struct glint_board *b, enum glint_led pattern);
 /* Turn the turntable to the probe (which = 0) or sample (1) position.
  * No-op without a turntable.  *cancel stops between steps (-ECANCELED). */
-int glint_board_turntable(struct glint_board *b, int which,
-			  volatile int *cancel);
+int glint_board_turntable(struct glint_board *b, int which, atomic_int *cancel);
 /* Lights off, stepper disabled: what SIGTERM and errors leave. */
 void glint_board_safe(struct glint_board *b);
 

@@ -254,7 +254,7 @@ int glint_rig_load(const char *path, struct glint_rig *r)
 
 	memset(r, 0, sizeof(*r));
 	snprintf(r->path, sizeof(r->path), "%s", path);
-	glint_bracket_default_opts(&r->bracket);
+	glint_bracket_default_opts(&r->capture.bracket);
 	r->output = "captures";
 	ret = glint_json_load(path, &r->doc);
 	if (ret < 0)
@@ -266,17 +266,17 @@ int glint_rig_load(const char *path, struct glint_rig *r)
 		ret = glint_json_known_keys(path, "camera", cam, cam_keys);
 	if (!ret)
 		ret = glint_json_string(path, "camera", cam, "backend", 1,
-					&r->backend);
+					&r->capture.backend);
 	if (!ret)
 		ret = glint_json_string(path, "camera", cam, "device", 0,
-					&r->device);
+					&r->capture.device);
 	if (!ret)
 		ret = glint_json_string(path, "", r->doc, "output", 0,
 					&r->output);
 	if (!ret)
 		ret = glint_json_object(path, "", r->doc, "bracket", 0, &br);
 	if (!ret && br) {
-		struct glint_bracket_opts *o = &r->bracket;
+		struct glint_bracket_opts *o = &r->capture.bracket;
 		ret = glint_json_known_keys(path, "bracket", br, br_keys);
 		if (!ret)
 			ret = glint_json_number(
@@ -312,9 +312,9 @@ int glint_rig_load(const char *path, struct glint_rig *r)
 							NULL };
 		static const char *const sample_keys[] = { "diameter_m", NULL };
 		json_t *opt = NULL, *smp = NULL;
-		r->principal[0] = r->principal[1] = -1;
-		r->pitch_um = 1;
-		r->diameter_m = 0.1;
+		r->capture.principal[0] = r->capture.principal[1] = -1;
+		r->capture.pitch_um = 1;
+		r->capture.diameter_m = 0.1;
 		ret = glint_json_object(path, "", r->doc, "sample", 0, &smp);
 		if (!ret && smp)
 			ret = glint_json_known_keys(path, "sample", smp,
@@ -323,7 +323,7 @@ int glint_rig_load(const char *path, struct glint_rig *r)
 			ret = glint_json_number(
 				path, "sample", smp, "diameter_m", 0,
 				(struct glint_range){ 0, 10, 1, 0 },
-				&r->diameter_m);
+				&r->capture.diameter_m);
 		if (!ret)
 			ret = glint_json_object(path, "", r->doc, "optics", 0,
 						&opt);
@@ -334,17 +334,17 @@ int glint_rig_load(const char *path, struct glint_rig *r)
 			ret = glint_json_number(
 				path, "optics", opt, "focal_px", 1,
 				(struct glint_range){ 1, 1e6, 0, 0 },
-				&r->focal_px);
+				&r->capture.focal_px);
 		if (!ret && opt)
 			ret = glint_json_numbers(
 				path, "optics", opt, "principal", 0, 2,
 				(struct glint_range){ 0, 1e5, 0, 0 },
-				r->principal);
+				r->capture.principal);
 		if (!ret && opt)
 			ret = glint_json_number(
 				path, "optics", opt, "pixel_pitch_um", 0,
 				(struct glint_range){ 0, 1000, 1, 0 },
-				&r->pitch_um);
+				&r->capture.pitch_um);
 	}
 	if (!ret)
 		ret = glint_json_object(path, "", r->doc, "roi", 0, &roi);
@@ -355,22 +355,22 @@ int glint_rig_load(const char *path, struct glint_rig *r)
 		ret = glint_json_numbers(
 			path, "roi", roi, k ? "sample" : "probe", 0, 4,
 			(struct glint_range){ 0, 65536, 0, 0 }, v);
-		r->roi[k] = (struct glint_roi){ (int)v[0], (int)v[1], (int)v[2],
-						(int)v[3] };
+		r->capture.roi[k] = (struct glint_roi){ (int)v[0], (int)v[1],
+							(int)v[2], (int)v[3] };
 	}
 	if (!ret)
 		ret = load_board(path, r);
 	if (!ret)
 		ret = load_sequence(path, r);
 	if (!ret)
-		r->text = json_dumps(r->doc, JSON_INDENT(2));
+		r->capture.text = json_dumps(r->doc, JSON_INDENT(2));
 	return ret;
 }
 
 void glint_rig_free(struct glint_rig *r)
 {
-	free(r->text);
+	free(r->capture.text);
 	json_decref(r->doc);
-	r->text = NULL;
+	r->capture.text = NULL;
 	r->doc = NULL;
 }

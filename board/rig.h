@@ -3,8 +3,9 @@
 #define GLINT_BOARD_RIG_H
 
 #include "board.h"
-#include "capture/bracket.h"
+#include "capture/run.h"
 #include "core/json.h"
+#include "core/path.h"
 
 enum glint_rig_step {
 	GLINT_RIG_LIGHTS_ON,
@@ -19,16 +20,13 @@ enum glint_rig_step {
 #define GLINT_RIG_MAX_STEPS 32
 extern const char *const glint_rig_step_names[GLINT_RIG_STEP_COUNT];
 
+/* A loaded rig file; strings point into doc and live as long as it. */
 struct glint_rig {
-	char path[4096];
+	char path[GLINT_PATH_MAX];
 	json_t *doc;
-	char *text;
-	const char *backend, *device, *output;
-	struct glint_bracket_opts bracket;
-	struct glint_roi roi[2];       /* probe, sample */
-	double focal_px, principal[2]; /* optics; 0 = not given */
-	double pitch_um;	       /* optics.pixel_pitch_um */
-	double diameter_m;	       /* sample.diameter_m */
+	const char *output; /* where sessions go */
+	/* camera, bracket, ROIs, optics, sample (text: the file itself) */
+	struct glint_capture_setup capture;
 	int has_board;
 	struct glint_board_cfg board;
 	enum glint_rig_step steps[GLINT_RIG_MAX_STEPS];

@@ -12,6 +12,7 @@
  */
 
 #include "camera.h"
+#include "core/atomic.h"
 
 #define GLINT_BRACKET_MAX 32
 
@@ -33,7 +34,7 @@ struct glint_bracket_opts {
 	int (*on_frame)(const struct glint_frame *f, int index, void *ctx);
 	void *ctx;
 	/* Set (e.g. from a signal handler) to stop: -ECANCELED. */
-	volatile int *cancel;
+	atomic_int *cancel;
 };
 
 void glint_bracket_default_opts(struct glint_bracket_opts *o);

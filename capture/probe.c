@@ -2,6 +2,8 @@
 #include "probe.h"
 
 #include "core/error.h"
+#include "core/formats.h"
+#include "core/path.h"
 #include "fit/scene/pinhole.h"
 #include "fit/scene/envmap.h"
 
@@ -475,4 +477,35 @@ int glint_probe_unwrap(const struct glint_image *photo,
 	else
 		glint_image_free(dn);
 	return 0;
+}
+
+int glint_probe_unwrap_write(const struct glint_image *photo,
+			     const struct glint_unwrap_opts *o,
+			     const char *env_path, int *width, int *height)
+{
+	struct glint_image *env = NULL, *mask = NULL, *dens = NULL;
+	struct glint_write_opts png = { 0, 0, 0 };
+	char path[GLINT_PATH_MAX];
+	int ret = glint_probe_unwrap(photo, o, &env, &mask, &dens);
+
+	if (ret == 0)
+		ret = glint_image_write(env_path, env, NULL);
+	if (ret == 0)
+		ret = glint_path_sibling(path, sizeof(path), env_path,
+					 "-mask.png");
+	if (ret == 0)
+		ret = glint_image_write(path, mask, &png);
+	if (ret == 0)
+		ret = glint_path_sibling(path, sizeof(path), env_path,
+					 "-density.exr");
+	if (ret == 0)
+		ret = glint_image_write(path, dens, NULL);
+	if (ret == 0 && width)
+		*width = env->width;
+	if (ret == 0 && height)
+		*height = env->height;
+	glint_image_free(env);
+	glint_image_free(mask);
+	glint_image_free(dens);
+	return ret;
 }

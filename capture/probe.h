@@ -94,6 +94,16 @@ int glint_probe_unwrap(const struct glint_image *photo,
 		       struct glint_image **env, struct glint_image **mask,
 		       struct glint_image **density);
 
+/*
+ * Unwrap and write the map to env_path, its reliability mask to
+ * ENV-mask.png and its sampling density to ENV-density.exr beside it (ENV:
+ * env_path without its extension), each atomically.  *width, *height (may
+ * be NULL) get the map's size.
+ */
+int glint_probe_unwrap_write(const struct glint_image *photo,
+			     const struct glint_unwrap_opts *o,
+			     const char *env_path, int *width, int *height);
+
 /* Fresnel reflectance of a conductor (n, k) at cos(incidence) c. */
 double glint_fresnel_conductor(double n, double k, double c);
 

@@ -21,6 +21,17 @@
 #include "bracket.h"
 #include "core/error.h"
 
+/* The files of a session folder: the one place their names are spelt. */
+#define GLINT_SESSION_JSON	     "session.json"
+#define GLINT_SESSION_RIG	     "rig.json"
+#define GLINT_SESSION_LOG	     "log.txt"
+#define GLINT_SESSION_ENV	     "env.exr"	  /* probe: the unwrapped map */
+#define GLINT_SESSION_SCENE	     "scene.json" /* sample: what to fit */
+#define GLINT_SESSION_SAMPLE	     "sample.exr" /* sample: merged photo */
+#define GLINT_SESSION_SAMPLE_WEIGHTS "sample-weights.exr"
+#define GLINT_SESSION_FIT	     "fit"	/* the fit's result folder */
+#define GLINT_SESSION_FIT_LOCK	     "fit.lock" /* one fit per session */
+
 struct glint_session;
 
 /* Create the directory and its first session.json ("incomplete").  rig

@@ -38,21 +38,6 @@ int cmd_cameras(int argc, char **argv);
 int cmd_hdr(int argc, char **argv);
 int cmd_probe(int argc, char **argv);
 
-struct glint_frame;
-struct glint_noise_model;
-struct glint_hdr_report;
-struct glint_image;
-/* Merge a raw bracket and write radiance, variance, weights, mask and a
- * preview into folder `out` under names[0..4]; the radiance is handed to
- * *radiance when that is not NULL. */
-int cmd_hdr_merge_write(const struct glint_frame *frames, int n,
-			const struct glint_noise_model *nm, const char *out,
-			const char *const names[5],
-			struct glint_hdr_report *rep, int *width, int *height,
-			long *valid_px, struct glint_image **radiance);
-/* The noise model of a session's rig.json "sensor" section (m keeps its
- * values for what is absent). */
-int cmd_session_noise(const char *dir, struct glint_noise_model *m);
 void cmd_probe_help(void);
 int cmd_rig(int argc, char **argv);
 void cmd_rig_help(void);
@@ -79,6 +64,9 @@ void cmd_print_json(json_t *obj);
 /* Print a fit's parameters (value, standard error; truth and error when
  * truth is not NULL) as a table on stdout. */
 void cmd_print_params(const json_t *doc, const double *truth);
+
+/* A fit's progress on a terminal (struct glint_fit_opts.progress). */
+void cmd_fit_progress(void *ctx, const char *pass, int iter, double cost);
 
 /* Parse a positive int option value; -1 on error (message printed). */
 int cmd_parse_int(const char *cmd, const char *opt, const char *val, int lo,

@@ -6,9 +6,8 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
-#include "capture_run.h"
 
-#include "board/board.h"
+#include "board/daemon.h"
 
 #include "capture/hdr_linear.h"
 #include "capture/probe.h"
@@ -77,8 +76,7 @@ void cmd_cameras_help(void)
 	       "      --json          print JSON on stdout\n");
 }
 
-static volatile sig_atomic_t interrupted;
-static volatile int cancel_flag;
+static atomic_int interrupted, cancel_flag;
 
 static void on_sigint(int sig)
 {
@@ -150,29 +148,14 @@ int cmd_capture(int argc, char **argv)
 	if (!out)
 		out = rig.output;
 
-	struct capture_result res;
+	struct glint_capture_result res;
 	struct sigaction sa, old_int, old_term;
 
 	memset(&sa, 0, sizeof(sa));
 	sa.sa_handler = on_sigint;
 	sigaction(SIGINT, &sa, &old_int);
 	sigaction(SIGTERM, &sa, &old_term);
-	/* A rig with a board: lights on and the turntable to what is being
-	 * captured, lights off after (the board is busy while the rig
-	 * daemon runs: the error says so). */
-	struct glint_board *board = NULL;
-	if (rig.has_board) {
-		ret = glint_board_open(&rig.board, "glint capture", &board);
-		if (ret == 0)
-			ret = glint_board_lights(board, 1);
-		if (ret == 0)
-			ret = glint_board_turntable(board,
-						    strcmp(kind, "sample") == 0,
-						    &cancel_flag);
-	}
-	if (ret == 0)
-		ret = capture_run(&rig, kind, out, probe, &cancel_flag, &res);
-	glint_board_close(board);
+	ret = glint_rig_capture(&rig, kind, out, probe, &cancel_flag, &res);
 	sigaction(SIGINT, &old_int, NULL);
 	sigaction(SIGTERM, &old_term, NULL);
 	glint_rig_free(&rig);

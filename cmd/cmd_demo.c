@@ -7,7 +7,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
-#include "fit_job.h"
+#include "fit/job.h"
 
 #include "core/error.h"
 #include "core/log.h"
@@ -69,7 +69,7 @@ int cmd_demo(int argc, char **argv)
 	};
 	const char *material = "yellow-plastic", *dir = "demo-out";
 	char scene_path[4096], table[4096], photo_path[4200], fit_dir[4200];
-	struct fit_job job = { 0 };
+	struct glint_fit_job job = { 0 };
 	const struct glint_model_ops *model;
 	double truth[GLINT_MAX_PARAMS];
 	int json = 0, noise = 0, c, ret;
@@ -183,7 +183,8 @@ int cmd_demo(int argc, char **argv)
 	job.model = model;
 	job.out_dir = fit_dir;
 	json_t *doc;
-	ret = fit_job_run(&job, &doc);
+	job.opts.progress = cmd_fit_progress;
+	ret = glint_fit_job_run(&job, &doc);
 	if (ret < 0)
 		goto fail;
 	if (json) {

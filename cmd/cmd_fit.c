@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
-#include "fit_job.h"
+#include "fit/job.h"
 
 #include "core/atomic_dir.h"
 #include "core/atomic_file.h"
@@ -118,282 +118,16 @@ void cmd_fit_help(void)
 	       "written), 2 bad command\nline.\n");
 }
 
-static json_t *param_json(const struct glint_fit_result *r)
-{
-	const struct glint_model_ops *m = r->model;
-	json_t *list = json_array();
-
-	for (int k = 0; k < m->nparams; k++) {
-		const struct glint_param *pi = &m->params[k];
-		json_array_append_new(
-			list, json_pack("{s:s,s:f,s:o,s:b,s:[f,f]}", "name",
-					pi->name, "value", r->p[k], "stderr",
-					isfinite(r->se[k]) ? json_real(r->se[k])
-							   : json_null(),
-					"at_bound", r->at_bound[k], "bounds",
-					pi->lo, pi->hi));
-	}
-	return list;
-}
-
-static json_t *passes_json(const struct glint_fit_result *r)
-{
-	json_t *a = json_array();
-
-	for (int i = 0; i < r->npasses; i++) {
-		const struct glint_fit_pass *p = &r->passes[i];
-		json_array_append_new(
-			a,
-			json_pack("{s:s,s:i,s:i,s:i,s:f,s:f,s:f}", "name",
-				  p->name, "pixels", p->pixels, "iterations",
-				  p->iterations, "evaluations", p->evaluations,
-				  "cost_start", p->cost0, "cost_end", p->cost,
-				  "seconds", p->seconds));
-	}
-	return a;
-}
-
-static void fit_progress(void *ctx, const char *pass, int iter, double cost)
+void cmd_fit_progress(void *ctx, const char *pass, int iter, double cost)
 {
 	(void)ctx;
-	if (glint_log_get_mode() == GLINT_LOG_HUMAN && isatty(2))
+	if (glint_log_get_mode() != GLINT_LOG_HUMAN || !isatty(2))
+		return;
+	if (pass)
 		fprintf(stderr, "\rfit: pass %-12s iteration %3d  cost %.6g   ",
 			pass, iter, cost);
-}
-
-/*
- * --model auto: quick fits (about 1000 pixels) of an opaque and a
- * transparent sphere; the one whose render explains the photo better (the
- * lower relative RMSE) is chosen, and the numbers say why.
- */
-static int pick_model(struct glint_renderer *r, const struct fit_job *job,
-		      const struct glint_fit_opts *base,
-		      const struct glint_model_ops **out, json_t **why)
-{
-	const struct glint_model_ops *cand[2] = { &glint_model_torrance_sparrow,
-						  &glint_model_dielectric };
-	double err[2];
-	struct glint_fit_opts o = *base;
-	o.max_pixels = 1024;
-	o.progress = NULL;
-	for (int i = 0; i < 2; i++) {
-		struct glint_fit_result fr;
-		int ret =
-			glint_fit(r, cand[i], job->photo, job->weight, &o, &fr);
-		if (ret < 0)
-			return glint_error_prefix(
-				ret, "--model auto: trying %s", cand[i]->name);
-		err[i] = fr.rel_rmse;
-	}
-	int k = err[1] < err[0];
-	*out = cand[k];
-	*why = json_pack("{s:s, s:f, s:f}", "chosen", cand[k]->name,
-			 "torrance_sparrow_rel_rmse", err[0],
-			 "dielectric_rel_rmse", err[1]);
-	glint_log_info("--model auto: %s (a quick fit leaves a relative RMSE "
-		       "of %.3f as an opaque Torrance-Sparrow sphere, %.3f as "
-		       "a transparent dielectric one: %s)",
-		       cand[k]->name, err[0], err[1],
-		       k ? "the photo shows the map through the sphere"
-			 : "the photo does not show the map through the "
-			   "sphere");
-	return 0;
-}
-
-/*
- * --select-model: the opaque candidates scored by BIC (fit/select.h); the
- * chosen one's fit is the result.
- */
-static int select_model(struct glint_renderer *r, const struct fit_job *job,
-			const struct glint_fit_opts *o,
-			const struct glint_model_ops **model,
-			struct glint_fit_result *res, json_t **why)
-{
-	struct glint_selection *sel = calloc(1, sizeof(*sel));
-	int ret = sel ? glint_select_model(r, job->photo, job->weight, o, sel)
-		      : -ENOMEM;
-	if (ret < 0) {
-		free(sel);
-		return glint_error_prefix(ret, "--select-model");
-	}
-	const struct glint_select_candidate *c = &sel->c[sel->chosen];
-	switch (sel->chosen) {
-	case GLINT_SEL_LAMBERT:
-		ret = glint_fit(r, &glint_model_lambert, job->photo,
-				job->weight, o, res);
-		break;
-	case GLINT_SEL_CONST_FRESNEL:
-		*res = sel->nf;
-		break;
-	default:
-		*res = sel->full;
-		memcpy(res->p, c->p, sizeof(res->p));
-		memcpy(res->se, c->se, sizeof(res->se));
-	}
-	*model = c->model;
-	res->model = c->model;
-	glint_log_info("--select-model: %s", sel->why);
-	*why = glint_selection_to_json(sel);
-	free(sel);
-	return ret;
-}
-
-int fit_job_run(const struct fit_job *job, json_t **result)
-{
-	struct glint_renderer r;
-	struct glint_fit_result res;
-	struct glint_progress prog;
-	struct glint_atomic_dir ad;
-	struct glint_image *img = NULL, *cov = NULL;
-	char path[4300];
-	json_t *fidelity = NULL, *selection = NULL;
-	int ret;
-
-	*result = NULL;
-	glint_progress_start(&prog, "trace", job->scene.cam.height);
-	ret = glint_renderer_init(&r, &job->scene, job->nthreads, &prog);
-	glint_progress_finish(&prog);
-	if (ret < 0)
-		return ret;
-	struct glint_fit_opts o = job->opts;
-	o.nthreads = job->nthreads;
-	o.progress = fit_progress;
-	const struct glint_model_ops *model = job->model;
-	json_t *why = NULL;
-	if (!model) {
-		ret = pick_model(&r, job, &o, &model, &why);
-		if (ret < 0)
-			goto out;
-	}
-	if (job->select && !model->transparent) {
-		ret = select_model(&r, job, &o, &model, &res, &selection);
-		if (ret < 0)
-			goto out;
-	}
-	if (selection)
-		; /* fitted already */
-	else if (job->ladder > 0 && !model->transparent) {
-		struct glint_ladder_result *lr = calloc(1, sizeof(*lr));
-		ret = lr ? glint_ladder_run(&job->scene, model, job->photo,
-					    job->weight, &o, job->ladder,
-					    job->ladder_knobs, job->nthreads,
-					    lr)
-			 : -ENOMEM;
-		if (!ret) {
-			res = lr->chosen_fit;
-			fidelity = glint_ladder_to_json(lr);
-			if (glint_log_get_mode() == GLINT_LOG_HUMAN)
-				glint_ladder_print(lr, stderr);
-		}
-		free(lr);
-	} else
-		ret = glint_fit(&r, model, job->photo, job->weight, &o, &res);
-	if (glint_log_get_mode() == GLINT_LOG_HUMAN && isatty(2))
-		fprintf(stderr, "\r%*s\r", 70, "");
-	if (ret < 0)
-		goto out;
-	/* A photo that does not show the sphere where the scene says fits
-	 * badly whatever the parameters: say so rather than report them. */
-	/* (A transparent sphere's sharp refracted detail aliases: its
-	 * relative RMSE runs higher; docs/fitting.md.) */
-	if (!(res.rel_rmse < (model->transparent ? 3.0 : 0.5))) {
-		ret = glint_error_set(EINVAL,
-				      "%s: the fit leaves a relative RMSE of "
-				      "%.2f on the sphere: the photo does not "
-				      "look like the scene's sphere (wrong "
-				      "scene, position or image?)",
-				      job->photo_path, res.rel_rmse);
-		goto out;
-	}
-	/* The result rendered in full (MIS, the scene's sample counts). */
-	img = glint_image_new(job->scene.cam.width, job->scene.cam.height);
-	cov = glint_image_new(job->scene.cam.width, job->scene.cam.height);
-	if (!img || !cov) {
-		ret = -ENOMEM;
-		goto out;
-	}
-	struct glint_shade_opts so = {
-		.light_samples = job->scene.light_samples,
-		.brdf_samples = job->scene.brdf_samples,
-		.background = 1,
-		.nthreads = job->nthreads,
-	};
-	ret = glint_renderer_shade(&r, model, res.p, &so, img, cov);
-	if (ret < 0)
-		goto out;
-	json_t *doc = json_pack(
-		"{s:s,s:s,s:o,s:o,s:{s:s,s:b,s:b,s:f,s:i,s:i},s:f,s:f,s:f,"
-		"s:i,s:i,s:i,s:o,s:f,s:f,s:{s:s,s:s},s:s}",
-		"model", model->name, "conventions", model->conventions,
-		"material", glint_material_to_json(model, res.p), "parameters",
-		param_json(&res), "method", "name",
-		glint_fit_method_name(o.method), "coarse_to_fine",
-		o.coarse_to_fine, "faithful", o.faithful, "mask_threshold",
-		o.mask_threshold, "light_samples", o.light_samples,
-		"lobe_samples", o.lobe_samples, "cost", res.cost, "rmse",
-		res.rmse, "relative_rmse", res.rel_rmse, "pixels", res.pixels,
-		"interior_pixels", res.interior, "specular_pixels",
-		res.specular_pixels, "passes", passes_json(&res), "seconds",
-		res.seconds, "setup_seconds", res.setup_seconds, "inputs",
-		"scene", job->scene_path, "photo", job->photo_path, "weighting",
-		job->weight			      ? "weight image"
-		: o.weighting == GLINT_WEIGHT_POISSON ? "poisson"
-						      : "uniform");
-	json_object_set_new(doc, "optimizer",
-			    json_string(o.optimizer == GLINT_OPT_LM ? "lm"
-					: o.optimizer == GLINT_OPT_ANNEAL
-						? "anneal"
-						: "auto"));
-	if (why) {
-		json_object_set_new(doc, "model_choice", why);
-		why = NULL;
-	}
-	if (fidelity) {
-		json_object_set_new(doc, "fidelity", fidelity);
-		fidelity = NULL;
-	}
-	if (selection) {
-		json_object_set_new(doc, "model_selection", selection);
-		selection = NULL;
-	}
-	ret = glint_atomic_dir_open(&ad, job->out_dir);
-	if (ret < 0) {
-		json_decref(doc);
-		goto out;
-	}
-	char *text = json_dumps(doc, JSON_INDENT(2) | JSON_REAL_PRECISION(9));
-	ret = glint_atomic_write_file(
-		glint_atomic_dir_file(&ad, "params.json", path, sizeof(path)),
-		text, strlen(text));
-	free(text);
-	if (!ret)
-		ret = glint_image_write(glint_atomic_dir_file(&ad, "render.exr",
-							      path,
-							      sizeof(path)),
-					img, NULL);
-	if (!ret)
-		ret = glint_compare_png(
-			glint_atomic_dir_file(&ad, "compare.png", path,
-					      sizeof(path)),
-			job->photo, img, cov, NULL);
-	if (!ret)
-		ret = glint_atomic_dir_commit(&ad);
 	else
-		glint_atomic_dir_abort(&ad);
-	if (ret < 0) {
-		json_decref(doc);
-		goto out;
-	}
-	json_object_set_new(doc, "output", json_string(job->out_dir));
-	*result = doc;
-out:
-	json_decref(why);
-	json_decref(fidelity);
-	json_decref(selection);
-	glint_image_free(img);
-	glint_image_free(cov);
-	glint_renderer_release(&r);
-	return ret;
+		fprintf(stderr, "\r%*s\r", 70, "");
 }
 
 void cmd_print_params(const json_t *doc, const double *truth)
@@ -554,7 +288,7 @@ int cmd_fit(int argc, char **argv)
 		{ "help", no_argument, NULL, 'h' },
 		{ NULL, 0, NULL, 0 },
 	};
-	struct fit_job job = { .model = &glint_model_torrance_sparrow };
+	struct glint_fit_job job = { .model = &glint_model_torrance_sparrow };
 	const char *weights = NULL;
 	int json = 0, wait = 0, c, n;
 
@@ -726,8 +460,9 @@ int cmd_fit(int argc, char **argv)
 		ret = glint_image_read(job.photo_path, &job.photo);
 	if (!ret && weights)
 		ret = glint_image_read(weights, &job.weight);
+	job.opts.progress = cmd_fit_progress;
 	if (!ret)
-		ret = fit_job_run(&job, &doc);
+		ret = glint_fit_job_run(&job, &doc);
 	glint_image_free(job.photo);
 	glint_image_free(job.weight);
 	glint_lockfile_release(lock);

@@ -9,6 +9,7 @@
 #include "capture/frame_file.h"
 #include "capture/hdr_linear.h"
 #include "capture/hdr_response.h"
+#include "capture/session_merge.h"
 #include "core/formats.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -80,131 +81,6 @@ static int parse_double(const char *opt, const char *v, double lo, double *out)
 			"hdr", "%s '%s': expected a number >= %g", opt, v, lo);
 	*out = d;
 	return 0;
-}
-
-/* The rig's "sensor" section, if the session has one. */
-int cmd_session_noise(const char *dir, struct glint_noise_model *m)
-{
-	static const char *const keys[] = { "dn_per_electron", "read_noise_e",
-					    "saturation_dn", NULL };
-	char path[4200];
-	json_t *rig, *s = NULL;
-	struct stat st;
-	int ret;
-
-	snprintf(path, sizeof(path), "%s/rig.json", dir);
-	if (stat(path, &st) != 0)
-		return 0;
-	ret = glint_json_load(path, &rig);
-	if (ret < 0)
-		return ret;
-	ret = glint_json_object(path, "", rig, "sensor", 0, &s);
-	if (!ret && s)
-		ret = glint_json_known_keys(path, "sensor", s, keys);
-	if (!ret && s)
-		ret = glint_json_number(path, "sensor", s, "dn_per_electron", 0,
-					(struct glint_range){ 0, 1e6, 1, 0 },
-					&m->dn_per_electron);
-	if (!ret && s)
-		ret = glint_json_number(path, "sensor", s, "read_noise_e", 0,
-					(struct glint_range){ 0, 1e6, 0, 0 },
-					&m->read_noise_e);
-	if (!ret && s)
-		ret = glint_json_number(path, "sensor", s, "saturation_dn", 0,
-					(struct glint_range){ 0, 65535, 0, 0 },
-					&m->saturation_dn);
-	json_decref(rig);
-	return ret;
-}
-
-static int load_session(const char *dir, struct glint_frame **frames, int *n)
-{
-	char path[4200];
-	json_t *doc, *list;
-	int ret;
-
-	snprintf(path, sizeof(path), "%s/session.json", dir);
-	ret = glint_json_load(path, &doc);
-	if (ret < 0)
-		return ret;
-	list = json_object_get(doc, "frames");
-	if (!json_is_array(list) || json_array_size(list) == 0) {
-		json_decref(doc);
-		return glint_error_set(EINVAL, "%s: no frames listed", path);
-	}
-	*n = (int)json_array_size(list);
-	*frames = calloc((size_t)*n, sizeof(**frames));
-	if (!*frames) {
-		json_decref(doc);
-		return glint_error_set(ENOMEM, "out of memory");
-	}
-	for (int i = 0; i < *n && ret == 0; i++) {
-		const char *name = json_string_value(json_object_get(
-			json_array_get(list, (size_t)i), "file"));
-		if (!name || strchr(name, '/')) {
-			ret = glint_error_set(EINVAL,
-					      "%s: frames[%d].file: expected a "
-					      "file name in the session",
-					      path, i);
-			break;
-		}
-		snprintf(path, sizeof(path), "%s/%s", dir, name);
-		ret = glint_frame_read(path, &(*frames)[i]);
-	}
-	json_decref(doc);
-	return ret;
-}
-
-static void free_frames(struct glint_frame *f, int n)
-{
-	for (int i = 0; f && i < n; i++)
-		glint_frame_release(&f[i]);
-	free(f);
-}
-
-int cmd_hdr_merge_write(const struct glint_frame *frames, int n,
-			const struct glint_noise_model *nm, const char *out,
-			const char *const names[5],
-			struct glint_hdr_report *rep, int *width, int *height,
-			long *valid_px, struct glint_image **radiance)
-{
-	struct glint_raw_hdr raw;
-	struct glint_image *rad = NULL, *var = NULL, *valid = NULL,
-			   *weights = NULL;
-	int ret = glint_hdr_merge_raw(frames, n, nm, &raw, rep);
-	if (ret == 0)
-		ret = glint_hdr_demosaic(&raw, &rad, &var, &valid);
-	if (ret == 0 && mkdir(out, 0777) < 0 && errno != EEXIST)
-		ret = glint_error_set(errno, "%s: %s", out, strerror(errno));
-	if (ret == 0 && !(weights = glint_image_new(rad->width, rad->height)))
-		ret = glint_error_set(ENOMEM, "out of memory");
-	*valid_px = 0;
-	if (ret == 0) {
-		size_t np = (size_t)rad->width * rad->height * 3;
-		for (size_t i = 0; i < np; i++)
-			weights->data[i] =
-				var->data[i] > 0 ? 1 / var->data[i] : 0;
-		for (size_t i = 0; i < np; i += 3)
-			*valid_px += valid->data[i] > 0;
-		*width = rad->width;
-		*height = rad->height;
-	}
-	char path[4200];
-	struct glint_image *imgs[] = { rad, var, weights, valid, rad };
-	for (int i = 0; i < 5 && ret == 0; i++) {
-		struct glint_write_opts wo = { 0, 0, i == 4 };
-		snprintf(path, sizeof(path), "%s/%s", out, names[i]);
-		ret = glint_image_write(path, imgs[i], &wo);
-	}
-	if (radiance && ret == 0)
-		*radiance = rad;
-	else
-		glint_image_free(rad);
-	glint_image_free(var);
-	glint_image_free(valid);
-	glint_image_free(weights);
-	glint_raw_hdr_release(&raw);
-	return ret;
 }
 
 /* "32", "1/1024", "0.5" */
@@ -438,9 +314,10 @@ int cmd_hdr(int argc, char **argv)
 	int is_session = optind == argc - 1 &&
 			 !(stat(argv[optind], &st) == 0 && S_ISREG(st.st_mode));
 	if (is_session) {
-		ret = cmd_session_noise(argv[optind], &nm);
+		ret = glint_session_noise(argv[optind], &nm);
 		if (ret == 0)
-			ret = load_session(argv[optind], &frames, &n);
+			ret = glint_session_load_frames(argv[optind], &frames,
+							&n);
 		if (!out)
 			out = argv[optind];
 	} else {
@@ -460,8 +337,9 @@ int cmd_hdr(int argc, char **argv)
 	if (!isnan(sat))
 		nm.saturation_dn = sat;
 	if (ret == 0)
-		ret = cmd_hdr_merge_write(frames, n, &nm, out, hdr_names, &rep,
-					  &width, &height, &valid_px, NULL);
+		ret = glint_hdr_merge_write(frames, n, &nm, out, hdr_names,
+					    &rep, &width, &height, &valid_px,
+					    NULL);
 	json_t *res = NULL;
 	if (ret == 0) {
 		json_t *pairs = json_array();
@@ -504,6 +382,6 @@ int cmd_hdr(int argc, char **argv)
 		else
 			json_decref(res);
 	}
-	free_frames(frames, n);
+	glint_frames_free(frames, n);
 	return ret < 0 ? cmd_fail("hdr") : GLINT_EXIT_OK;
 }

@@ -87,15 +87,6 @@ static int parse_list(const char *opt, const char *v, int n, double *out)
 	return 0;
 }
 
-/* ENV.exr -> ENV-suffix */
-static void sibling(const char *path, const char *suffix, char *buf, size_t n)
-{
-	const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
-	size_t stem = dot && (!slash || dot > slash) ? (size_t)(dot - path)
-						     : strlen(path);
-	snprintf(buf, n, "%.*s%s", (int)stem, path, suffix);
-}
-
 static int unwrap_main(int argc, char **argv)
 {
 	enum {
@@ -201,30 +192,15 @@ static int unwrap_main(int argc, char **argv)
 		return cmd_usage_error("probe", "unwrap: --focal-px and --ball "
 						"are required (automatic ball "
 						"detection is to come)");
-	struct glint_image *photo = NULL, *env = NULL, *mask = NULL,
-			   *dens = NULL;
-	char path[4200];
+	struct glint_image *photo = NULL;
+	int w, h;
 	int ret = glint_image_read(argv[optind], &photo);
 	if (ret == 0)
-		ret = glint_probe_unwrap(photo, &o, &env, &mask, &dens);
-	if (ret == 0)
-		ret = glint_image_write(out, env, NULL);
-	if (ret == 0) {
-		sibling(out, "-mask.png", path, sizeof(path));
-		struct glint_write_opts wo = { 0, 0, 0 };
-		ret = glint_image_write(path, mask, &wo);
-	}
-	if (ret == 0) {
-		sibling(out, "-density.exr", path, sizeof(path));
-		ret = glint_image_write(path, dens, NULL);
-	}
+		ret = glint_probe_unwrap_write(photo, &o, out, &w, &h);
 	if (ret == 0)
 		glint_log_info("%s -> %s (%dx%d), mask and density beside it",
-			       argv[optind], out, env->width, env->height);
+			       argv[optind], out, w, h);
 	glint_image_free(photo);
-	glint_image_free(env);
-	glint_image_free(mask);
-	glint_image_free(dens);
 	return ret < 0 ? cmd_fail("probe") : GLINT_EXIT_OK;
 }
 
@@ -295,11 +271,11 @@ static int convert_main(int argc, char **argv)
 /* ENV-mask.png x ENV-density.exr, or NULL when absent. */
 static struct glint_image *view_weight(const char *env)
 {
-	char mp[4200], dp[4200];
+	char mp[GLINT_PATH_MAX], dp[GLINT_PATH_MAX];
 	struct glint_image *m = NULL, *d = NULL;
-	sibling(env, "-mask.png", mp, sizeof(mp));
-	sibling(env, "-density.exr", dp, sizeof(dp));
-	if (glint_image_read(mp, &m) < 0 || glint_image_read(dp, &d) < 0 ||
+	if (glint_path_sibling(mp, sizeof(mp), env, "-mask.png") < 0 ||
+	    glint_path_sibling(dp, sizeof(dp), env, "-density.exr") < 0 ||
+	    glint_image_read(mp, &m) < 0 || glint_image_read(dp, &d) < 0 ||
 	    m->width != d->width || m->height != d->height) {
 		glint_image_free(m);
 		glint_image_free(d);

@@ -6,7 +6,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
-#include "queue_worker.h"
+#include "board/worker.h"
 #include "board/rig.h"
 
 #include "board/queue.h"
@@ -250,7 +250,7 @@ int cmd_sessions(int argc, char **argv)
 	return GLINT_EXIT_OK;
 }
 
-static volatile sig_atomic_t stop_worker;
+static atomic_int stop_worker;
 
 static void on_stop(int sig)
 {
@@ -316,7 +316,8 @@ int cmd_queue(int argc, char **argv)
 		sa.sa_handler = on_stop;
 		sigaction(SIGINT, &sa, NULL);
 		sigaction(SIGTERM, &sa, NULL);
-		int done = queue_work(q.queue, q.until_empty, &stop_worker);
+		int done =
+			glint_queue_work(q.queue, q.until_empty, &stop_worker);
 		if (done < 0)
 			return cmd_fail("queue");
 		return GLINT_EXIT_OK;

@@ -9,9 +9,9 @@
  * without capturing.
  */
 #define _GNU_SOURCE /* pthread_timedjoin_np not used; strsignal */
-#include "capture_run.h"
+#include "capture/run.h"
 #include "cmd.h"
-#include "queue_worker.h"
+#include "board/daemon.h"
 #include "board/rig.h"
 
 #include "board/board.h"
@@ -73,8 +73,7 @@ void cmd_check_rig_help(void)
 	       "first problem.\n");
 }
 
-static volatile sig_atomic_t stop_flag;
-static volatile int cancel_flag;
+static atomic_int stop_flag, cancel_flag;
 
 static void on_signal(int sig)
 {
@@ -83,131 +82,9 @@ static void on_signal(int sig)
 	cancel_flag = 1;
 }
 
-/* The camera must be there before any output is touched. */
-static int check_camera(const struct glint_rig *rig)
+static pid_t start_worker(const char *root, void *ctx)
 {
-	struct glint_camera *cam;
-	struct glint_camera_info in;
-	int ret = glint_camera_open(rig->backend, rig->device, NULL, &cam);
-	if (ret < 0)
-		return glint_error_prefix(ret, "%s: camera", rig->path);
-	glint_camera_describe(cam, &in);
-	glint_camera_close(cam);
-	glint_log_info("camera: %s (%s), %dx%d", in.name, in.backend, in.width,
-		       in.height);
-	return 0;
-}
-
-/* The button during a run: a press cancels it. */
-struct watcher {
-	struct glint_board *board;
-	volatile int done;
-	int pressed;
-};
-
-static void *watch_button(void *arg)
-{
-	struct watcher *w = arg;
-	while (!w->done && !cancel_flag) {
-		int r = glint_board_wait_press(w->board, 0.2, &w->done);
-		if (r == 1) {
-			w->pressed = 1;
-			cancel_flag = 1;
-			glint_log_info("button pressed during the run: "
-				       "cancelling");
-			break;
-		}
-		if (r < 0)
-			break;
-	}
-	return NULL;
-}
-
-struct run_out {
-	char dir[4200];
-	char probe[4096], sample[4096];
-	char job[64];
-};
-
-static int run_sequence(const struct glint_rig *rig, struct glint_board *b,
-			const char *queue, struct run_out *ro)
-{
-	char stamp[32];
-	time_t t = time(NULL);
-	struct tm tm;
-	int ret = 0;
-
-	gmtime_r(&t, &tm);
-	strftime(stamp, sizeof(stamp), "%Y%m%dT%H%M%SZ", &tm);
-	memset(ro, 0, sizeof(*ro));
-	mkdir(rig->output, 0777);
-	snprintf(ro->dir, sizeof(ro->dir), "%s/run-%s", rig->output, stamp);
-	for (int k = 1; mkdir(ro->dir, 0777) < 0; k++) {
-		if (errno != EEXIST || k > 99)
-			return glint_error_set(errno, "%s: %s", ro->dir,
-					       strerror(errno));
-		snprintf(ro->dir, sizeof(ro->dir), "%s/run-%s-%d", rig->output,
-			 stamp, k);
-	}
-	glint_log_info("run %s", ro->dir);
-	for (int i = 0; i < rig->nsteps && ret == 0; i++) {
-		enum glint_rig_step s = rig->steps[i];
-		if (cancel_flag) {
-			ret = glint_error_set(ECANCELED, "run cancelled");
-			break;
-		}
-		glint_log_info("step %d/%d: %s", i + 1, rig->nsteps,
-			       glint_rig_step_names[s]);
-		switch (s) {
-		case GLINT_RIG_LIGHTS_ON:
-		case GLINT_RIG_LIGHTS_OFF:
-			ret = glint_board_lights(b, s == GLINT_RIG_LIGHTS_ON);
-			break;
-		case GLINT_RIG_TURNTABLE_PROBE:
-		case GLINT_RIG_TURNTABLE_SAMPLE:
-			ret = glint_board_turntable(
-				b, s == GLINT_RIG_TURNTABLE_SAMPLE,
-				&cancel_flag);
-			break;
-		case GLINT_RIG_CAPTURE_PROBE:
-		case GLINT_RIG_CAPTURE_SAMPLE: {
-			struct capture_result res;
-			int probe = s == GLINT_RIG_CAPTURE_PROBE;
-			ret = capture_run(rig, probe ? "probe" : "sample",
-					  ro->dir, NULL, &cancel_flag, &res);
-			snprintf(probe ? ro->probe : ro->sample,
-				 sizeof(ro->probe), "%s", res.session);
-			json_decref(res.summary);
-			if (ret == 0 && !probe && !res.scene[0])
-				ret = glint_error_set(
-					EINVAL,
-					"the sample was captured but has no "
-					"scene.json (see the warning above)");
-			break;
-		}
-		case GLINT_RIG_FIT:
-			if (!ro->sample[0]) {
-				ret = glint_error_set(EINVAL,
-						      "%s: sequence: \"fit\" "
-						      "before \"capture "
-						      "sample\"",
-						      rig->path);
-				break;
-			}
-			ret = glint_queue_add(queue, "fit", ro->sample,
-					      ro->job);
-			if (ret == 0)
-				glint_log_info("fit queued: job %s", ro->job);
-			break;
-		default:
-			break;
-		}
-	}
-	return ret;
-}
-
-static pid_t start_worker(const char *root)
-{
+	(void)ctx;
 	char self[4096];
 	ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
 	if (n <= 0)
@@ -227,7 +104,7 @@ static pid_t start_worker(const char *root)
 	return pid;
 }
 
-static void print_result(const struct run_out *ro, int json)
+static void print_result(const struct glint_rig_run *ro, int json)
 {
 	char path[4300];
 	snprintf(path, sizeof(path), "%s/fit/params.json", ro->sample);
@@ -265,7 +142,7 @@ int cmd_rig(int argc, char **argv)
 		{ NULL, 0, NULL, 0 },
 	};
 	const char *config = NULL;
-	char path[4096], queue[4200];
+	char path[GLINT_PATH_MAX];
 	int once = 0, json = 0, worker = 1, c, ret;
 
 	optind = 1;
@@ -309,107 +186,33 @@ int cmd_rig(int argc, char **argv)
 				      "(docs/rig.md)",
 				      path);
 	if (ret == 0)
-		ret = check_camera(&rig);
+		ret = glint_rig_check_camera(&rig);
 	if (ret == 0)
 		ret = glint_board_open(&rig.board, "glint rig", &board);
 	if (ret < 0) {
 		glint_rig_free(&rig);
 		return cmd_fail("rig");
 	}
-	snprintf(queue, sizeof(queue), "%s/queue", rig.output);
-
 	struct sigaction sa;
 	memset(&sa, 0, sizeof(sa));
 	sa.sa_handler = on_signal;
 	sigaction(SIGINT, &sa, NULL);
 	sigaction(SIGTERM, &sa, NULL);
 
-	pid_t wpid = -1;
-	int status = GLINT_EXIT_OK, runs = 0;
-	glint_board_led(board, GLINT_LED_IDLE);
-	glint_log_info("ready: waiting for the capture button (%s board)",
-		       rig.board.backend);
-	while (!stop_flag) {
-		if (wpid > 0 && waitpid(wpid, NULL, WNOHANG) == wpid)
-			wpid = -1;
-		int r = glint_board_wait_press(board, 0.5,
-					       (volatile int *)&stop_flag);
-		if (r < 0) {
-			glint_log_error("%s", glint_error_msg());
-			glint_board_safe(board);
-			glint_board_led(board, GLINT_LED_ERROR);
-			status = GLINT_EXIT_FAIL;
-			break;
-		}
-		if (r == 0)
-			continue;
-		glint_log_info("button pressed: starting a run");
-		glint_board_led(board, GLINT_LED_BUSY);
-		cancel_flag = 0;
-		struct watcher w = { board, 0, 0 };
-		pthread_t th;
-		int watching = pthread_create(&th, NULL, watch_button, &w) == 0;
-		struct run_out ro;
-		ret = run_sequence(&rig, board, queue, &ro);
-		w.done = 1;
-		if (watching)
-			pthread_join(th, NULL);
-		runs++;
-		if (ret < 0) {
-			/* Whatever stopped it, the outputs go safe. */
-			glint_board_safe(board);
-			if (w.pressed || stop_flag) {
-				glint_log_info("run cancelled (%s); sessions "
-					       "kept as incomplete in %s",
-					       w.pressed ? "button" : "signal",
-					       ro.dir);
-				glint_board_led(board, GLINT_LED_IDLE);
-			} else {
-				glint_log_error("run failed: %s",
-						glint_error_msg());
-				glint_board_led(board, GLINT_LED_ERROR);
-			}
-			status = GLINT_EXIT_FAIL;
-		} else {
-			glint_board_led(board, GLINT_LED_DONE);
-			glint_log_info("run complete: %s", ro.dir);
-			status = GLINT_EXIT_OK;
-			if (ro.job[0] && worker && wpid < 0)
-				wpid = start_worker(rig.output);
-		}
-		if (once) {
-			if (wpid > 0) {
-				while (waitpid(wpid, NULL, 0) < 0 &&
-				       errno == EINTR) {
-				}
-				wpid = -1;
-			}
-			if (status == GLINT_EXIT_OK && ro.job[0]) {
-				char fit[4300];
-				struct stat st;
-				snprintf(fit, sizeof(fit), "%s/fit/params.json",
-					 ro.sample);
-				if (worker && stat(fit, &st) < 0) {
-					glint_log_error("the fit of %s failed "
-							"(glint jobs --root "
-							"%s says why)",
-							ro.sample, rig.output);
-					status = GLINT_EXIT_FAIL;
-				}
-			}
-			if (status == GLINT_EXIT_OK)
-				print_result(&ro, json);
-			break;
-		}
-	}
-	if (stop_flag) {
-		glint_log_info("stopping: outputs safe, board released");
-		status = GLINT_EXIT_OK; /* a clean shutdown */
-	}
+	struct glint_rig_serve_opts so = {
+		.once = once,
+		.start_worker = worker ? start_worker : NULL,
+		.stop = &stop_flag,
+		.cancel = &cancel_flag,
+	};
+	struct glint_rig_run ro;
+	ret = glint_rig_serve(&rig, board, &so, &ro);
+	if (ret == 0 && once && !stop_flag)
+		print_result(&ro, json);
 	glint_board_close(board);
 	glint_rig_free(&rig);
-	(void)runs;
-	return status;
+	/* A signal is a clean shutdown, whatever it interrupted. */
+	return ret < 0 && !stop_flag ? GLINT_EXIT_FAIL : GLINT_EXIT_OK;
 }
 
 int cmd_check_rig(int argc, char **argv)
@@ -450,7 +253,7 @@ int cmd_check_rig(int argc, char **argv)
 	struct glint_board *board = NULL;
 	ret = glint_rig_load(path, &rig);
 	if (ret == 0)
-		ret = check_camera(&rig);
+		ret = glint_rig_check_camera(&rig);
 	if (ret == 0 && rig.has_board) {
 		ret = glint_board_open(&rig.board, "glint check-rig", &board);
 		if (ret == 0) {

@@ -36,6 +36,15 @@ int glint_path_join(char *buf, size_t n, const char *dir, const char *name)
 	return glint_path_fmt(buf, n, "%s%s%s", dir, sep, name);
 }
 
+int glint_path_sibling(char *buf, size_t n, const char *path,
+		       const char *suffix)
+{
+	const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
+	size_t stem = dot && (!slash || dot > slash) ? (size_t)(dot - path)
+						     : strlen(path);
+	return glint_path_fmt(buf, n, "%.*s%s", (int)stem, path, suffix);
+}
+
 int glint_path_dirname(char *buf, size_t n, const char *path)
 {
 	const char *slash = strrchr(path, '/');

@@ -27,6 +27,12 @@ int glint_path_fmt(char *buf, size_t n, const char *fmt, ...)
  * itself when absolute, else base's folder joined with rel. */
 int glint_path_resolve(char *buf, size_t n, const char *base, const char *rel);
 
+/* buf = path with its extension replaced by suffix ("env.exr",
+ * "-mask.png" -> "env-mask.png"; a path without extension gets suffix
+ * appended). */
+int glint_path_sibling(char *buf, size_t n, const char *path,
+		       const char *suffix);
+
 /* The folder part of `path` ("." when it has none) into buf. */
 int glint_path_dirname(char *buf, size_t n, const char *path);
 

@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-#ifndef GLINT_FIT_MICROFACET_H
-#define GLINT_FIT_MICROFACET_H
+#ifndef GLINT_FIT_BRDF_MICROFACET_H
+#define GLINT_FIT_BRDF_MICROFACET_H
 
 /* Pieces of the Torrance-Sparrow model, exposed for tests. */
 

@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-#ifndef GLINT_FIT_MODEL_H
-#define GLINT_FIT_MODEL_H
+#ifndef GLINT_FIT_BRDF_MODEL_H
+#define GLINT_FIT_BRDF_MODEL_H
 
 /*
  * Appearance models behind one interface.  A model is a static const ops

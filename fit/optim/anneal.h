@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-#ifndef GLINT_FIT_ANNEAL_H
-#define GLINT_FIT_ANNEAL_H
+#ifndef GLINT_FIT_OPTIM_ANNEAL_H
+#define GLINT_FIT_OPTIM_ANNEAL_H
 
 /*
  * Adaptive simulated annealing (Ingber's ASA, re-implemented: GSL's

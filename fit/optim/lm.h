@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-#ifndef GLINT_FIT_LM_H
-#define GLINT_FIT_LM_H
+#ifndef GLINT_FIT_OPTIM_LM_H
+#define GLINT_FIT_OPTIM_LM_H
 
 /*
  * Bounded Levenberg-Marquardt for small problems (a few to a few dozen

@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-#ifndef GLINT_FIT_COMPARE_H
-#define GLINT_FIT_COMPARE_H
+#ifndef GLINT_FIT_RENDER_COMPARE_H
+#define GLINT_FIT_RENDER_COMPARE_H
 
 #include "core/image.h"
 

@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-#ifndef GLINT_FIT_DIELECTRIC_H
-#define GLINT_FIT_DIELECTRIC_H
+#ifndef GLINT_FIT_RENDER_DIELECTRIC_PATHS_H
+#define GLINT_FIT_RENDER_DIELECTRIC_PATHS_H
 
 /*
  * A transparent sphere: a smooth dielectric interface (exact unpolarised

@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-#ifndef GLINT_FIT_IRRADIANCE_H
-#define GLINT_FIT_IRRADIANCE_H
+#ifndef GLINT_FIT_RENDER_IRRADIANCE_H
+#define GLINT_FIT_RENDER_IRRADIANCE_H
 
 /*
  * Irradiance E(n) = integral of L(w) max(0, n.w) dw over an env map, on a

@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-#ifndef GLINT_FIT_RENDER_H
-#define GLINT_FIT_RENDER_H
+#ifndef GLINT_FIT_RENDER_RENDER_H
+#define GLINT_FIT_RENDER_RENDER_H
 
 /*
  * Shading of a traced G-buffer under a distant environment map:

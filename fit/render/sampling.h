@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-#ifndef GLINT_FIT_SAMPLING_H
-#define GLINT_FIT_SAMPLING_H
+#ifndef GLINT_FIT_RENDER_SAMPLING_H
+#define GLINT_FIT_RENDER_SAMPLING_H
 
 /* Deterministic sample sequences: the same inputs give the same numbers. */
 

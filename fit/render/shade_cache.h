@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-#ifndef GLINT_FIT_SHADE_CACHE_H
-#define GLINT_FIT_SHADE_CACHE_H
+#ifndef GLINT_FIT_RENDER_SHADE_CACHE_H
+#define GLINT_FIT_RENDER_SHADE_CACHE_H
 
 /*
  * The fitter's fast path: trace once, re-shade only.

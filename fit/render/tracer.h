@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-#ifndef GLINT_FIT_TRACER_H
-#define GLINT_FIT_TRACER_H
+#ifndef GLINT_FIT_RENDER_TRACER_H
+#define GLINT_FIT_RENDER_TRACER_H
 
 /*
  * The sample's geometry in an Embree scene, and the primary-ray pass that

@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-#ifndef GLINT_FIT_ENVMAP_H
-#define GLINT_FIT_ENVMAP_H
+#ifndef GLINT_FIT_SCENE_ENVMAP_H
+#define GLINT_FIT_SCENE_ENVMAP_H
 
 /*
  * Distant light as a lat-long (equirectangular) RGB radiance map.

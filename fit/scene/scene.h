@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-#ifndef GLINT_FIT_SCENE_H
-#define GLINT_FIT_SCENE_H
+#ifndef GLINT_FIT_SCENE_SCENE_H
+#define GLINT_FIT_SCENE_SCENE_H
 
 /*
  * A scene file (JSON, docs/scene.md): camera, sphere, environment map and

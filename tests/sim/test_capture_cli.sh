@@ -4,6 +4,7 @@
 # injected faults; every session on disk is checked whole.
 # usage: test_capture_cli.sh GLINT FAKE_V4L2_SO|none CHECK_SESSION_PY
 set -u
+. "$(dirname "$0")/../wait.sh"
 glint=$1
 fake=$2
 checker=$3
@@ -116,13 +117,13 @@ check "... with its ranges" grep -q "exposure manual" "$tmp/out"
 check "cameras --json" run 0 "" cameras --json
 check "... parses" python3 -c "import json; json.load(open('$tmp/out'))"
 
-# Interrupted: real-time sim, SIGINT after a second.
+# Interrupted: real-time sim, SIGINT once the first frame is on disk.
 cat >"$tmp/slow.json" <<JSON
 {"camera": {"backend": "sim", "device": "sim:width=64,height=48"}, "output": "$tmp/slow"}
 JSON
 "$glint" capture sample --config "$tmp/slow.json" -q 2>"$tmp/err" &
 pid=$!
-sleep 1.5
+wait_until 30 exists "$tmp/slow/*/frame-001.png"
 kill -INT $pid
 wait $pid
 st=$?

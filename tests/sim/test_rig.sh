@@ -7,6 +7,7 @@
 # backend.
 # usage: test_rig.sh GLINT DATA_DIR [FAKE_GPIO_LIB|none]
 set -u
+. "$(dirname "$0")/../wait.sh"
 glint=$1
 data=$2
 fakegpio=${3:-none}
@@ -44,14 +45,14 @@ run() { # EXPECTED_STATUS FRAGMENT ARGS...
 # rig NAME PRESSES [W H]: the shipped sim rig, output and log in $tmp.
 rig() {
 	echo "{\"presses\": [$2]}" >"$tmp/$1-press.json"
-	python3 - "$data/rig-sim.json" "$tmp/$1.json" "$tmp/$1" "$tmp/$1-press.json" "$tmp/$1-board.log" "${3:-160}" "${4:-120}" <<'PY'
+	python3 - "$data/rig-sim.json" "$tmp/$1.json" "$tmp/$1" "$tmp/$1-press.json" "$tmp/$1-board.log" "${3:-160}" "${4:-120}" "${5:-0.05}" <<'PY'
 import json, sys
-src, dst, out, press, log, w, h = sys.argv[1:]
+src, dst, out, press, log, w, h, ts = sys.argv[1:]
 r = json.load(open(src))
 r["output"] = out
 r["board"]["scenario"] = press
 r["board"]["log"] = log
-r["camera"]["device"] = "sim:width=%s,height=%s,scene=rig,timescale=0.05" % (w, h)
+r["camera"]["device"] = "sim:width=%s,height=%s,scene=rig,timescale=%s" % (w, h, ts)
 r["optics"]["focal_px"] = 2 * int(w)
 json.dump(r, open(dst, "w"), indent=1)
 PY
@@ -135,7 +136,9 @@ json.dump(r, open('$tmp/pos.json', 'w'))"
 check "position sensor agrees with the moves" run 0 "run complete" rig --config "$tmp/pos.json" --once
 
 # 2. A second press during the run cancels it.
-rig two '{"at_s": 0.3, "hold_s": 0.1}, {"at_s": 1.5, "hold_s": 0.1}'
+# (In camera time: the probe's bracket takes seconds, so the second press
+# lands inside it however loaded the machine is.)
+rig two '{"at_s": 0.3, "hold_s": 0.1}, {"at_s": 1.5, "hold_s": 0.1}' 160 120 1
 check "second press cancels the run" run 1 "cancelled (button)" rig --config "$tmp/two.json" --once
 check "... the probe session is kept, incomplete" bash -c "grep -q '\"status\": \"incomplete\"' '$tmp'/two/run-*/probe-*/session.json"
 check "... no sample captured, no fit queued" bash -c "! ls -d '$tmp'/two/run-*/sample-* 2>/dev/null && ! ls '$tmp'/two/queue/pending/*.json 2>/dev/null"
@@ -145,10 +148,7 @@ check "... outputs safe" final two "lights=0,turntable_enable=0,led=0"
 rig term '{"at_s": 0.2, "hold_s": 0.1}'
 "$glint" rig --config "$tmp/term.json" 2>"$tmp/term.err" &
 pid=$!
-for _ in $(seq 300); do
-	ls "$tmp"/term/run-*/probe-*/frame-001.png >/dev/null 2>&1 && break
-	sleep 0.05
-done
+wait_until 30 exists "$tmp/term/run-*/probe-*/frame-001.png"
 kill -TERM $pid
 wait $pid
 st=$?
@@ -186,14 +186,14 @@ sess=$(ls -d "$tmp"/one/run-*/sample-*)
 check "queue add" run 0 "" queue add "$sess" --root "$tmp/one"
 "$glint" queue run --until-empty --root "$tmp/one" -q &
 wpid=$!
-for _ in $(seq 200); do
-	ls "$tmp"/one/queue/running/*.json >/dev/null 2>&1 && break
-	sleep 0.05
-done
-sleep 0.3
+wait_until 30 exists "$tmp/one/queue/running/*.json"
+# The worker's own child, the fit (this test's processes only).
+wait_until 30 pgrep -P $wpid
+child=$(pgrep -P $wpid)
 kill -KILL $wpid
 wait $wpid 2>/dev/null
-pkill -KILL -f "glint fit $sess" 2>/dev/null
+kill -KILL $child 2>/dev/null
+wait_until 30 bash -c "! kill -0 $child"
 check "killed worker: its job is still listed as running" bash -c "'$glint' jobs --root '$tmp/one' | grep -q ' running '"
 check "a new worker re-runs it" run 0 "put back in the queue" queue run --until-empty --root "$tmp/one"
 check "... and it is done" bash -c "'$glint' jobs --root '$tmp/one' --json | python3 -c 'import json,sys; j=json.load(sys.stdin)[\"jobs\"]; s=[x[\"state\"] for x in j]; print(\"  states\", s); sys.exit(s.count(\"done\") != 2 or \"running\" in s or \"pending\" in s)'"
@@ -204,7 +204,7 @@ check "cancel of an unknown job: named" run 1 "nosuchjob" queue cancel nosuchjob
 
 # The systemd unit is valid (with this build's glint in ExecStart).
 if command -v systemd-analyze >/dev/null; then
-	sed "s#/usr/local/bin/glint#$glint#" "$data/../scripts/systemd/glint-rig.service" >"$tmp/glint-rig.service"
+	sed "s#^ExecStart=[^ ]*glint #ExecStart=$glint #" "$(dirname "$glint")/../glint-rig.service" >"$tmp/glint-rig.service"
 	check "systemd unit verifies" bash -c "systemd-analyze verify '$tmp/glint-rig.service' 2>&1 | tee '$tmp/verify' >&2; ! grep -q . '$tmp/verify'"
 fi
 

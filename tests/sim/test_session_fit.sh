@@ -4,6 +4,7 @@
 # SESSION`, and what must hold when two fits race or one is killed.
 # usage: test_session_fit.sh GLINT
 set -u
+. "$(dirname "$0")/../wait.sh"
 glint=$1
 tmp=$(mktemp -d)
 trap 'kill $(jobs -p) 2>/dev/null; rm -rf "$tmp"' EXIT
@@ -85,10 +86,7 @@ check "a probe session is not fittable: named" run 1 "expected a complete sample
 # --wait it waits and then runs.
 "$glint" fit "$sess" -q --threads 1 --samples 32 &
 pid=$!
-for _ in $(seq 100); do
-	flock -n "$sess/fit.lock" true 2>/dev/null || break
-	sleep 0.05
-done
+wait_until 30 bash -c "! flock -n '$sess/fit.lock' true"
 check "a second fit of the session is refused" run 1 "is being fitted" fit "$sess"
 check "... naming the holder" grep -q "pid $pid" "$tmp/err"
 check "... --wait waits, then fits" run 0 "waiting for it" fit "$sess" --wait
@@ -99,7 +97,7 @@ check "the first fit also completed" test $? = 0
 # whole, and the next fit completes.
 "$glint" fit "$sess" -q --threads 1 --samples 64 &
 pid=$!
-sleep 1
+wait_until 30 bash -c "! flock -n '$sess/fit.lock' true"
 kill -KILL $pid
 wait $pid 2>/dev/null
 check "killed fit: the previous result is intact" python3 -c "import json; json.load(open('$sess/fit/params.json'))"

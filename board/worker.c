@@ -1,0 +1,147 @@
+/* SPDX-License-Identifier: MIT */
+#define _DEFAULT_SOURCE
+#include "worker.h"
+
+#include "queue.h"
+#include "core/error.h"
+#include "core/log.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+static void nap(double s)
+{
+	struct timespec ts = { (time_t)s, (long)((s - (time_t)s) * 1e9) };
+	nanosleep(&ts, NULL);
+}
+
+/* The last non-empty line of a file (the child's error message). */
+static void last_line(const char *path, char *out, size_t n)
+{
+	char line[1024];
+	FILE *f = fopen(path, "r");
+	out[0] = '\0';
+	if (!f)
+		return;
+	while (fgets(line, sizeof(line), f))
+		if (line[0] != '\n') {
+			line[strcspn(line, "\n")] = '\0';
+			snprintf(out, n, "%s", line);
+		}
+	fclose(f);
+}
+
+static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
+{
+	char out[4300], err[4300], self[4096];
+	ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
+
+	if (n <= 0)
+		return glint_queue_finish(
+			queue, job, "failed",
+			json_pack("{s:s}", "error",
+				  "cannot find the glint executable"));
+	self[n] = '\0';
+	snprintf(out, sizeof(out), "%s/running/%s.out", queue, job->id);
+	snprintf(err, sizeof(err), "%s/running/%s.err", queue, job->id);
+	glint_log_info("job %s: fitting %s", job->id, job->session);
+	pid_t pid = fork();
+	if (pid == 0) {
+		int fo = open(out, O_WRONLY | O_CREAT | O_TRUNC, 0666);
+		int fe = open(err, O_WRONLY | O_CREAT | O_TRUNC, 0666);
+		if (fo >= 0)
+			dup2(fo, 1);
+		if (fe >= 0)
+			dup2(fe, 2);
+		execl(self, "glint", "fit", job->session, "--wait", "--json",
+		      (char *)NULL);
+		_exit(127);
+	}
+	if (pid < 0)
+		return glint_queue_finish(
+			queue, job, "failed",
+			json_pack("{s:s}", "error", strerror(errno)));
+	int status = 0, cancelled = 0;
+	for (;;) {
+		pid_t w = waitpid(pid, &status, WNOHANG);
+		if (w == pid || (w < 0 && errno != EINTR))
+			break;
+		if (!cancelled &&
+		    (*stop || glint_queue_cancel_requested(queue, job))) {
+			cancelled = 1 + (*stop != 0);
+			kill(pid, SIGTERM);
+		}
+		nap(0.1);
+	}
+	json_t *res;
+	const char *state;
+	if (cancelled == 2) {
+		/* The worker is stopping: the job goes back to pending for
+		 * the next worker. */
+		glint_job_release(job);
+		glint_queue_recover(queue);
+		unlink(out);
+		unlink(err);
+		return 0;
+	}
+	if (cancelled) {
+		state = "cancelled";
+		res = json_object();
+	} else if (WIFEXITED(status) && WEXITSTATUS(status) == 0) {
+		json_t *doc = json_load_file(out, 0, NULL);
+		state = "done";
+		res = json_pack(
+			"{s:o, s:f*}", "parameters",
+			doc ? json_incref(json_object_get(doc, "parameters"))
+			    : json_null(),
+			"relative_rmse",
+			json_real_value(json_object_get(doc, "relative_rmse")));
+		json_decref(doc);
+	} else {
+		char msg[1024];
+		last_line(err, msg, sizeof(msg));
+		state = "failed";
+		res = json_pack("{s:s, s:i}", "error",
+				msg[0] ? msg : "glint fit failed", "exit",
+				WIFEXITED(status) ? WEXITSTATUS(status)
+						  : 128 + WTERMSIG(status));
+	}
+	glint_log_info("job %s: %s", job->id, state);
+	int ret = glint_queue_finish(queue, job, state, res);
+	unlink(out);
+	unlink(err);
+	return ret;
+}
+
+int glint_queue_work(const char *queue, int until_empty, atomic_int *stop)
+{
+	int ran = 0;
+	int r = glint_queue_recover(queue);
+	if (r > 0)
+		glint_log_info("%d job(s) of a worker that died put back in "
+			       "the queue",
+			       r);
+	while (!*stop) {
+		struct glint_job job;
+		int got = glint_queue_claim(queue, &job);
+		if (got < 0)
+			return got;
+		if (!got) {
+			if (until_empty)
+				break;
+			nap(0.5);
+			continue;
+		}
+		int ret = run_job(queue, &job, stop);
+		if (ret < 0)
+			return ret;
+		ran++;
+	}
+	return ran;
+}

@@ -1,0 +1,232 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * One capture as `glint capture` and the rig daemon run it: a bracket into
+ * a session, merged; a probe unwrapped to env.exr, a sample given its
+ * scene.json.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "run.h"
+
+#include "probe.h"
+#include "scene_file.h"
+#include "session.h"
+#include "session_merge.h"
+#include "sphere_detect.h"
+#include "core/error.h"
+#include "core/log.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* The merged probe -> env.exr (+ env-mask.png, env-density.exr): the ball
+ * found in it, unwrapped with the rig's focal length. */
+static int unwrap_probe(const char *dir, const struct glint_capture_setup *s,
+			const struct glint_image *probe)
+{
+	char path[GLINT_PATH_MAX];
+	struct glint_unwrap_opts o;
+	struct glint_circle c;
+	int ret = glint_sphere_detect(probe, 0, 0, &c);
+
+	if (ret == 0) {
+		glint_unwrap_default_opts(&o);
+		o.fpx = s->focal_px;
+		o.cx = s->principal[0];
+		o.cy = s->principal[1];
+		o.ball_cx = c.cx;
+		o.ball_cy = c.cy;
+		o.ball_r = c.r;
+		glint_log_info("probe ball at (%.2f, %.2f), radius %.2f px "
+			       "(%d edge points, %.2f px rms)",
+			       c.cx, c.cy, c.r, c.points, c.rms_px);
+		ret = glint_path_join(path, sizeof(path), dir,
+				      GLINT_SESSION_ENV);
+	}
+	if (ret == 0)
+		ret = glint_probe_unwrap_write(probe, &o, path, NULL, NULL);
+	if (ret < 0)
+		glint_error_prefix(ret,
+				   "unwrapping the probe (frames and "
+				   "probe.exr kept in %s)",
+				   dir);
+	return ret;
+}
+
+/* A merged sample -> scene.json lit by the probe session's env.exr.  A
+ * missing probe is not the sample's fault: its capture stays complete and
+ * the warning says what to do; a given probe that is wrong is an error. */
+static int sample_scene(const char *dir, const char *root, const char *probe,
+			const struct glint_capture_setup *s,
+			const struct glint_image *rad, char *scene_path,
+			size_t n)
+{
+	char found[GLINT_PATH_MAX];
+	struct glint_scene_optics o = { s->focal_px,
+					{ s->principal[0], s->principal[1] },
+					s->pitch_um,
+					s->diameter_m };
+	int ret = 0;
+
+	if (!probe) {
+		ret = glint_session_latest_probe(root, found, sizeof(found));
+		probe = found;
+	}
+	if (ret == 0)
+		ret = glint_sample_write_scene(dir, rad, &o, probe, NULL);
+	if (ret == 0)
+		return glint_path_join(scene_path, n, dir, GLINT_SESSION_SCENE);
+	if (probe != found)
+		return ret;
+	glint_log_warn("no scene.json for the sample: %s (session "
+		       "%s is complete; glint fit needs a scene)",
+		       glint_error_msg(), dir);
+	return 0;
+}
+
+struct frame_ctx {
+	struct glint_session *session;
+	struct glint_progress progress;
+};
+
+static int save_frame(const struct glint_frame *f, int index, void *ctx)
+{
+	struct frame_ctx *c = ctx;
+	int ret = glint_session_add_frame(c->session, f, index);
+	glint_progress_add(&c->progress, 1);
+	return ret;
+}
+
+/* The bracket into the session, which records the outcome either way
+ * (and is gone after this). */
+static int bracket_into(struct glint_camera *cam,
+			const struct glint_capture_setup *s, const char *kind,
+			struct glint_session *session, atomic_int *cancel,
+			struct glint_bracket *b)
+{
+	struct glint_bracket_opts opts = s->bracket;
+	struct frame_ctx fc = { .session = session };
+	char err[512], dir[GLINT_PATH_MAX];
+
+	opts.on_frame = save_frame;
+	opts.ctx = &fc;
+	opts.cancel = cancel;
+	glint_progress_start(&fc.progress, "frames", opts.max_frames);
+	int ret =
+		glint_bracket_capture(cam, &s->roi[strcmp(kind, "probe") != 0],
+				      &opts, &glint_clock_real, b);
+	glint_progress_finish(&fc.progress);
+	snprintf(err, sizeof(err), "%s", glint_error_msg());
+	snprintf(dir, sizeof(dir), "%s", glint_session_dir(session));
+	int r2 = glint_session_finish(session, b, ret < 0 ? err : NULL);
+	if (ret < 0)
+		return glint_error_set(-ret, "%s (session %s kept, incomplete)",
+				       err, dir);
+	return r2;
+}
+
+/* The merged HDR image of a raw bracket, beside its frames: KIND.exr,
+ * KIND-variance.exr, KIND-weights.exr, KIND-mask.png, KIND.png; then the
+ * probe's unwrap or the sample's scene. */
+static int merge_session(const struct glint_capture_setup *s, const char *kind,
+			 const char *out, const char *probe,
+			 const struct glint_bracket *b,
+			 struct glint_capture_result *res)
+{
+	static const char *const suffix[5] = { ".exr", "-variance.exr",
+					       "-weights.exr", "-mask.png",
+					       ".png" };
+	const char *dir = res->session;
+	char names[5][64];
+	const char *np[5];
+	struct glint_noise_model nm;
+	struct glint_hdr_report rep;
+	struct glint_image *rad = NULL;
+	long valid_px;
+	int w, h, ret;
+
+	for (int i = 0; i < 5; i++) {
+		snprintf(names[i], sizeof(names[i]), "%s%s", kind, suffix[i]);
+		np[i] = names[i];
+	}
+	glint_noise_default(&nm);
+	ret = glint_session_noise(dir, &nm);
+	if (ret == 0)
+		ret = glint_hdr_merge_write(b->frames, b->n, &nm, dir, np, &rep,
+					    &w, &h, &valid_px, &rad);
+	if (ret == 0 && rep.moved)
+		glint_log_warn("the bracket's frames disagree (moved rig or "
+			       "scene?); run glint hdr on the session for "
+			       "details");
+	if (ret < 0)
+		glint_error_prefix(
+			ret, "merging the bracket (frames kept in %s)", dir);
+	if (ret == 0 && !strcmp(kind, "probe") && s->focal_px > 0)
+		ret = unwrap_probe(dir, s, rad);
+	if (ret == 0 && !strcmp(kind, "sample") && s->focal_px > 0)
+		ret = sample_scene(dir, out, probe, s, rad, res->scene,
+				   sizeof(res->scene));
+	glint_image_free(rad);
+	return ret;
+}
+
+static json_t *summary(const char *kind, const struct glint_bracket *b,
+		       const struct glint_capture_result *res)
+{
+	const struct glint_frame *lo = &b->frames[0],
+				 *hi = &b->frames[b->n - 1];
+
+	glint_log_info(
+		"%d frames, %.4g s .. %.4g s (gain up to %.3g) in "
+		"%.1f s%s%s",
+		b->n, lo->exposure_s, hi->exposure_s, hi->gain, b->seconds,
+		b->covered_low && b->covered_high ? ", range covered" : "",
+		b->truncated ? " (stopped by a cap)" : "");
+	return json_pack(
+		"{s:s, s:s, s:s, s:s*, s:i, s:f, s:f, s:f, s:b, s:b, "
+		"s:b, s:b, s:f}",
+		"status", "complete", "kind", kind, "session", res->session,
+		"scene", res->scene[0] ? res->scene : NULL, "frames", b->n,
+		"shortest_s", lo->exposure_s, "longest_s", hi->exposure_s,
+		"max_gain", hi->gain, "covered_low", b->covered_low,
+		"covered_high", b->covered_high, "used_gain", b->used_gain,
+		"truncated", b->truncated, "seconds", b->seconds);
+}
+
+int glint_capture_run(const struct glint_capture_setup *s, const char *kind,
+		      const char *out, const char *probe, atomic_int *cancel,
+		      struct glint_capture_result *res)
+{
+	struct glint_camera *cam = NULL;
+	struct glint_camera_info info;
+	struct glint_session *session = NULL;
+	struct glint_bracket b = { 0 };
+	int ret;
+
+	memset(res, 0, sizeof(*res));
+	ret = glint_camera_open(s->backend, s->device, NULL, &cam);
+	if (ret < 0)
+		goto err_camera;
+	glint_camera_describe(cam, &info);
+	ret = glint_session_create(out, kind, s->text, &info, &session);
+	if (ret < 0)
+		goto err_session;
+	snprintf(res->session, sizeof(res->session), "%s",
+		 glint_session_dir(session));
+	glint_log_info("capturing the %s with %s (%s) into %s", kind, info.name,
+		       info.backend, res->session);
+	ret = bracket_into(cam, s, kind, session, cancel, &b);
+	if (ret < 0)
+		goto err_bracket;
+	if (b.n > 0 && b.frames[0].linear && b.frames[0].channels == 1)
+		ret = merge_session(s, kind, out, probe, &b, res);
+	if (ret == 0 && !(res->summary = summary(kind, &b, res)))
+		ret = glint_error_set(ENOMEM, "out of memory");
+err_bracket:
+	/* The frames are released on every path (they are on disk). */
+	glint_bracket_release(&b);
+err_session:
+	glint_camera_close(cam);
+err_camera:
+	return ret;
+}

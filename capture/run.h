@@ -1,0 +1,50 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_CAPTURE_RUN_H
+#define GLINT_CAPTURE_RUN_H
+
+/*
+ * One capture, as `glint capture` and the rig daemon run it: a bracket
+ * into a new session (every frame on disk before the next), the session
+ * finished complete or incomplete, the merge, and then for a probe the
+ * unwrap to env.exr, for a sample its scene.json lit by a probe session.
+ */
+
+#include "bracket.h"
+#include "core/path.h"
+
+#include "core/atomic.h"
+
+#include <jansson.h>
+
+/* What a capture needs to know of the rig (board/rig.c fills it from the
+ * rig file). */
+struct glint_capture_setup {
+	const char *backend, *device; /* camera */
+	char *text; /* the rig file as recorded in each session (owned by
+		       whoever built the setup) */
+	struct glint_bracket_opts bracket;
+	struct glint_roi roi[2];       /* probe, sample */
+	double focal_px, principal[2]; /* optics; 0 = not given */
+	double pitch_um;	       /* optics.pixel_pitch_um */
+	double diameter_m;	       /* sample.diameter_m */
+};
+
+struct glint_capture_result {
+	char session[GLINT_PATH_MAX]; /* the session folder ("" if none) */
+	char scene[GLINT_PATH_MAX];   /* a sample's scene.json, "" if none */
+	json_t *summary; /* complete: what glint capture --json prints;
+			    the caller owns it (json_decref) */
+};
+
+/*
+ * Capture `kind` ("probe" or "sample") into a new session under `out`;
+ * a sample's scene is lit by the probe session `probe` (NULL: the newest
+ * complete probe session under out).  *cancel (may be NULL) stops it
+ * with -ECANCELED.  On failure the message names the session kept
+ * (incomplete, its frames whole) and res->summary is NULL.
+ */
+int glint_capture_run(const struct glint_capture_setup *setup, const char *kind,
+		      const char *out, const char *probe, atomic_int *cancel,
+		      struct glint_capture_result *res);
+
+#endif

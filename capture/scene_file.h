@@ -1,0 +1,27 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_CAPTURE_SCENE_FILE_H
+#define GLINT_CAPTURE_SCENE_FILE_H
+
+#include "sphere_detect.h"
+#include "core/image.h"
+
+#include <stddef.h>
+
+/* What the rig file says about its optics and sample. */
+struct glint_scene_optics {
+	double focal_px;
+	double principal[2]; /* -1 = the image centre */
+	double pitch_um;
+	double diameter_m;
+};
+
+/* The newest complete probe session with an env.exr under root. */
+int glint_session_latest_probe(const char *root, char *out, size_t n);
+
+/* Find the sphere in the merged sample and write DIR/scene.json lit by
+ * probe_dir's env.exr; *found (may be NULL) gets the circle. */
+int glint_sample_write_scene(const char *dir, const struct glint_image *sample,
+			     const struct glint_scene_optics *o,
+			     const char *probe_dir, struct glint_circle *found);
+
+#endif

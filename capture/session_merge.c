@@ -1,0 +1,146 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * A session's raw bracket merged and written beside its frames (glint
+ * hdr SESSION and every capture): radiance, variance, fit weights, a
+ * validity mask and a preview.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "session_merge.h"
+
+#include "frame_file.h"
+#include "core/error.h"
+#include "core/formats.h"
+#include "core/json.h"
+#include "core/path.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+/* The rig's "sensor" section, if the session has one. */
+int glint_session_noise(const char *dir, struct glint_noise_model *m)
+{
+	static const char *const keys[] = { "dn_per_electron", "read_noise_e",
+					    "saturation_dn", NULL };
+	char path[4200];
+	json_t *rig, *s = NULL;
+	struct stat st;
+	int ret;
+
+	snprintf(path, sizeof(path), "%s/rig.json", dir);
+	if (stat(path, &st) != 0)
+		return 0;
+	ret = glint_json_load(path, &rig);
+	if (ret < 0)
+		return ret;
+	ret = glint_json_object(path, "", rig, "sensor", 0, &s);
+	if (!ret && s)
+		ret = glint_json_known_keys(path, "sensor", s, keys);
+	if (!ret && s)
+		ret = glint_json_number(path, "sensor", s, "dn_per_electron", 0,
+					(struct glint_range){ 0, 1e6, 1, 0 },
+					&m->dn_per_electron);
+	if (!ret && s)
+		ret = glint_json_number(path, "sensor", s, "read_noise_e", 0,
+					(struct glint_range){ 0, 1e6, 0, 0 },
+					&m->read_noise_e);
+	if (!ret && s)
+		ret = glint_json_number(path, "sensor", s, "saturation_dn", 0,
+					(struct glint_range){ 0, 65535, 0, 0 },
+					&m->saturation_dn);
+	json_decref(rig);
+	return ret;
+}
+
+int glint_session_load_frames(const char *dir, struct glint_frame **frames,
+			      int *n)
+{
+	char path[4200];
+	json_t *doc, *list;
+	int ret;
+
+	snprintf(path, sizeof(path), "%s/session.json", dir);
+	ret = glint_json_load(path, &doc);
+	if (ret < 0)
+		return ret;
+	list = json_object_get(doc, "frames");
+	if (!json_is_array(list) || json_array_size(list) == 0) {
+		json_decref(doc);
+		return glint_error_set(EINVAL, "%s: no frames listed", path);
+	}
+	*n = (int)json_array_size(list);
+	*frames = calloc((size_t)*n, sizeof(**frames));
+	if (!*frames) {
+		json_decref(doc);
+		return glint_error_set(ENOMEM, "out of memory");
+	}
+	for (int i = 0; i < *n && ret == 0; i++) {
+		const char *name = json_string_value(json_object_get(
+			json_array_get(list, (size_t)i), "file"));
+		if (!name || strchr(name, '/')) {
+			ret = glint_error_set(EINVAL,
+					      "%s: frames[%d].file: expected a "
+					      "file name in the session",
+					      path, i);
+			break;
+		}
+		snprintf(path, sizeof(path), "%s/%s", dir, name);
+		ret = glint_frame_read(path, &(*frames)[i]);
+	}
+	json_decref(doc);
+	return ret;
+}
+
+void glint_frames_free(struct glint_frame *f, int n)
+{
+	for (int i = 0; f && i < n; i++)
+		glint_frame_release(&f[i]);
+	free(f);
+}
+
+int glint_hdr_merge_write(const struct glint_frame *frames, int n,
+			  const struct glint_noise_model *nm, const char *out,
+			  const char *const names[5],
+			  struct glint_hdr_report *rep, int *width, int *height,
+			  long *valid_px, struct glint_image **radiance)
+{
+	struct glint_raw_hdr raw;
+	struct glint_image *rad = NULL, *var = NULL, *valid = NULL,
+			   *weights = NULL;
+	int ret = glint_hdr_merge_raw(frames, n, nm, &raw, rep);
+	if (ret == 0)
+		ret = glint_hdr_demosaic(&raw, &rad, &var, &valid);
+	if (ret == 0 && mkdir(out, 0777) < 0 && errno != EEXIST)
+		ret = glint_error_set(errno, "%s: %s", out, strerror(errno));
+	if (ret == 0 && !(weights = glint_image_new(rad->width, rad->height)))
+		ret = glint_error_set(ENOMEM, "out of memory");
+	*valid_px = 0;
+	if (ret == 0) {
+		size_t np = (size_t)rad->width * rad->height * 3;
+		for (size_t i = 0; i < np; i++)
+			weights->data[i] =
+				var->data[i] > 0 ? 1 / var->data[i] : 0;
+		for (size_t i = 0; i < np; i += 3)
+			*valid_px += valid->data[i] > 0;
+		*width = rad->width;
+		*height = rad->height;
+	}
+	char path[4200];
+	struct glint_image *imgs[] = { rad, var, weights, valid, rad };
+	for (int i = 0; i < 5 && ret == 0; i++) {
+		struct glint_write_opts wo = { 0, 0, i == 4 };
+		snprintf(path, sizeof(path), "%s/%s", out, names[i]);
+		ret = glint_image_write(path, imgs[i], &wo);
+	}
+	if (radiance && ret == 0)
+		*radiance = rad;
+	else
+		glint_image_free(rad);
+	glint_image_free(var);
+	glint_image_free(valid);
+	glint_image_free(weights);
+	glint_raw_hdr_release(&raw);
+	return ret;
+}

@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# meson install into a DESTDIR, then the installed glint run from outside
+# the source and build trees: its help, check-rig on the installed sim rig
+# and the demo, with its data found in the installed datadir only.
+#   test_install.sh BUILD_DIR PREFIX DATADIR SYSCONFDIR
+set -uo pipefail
+build=$1 prefix=$2 datadir=$3 sysconfdir=$4
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail=0
+check() { # name command...
+	local name=$1
+	shift
+	if "$@" >"$tmp/out" 2>&1; then
+		echo "ok   $name"
+	else
+		echo "FAIL $name"
+		sed 's/^/     /' "$tmp/out" | tail -20
+		fail=1
+	fi
+}
+
+dest=$tmp/dest
+meson install -C "$build" --destdir "$dest" --no-rebuild --quiet >"$tmp/install.log" 2>&1 ||
+	{ cat "$tmp/install.log"; exit 1; }
+bin=$dest$prefix/bin/glint
+data=$dest$prefix/$datadir/glint
+check "binary installed" test -x "$bin"
+check "data installed" test -f "$data/paper-table1.json" -a -f "$data/env/venice_sunset_1k.hdr" -a -f "$data/rig-sim.json"
+check "systemd unit installed, pointing at the installed binary" \
+	grep -q "^ExecStart=$prefix/bin/glint rig --config $sysconfdir/glint/rig.json" "$dest$prefix/lib/systemd/system/glint-rig.service"
+check "example rig file installed" test -f "$dest$sysconfdir/glint/rig.example.json"
+check "docs installed" test -f "$dest$prefix/$datadir/doc/glint/rig.md"
+
+cd "$tmp" || exit 1
+# Without the data where it was installed to, the installed binary must
+# not fall back to the source tree: it names the installed folder.
+if [ ! -d "$prefix/$datadir/glint" ]; then
+	check "installed binary: data from the datadir, not the source tree" \
+		bash -c "'$bin' demo --out '$tmp/d0' -q >'$tmp/d0.log' 2>&1; s=\$?; cat '$tmp/d0.log'; test \$s = 1 && grep -q '$prefix/$datadir/glint' '$tmp/d0.log'"
+fi
+export GLINT_DATA_DIR=$data
+check "installed glint --help" "$bin" --help
+check "installed check-rig on the installed sim rig" "$bin" check-rig --config "$data/rig-sim.json"
+check "installed demo" "$bin" demo --material yellow-plastic --out "$tmp/demo" -q
+check "demo wrote its fit" test -f "$tmp/demo/fit/params.json"
+exit $fail

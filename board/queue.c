@@ -5,6 +5,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/lockfile.h"
+#include "core/path.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -20,15 +21,26 @@
 static const char *const states[] = { "pending", "running", "done", "failed",
 				      "cancelled" };
 
+/* QUEUE/STATE/IDEXT (IDEXT "" for the state's folder): whole or
+ * -ENAMETOOLONG with a message. */
+static int qpath(char *buf, const char *queue, const char *state,
+		 const char *id, const char *ext)
+{
+	return glint_path_fmt(buf, GLINT_PATH_MAX, "%s/%s%s%s%s", queue, state,
+			      id[0] ? "/" : "", id, ext);
+}
+
 int glint_queue_init(const char *queue)
 {
-	char path[4200];
+	char path[GLINT_PATH_MAX];
 
 	if (mkdir(queue, 0777) < 0 && errno != EEXIST)
 		return glint_error_set(errno, "%s: cannot create the queue: %s",
 				       queue, strerror(errno));
 	for (int i = 0; i < 5; i++) {
-		snprintf(path, sizeof(path), "%s/%s", queue, states[i]);
+		int ret = qpath(path, queue, states[i], "", "");
+		if (ret < 0)
+			return ret;
 		if (mkdir(path, 0777) < 0 && errno != EEXIST)
 			return glint_error_set(errno, "%s: %s", path,
 					       strerror(errno));
@@ -62,7 +74,7 @@ int glint_queue_add(const char *queue, const char *kind, const char *session,
 		    char *id_out)
 {
 	static int counter;
-	char id[64], stamp[32], added[32], path[4300];
+	char id[64], stamp[32], added[32], path[GLINT_PATH_MAX];
 	int ret = glint_queue_init(queue);
 
 	if (ret < 0)
@@ -73,8 +85,10 @@ int glint_queue_add(const char *queue, const char *kind, const char *session,
 	json_t *doc = json_pack("{s:s, s:s, s:s, s:s, s:i}", "id", id, "kind",
 				kind, "session", session, "added", added,
 				"added_by_pid", (int)getpid());
-	snprintf(path, sizeof(path), "%s/pending/%s.json", queue, id);
-	ret = doc ? write_job(path, doc) : -ENOMEM;
+	ret = qpath(path, queue, "pending", id, ".json");
+	if (!ret)
+		ret = doc ? write_job(path, doc)
+			  : glint_error_set(ENOMEM, "out of memory");
 	json_decref(doc);
 	if (ret < 0)
 		return ret;
@@ -93,12 +107,14 @@ static int job_name(const struct dirent *e)
 static int load_job(const char *queue, const char *state, const char *file,
 		    struct glint_job *job)
 {
-	char path[4400];
+	char path[GLINT_PATH_MAX];
 	json_error_t err;
 
 	memset(job, 0, sizeof(*job));
 	job->lock_fd = -1;
-	snprintf(path, sizeof(path), "%s/%s/%s", queue, state, file);
+	int ret = qpath(path, queue, state, file, "");
+	if (ret < 0)
+		return ret;
 	job->doc = json_load_file(path, 0, &err);
 	if (!job->doc)
 		return glint_error_set(EINVAL, "%s: %s", path, err.text);
@@ -108,7 +124,12 @@ static int load_job(const char *queue, const char *state, const char *file,
 	const char *k = json_string_value(json_object_get(job->doc, "kind"));
 	const char *s = json_string_value(json_object_get(job->doc, "session"));
 	snprintf(job->kind, sizeof(job->kind), "%s", k ? k : "");
-	snprintf(job->session, sizeof(job->session), "%s", s ? s : "");
+	if (glint_path_fmt(job->session, sizeof(job->session), "%s",
+			   s ? s : "") < 0) {
+		json_decref(job->doc);
+		job->doc = NULL;
+		return glint_error_prefix(ENAMETOOLONG, "%s: session", path);
+	}
 	return 0;
 }
 
@@ -124,12 +145,14 @@ int glint_queue_list(const char *queue,
 		     int (*cb)(const struct glint_job *job, void *ctx),
 		     void *ctx)
 {
-	char dir[4200];
+	char dir[GLINT_PATH_MAX];
 	int stop = 0;
 
 	for (int s = 0; s < 5 && !stop; s++) {
 		struct dirent **names = NULL;
-		snprintf(dir, sizeof(dir), "%s/%s", queue, states[s]);
+		int ret = qpath(dir, queue, states[s], "", "");
+		if (ret < 0)
+			return ret;
 		int n = scandir(dir, &names, job_name, alphasort);
 		if (n < 0) {
 			if (errno == ENOENT)
@@ -156,9 +179,12 @@ int glint_queue_list(const char *queue,
 static int move(const char *queue, const char *id, const char *from,
 		const char *to)
 {
-	char a[4300], b[4300];
-	snprintf(a, sizeof(a), "%s/%s/%s.json", queue, from, id);
-	snprintf(b, sizeof(b), "%s/%s/%s.json", queue, to, id);
+	char a[GLINT_PATH_MAX], b[GLINT_PATH_MAX];
+	int ret = qpath(a, queue, from, id, ".json");
+	if (!ret)
+		ret = qpath(b, queue, to, id, ".json");
+	if (ret < 0)
+		return ret;
 	if (rename(a, b) < 0)
 		return -errno;
 	return 0;
@@ -166,22 +192,27 @@ static int move(const char *queue, const char *id, const char *from,
 
 int glint_queue_cancel(const char *queue, const char *id)
 {
-	char path[4300];
+	char path[GLINT_PATH_MAX];
 	struct stat st;
+	int ret;
 
 	if (strchr(id, '/') || !id[0])
 		return glint_error_set(EINVAL, "job id '%s': not an id", id);
 	if (move(queue, id, "pending", "cancelled") == 0)
-		return 0;
-	snprintf(path, sizeof(path), "%s/running/%s.json", queue, id);
+		return 0; /* it never ran */
+	ret = qpath(path, queue, "running", id, ".json");
+	if (ret < 0)
+		return ret;
 	if (stat(path, &st) == 0) {
-		snprintf(path, sizeof(path), "%s/running/%s.cancel", queue, id);
+		ret = qpath(path, queue, "running", id, ".cancel");
+		if (ret < 0)
+			return ret;
 		int fd = open(path, O_WRONLY | O_CREAT, 0666);
 		if (fd < 0)
 			return glint_error_set(errno, "%s: %s", path,
 					       strerror(errno));
 		close(fd);
-		return 0;
+		return 1; /* running: its worker stops it */
 	}
 	return glint_error_set(ENOENT,
 			       "job %s: not pending or running in %s (glint "
@@ -192,8 +223,9 @@ int glint_queue_cancel(const char *queue, const char *id)
 /* Is running/ID held by a live worker?  Take its lock to find out. */
 static int orphaned(const char *queue, const char *id)
 {
-	char path[4300];
-	snprintf(path, sizeof(path), "%s/running/%s.lock", queue, id);
+	char path[GLINT_PATH_MAX];
+	if (qpath(path, queue, "running", id, ".lock") < 0)
+		return 0;
 	int fd = open(path, O_RDWR | O_CREAT | O_CLOEXEC, 0666);
 	if (fd < 0)
 		return 0;
@@ -204,11 +236,12 @@ static int orphaned(const char *queue, const char *id)
 
 int glint_queue_recover(const char *queue)
 {
-	char dir[4200], path[4300];
+	char dir[GLINT_PATH_MAX], path[GLINT_PATH_MAX];
 	struct dirent **names = NULL;
 	int n, moved = 0;
 
-	snprintf(dir, sizeof(dir), "%s/running", queue);
+	if (qpath(dir, queue, "running", "", "") < 0)
+		return 0;
 	n = scandir(dir, &names, job_name, alphasort);
 	for (int i = 0; i < n; i++) {
 		char id[256];
@@ -217,9 +250,8 @@ int glint_queue_recover(const char *queue)
 		if (orphaned(queue, id) &&
 		    move(queue, id, "running", "pending") == 0) {
 			moved++;
-			snprintf(path, sizeof(path), "%s/running/%s.cancel",
-				 queue, id);
-			unlink(path);
+			if (!qpath(path, queue, "running", id, ".cancel"))
+				unlink(path);
 		}
 		free(names[i]);
 	}
@@ -229,14 +261,16 @@ int glint_queue_recover(const char *queue)
 
 int glint_queue_claim(const char *queue, struct glint_job *job)
 {
-	char dir[4200], path[4300];
+	char dir[GLINT_PATH_MAX], path[GLINT_PATH_MAX];
 	struct dirent **names = NULL;
 	int n, got = 0, ret = glint_queue_init(queue);
 
 	if (ret < 0)
 		return ret;
 	glint_queue_recover(queue);
-	snprintf(dir, sizeof(dir), "%s/pending", queue);
+	ret = qpath(dir, queue, "pending", "", "");
+	if (ret < 0)
+		return ret;
 	n = scandir(dir, &names, job_name, alphasort);
 	if (n < 0)
 		return glint_error_set(errno, "%s: %s", dir, strerror(errno));
@@ -248,9 +282,8 @@ int glint_queue_claim(const char *queue, struct glint_job *job)
 			/* Lock first, then claim: a claimed job is never
 			 * seen unlocked (which would make it "orphaned"). */
 			int fd;
-			snprintf(path, sizeof(path), "%s/running/%s.lock",
-				 queue, id);
-			if (glint_lockfile_acquire(path, "glint queue worker",
+			if (!qpath(path, queue, "running", id, ".lock") &&
+			    glint_lockfile_acquire(path, "glint queue worker",
 						   0, &fd) == 0) {
 				if (move(queue, id, "pending", "running") ==
 					    0 &&
@@ -271,16 +304,17 @@ int glint_queue_claim(const char *queue, struct glint_job *job)
 
 int glint_queue_cancel_requested(const char *queue, const struct glint_job *job)
 {
-	char path[4300];
+	char path[GLINT_PATH_MAX];
 	struct stat st;
-	snprintf(path, sizeof(path), "%s/running/%s.cancel", queue, job->id);
+	if (qpath(path, queue, "running", job->id, ".cancel") < 0)
+		return 0;
 	return stat(path, &st) == 0;
 }
 
 int glint_queue_finish(const char *queue, struct glint_job *job,
 		       const char *state, json_t *result)
 {
-	char path[4300], when[32];
+	char path[GLINT_PATH_MAX], when[32];
 	int ret;
 
 	utc_now(when, sizeof(when), 0);
@@ -289,19 +323,13 @@ int glint_queue_finish(const char *queue, struct glint_job *job,
 	if (result)
 		json_object_update(job->doc, result);
 	json_decref(result);
-	snprintf(path, sizeof(path), "%s/%s/%s.json", queue, state, job->id);
-	ret = write_job(path, job->doc);
-	if (ret == 0) {
-		snprintf(path, sizeof(path), "%s/running/%s.json", queue,
-			 job->id);
-		unlink(path);
-		snprintf(path, sizeof(path), "%s/running/%s.cancel", queue,
-			 job->id);
-		unlink(path);
-		snprintf(path, sizeof(path), "%s/running/%s.lock", queue,
-			 job->id);
-		unlink(path);
-	}
+	ret = qpath(path, queue, state, job->id, ".json");
+	if (!ret)
+		ret = write_job(path, job->doc);
+	for (int i = 0; i < 3 && ret == 0; i++)
+		if (!qpath(path, queue, "running", job->id,
+			   (const char *[]){ ".json", ".cancel", ".lock" }[i]))
+			unlink(path);
 	glint_job_release(job);
 	return ret;
 }

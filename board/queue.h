@@ -20,13 +20,15 @@
  * IDs sort by time added: "YYYYmmddTHHMMSSZ-PID-N".
  */
 
+#include "core/path.h"
+
 #include <jansson.h>
 
 struct glint_job {
 	char id[64];
 	char state[16]; /* pending, running, done, failed, cancelled */
 	char kind[16];	/* "fit" */
-	char session[4096];
+	char session[GLINT_PATH_MAX];
 	json_t *doc; /* the job file */
 	int lock_fd; /* running: the worker's lock */
 };
@@ -45,8 +47,9 @@ int glint_queue_list(const char *queue,
 		     int (*cb)(const struct glint_job *job, void *ctx),
 		     void *ctx);
 
-/* Cancel a pending job (moved to cancelled/) or ask a running one's
- * worker to stop.  -ENOENT names the ID if it is in no such state. */
+/* Cancel a pending job (moved to cancelled/: returns 0) or ask a running
+ * one's worker to stop (returns 1).  -ENOENT names the ID if it is in no
+ * such state. */
 int glint_queue_cancel(const char *queue, const char *id);
 
 /* Put jobs whose worker died back in pending/; returns how many. */

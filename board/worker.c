@@ -5,6 +5,7 @@
 #include "queue.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/path.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -21,7 +22,9 @@ static void nap(double s)
 	nanosleep(&ts, NULL);
 }
 
-/* The last non-empty line of a file (the child's error message). */
+/* The child's error message: the last non-empty line of its stderr, the
+ * text of a JSON log line ({"level": ..., "msg": ...}) rather than the
+ * line itself. */
 static void last_line(const char *path, char *out, size_t n)
 {
 	char line[1024];
@@ -35,21 +38,25 @@ static void last_line(const char *path, char *out, size_t n)
 			snprintf(out, n, "%s", line);
 		}
 	fclose(f);
+	json_t *doc = out[0] == '{' ? json_loads(out, 0, NULL) : NULL;
+	const char *msg = json_string_value(json_object_get(doc, "msg"));
+	if (msg)
+		glint_text(out, n, "%s", msg);
+	json_decref(doc);
 }
 
 static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 {
-	char out[4300], err[4300], self[4096];
-	ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
+	char out[GLINT_PATH_MAX], err[GLINT_PATH_MAX], self[GLINT_PATH_MAX];
 
-	if (n <= 0)
+	if (glint_path_self(self, sizeof(self)) < 0 ||
+	    glint_path_fmt(out, sizeof(out), "%s/running/%s.out", queue,
+			   job->id) < 0 ||
+	    glint_path_fmt(err, sizeof(err), "%s/running/%s.err", queue,
+			   job->id) < 0)
 		return glint_queue_finish(
 			queue, job, "failed",
-			json_pack("{s:s}", "error",
-				  "cannot find the glint executable"));
-	self[n] = '\0';
-	snprintf(out, sizeof(out), "%s/running/%s.out", queue, job->id);
-	snprintf(err, sizeof(err), "%s/running/%s.err", queue, job->id);
+			json_pack("{s:s}", "error", glint_error_msg()));
 	glint_log_info("job %s: fitting %s", job->id, job->session);
 	pid_t pid = fork();
 	if (pid == 0) {

@@ -5,6 +5,7 @@
 #include "frame_file.h"
 
 #include "core/atomic_file.h"
+#include "core/path.h"
 
 #include <fcntl.h>
 #include <jansson.h>
@@ -17,7 +18,7 @@
 #include <unistd.h>
 
 struct glint_session {
-	char dir[4096];
+	char dir[GLINT_PATH_MAX]; /* ROOT/KIND-STAMP[-N], room for its files */
 	json_t *doc;
 	FILE *log;
 };
@@ -47,15 +48,19 @@ static int fsync_path(const char *path)
 
 static int save_doc(struct glint_session *s)
 {
-	char path[4200];
+	char path[GLINT_PATH_MAX];
 	char *text =
 		json_dumps(s->doc, JSON_INDENT(2) | JSON_REAL_PRECISION(17));
 	if (!text)
 		return glint_error_set(ENOMEM, "out of memory");
-	snprintf(path, sizeof(path), "%s/session.json", s->dir);
+	int ret = glint_path_join(path, sizeof(path), s->dir, "session.json");
+	if (ret < 0) {
+		free(text);
+		return ret;
+	}
 	size_t n = strlen(text);
 	text[n] = '\n';
-	int ret = glint_atomic_write_file(path, text, n + 1);
+	ret = glint_atomic_write_file(path, text, n + 1);
 	free(text);
 	return ret;
 }
@@ -84,10 +89,17 @@ int glint_session_create(const char *root, const char *kind,
 			 struct glint_session **out)
 {
 	struct glint_session *s;
-	char stamp[32], path[4200];
+	char stamp[32], path[GLINT_PATH_MAX];
 	int ret;
 
 	*out = NULL;
+	/* Room for "/probe-YYYYmmddTHHMMSSZ-999/frame-000.json": every
+	 * path in the session then fits whole. */
+	if (strlen(root) + 64 >= GLINT_PATH_MAX)
+		return glint_error_set(ENAMETOOLONG,
+				       "capture root %.64s...: longer than %d "
+				       "bytes",
+				       root, GLINT_PATH_MAX - 64);
 	if (mkdir(root, 0777) < 0 && errno != EEXIST)
 		return glint_error_set(errno, "capture root %s: %s", root,
 				       strerror(errno));
@@ -120,12 +132,15 @@ int glint_session_create(const char *root, const char *kind,
 	if (!s->doc && ret == 0)
 		ret = glint_error_set(ENOMEM, "out of memory");
 	if (ret == 0 && rig_json) {
-		snprintf(path, sizeof(path), "%s/rig.json", s->dir);
-		ret = glint_atomic_write_file(path, rig_json, strlen(rig_json));
+		ret = glint_path_join(path, sizeof(path), s->dir, "rig.json");
+		if (ret == 0)
+			ret = glint_atomic_write_file(path, rig_json,
+						      strlen(rig_json));
 	}
 	if (ret == 0)
 		ret = save_doc(s);
-	snprintf(path, sizeof(path), "%s/log.txt", s->dir);
+	if (ret == 0)
+		ret = glint_path_join(path, sizeof(path), s->dir, "log.txt");
 	if (ret == 0 && !(s->log = fopen(path, "a")))
 		ret = glint_error_set(errno, "%s: %s", path, strerror(errno));
 	if (ret < 0) {
@@ -163,21 +178,27 @@ void glint_session_log(struct glint_session *s, const char *fmt, ...)
 int glint_session_add_frame(struct glint_session *s,
 			    const struct glint_frame *f, int index)
 {
-	char name[32], path[4200];
+	char name[32], json_name[32], path[GLINT_PATH_MAX];
 	char *meta = glint_frame_metadata_json(f, index);
 	int ret;
 
 	if (!meta)
 		return glint_error_set(ENOMEM, "out of memory");
 	snprintf(name, sizeof(name), "frame-%03d.png", index);
-	snprintf(path, sizeof(path), "%s/%s", s->dir, name);
-	ret = glint_frame_write(path, f, meta);
+	ret = glint_path_join(path, sizeof(path), s->dir, name);
+	if (ret == 0)
+		ret = glint_frame_write(path, f, meta);
 	if (ret == 0) {
-		snprintf(path, sizeof(path), "%s/frame-%03d.json", s->dir,
+		snprintf(json_name, sizeof(json_name), "frame-%03d.json",
 			 index);
+		ret = glint_path_join(path, sizeof(path), s->dir, json_name);
+	}
+	if (ret == 0) {
 		size_t n = strlen(meta);
 		char *m = realloc(meta, n + 2);
-		if (m) {
+		if (!m) {
+			ret = glint_error_set(ENOMEM, "out of memory");
+		} else {
 			meta = m;
 			meta[n] = '\n';
 			ret = glint_atomic_write_file(path, meta, n + 1);

@@ -20,6 +20,7 @@
 
 #include "bracket.h"
 #include "core/error.h"
+#include "core/path.h"
 
 /* The files of a session folder: the one place their names are spelt. */
 #define GLINT_SESSION_JSON	     "session.json"
@@ -54,5 +55,16 @@ void glint_session_log(struct glint_session *s, const char *fmt, ...)
  * NULL, else "incomplete" with the error.  Frees s. */
 int glint_session_finish(struct glint_session *s, const struct glint_bracket *b,
 			 const char *error);
+
+/* What `glint fit SESSION` fits: a complete sample session's scene,
+ * photo, weights ("" when it has none) and result folder, each a path of
+ * GLINT_PATH_MAX bytes.  Anything else (a probe session, an incomplete
+ * one, one without a scene) is an error saying what it is and what to do:
+ * checked when a fit is queued, not when it runs. */
+struct glint_session_fit {
+	char scene[GLINT_PATH_MAX], photo[GLINT_PATH_MAX];
+	char weights[GLINT_PATH_MAX], out[GLINT_PATH_MAX];
+};
+int glint_session_fit_inputs(const char *dir, struct glint_session_fit *fs);
 
 #endif

@@ -8,6 +8,7 @@
 #include "session_merge.h"
 
 #include "frame_file.h"
+#include "session.h"
 #include "core/error.h"
 #include "core/formats.h"
 #include "core/json.h"
@@ -24,12 +25,14 @@ int glint_session_noise(const char *dir, struct glint_noise_model *m)
 {
 	static const char *const keys[] = { "dn_per_electron", "read_noise_e",
 					    "saturation_dn", NULL };
-	char path[4200];
+	char path[GLINT_PATH_MAX];
 	json_t *rig, *s = NULL;
 	struct stat st;
 	int ret;
 
-	snprintf(path, sizeof(path), "%s/rig.json", dir);
+	ret = glint_path_join(path, sizeof(path), dir, "rig.json");
+	if (ret < 0)
+		return ret;
 	if (stat(path, &st) != 0)
 		return 0;
 	ret = glint_json_load(path, &rig);
@@ -57,11 +60,13 @@ int glint_session_noise(const char *dir, struct glint_noise_model *m)
 int glint_session_load_frames(const char *dir, struct glint_frame **frames,
 			      int *n)
 {
-	char path[4200];
+	char path[GLINT_PATH_MAX];
 	json_t *doc, *list;
 	int ret;
 
-	snprintf(path, sizeof(path), "%s/session.json", dir);
+	ret = glint_path_join(path, sizeof(path), dir, "session.json");
+	if (ret < 0)
+		return ret;
 	ret = glint_json_load(path, &doc);
 	if (ret < 0)
 		return ret;
@@ -86,8 +91,9 @@ int glint_session_load_frames(const char *dir, struct glint_frame **frames,
 					      path, i);
 			break;
 		}
-		snprintf(path, sizeof(path), "%s/%s", dir, name);
-		ret = glint_frame_read(path, &(*frames)[i]);
+		ret = glint_path_join(path, sizeof(path), dir, name);
+		if (!ret)
+			ret = glint_frame_read(path, &(*frames)[i]);
 	}
 	json_decref(doc);
 	return ret;
@@ -127,12 +133,13 @@ int glint_hdr_merge_write(const struct glint_frame *frames, int n,
 		*width = rad->width;
 		*height = rad->height;
 	}
-	char path[4200];
+	char path[GLINT_PATH_MAX];
 	struct glint_image *imgs[] = { rad, var, weights, valid, rad };
 	for (int i = 0; i < 5 && ret == 0; i++) {
 		struct glint_write_opts wo = { 0, 0, i == 4 };
-		snprintf(path, sizeof(path), "%s/%s", out, names[i]);
-		ret = glint_image_write(path, imgs[i], &wo);
+		ret = glint_path_join(path, sizeof(path), out, names[i]);
+		if (!ret)
+			ret = glint_image_write(path, imgs[i], &wo);
 	}
 	if (radiance && ret == 0)
 		*radiance = rad;
@@ -143,4 +150,70 @@ int glint_hdr_merge_write(const struct glint_frame *frames, int n,
 	glint_image_free(weights);
 	glint_raw_hdr_release(&raw);
 	return ret;
+}
+
+int glint_session_fit_inputs(const char *dir, struct glint_session_fit *fs)
+{
+	char path[GLINT_PATH_MAX];
+	struct stat st;
+	json_t *doc;
+	int ret;
+
+	if (stat(dir, &st) < 0 || !S_ISDIR(st.st_mode))
+		return glint_error_set(ENOENT,
+				       "%s: not a capture session folder "
+				       "(give SCENE.json and PHOTO, or a "
+				       "session)",
+				       dir);
+	ret = glint_path_join(path, sizeof(path), dir, GLINT_SESSION_JSON);
+	if (!ret)
+		ret = glint_json_load(path, &doc);
+	if (ret < 0)
+		return ret;
+	const char *status = json_string_value(json_object_get(doc, "status"));
+	const char *kind = json_string_value(json_object_get(doc, "kind"));
+	if (!status || strcmp(status, "complete") != 0 || !kind ||
+	    strcmp(kind, "sample") != 0) {
+		ret = glint_error_set(EINVAL,
+				      "%s: a %s %s session: expected a "
+				      "complete sample session%s",
+				      dir, status ? status : "(no status)",
+				      kind ? kind : "(no kind)",
+				      kind && !strcmp(kind, "probe")
+					      ? " (a probe session is the "
+						"light of a sample's scene; "
+						"fit the sample captured "
+						"after it)"
+					      : "");
+		json_decref(doc);
+		return ret;
+	}
+	json_decref(doc);
+	ret = glint_path_join(fs->scene, sizeof(fs->scene), dir,
+			      GLINT_SESSION_SCENE);
+	if (!ret)
+		ret = glint_path_join(fs->photo, sizeof(fs->photo), dir,
+				      GLINT_SESSION_SAMPLE);
+	if (!ret)
+		ret = glint_path_join(fs->weights, sizeof(fs->weights), dir,
+				      GLINT_SESSION_SAMPLE_WEIGHTS);
+	if (!ret)
+		ret = glint_path_join(fs->out, sizeof(fs->out), dir,
+				      GLINT_SESSION_FIT);
+	if (ret < 0)
+		return ret;
+	if (stat(fs->scene, &st) < 0)
+		return glint_error_set(ENOENT,
+				       "%s: no scene.json (the sample was "
+				       "captured without a probe or optics; "
+				       "capture the probe, then the sample, "
+				       "or write a scene, docs/scene.md)",
+				       dir);
+	if (stat(fs->photo, &st) < 0)
+		return glint_error_set(ENOENT,
+				       "%s: no %s (the bracket was not merged)",
+				       dir, GLINT_SESSION_SAMPLE);
+	if (stat(fs->weights, &st) < 0)
+		fs->weights[0] = '\0';
+	return 0;
 }

@@ -10,6 +10,7 @@
 #include "board/rig.h"
 
 #include "board/queue.h"
+#include "capture/session.h"
 #include "core/error.h"
 #include "core/log.h"
 
@@ -281,16 +282,12 @@ int cmd_queue(int argc, char **argv)
 		if (nargs != 1)
 			return cmd_usage_error("queue",
 					       "add: expected SESSION");
-		struct stat st;
-		char sj[4200];
-		snprintf(sj, sizeof(sj), "%s/session.json", args[0]);
-		if (stat(sj, &st) < 0) {
-			glint_error_set(ENOENT,
-					"%s: not a capture session (no "
-					"session.json)",
-					args[0]);
+		/* What a fit of it needs, checked now rather than when
+		 * the job runs: a probe session, an incomplete one or one
+		 * without a scene is refused with the reason. */
+		struct glint_session_fit fs;
+		if (glint_session_fit_inputs(args[0], &fs) < 0)
 			return cmd_fail("queue");
-		}
 		if (glint_queue_add(q.queue, "fit", args[0], id) < 0)
 			return cmd_fail("queue");
 		if (q.json)
@@ -302,8 +299,19 @@ int cmd_queue(int argc, char **argv)
 	if (!strcmp(what, "cancel")) {
 		if (nargs != 1)
 			return cmd_usage_error("queue", "cancel: expected ID");
-		if (glint_queue_cancel(q.queue, args[0]) < 0)
+		int was_running = glint_queue_cancel(q.queue, args[0]);
+		if (was_running < 0)
 			return cmd_fail("queue");
+		if (q.json)
+			cmd_print_json(json_pack(
+				"{s:s,s:s}", "id", args[0], "cancelled",
+				was_running ? "running (its worker stops it)"
+					    : "pending"));
+		else
+			printf("cancelled %s job %s%s\n",
+			       was_running ? "running" : "pending", args[0],
+			       was_running ? " (its worker stops the fit)"
+					   : "");
 		return GLINT_EXIT_OK;
 	}
 	if (!strcmp(what, "run")) {

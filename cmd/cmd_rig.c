@@ -19,6 +19,7 @@
 #include "capture/camera.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/path.h"
 
 #include <errno.h>
 #include <getopt.h>
@@ -85,11 +86,9 @@ static void on_signal(int sig)
 static pid_t start_worker(const char *root, void *ctx)
 {
 	(void)ctx;
-	char self[4096];
-	ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
-	if (n <= 0)
+	char self[GLINT_PATH_MAX];
+	if (glint_path_self(self, sizeof(self)) < 0)
 		return -1;
-	self[n] = '\0';
 	pid_t pid = fork();
 	if (pid == 0) {
 		const char *mode = glint_log_get_mode() == GLINT_LOG_JSON

@@ -3,6 +3,7 @@
 #include "atomic_dir.h"
 
 #include "error.h"
+#include "path.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -17,6 +18,13 @@
 int glint_atomic_dir_open(struct glint_atomic_dir *ad, const char *path)
 {
 	memset(ad, 0, sizeof(*ad));
+	/* Room for the siblings (".tmp.XXXXXX", ".old.PID") and the files
+	 * inside: every path derived below then fits whole. */
+	if (strlen(path) >= GLINT_ATOMIC_DIR_PATH_MAX)
+		return glint_error_set(ENAMETOOLONG,
+				       "%.64s...: an output folder's path must "
+				       "be shorter than %d bytes",
+				       path, GLINT_ATOMIC_DIR_PATH_MAX);
 	snprintf(ad->final_path, sizeof(ad->final_path), "%s", path);
 	/* Drop trailing slashes so the sibling is next to the folder. */
 	size_t l = strlen(ad->final_path);
@@ -36,23 +44,32 @@ int glint_atomic_dir_open(struct glint_atomic_dir *ad, const char *path)
 const char *glint_atomic_dir_file(const struct glint_atomic_dir *ad,
 				  const char *name, char *buf, unsigned n)
 {
-	snprintf(buf, n, "%s/%s", ad->tmp_path, name);
+	/* A name that does not fit yields a path that cannot be opened
+	 * (the folder itself), never a cut one naming another file. */
+	if (glint_path_join(buf, n, ad->tmp_path, name) < 0)
+		snprintf(buf, n, "%s/", ad->tmp_path);
 	return buf;
 }
 
+/* Remove a folder glint made and the files in it.  A symbolic link in
+ * its place is not followed (its target is someone else's), and the
+ * files are unlinked relative to the folder opened, so nothing outside
+ * it is reached. */
 static void remove_tree(const char *path)
 {
-	DIR *d = opendir(path);
+	int fd = open(path, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+	DIR *d = fd >= 0 ? fdopendir(fd) : NULL;
 	struct dirent *e;
-	char buf[4096];
 
-	if (!d)
+	if (!d) {
+		if (fd >= 0)
+			close(fd);
 		return;
+	}
 	while ((e = readdir(d))) {
 		if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, ".."))
 			continue;
-		snprintf(buf, sizeof(buf), "%s/%s", path, e->d_name);
-		unlink(buf);
+		unlinkat(fd, e->d_name, 0);
 	}
 	closedir(d);
 	rmdir(path);
@@ -69,20 +86,25 @@ static void fsync_path(const char *path)
 
 int glint_atomic_dir_commit(struct glint_atomic_dir *ad)
 {
-	char old[4200], parent[4096];
+	char old[GLINT_PATH_MAX], parent[GLINT_PATH_MAX];
 	struct stat st;
 	int had_old = 0;
 
 	fsync_path(ad->tmp_path);
-	if (stat(ad->final_path, &st) == 0) {
+	/* lstat: a symbolic link in the target's place is not a folder of
+	 * results, and moving it aside would have its target emptied. */
+	if (lstat(ad->final_path, &st) == 0) {
 		if (!S_ISDIR(st.st_mode)) {
 			glint_atomic_dir_abort(ad);
 			return glint_error_set(EEXIST,
 					       "%s exists and is not a folder",
 					       ad->final_path);
 		}
-		snprintf(old, sizeof(old), "%s.old.%ld", ad->final_path,
-			 (long)getpid());
+		if (glint_path_fmt(old, sizeof(old), "%s.old.%ld",
+				   ad->final_path, (long)getpid()) < 0) {
+			glint_atomic_dir_abort(ad);
+			return -ENAMETOOLONG;
+		}
 		if (rename(ad->final_path, old) < 0) {
 			int e = errno;
 			glint_atomic_dir_abort(ad);
@@ -113,12 +135,88 @@ void glint_atomic_dir_abort(struct glint_atomic_dir *ad)
 	ad->tmp_path[0] = '\0';
 }
 
+static int listed(const char *name, const char *const *names)
+{
+	for (int i = 0; names[i]; i++)
+		if (!strcmp(name, names[i]))
+			return 1;
+	return 0;
+}
+
+/* Is `path` the current folder or one of its ancestors? */
+static int holds_cwd(const char *path)
+{
+	char cwd[GLINT_PATH_MAX], real[GLINT_PATH_MAX];
+	size_t n;
+
+	if (!getcwd(cwd, sizeof(cwd)) || !realpath(path, real))
+		return 0;
+	n = strlen(real);
+	if (n == 1) /* "/" */
+		return 1;
+	return !strncmp(cwd, real, n) && (cwd[n] == '/' || cwd[n] == 0);
+}
+
+int glint_atomic_dir_check(const char *path, const char *const *names,
+			   int force)
+{
+	struct stat st;
+	struct dirent *e;
+	char other[256] = "";
+	int others = 0;
+
+	if (lstat(path, &st) < 0)
+		return errno == ENOENT ? 0
+				       : glint_error_set(errno, "%s: %s", path,
+							 strerror(errno));
+	if (S_ISLNK(st.st_mode))
+		return glint_error_set(EEXIST,
+				       "%s is a symbolic link: a result "
+				       "replaces its folder whole, so name "
+				       "the folder itself or a new one",
+				       path);
+	if (!S_ISDIR(st.st_mode))
+		return glint_error_set(EEXIST,
+				       "%s exists and is not a folder: choose "
+				       "another output folder",
+				       path);
+	if (holds_cwd(path))
+		return glint_error_set(EBUSY,
+				       "%s is the current folder or holds it: "
+				       "results replace their folder whole, so "
+				       "name a new one (e.g. -o fit-out)",
+				       path);
+	if (force)
+		return 0;
+	DIR *d = opendir(path);
+	if (!d)
+		return glint_error_set(errno, "%s: %s", path, strerror(errno));
+	while ((e = readdir(d))) {
+		if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, ".."))
+			continue;
+		if (!listed(e->d_name, names) && !others++)
+			glint_text(other, sizeof(other), "%s", e->d_name);
+	}
+	closedir(d);
+	if (others)
+		return glint_error_set(
+			EEXIST,
+			"%s holds files glint did not write ('%s'"
+			"%s): a result replaces its folder "
+			"whole, so it is refused; choose another "
+			"output folder, or --force to replace it",
+			path, other, others > 1 ? " and more" : "");
+	return 0;
+}
+
 int glint_atomic_dir_sweep(const char *path)
 {
-	char dir[4096], base[4096], buf[8400];
+	char dir[GLINT_PATH_MAX], base[GLINT_PATH_MAX], buf[GLINT_PATH_MAX];
 	struct stat st;
 	int restored = 0, removed = 0;
 
+	if (strlen(path) >= GLINT_ATOMIC_DIR_PATH_MAX)
+		return 0; /* never opened, so nothing to sweep */
 	snprintf(dir, sizeof(dir), "%s", path);
 	snprintf(base, sizeof(base), "%s", basename(dir));
 	snprintf(dir, sizeof(dir), "%s", path);
@@ -136,7 +234,8 @@ int glint_atomic_dir_sweep(const char *path)
 		const char *rest = e->d_name + bl;
 		if (strncmp(rest, ".tmp.", 5) && strncmp(rest, ".old.", 5))
 			continue;
-		snprintf(buf, sizeof(buf), "%s/%s", parent, e->d_name);
+		if (glint_path_join(buf, sizeof(buf), parent, e->d_name) < 0)
+			continue;
 		/* Cut between moving the old result aside and putting the
 		 * new one in place: the old one is whole, bring it back. */
 		if (!have_final && !strncmp(rest, ".old.", 5) &&

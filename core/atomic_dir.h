@@ -8,12 +8,17 @@
  * complete (an existing target is moved aside first and removed after).
  */
 
+/* The longest target path accepted (bytes, without the NUL): leaves room
+ * for the siblings' suffixes and the names of the files inside. */
+#define GLINT_ATOMIC_DIR_PATH_MAX 3840
+
 struct glint_atomic_dir {
 	char final_path[4096];
 	char tmp_path[4096];
 };
 
-/* Create the temporary folder for `path`. */
+/* Create the temporary folder for `path`; -ENAMETOOLONG (and nothing
+ * created) when path has GLINT_ATOMIC_DIR_PATH_MAX bytes or more. */
 int glint_atomic_dir_open(struct glint_atomic_dir *ad, const char *path);
 /* Path of file `name` inside the temporary folder (static storage per
  * call site is the caller's: buf of size n). */
@@ -23,6 +28,19 @@ const char *glint_atomic_dir_file(const struct glint_atomic_dir *ad,
 int glint_atomic_dir_commit(struct glint_atomic_dir *ad);
 /* Remove the temporary folder and its files. */
 void glint_atomic_dir_abort(struct glint_atomic_dir *ad);
+/*
+ * May `path` be replaced by a result folder?  Yes when it does not exist,
+ * is an empty folder, or is a previous result: a folder holding only
+ * files named in `names` (NULL-terminated).  A folder
+ * holding anything else (a user's notes, another program's output), a
+ * file, a symbolic link, or the current folder or one holding it is
+ * refused with -EEXIST/-EBUSY and a message, unless force (which still
+ * refuses a non-folder, a link and the current folder).  Checked before any
+ * work, so a refusal costs nothing.
+ */
+int glint_atomic_dir_check(const char *path, const char *const *names,
+			   int force);
+
 /* Clean up after writers that died (SIGKILL, power cut) while writing
  * `path`: their temporary folders are removed, and an old result moved
  * aside but never replaced is put back.  Only for a caller that knows no

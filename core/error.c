@@ -29,8 +29,20 @@ int glint_error_prefix(int code, const char *fmt, ...)
 	vsnprintf(prefix, sizeof(prefix), fmt, ap);
 	va_end(ap);
 	memcpy(old, error_buf, sizeof(old));
-	snprintf(error_buf, sizeof(error_buf), "%s: %s", prefix, old);
+	glint_text(error_buf, sizeof(error_buf), "%s: %s", prefix, old);
 	return code > 0 ? -code : code;
+}
+
+char *glint_text(char *buf, size_t n, const char *fmt, ...)
+{
+	va_list ap;
+
+	va_start(ap, fmt);
+	int len = vsnprintf(buf, n, fmt, ap);
+	va_end(ap);
+	if (len >= 0 && (size_t)len >= n && n > 4)
+		memcpy(buf + n - 4, "...", 4);
+	return buf;
 }
 
 const char *glint_error_msg(void)

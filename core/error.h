@@ -11,6 +11,7 @@
  */
 
 #include <errno.h>
+#include <stddef.h>
 
 #if defined(__GNUC__)
 #define GLINT_PRINTF(a, b) __attribute__((format(printf, a, b)))
@@ -23,6 +24,13 @@ int glint_error_set(int code, const char *fmt, ...) GLINT_PRINTF(2, 3);
 
 /* Prefix the current message with "prefix: " (e.g. a file name). */
 int glint_error_prefix(int code, const char *fmt, ...) GLINT_PRINTF(2, 3);
+
+/*
+ * Text for a message or a label into buf (n > 0): when it does not fit it is
+ * cut and ends in "..." so a reader sees it was cut.  Not for paths, which
+ * glint_path_*() refuse to cut.  Returns buf.
+ */
+char *glint_text(char *buf, size_t n, const char *fmt, ...) GLINT_PRINTF(3, 4);
 
 /* The last message recorded on this thread ("" when none). */
 const char *glint_error_msg(void);

@@ -64,6 +64,22 @@ int glint_path_resolve(char *buf, size_t n, const char *base, const char *rel)
 	return ret < 0 ? ret : glint_path_join(buf, n, dir, rel);
 }
 
+int glint_path_self(char *buf, size_t n)
+{
+	ssize_t len = readlink("/proc/self/exe", buf, n);
+
+	if (len < 0)
+		return glint_error_set(errno, "/proc/self/exe: %s",
+				       strerror(errno));
+	if ((size_t)len >= n)
+		return glint_error_set(ENAMETOOLONG,
+				       "/proc/self/exe: the path of glint's "
+				       "executable is longer than %zu bytes",
+				       n - 1);
+	buf[len] = 0;
+	return 0;
+}
+
 const char *glint_data_dir(void)
 {
 	static char exe[GLINT_PATH_MAX];
@@ -72,12 +88,9 @@ const char *glint_data_dir(void)
 
 	if (env && env[0])
 		return env;
-	ssize_t len = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
-	if (len > 0 && (size_t)len > root) {
-		exe[len] = 0;
-		if (!strncmp(exe, GLINT_BUILD_ROOT, root) && exe[root] == '/')
-			return GLINT_SOURCE_DATA_DIR;
-	}
+	if (glint_path_self(exe, sizeof(exe)) == 0 && strlen(exe) > root &&
+	    !strncmp(exe, GLINT_BUILD_ROOT, root) && exe[root] == '/')
+		return GLINT_SOURCE_DATA_DIR;
 	return GLINT_INSTALL_DATA_DIR;
 }
 

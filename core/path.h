@@ -36,6 +36,10 @@ int glint_path_sibling(char *buf, size_t n, const char *path,
 /* The folder part of `path` ("." when it has none) into buf. */
 int glint_path_dirname(char *buf, size_t n, const char *path);
 
+/* This program's own executable (to run glint again, as a worker or a
+ * job): 0, or -ENAMETOOLONG / -errno with a message. */
+int glint_path_self(char *buf, size_t n);
+
 /*
  * The folder of glint's own data (the sim rig's map, Table 1, rig files):
  * $GLINT_DATA_DIR when set; else the source tree's data/ for a binary run

@@ -200,7 +200,17 @@ check "... and it is done" bash -c "'$glint' jobs --root '$tmp/one' --json | pyt
 id=$("$glint" queue add "$sess" --root "$tmp/one")
 check "cancel a pending job" run 0 "" queue cancel "$id" --root "$tmp/one"
 check "... listed as cancelled" bash -c "'$glint' jobs --root '$tmp/one' | grep -q '$id *cancelled'"
+check "... and says what it cancelled" grep -q "cancelled pending job $id" "$tmp/out"
 check "cancel of an unknown job: named" run 1 "nosuchjob" queue cancel nosuchjob --root "$tmp/one"
+probe=$(ls -d "$tmp"/one/run-*/probe-* | head -1)
+check "queue add of a probe session: refused with the reason" run 1 "a probe session is the light of a sample's scene" queue add "$probe" --root "$tmp/one"
+# A job that fails when it runs keeps its reason as text.
+cp -r "$sess" "$tmp/broken"
+rm -rf "$tmp/broken/fit"
+echo "not an image" >"$tmp/broken/sample.exr"
+check "queue add of a session whose photo is damaged" run 0 "" queue add "$tmp/broken" --root "$tmp/one"
+check "... the worker runs it" run 0 "" queue run --until-empty --root "$tmp/one" -q
+check "... glint jobs shows why it failed, as text" bash -c "'$glint' jobs --root '$tmp/one' | grep ' failed ' | tee /dev/stderr | grep -q -- '-- .*sample.exr: not a readable OpenEXR' && ! '$glint' jobs --root '$tmp/one' | grep -q '{\"level'"
 
 # The systemd unit is valid (with this build's glint in ExecStart).
 if command -v systemd-analyze >/dev/null; then

@@ -5,9 +5,12 @@
 #include "core/error.h"
 #include "core/formats.h"
 #include "core/image.h"
+#include "core/path.h"
+#include "core/atomic_dir.h"
 
 #include <OpenEXR/openexr.h>
 #include <dirent.h>
+#include <sys/stat.h>
 #include <png.h>
 #include <stdint.h>
 
@@ -423,8 +426,86 @@ static void test_write_errors(void)
 	glint_image_free(a);
 }
 
+/* Paths are whole or refused; messages are cut visibly. */
+static void test_paths_and_text(void)
+{
+	char buf[16], big[GLINT_PATH_MAX * 2];
+
+	CHECK(glint_path_join(buf, sizeof(buf), "dir", "name.exr") == 0 &&
+		      !strcmp(buf, "dir/name.exr"),
+	      "join: '%s'", buf);
+	CHECK(glint_path_join(buf, sizeof(buf), "dir", "/abs") == 0 &&
+		      !strcmp(buf, "/abs"),
+	      "absolute name: '%s'", buf);
+	CHECK(glint_path_join(buf, sizeof(buf), "folder", "long-name.exr") ==
+		      -ENAMETOOLONG,
+	      "a path one byte too long is refused");
+	CHECK_MSG(glint_error_msg(), "folder/long-nam");
+	CHECK(glint_path_join(buf, 13, "dir", "name.exr") == 0 &&
+		      !strcmp(buf, "dir/name.exr"),
+	      "exactly fitting: '%s'", buf);
+	CHECK(glint_path_sibling(buf, sizeof(buf), "a/env.hdr", "-m.png") ==
+			      0 &&
+		      !strcmp(buf, "a/env-m.png"),
+	      "sibling: '%s'", buf);
+	memset(big, 'x', sizeof(big) - 1);
+	big[sizeof(big) - 1] = 0;
+	char path[GLINT_PATH_MAX];
+	CHECK(glint_path_fmt(path, sizeof(path), "%s/x", big) == -ENAMETOOLONG,
+	      "an 8 KiB path is refused");
+	struct glint_atomic_dir ad;
+	big[GLINT_ATOMIC_DIR_PATH_MAX] = 0;
+	CHECK(glint_atomic_dir_open(&ad, big) == -ENAMETOOLONG,
+	      "an output folder too long for its siblings is refused");
+	CHECK_MSG(glint_error_msg(), "shorter than 3840 bytes");
+	big[GLINT_ATOMIC_DIR_PATH_MAX] = 'x';
+	CHECK(glint_text(buf, sizeof(buf), "%s", "short") == buf &&
+		      !strcmp(buf, "short"),
+	      "text: '%s'", buf);
+	glint_text(buf, sizeof(buf), "%s", "a label far too long");
+	CHECK(!strcmp(buf, "a label far ..."), "cut text: '%s'", buf);
+	glint_error_set(EINVAL, "%s", big + 100);
+	glint_error_prefix(EINVAL, "file.json");
+	size_t n = strlen(glint_error_msg());
+	CHECK(!strncmp(glint_error_msg(), "file.json: xxx", 14) &&
+		      !strcmp(glint_error_msg() + n - 3, "..."),
+	      "a long message keeps its prefix and shows the cut");
+}
+
+/* A result folder never follows a symbolic link in its place. */
+static void test_atomic_dir_link(void)
+{
+	char dir[512], target[600], link[600], note[700], file[700];
+	struct glint_atomic_dir ad;
+
+	snprintf(dir, sizeof(dir), "%s", test_tmpdir());
+	snprintf(target, sizeof(target), "%s/theirs", dir);
+	snprintf(link, sizeof(link), "%s/out", dir);
+	snprintf(note, sizeof(note), "%s/notes.txt", target);
+	CHECK(mkdir(target, 0777) == 0 && symlink(target, link) == 0, "set-up");
+	FILE *f = fopen(note, "w");
+	CHECK(f && fputs("mine\n", f) >= 0 && fclose(f) == 0, "note");
+	static const char *const names[] = { "params.json", NULL };
+	CHECK(glint_atomic_dir_check(link, names, 1) == -EEXIST,
+	      "a link is refused, even with force");
+	CHECK_MSG(glint_error_msg(), "is a symbolic link");
+	/* A writer that gets past the check (a link made after it) fails
+	 * at commit and leaves the link's target alone. */
+	CHECK(glint_atomic_dir_open(&ad, link) == 0, "%s", glint_error_msg());
+	glint_atomic_dir_file(&ad, "params.json", file, sizeof(file));
+	f = fopen(file, "w");
+	CHECK(f && fclose(f) == 0, "write into the temporary folder");
+	CHECK(glint_atomic_dir_commit(&ad) == -EEXIST,
+	      "commit over a link is refused");
+	struct stat st;
+	CHECK(lstat(link, &st) == 0 && S_ISLNK(st.st_mode), "the link stays");
+	CHECK(access(note, R_OK) == 0, "its target's file stays");
+}
+
 int main(void)
 {
+	RUN(test_paths_and_text);
+	RUN(test_atomic_dir_link);
 	RUN(test_exr_float_roundtrip);
 	RUN(test_exr_half_roundtrip);
 	RUN(test_exr_zip_equal_size);

@@ -88,6 +88,71 @@ static double var_x(const struct glint_noise_model *m, double g, double tg,
 	return v / (tg * tg);
 }
 
+/*
+ * One site's merged value and its variance: the inverse-variance weighted
+ * mean of the unclipped frames' dn / (time x gain), the variances first
+ * from each sample's own value, then from the merged estimate (unbiased
+ * weights).  0 when every frame is clipped there.
+ */
+static int merge_site(const struct glint_frame *const *f, int n,
+		      const struct glint_noise_model *noise, double top,
+		      size_t s, double *xhat, double *var)
+{
+	double sw = 0, swx = 0;
+
+	*xhat = 0;
+	for (int pass = 0; pass < 2; pass++) {
+		sw = swx = 0;
+		for (int i = 0; i < n; i++) {
+			const struct glint_frame *fi = f[i];
+			double sat = noise->saturation_dn > 0
+					     ? noise->saturation_dn
+					     : fi->black_level +
+						       0.95 * (top -
+							       fi->black_level);
+			double dn = fi->data[s];
+			if (dn >= sat)
+				continue;
+			double tg = fi->exposure_s * fi->gain;
+			double d = dn - fi->black_level;
+			double v = var_x(noise, fi->gain, tg,
+					 pass ? *xhat * tg : d);
+			sw += 1 / v;
+			swx += d / tg / v;
+		}
+		if (!(sw > 0))
+			return 0;
+		*xhat = swx / sw;
+	}
+	*var = 1 / sw;
+	return 1;
+}
+
+/* Motion check at one site on frames adjacent in exposure: their values
+ * per unit exposure must agree within 5 sigma. */
+static void motion_check(const struct glint_frame *const *f, int n,
+			 const struct glint_noise_model *noise, double top,
+			 size_t s, double xhat, struct glint_hdr_report *rep)
+{
+	for (int i = 0; i + 1 < n && i < 32; i++) {
+		const struct glint_frame *a = f[i], *b = f[i + 1];
+		double da = a->data[s] - a->black_level,
+		       db = b->data[s] - b->black_level;
+		double ra = top - a->black_level, rb = top - b->black_level;
+		if (da < 0.02 * ra || da > 0.9 * ra || db < 0.02 * rb ||
+		    db > 0.9 * rb)
+			continue;
+		double ta = a->exposure_s * a->gain,
+		       tb = b->exposure_s * b->gain;
+		double v = var_x(noise, a->gain, ta, xhat * ta) +
+			   var_x(noise, b->gain, tb, xhat * tb);
+		double z = (da / ta - db / tb) / sqrt(v);
+		rep->compared[i]++;
+		if (fabs(z) > 5)
+			rep->disagree[i] += 1;
+	}
+}
+
 int glint_hdr_merge_raw(const struct glint_frame *frames, int n,
 			const struct glint_noise_model *noise,
 			struct glint_raw_hdr *out, struct glint_hdr_report *rep)
@@ -124,37 +189,8 @@ int glint_hdr_merge_raw(const struct glint_frame *frames, int n,
 	rep->sites = (long)ns;
 	rep->pairs = n - 1 < 32 ? n - 1 : 32;
 	for (size_t s = 0; s < ns; s++) {
-		double sw = 0, swx = 0, xhat = 0;
-		int any = 0;
-		/* Pass 1: variances from each sample's own value; pass 2:
-		 * from the merged estimate (unbiased weights). */
-		for (int pass = 0; pass < 2; pass++) {
-			sw = swx = 0;
-			any = 0;
-			for (int i = 0; i < n; i++) {
-				const struct glint_frame *fi = f[i];
-				double sat =
-					noise->saturation_dn > 0
-						? noise->saturation_dn
-						: fi->black_level +
-							  0.95 * (top -
-								  fi->black_level);
-				double dn = fi->data[s];
-				if (dn >= sat)
-					continue;
-				double tg = fi->exposure_s * fi->gain;
-				double d = dn - fi->black_level;
-				double v = var_x(noise, fi->gain, tg,
-						 pass ? xhat * tg : d);
-				sw += 1 / v;
-				swx += d / tg / v;
-				any = 1;
-			}
-			if (!any)
-				break;
-			xhat = swx / sw;
-		}
-		if (!any) {
+		double xhat, var;
+		if (!merge_site(f, n, noise, top, s, &xhat, &var)) {
 			/* Clipped in every frame: a lower bound, no weight. */
 			const struct glint_frame *fs = f[0];
 			out->x[s] = (float)((top - fs->black_level) /
@@ -165,29 +201,11 @@ int glint_hdr_merge_raw(const struct glint_frame *frames, int n,
 			continue;
 		}
 		out->x[s] = (float)xhat;
-		out->var[s] = (float)(1 / sw);
+		out->var[s] = (float)var;
 		out->valid[s] = 1;
-		if (xhat < 3 * sqrt(1 / sw))
+		if (xhat < 3 * sqrt(var))
 			rep->dark_sites++;
-		/* Motion check on frames adjacent in exposure. */
-		for (int i = 0; i + 1 < n && i < 32; i++) {
-			const struct glint_frame *a = f[i], *b = f[i + 1];
-			double da = a->data[s] - a->black_level,
-			       db = b->data[s] - b->black_level;
-			double ra = top - a->black_level,
-			       rb = top - b->black_level;
-			if (da < 0.02 * ra || da > 0.9 * ra || db < 0.02 * rb ||
-			    db > 0.9 * rb)
-				continue;
-			double ta = a->exposure_s * a->gain,
-			       tb = b->exposure_s * b->gain;
-			double v = var_x(noise, a->gain, ta, xhat * ta) +
-				   var_x(noise, b->gain, tb, xhat * tb);
-			double z = (da / ta - db / tb) / sqrt(v);
-			rep->compared[i]++;
-			if (fabs(z) > 5)
-				rep->disagree[i] += 1;
-		}
+		motion_check(f, n, noise, top, s, xhat, rep);
 	}
 	for (int i = 0; i < rep->pairs; i++) {
 		if (rep->compared[i])

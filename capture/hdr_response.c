@@ -56,6 +56,58 @@ void glint_ldr_floor(const struct glint_ldr_stack *s, int floor[3])
 	free(v);
 }
 
+int glint_ldr_check_order(const struct glint_ldr_stack *s,
+			  const char *const *names)
+{
+	size_t np = (size_t)s->width * s->height;
+	int floor[3];
+
+	glint_ldr_floor(s, floor);
+	for (int a = 0; a < s->n; a++) {
+		int b = -1; /* the next longer exposure */
+		for (int i = 0; i < s->n; i++)
+			if (s->times[i] > s->times[a] &&
+			    (b < 0 || s->times[i] < s->times[b]))
+				b = i;
+		for (int i = a + 1; i < s->n; i++)
+			if (!memcmp(s->rgb[i], s->rgb[a], np * 3))
+				return glint_error_set(
+					EINVAL,
+					"%s and %s are the same image (a "
+					"duplicated frame?)",
+					names ? names[a] : "a frame",
+					names ? names[i] : "another");
+		if (b < 0)
+			continue;
+		for (int c = 0; c < 3; c++) {
+			long up = 0, down = 0;
+			for (size_t p = 0; p < np; p++) {
+				int za = s->rgb[a][3 * p + c];
+				int zb = s->rgb[b][3 * p + c];
+				if (za <= floor[c] || zb <= floor[c] ||
+				    za == 255 || zb == 255)
+					continue;
+				up += zb > za;
+				down += zb < za;
+			}
+			if (up + down >= 100 && up < down)
+				return glint_error_set(
+					EINVAL,
+					"%s (%g s) is darker than %s (%g s) "
+					"in %.0f %% of the pixels that "
+					"differ: the frames are not in the "
+					"order of their exposure times (or a "
+					"time is wrong)",
+					names ? names[b] : "a frame",
+					s->times[b],
+					names ? names[a] : "a shorter one",
+					s->times[a],
+					100.0 * down / (double)(up + down));
+		}
+	}
+	return 0;
+}
+
 static int check_stack(const struct glint_ldr_stack *s, int need_distinct)
 {
 	if (s->n < 2)

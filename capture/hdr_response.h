@@ -51,6 +51,18 @@ void glint_debevec_default_opts(struct glint_debevec_opts *o);
  * is black). */
 void glint_ldr_floor(const struct glint_ldr_stack *s, int floor[3]);
 
+/*
+ * Does the stack's brightness rise with its exposure times?  For each
+ * frame and the next longer one, per channel, over pixels informative in
+ * both (above the floor, below 255): a longer exposure must make most of
+ * those that change brighter (at least half; a true bracket gives nearly
+ * all, frames in the wrong order for their times nearly none), and two
+ * frames must not be identical (a duplicated file).  names[i] (may be
+ * NULL) names frame i in the message.
+ */
+int glint_ldr_check_order(const struct glint_ldr_stack *s,
+			  const char *const *names);
+
 int glint_response_debevec(const struct glint_ldr_stack *s,
 			   const struct glint_debevec_opts *o,
 			   double response[256][3]);

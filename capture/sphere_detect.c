@@ -26,40 +26,69 @@ static double sample(const float *m, int w, int h, double x, double y)
 	       ty * ((1 - tx) * p[w] + tx * p[w + 1]);
 }
 
-int glint_sphere_detect(const struct glint_image *img, double r_min,
-			double r_max, struct glint_circle *out)
-{
-	int w = img->width, h = img->height, ret = 0;
-	size_t n = (size_t)w * h;
-	float *l = malloc(n * sizeof(float)), *gx = malloc(n * sizeof(float)),
-	      *gy = malloc(n * sizeof(float)), *m = malloc(n * sizeof(float)),
-	      *acc = calloc(n, sizeof(float)), *tmp = malloc(n * sizeof(float));
-	unsigned char *edge = calloc(n, 1);
-	double *px = NULL, *py = NULL;
+/* Edges of an image: log-luminance Sobel gradients and the thinned
+ * strongest edges.  Every array is w x h. */
+struct edge_map {
+	int w, h;
+	float *l;	/* log luminance */
+	float *gx, *gy; /* its Sobel gradient */
+	float *m;	/* the gradient's magnitude */
+	float *acc;	/* the linear luminance's gradient magnitude */
+	unsigned char *edge;
+	long nedge;
+};
 
-	memset(out, 0, sizeof(*out));
-	if (!l || !gx || !gy || !m || !acc || !tmp || !edge) {
+static void edge_map_free(struct edge_map *em)
+{
+	free(em->l);
+	free(em->gx);
+	free(em->gy);
+	free(em->m);
+	free(em->acc);
+	free(em->edge);
+}
+
+static float sobel_x(const float *p, int w)
+{
+	return (p[-w + 1] + 2 * p[1] + p[w + 1]) -
+	       (p[-w - 1] + 2 * p[-1] + p[w - 1]);
+}
+
+static float sobel_y(const float *p, int w)
+{
+	return (p[w - 1] + 2 * p[w] + p[w + 1]) -
+	       (p[-w - 1] + 2 * p[-w] + p[-w + 1]);
+}
+
+/* 1. log luminance, Sobel, thinning, strongest 6 %. */
+static int edge_detect(const struct glint_image *img, struct edge_map *em)
+{
+	int w = img->width, h = img->height;
+	size_t n = (size_t)w * h;
+	float *tmp = malloc(n * sizeof(float));
+	int ret = 0;
+
+	memset(em, 0, sizeof(*em));
+	em->w = w;
+	em->h = h;
+	em->l = malloc(n * sizeof(float));
+	em->gx = malloc(n * sizeof(float));
+	em->gy = malloc(n * sizeof(float));
+	em->m = malloc(n * sizeof(float));
+	em->acc = calloc(n, sizeof(float));
+	em->edge = calloc(n, 1);
+	if (!tmp || !em->l || !em->gx || !em->gy || !em->m || !em->acc ||
+	    !em->edge) {
 		ret = glint_error_set(ENOMEM,
 				      "sphere detection: out of memory");
 		goto out;
 	}
-	if (w < 16 || h < 16) {
-		ret = glint_error_set(
-			EINVAL, "sphere detection: %dx%d image: too small", w,
-			h);
-		goto out;
-	}
-	if (r_min <= 0 || r_max <= 0) {
-		r_min = 0.05 * (w < h ? w : h);
-		r_max = 0.5 * (w < h ? w : h);
-	}
-	/* 1. log luminance, Sobel, thinning, strongest 6 %. */
 	double mean = 0;
 	for (size_t i = 0; i < n; i++) {
 		const float *p = img->data + 3 * i;
 		double v = 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
-		l[i] = (float)(isfinite(v) && v > 0 ? v : 0);
-		mean += l[i];
+		em->l[i] = (float)(isfinite(v) && v > 0 ? v : 0);
+		mean += em->l[i];
 	}
 	mean /= (double)n;
 	if (!(mean > 0)) {
@@ -68,38 +97,32 @@ int glint_sphere_detect(const struct glint_image *img, double r_min,
 		goto out;
 	}
 	/* Linear gradient magnitude (for sub-pixel edge positions: the log
-	 * would pull them towards the dark side) into acc, which is free. */
+	 * would pull them towards the dark side). */
 	for (int y = 1; y < h - 1; y++)
 		for (int x = 1; x < w - 1; x++) {
-			const float *p = l + (size_t)y * w + x;
-			float ax = (p[-w + 1] + 2 * p[1] + p[w + 1]) -
-				   (p[-w - 1] + 2 * p[-1] + p[w - 1]);
-			float ay = (p[w - 1] + 2 * p[w] + p[w + 1]) -
-				   (p[-w - 1] + 2 * p[-w] + p[-w + 1]);
-			acc[(size_t)y * w + x] = hypotf(ax, ay);
+			const float *p = em->l + (size_t)y * w + x;
+			em->acc[(size_t)y * w + x] =
+				hypotf(sobel_x(p, w), sobel_y(p, w));
 		}
 	for (size_t i = 0; i < n; i++)
-		l[i] = (float)log(l[i] + 0.01 * mean);
+		em->l[i] = (float)log(em->l[i] + 0.01 * mean);
 	for (int y = 0; y < h; y++)
 		for (int x = 0; x < w; x++) {
 			size_t i = (size_t)y * w + x;
 			if (x == 0 || y == 0 || x == w - 1 || y == h - 1) {
-				gx[i] = gy[i] = m[i] = 0;
+				em->gx[i] = em->gy[i] = em->m[i] = 0;
 				continue;
 			}
-			const float *p = l + i;
-			gx[i] = (p[-w + 1] + 2 * p[1] + p[w + 1]) -
-				(p[-w - 1] + 2 * p[-1] + p[w - 1]);
-			gy[i] = (p[w - 1] + 2 * p[w] + p[w + 1]) -
-				(p[-w - 1] + 2 * p[-w] + p[-w + 1]);
-			m[i] = hypotf(gx[i], gy[i]);
+			em->gx[i] = sobel_x(em->l + i, w);
+			em->gy[i] = sobel_y(em->l + i, w);
+			em->m[i] = hypotf(em->gx[i], em->gy[i]);
 		}
 	/* The strongest 6 % of the non-flat pixels (a photo that is mostly
 	 * black background has mostly zero gradient). */
 	size_t nz = 0;
 	for (size_t i = 0; i < n; i++)
-		if (m[i] > 1e-6f)
-			tmp[nz++] = m[i];
+		if (em->m[i] > 1e-6f)
+			tmp[nz++] = em->m[i];
 	qsort(tmp, nz, sizeof(float), cmp_float);
 	float thr = nz ? tmp[(size_t)(0.94 * (double)(nz - 1))] : 0;
 	if (!(thr > 0)) {
@@ -108,36 +131,63 @@ int glint_sphere_detect(const struct glint_image *img, double r_min,
 				      "image)");
 		goto out;
 	}
-	long nedge = 0;
 	for (int y = 1; y < h - 1; y++)
 		for (int x = 1; x < w - 1; x++) {
 			size_t i = (size_t)y * w + x;
+			const float *m = em->m;
 			if (m[i] < thr)
 				continue;
-			double ux = gx[i] / m[i], uy = gy[i] / m[i];
+			double ux = em->gx[i] / m[i], uy = em->gy[i] / m[i];
 			if (m[i] >= sample(m, w, h, x + ux, y + uy) &&
 			    m[i] >= sample(m, w, h, x - ux, y - uy)) {
-				edge[i] = 1;
-				nedge++;
+				em->edge[i] = 1;
+				em->nedge++;
 			}
 		}
-	/* 2-3. RANSAC: two edge points and the first one's gradient give a
-	 * circle (its centre lies on that gradient line); the circle with
-	 * the most edges on it (within 1.5 px, gradient along the radius)
-	 * wins.  A silhouette is the longest such contour. */
-	int *ex = malloc((size_t)nedge * sizeof(int));
-	if (!ex) {
-		ret = glint_error_set(ENOMEM,
-				      "sphere detection: out of memory");
-		goto out;
+out:
+	free(tmp);
+	return ret;
+}
+
+/* Edge points on the circle (cx, cy, r) within `tol` px whose gradient is
+ * radial (|cos| > 0.9). */
+static long circle_support(const struct edge_map *em, const int *ex, long ne,
+			   double cx, double cy, double r, double tol)
+{
+	long support = 0;
+	for (long k = 0; k < ne; k++) {
+		size_t e = (size_t)ex[k];
+		double dx = (double)(e % (size_t)em->w) - cx,
+		       dy = (double)(e / (size_t)em->w) - cy;
+		double d = hypot(dx, dy);
+		if (fabs(d - r) > tol || d <= 0)
+			continue;
+		if (fabs((dx * em->gx[e] + dy * em->gy[e]) / (d * em->m[e])) >
+		    0.9)
+			support++;
 	}
-	long ne = 0;
-	for (size_t i = 0; i < n; i++)
-		if (edge[i])
-			ex[ne++] = (int)i;
+	return support;
+}
+
+/* 2-3. RANSAC: two edge points and the first one's gradient give a circle
+ * (its centre lies on that gradient line); the circle with the most edges
+ * on it (within 1.5 px, gradient along the radius) wins.  A silhouette is
+ * the longest such contour.  c gets (cx, cy, r) in pixel-index units. */
+static int ransac_circle(const struct edge_map *em, double r_min, double r_max,
+			 double c[3])
+{
+	int w = em->w;
+	int *ex = malloc((size_t)(em->nedge > 0 ? em->nedge : 1) * sizeof(int));
+	long ne = 0, best = 0;
 	uint64_t rng = 0x9e3779b97f4a7c15ull;
-	double bx = 0, by = 0, r0 = 0;
-	long best = 0;
+
+	if (!ex)
+		return glint_error_set(ENOMEM,
+				       "sphere detection: out of memory");
+	for (size_t i = 0; i < (size_t)w * em->h; i++)
+		if (em->edge[i])
+			ex[ne++] = (int)i;
+	c[0] = c[1] = c[2] = 0;
 	for (int it = 0; it < 4000 && ne >= 2; it++) {
 		rng ^= rng << 13;
 		rng ^= rng >> 7;
@@ -148,7 +198,7 @@ int glint_sphere_detect(const struct glint_image *img, double r_min,
 		       y1 = (double)(i1 / (size_t)w);
 		double x2 = (double)(i2 % (size_t)w),
 		       y2 = (double)(i2 / (size_t)w);
-		double ux = gx[i1] / m[i1], uy = gy[i1] / m[i1];
+		double ux = em->gx[i1] / em->m[i1], uy = em->gy[i1] / em->m[i1];
 		double dx = x1 - x2, dy = y1 - y2;
 		double den = 2 * (ux * dx + uy * dy);
 		if (fabs(den) < 1e-9)
@@ -159,120 +209,139 @@ int glint_sphere_detect(const struct glint_image *img, double r_min,
 			continue;
 		/* The second point's gradient must be radial too. */
 		double d2 = hypot(x2 - cx, y2 - cy);
-		if (d2 <= 0 || fabs(((x2 - cx) * gx[i2] + (y2 - cy) * gy[i2]) /
-				    (d2 * m[i2])) < 0.9)
+		if (d2 <= 0 ||
+		    fabs(((x2 - cx) * em->gx[i2] + (y2 - cy) * em->gy[i2]) /
+			 (d2 * em->m[i2])) < 0.9)
 			continue;
-		long support = 0;
-		for (long k = 0; k < ne; k++) {
-			size_t e = (size_t)ex[k];
-			double ex_ = (double)(e % (size_t)w) - cx,
-			       ey_ = (double)(e / (size_t)w) - cy;
-			double d = hypot(ex_, ey_);
-			if (fabs(d - r) > 1.5 || d <= 0)
-				continue;
-			if (fabs((ex_ * gx[e] + ey_ * gy[e]) / (d * m[e])) >
-			    0.9)
-				support++;
-		}
+		long support = circle_support(em, ex, ne, cx, cy, r, 1.5);
 		if (support > best) {
 			best = support;
-			bx = cx;
-			by = cy;
-			r0 = r;
+			c[0] = cx;
+			c[1] = cy;
+			c[2] = r;
 		}
 	}
 	free(ex);
+	return 0;
+}
+
+/* Sub-pixel edge points within `band` px of the circle c (image
+ * coordinates: pixel (x, y) spans [x, x + 1)), into px, py; returns how
+ * many. */
+static int subpixel_edges(const struct edge_map *em, const double c[3],
+			  double band, double *px, double *py)
+{
+	int w = em->w, h = em->h, np = 0;
+	for (int y = 1; y < h - 1; y++)
+		for (int x = 1; x < w - 1; x++) {
+			size_t i = (size_t)y * w + x;
+			if (!em->edge[i])
+				continue;
+			double dx = x + 0.5 - c[0], dy = y + 0.5 - c[1],
+			       d = hypot(dx, dy);
+			if (d <= 0 || fabs(d - c[2]) > band)
+				continue;
+			double ux = em->gx[i] / em->m[i],
+			       uy = em->gy[i] / em->m[i];
+			if (fabs((dx * ux + dy * uy) / d) < 0.9)
+				continue;
+			double a = sample(em->acc, w, h, x - ux, y - uy),
+			       b = em->acc[i],
+			       cc = sample(em->acc, w, h, x + ux, y + uy);
+			double den = a - 2 * b + cc, off = 0;
+			if (den < 0)
+				off = 0.5 * (a - cc) / den;
+			off = fmax(-0.5, fmin(0.5, off));
+			px[np] = x + 0.5 + off * ux;
+			py[np] = y + 0.5 + off * uy;
+			np++;
+		}
+	return np;
+}
+
+static double det3(const double a[3][3])
+{
+	return a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
+	       a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+	       a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+}
+
+/* Geometric circle fit to px, py from c: Gauss-Newton on (cx, cy, r),
+ * Huber weights at 0.5 px, 3 x 3 steps by Cramer's rule. */
+static void circle_fit(const double *px, const double *py, int np, double c[3])
+{
+	for (int it = 0; it < 20; it++) {
+		double jtj[3][3] = { { 0 } }, jtr[3] = { 0 };
+		for (int k = 0; k < np; k++) {
+			double dx = px[k] - c[0], dy = py[k] - c[1],
+			       d = hypot(dx, dy);
+			if (d <= 0)
+				continue;
+			double res = d - c[2],
+			       wt = fabs(res) < 0.5 ? 1 : 0.5 / fabs(res);
+			double j[3] = { -dx / d, -dy / d, -1 };
+			for (int a = 0; a < 3; a++) {
+				jtr[a] += wt * j[a] * res;
+				for (int b = 0; b < 3; b++)
+					jtj[a][b] += wt * j[a] * j[b];
+			}
+		}
+		double det = det3(jtj), step = 0;
+		if (fabs(det) < 1e-12)
+			break;
+		for (int col = 0; col < 3; col++) {
+			double b[3][3];
+			memcpy(b, jtj, sizeof(b));
+			for (int rr = 0; rr < 3; rr++)
+				b[rr][col] = -jtr[rr];
+			double dl = det3(b) / det;
+			c[col] += dl;
+			step += fabs(dl);
+		}
+		if (step < 1e-6)
+			break;
+	}
+}
+
+int glint_sphere_detect(const struct glint_image *img, double r_min,
+			double r_max, struct glint_circle *out)
+{
+	int w = img->width, h = img->height, ret = 0, np = 0;
+	struct edge_map em = { 0 };
+	double *px = NULL, *py = NULL, c[3];
+
+	memset(out, 0, sizeof(*out));
+	if (w < 16 || h < 16)
+		return glint_error_set(
+			EINVAL, "sphere detection: %dx%d image: too small", w,
+			h);
+	if (r_min <= 0 || r_max <= 0) {
+		r_min = 0.05 * (w < h ? w : h);
+		r_max = 0.5 * (w < h ? w : h);
+	}
+	ret = edge_detect(img, &em);
+	if (ret == 0)
+		ret = ransac_circle(&em, r_min, r_max, c);
+	if (ret < 0)
+		goto out;
 	/* 4. sub-pixel edges near that circle, and a geometric fit. */
-	px = malloc((size_t)nedge * sizeof(double));
-	py = malloc((size_t)nedge * sizeof(double));
+	size_t ne = (size_t)(em.nedge > 0 ? em.nedge : 1);
+	px = malloc(ne * sizeof(double));
+	py = malloc(ne * sizeof(double));
 	if (!px || !py) {
 		ret = glint_error_set(ENOMEM,
 				      "sphere detection: out of memory");
 		goto out;
 	}
-	double cx = bx + 0.5, cy = by + 0.5, r = r0;
-	int np = 0;
+	c[0] += 0.5;
+	c[1] += 0.5;
 	for (int pass = 0; pass < 3; pass++) {
-		double band = pass == 0 ? 4 : 2;
-		np = 0;
-		for (int y = 1; y < h - 1; y++)
-			for (int x = 1; x < w - 1; x++) {
-				size_t i = (size_t)y * w + x;
-				if (!edge[i])
-					continue;
-				double dx = x + 0.5 - cx, dy = y + 0.5 - cy,
-				       d = hypot(dx, dy);
-				if (d <= 0 || fabs(d - r) > band)
-					continue;
-				double ux = gx[i] / m[i], uy = gy[i] / m[i];
-				if (fabs((dx * ux + dy * uy) / d) < 0.9)
-					continue;
-				double a = sample(acc, w, h, x - ux, y - uy),
-				       b = acc[i],
-				       c = sample(acc, w, h, x + ux, y + uy);
-				double den = a - 2 * b + c, off = 0;
-				if (den < 0)
-					off = 0.5 * (a - c) / den;
-				off = fmax(-0.5, fmin(0.5, off));
-				/* Pixel (x, y) spans [x, x + 1): its centre
-				 * is at + 0.5 (glint's image coordinates). */
-				px[np] = x + 0.5 + off * ux;
-				py[np] = y + 0.5 + off * uy;
-				np++;
-			}
+		np = subpixel_edges(&em, c, pass == 0 ? 4 : 2, px, py);
 		if (np < 8)
 			break;
-		for (int it = 0; it < 20; it++) {
-			/* Gauss-Newton on (cx, cy, r), Huber weights at
-			 * 0.5 px. */
-			double jtj[3][3] = { { 0 } }, jtr[3] = { 0 };
-			for (int k = 0; k < np; k++) {
-				double dx = px[k] - cx, dy = py[k] - cy,
-				       d = hypot(dx, dy);
-				if (d <= 0)
-					continue;
-				double res = d - r,
-				       wt = fabs(res) < 0.5 ? 1
-							    : 0.5 / fabs(res);
-				double j[3] = { -dx / d, -dy / d, -1 };
-				for (int a = 0; a < 3; a++) {
-					jtr[a] += wt * j[a] * res;
-					for (int b = 0; b < 3; b++)
-						jtj[a][b] += wt * j[a] * j[b];
-				}
-			}
-			/* Solve jtj delta = -jtr (3 x 3, Cramer). */
-			double(*A)[3] = jtj;
-			double det = A[0][0] * (A[1][1] * A[2][2] -
-						A[1][2] * A[2][1]) -
-				     A[0][1] * (A[1][0] * A[2][2] -
-						A[1][2] * A[2][0]) +
-				     A[0][2] * (A[1][0] * A[2][1] -
-						A[1][1] * A[2][0]);
-			if (fabs(det) < 1e-12)
-				break;
-			double dlt[3];
-			for (int c = 0; c < 3; c++) {
-				double B[3][3];
-				memcpy(B, A, sizeof(B));
-				for (int rr = 0; rr < 3; rr++)
-					B[rr][c] = -jtr[rr];
-				dlt[c] = (B[0][0] * (B[1][1] * B[2][2] -
-						     B[1][2] * B[2][1]) -
-					  B[0][1] * (B[1][0] * B[2][2] -
-						     B[1][2] * B[2][0]) +
-					  B[0][2] * (B[1][0] * B[2][1] -
-						     B[1][1] * B[2][0])) /
-					 det;
-			}
-			cx += dlt[0];
-			cy += dlt[1];
-			r += dlt[2];
-			if (fabs(dlt[0]) + fabs(dlt[1]) + fabs(dlt[2]) < 1e-6)
-				break;
-		}
+		circle_fit(px, py, np, c);
 	}
-	if (np < 8 || !(r > 0)) {
+	if (np < 8 || !(c[2] > 0)) {
 		ret = glint_error_set(ENOENT,
 				      "sphere detection: no circle found "
 				      "between radius %.0f and %.0f px",
@@ -281,30 +350,23 @@ int glint_sphere_detect(const struct glint_image *img, double r_min,
 	}
 	/* Report: RMS and the arc the points cover (in 10-degree bins). */
 	double ss = 0;
-	int bins[36] = { 0 };
+	int bins[36] = { 0 }, covered = 0;
 	for (int k = 0; k < np; k++) {
-		double d = hypot(px[k] - cx, py[k] - cy) - r;
+		double d = hypot(px[k] - c[0], py[k] - c[1]) - c[2];
 		ss += d * d;
-		double a = atan2(py[k] - cy, px[k] - cx) * 180 / M_PI + 180;
+		double a = atan2(py[k] - c[1], px[k] - c[0]) * 180 / M_PI + 180;
 		bins[(int)(a / 10) % 36] = 1;
 	}
-	int covered = 0;
 	for (int k = 0; k < 36; k++)
 		covered += bins[k];
-	out->cx = cx;
-	out->cy = cy;
-	out->r = r;
+	out->cx = c[0];
+	out->cy = c[1];
+	out->r = c[2];
 	out->points = np;
 	out->rms_px = sqrt(ss / np);
 	out->arc_deg = 10.0 * covered;
 out:
-	free(l);
-	free(gx);
-	free(gy);
-	free(m);
-	free(acc);
-	free(tmp);
-	free(edge);
+	edge_map_free(&em);
 	free(px);
 	free(py);
 	return ret;

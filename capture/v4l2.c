@@ -442,8 +442,8 @@ static int v4l2_describe(void *priv, struct glint_camera_info *in)
 	memset(in, 0, sizeof(*in));
 	snprintf(in->backend, sizeof(in->backend), "v4l2");
 	snprintf(in->name, sizeof(in->name), "%s", (const char *)c->cap.card);
-	snprintf(in->detail, sizeof(in->detail), "%s, driver %s, %s", c->path,
-		 (const char *)c->cap.driver, (const char *)c->cap.bus_info);
+	glint_text(in->detail, sizeof(in->detail), "%s, driver %s, %s", c->path,
+		   (const char *)c->cap.driver, (const char *)c->cap.bus_info);
 	in->width = c->width;
 	in->height = c->height;
 	for (int i = 0; i < c->nfmt && i < GLINT_CAMERA_MAX_FORMATS; i++) {

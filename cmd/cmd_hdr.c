@@ -169,6 +169,8 @@ static int ldr_main(char **files, int n, const char *times,
 		h = hi;
 	}
 	struct glint_ldr_stack s = { n, w, h, (const uint8_t *const *)img, t };
+	if (ret == 0)
+		ret = glint_ldr_check_order(&s, (const char *const *)files);
 	if (ret == 0 && !strcmp(method, "debevec")) {
 		struct glint_debevec_opts o;
 		glint_debevec_default_opts(&o);

@@ -8,6 +8,7 @@
 
 #include "capture/probe.h"
 #include "capture/probe_register.h"
+#include "capture/sphere_detect.h"
 #include "core/error.h"
 #include "core/log.h"
 
@@ -20,8 +21,8 @@
 
 void cmd_probe_help(void)
 {
-	printf("usage: glint probe unwrap PHOTO.exr --focal-px F --ball "
-	       "CX,CY,R [options] -o ENV.exr\n"
+	printf("usage: glint probe unwrap PHOTO.exr --focal-px F [--ball "
+	       "CX,CY,R] [options] -o ENV.exr\n"
 	       "       glint probe convert IN OUT --from FMT --to FMT "
 	       "[--size WxH]\n"
 	       "       glint probe register ENV1.exr ENV2.exr -o OUT.exr "
@@ -39,7 +40,13 @@ void cmd_probe_help(void)
 	       "  --focal-px F         focal length in pixels\n"
 	       "  --principal X,Y      principal point (default: the image "
 	       "centre)\n"
-	       "  --ball CX,CY,R       the ball's image circle, pixels\n"
+	       "  --ball CX,CY,R       the ball's image circle, pixels "
+	       "(default: found in the\n"
+	       "                       photo, as capture does; a given one "
+	       "is checked)\n"
+	       "  --srgb               take an 8-bit photo as sRGB-encoded "
+	       "(else refused: not\n"
+	       "                       radiance)\n"
 	       "  --chrome N,K         complex index of the ball (default "
 	       "3.2,3.3: chrome, 55 %%)\n"
 	       "  --reflectivity R     a constant reflectance instead\n"
@@ -87,6 +94,77 @@ static int parse_list(const char *opt, const char *v, int n, double *out)
 	return 0;
 }
 
+/* An 8-bit photo is camera-encoded, not radiance: refused, or with
+ * --srgb linearised through the sRGB curve (IEC 61966-2-1). */
+static int radiance_of(const char *path, struct glint_image *img, int srgb)
+{
+	char ext[16];
+	const char *ldr[] = { "png", "tga", "jpg", "jpeg", "bmp" };
+	int is_ldr = 0;
+
+	glint_path_ext(path, ext, sizeof(ext));
+	for (int i = 0; i < 5; i++)
+		is_ldr |= !strcmp(ext, ldr[i]);
+	if (!is_ldr)
+		return 0;
+	if (!srgb)
+		return glint_error_set(
+			EINVAL,
+			"%s: an 8-bit image holds camera-encoded "
+			"values, not radiance, and unwrapped as "
+			"light it would be wrong: merge a "
+			"bracket to HDR (glint hdr), or give "
+			"--srgb to take it as sRGB-encoded "
+			"(highlights stay clipped)",
+			path);
+	for (size_t i = 0; i < (size_t)img->width * img->height * 3; i++) {
+		float v = img->data[i];
+		img->data[i] = v <= 0.04045f
+				       ? v / 12.92f
+				       : powf((v + 0.055f) / 1.055f, 2.4f);
+	}
+	glint_log_warn("%s: 8-bit, taken as sRGB-encoded: highlights above "
+		       "the white point are clipped, so the map's lights are "
+		       "too dim",
+		       path);
+	return 0;
+}
+
+/* The ball's circle: found in the photo when --ball is not given (the
+ * capture's detector); a given one is checked against it. */
+static int find_ball(const struct glint_image *photo, int given,
+		     struct glint_unwrap_opts *o)
+{
+	struct glint_circle c;
+	int ret = glint_sphere_detect(photo, 0, 0, &c);
+
+	if (given) {
+		double d = hypot(c.cx - o->ball_cx, c.cy - o->ball_cy);
+		double dr = fabs(c.r - o->ball_r);
+		if (ret == 0 && (d > 2 || dr > 2))
+			glint_log_warn(
+				"--ball %g,%g,%g disagrees with the ball "
+				"found in the photo, %.1f,%.1f,%.1f "
+				"(centre %.1f px, radius %.1f px "
+				"apart): check it",
+				o->ball_cx, o->ball_cy, o->ball_r, c.cx, c.cy,
+				c.r, d, dr);
+		return 0;
+	}
+	if (ret < 0)
+		return glint_error_prefix(
+			ret, "no ball found (give --ball CX,CY,R)");
+	o->ball_cx = c.cx;
+	o->ball_cy = c.cy;
+	o->ball_r = c.r;
+	glint_log_info("found the ball at %.2f,%.2f, radius %.2f px (%d rim "
+		       "points, %.2f px RMS, %.0f deg of its rim): --ball "
+		       "%.2f,%.2f,%.2f",
+		       c.cx, c.cy, c.r, c.points, c.rms_px, c.arc_deg, c.cx,
+		       c.cy, c.r);
+	return 0;
+}
+
 static int unwrap_main(int argc, char **argv)
 {
 	enum {
@@ -97,7 +175,8 @@ static int unwrap_main(int argc, char **argv)
 		O_REFL,
 		O_GRAZE,
 		O_SIZE,
-		O_ORTHO
+		O_ORTHO,
+		O_SRGB
 	};
 	static const struct option opts[] = {
 		{ "focal-px", required_argument, NULL, O_F },
@@ -108,6 +187,7 @@ static int unwrap_main(int argc, char **argv)
 		{ "grazing", required_argument, NULL, O_GRAZE },
 		{ "size", required_argument, NULL, O_SIZE },
 		{ "orthographic", no_argument, NULL, O_ORTHO },
+		{ "srgb", no_argument, NULL, O_SRGB },
 		{ "out", required_argument, NULL, 'o' },
 		{ "quiet", no_argument, NULL, 'q' },
 		{ "help", no_argument, NULL, 'h' },
@@ -116,7 +196,7 @@ static int unwrap_main(int argc, char **argv)
 	struct glint_unwrap_opts o;
 	const char *out = NULL;
 	double v[3];
-	int c, have_ball = 0;
+	int c, have_ball = 0, srgb = 0;
 
 	glint_unwrap_default_opts(&o);
 	optind = 1;
@@ -169,6 +249,9 @@ static int unwrap_main(int argc, char **argv)
 			o.width = (int)v[0];
 			o.height = (int)v[1];
 			break;
+		case O_SRGB:
+			srgb = 1;
+			break;
 		case O_ORTHO:
 			o.orthographic = 1;
 			break;
@@ -188,13 +271,16 @@ static int unwrap_main(int argc, char **argv)
 	if (optind != argc - 1 || !out)
 		return cmd_usage_error("probe", "unwrap: expected PHOTO and -o "
 						"ENV.exr");
-	if (!(o.fpx > 0) || !have_ball)
-		return cmd_usage_error("probe", "unwrap: --focal-px and --ball "
-						"are required (automatic ball "
-						"detection is to come)");
+	if (!(o.fpx > 0))
+		return cmd_usage_error("probe",
+				       "unwrap: --focal-px is required");
 	struct glint_image *photo = NULL;
 	int w, h;
 	int ret = glint_image_read(argv[optind], &photo);
+	if (ret == 0)
+		ret = radiance_of(argv[optind], photo, srgb);
+	if (ret == 0)
+		ret = find_ball(photo, have_ball, &o);
 	if (ret == 0)
 		ret = glint_probe_unwrap_write(photo, &o, out, &w, &h);
 	if (ret == 0)

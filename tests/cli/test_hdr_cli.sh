@@ -28,6 +28,10 @@ check "memorial stack merges" run 0 "" hdr --times-file "$mem/shutter_times_qhan
 check "... radiance, mask, response written" bash -c "test -s '$tmp/m/hdr.exr' && test -s '$tmp/m/mask.png' && test \$(wc -l <'$tmp/m/response.csv') = 256"
 check "debevec response too" run 0 "" hdr --times 32,16,8,4,2,1,1/2,1/4,1/8,1/16,1/32,1/64,1/128,1/256,1/512,1/1024 "${photos[@]}" -o "$tmp/d" --response debevec -q
 check "times count mismatch: exit 1" run 1 "15 exposure times for 16 images" hdr --times 32,16,8,4,2,1,1/2,1/4,1/8,1/16,1/32,1/64,1/128,1/256,1/512 "${photos[@]:0:15}" "${photos[15]}" -o "$tmp/x"
+rev=($(printf '%s\n' "${photos[@]}" | sort -r))
+check "frames in the wrong order for their times: exit 1, named" run 1 "memorial0076.png (32 s) is darker than" hdr --times-file "$mem/shutter_times_qhan1028.txt" "${rev[@]}" -o "$tmp/rev"
+check "... nothing written" test ! -e "$tmp/rev/hdr.exr"
+check "a duplicated frame: exit 1, named" run 1 "are the same image" hdr --times 4,2,1 "${photos[5]}" "${photos[5]}" "${photos[7]}" -o "$tmp/dup"
 check "equal times: exit 1" run 1 "must differ" hdr --times 1,1 "${photos[0]}" "${photos[1]}" -o "$tmp/x"
 check "a bad time: exit 1" run 1 "'-2'" hdr --times 1,-2 "${photos[0]}" "${photos[1]}" -o "$tmp/x"
 check "unknown response method: exit 2" run 2 "robertson or debevec" hdr --times 1,2 a.png b.png -o "$tmp/x" --response fancy
@@ -40,7 +44,13 @@ check "probe convert angular -> latlong" run 0 "" probe convert "$campus" "$tmp/
 check "... -> cross" run 0 "" probe convert "$tmp/c.exr" "$tmp/c.hdr" --from latlong --to cross --size 300x400
 check "unknown format: exit 2" run 2 "latlong, angular, cross or ball" probe convert "$tmp/c.exr" "$tmp/d.exr" --from latlong --to sphere
 check "non-square angular: exit 1" run 1 "square" probe convert "$tmp/c.exr" "$tmp/d.exr" --from angular --to latlong
-check "unwrap without the ball: exit 2" run 2 "--ball" probe unwrap "$tmp/c.exr" -o "$tmp/e.exr" --focal-px 1000
+check "unwrap without the focal length: exit 2" run 2 "--focal-px is required" probe unwrap "$tmp/c.exr" -o "$tmp/e.exr" --ball 320,160,100
+chrome=$(dirname "$mem")/../spheres/uw_psm/chrome/chrome.3.tga
+check "an 8-bit ball photo is refused as radiance" run 1 "not radiance" probe unwrap "$chrome" -o "$tmp/u.exr" --focal-px 1000
+check "... nothing written" test ! -e "$tmp/u.exr"
+check "--srgb: the ball is found in the photo" run 0 "found the ball at 254." probe unwrap "$chrome" -o "$tmp/u.exr" --focal-px 1000 --srgb
+check "... and the 8-bit input is warned about" grep -q "8-bit, taken as sRGB-encoded" "$tmp/err"
+check "a --ball 19 px off the photo's is warned about" run 0 "disagrees with the ball found in the photo" probe unwrap "$chrome" -o "$tmp/u.exr" --focal-px 1000 --srgb --ball 254.5,147.5,100
 check "unwrap of a ball off the photo: exit 1" run 1 "not inside" probe unwrap "$tmp/c.exr" -o "$tmp/e.exr" --focal-px 1000 --ball 10,10,50
 check "... nothing written" test ! -e "$tmp/e.exr"
 check "unwrap writes env, mask, density" run 0 "" probe unwrap "$tmp/c.exr" -o "$tmp/e.exr" --focal-px 1000 --ball 320,160,100

@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
+#include "capture/session.h"
 #include "fit/job.h"
 
 #include "core/atomic_dir.h"
@@ -65,7 +66,12 @@ void cmd_fit_help(void)
 	       "                        with the lowest BIC on the "
 	       "weighted residual (all four\n"
 	       "                        with AIC, BIC and standard errors "
-	       "in params.json)\n"
+	       "in params.json);\n"
+	       "                        also done when the fit leaves a "
+	       "parameter\n"
+	       "                        undetermined, or specular and ior "
+	       "trading off\n"
+	       "  --no-select-model     never choose the model that way\n"
 	       "  --ladder              fidelity ladder: try cheaper "
 	       "modelling (no depth of\n"
 	       "                        field, fewer samples per pixel, "
@@ -107,6 +113,25 @@ void cmd_fit_help(void)
 	       "default 4096)\n"
 	       "  --samples N           fixed env and lobe samples per hit "
 	       "(default 8 each)\n"
+	       "  --sample-sets K       final polish and Monte Carlo error on "
+	       "the mean of K\n"
+	       "                        independent sample sets (default 3; "
+	       "1: neither,\n"
+	       "                        faster; docs/fitting.md, "
+	       "\"Uncertainty\")\n"
+	       "  --level P             of the reported intervals (default "
+	       "0.95)\n"
+	       "  --accept-rmse X       take the fit when its relative RMSE "
+	       "is below X, instead\n"
+	       "                        of the rule (better than the bare "
+	       "backdrop and than\n"
+	       "                        a flat disc of the photo's mean "
+	       "colour); a refused\n"
+	       "                        fit's diagnostics go to OUT.refused\n"
+	       "  --force               replace OUT even when it holds files "
+	       "glint did not write\n"
+	       "                        (without it such a folder is refused "
+	       "before any work)\n"
 	       "  --max-iter N          LM iterations per pass (default 60)\n"
 	       "  --threads N           worker threads (default: all CPUs)\n"
 	       "  --wait                SESSION: wait for a running fit of "
@@ -114,8 +139,9 @@ void cmd_fit_help(void)
 	       "  --json                print params.json on stdout; logs as "
 	       "JSON lines\n"
 	       "  -q, --quiet           no progress or info messages\n"
-	       "\nExit status: 0 fitted, 1 bad input or failure (nothing "
-	       "written), 2 bad command\nline.\n");
+	       "\nExit status: 0 fitted, 1 bad input, failure (nothing "
+	       "written) or a refused\nfit (its diagnostics in OUT.refused, "
+	       "OUT untouched), 2 bad command line.\n");
 }
 
 void cmd_fit_progress(void *ctx, const char *pass, int iter, double cost)
@@ -133,7 +159,9 @@ void cmd_fit_progress(void *ctx, const char *pass, int iter, double cost)
 void cmd_print_params(const json_t *doc, const double *truth)
 {
 	json_t *ps = json_object_get(doc, "parameters"), *p;
+	json_t *unc = json_object_get(doc, "uncertainty");
 	size_t i;
+	double level = json_real_value(json_object_get(unc, "level"));
 
 	int w = 11; /* the longest name */
 	json_array_foreach(ps, i, p)
@@ -142,11 +170,13 @@ void cmd_print_params(const json_t *doc, const double *truth)
 		if (nm && (int)strlen(nm) > w)
 			w = (int)strlen(nm);
 	}
-	printf("  %-*s %10s %10s%s\n", w, "parameter", "value", "std.err",
+	printf("  %-*s %10s %10s %21s%s\n", w, "parameter", "value", "std.err",
+	       json_is_object(unc) ? "interval" : "",
 	       truth ? "       true      error" : "");
 	json_array_foreach(ps, i, p)
 	{
 		json_t *se = json_object_get(p, "stderr");
+		json_t *iv = json_object_get(p, "interval");
 		double v = json_real_value(json_object_get(p, "value"));
 		printf("  %-*s %10.4f ", w,
 		       json_string_value(json_object_get(p, "name")), v);
@@ -154,65 +184,43 @@ void cmd_print_params(const json_t *doc, const double *truth)
 			printf("%10.4f", json_real_value(se));
 		else
 			printf("%10s", "n/a");
-		if (json_is_true(json_object_get(p, "at_bound")))
+		if (json_is_array(iv))
+			printf("  [%8.4f, %8.4f]",
+			       json_real_value(json_array_get(iv, 0)),
+			       json_real_value(json_array_get(iv, 1)));
+		if (json_is_false(json_object_get(p, "determined")))
+			printf(" not determined");
+		else if (json_is_true(json_object_get(p, "at_bound")))
 			printf(" (at bound)");
 		if (truth)
 			printf(" %10.4f %+10.4f", truth[i], v - truth[i]);
 		printf("\n");
 	}
+	if (!json_is_object(unc))
+		return;
+	printf("  intervals: %.0f %%: noise over %d blocks of pixels "
+	       "(chi2/dof %.3g), %d sample sets,\n  and the render's "
+	       "systematic accuracy (docs/fitting.md, \"Uncertainty\")\n",
+	       100 * level,
+	       (int)json_integer_value(json_object_get(unc, "blocks")),
+	       json_real_value(json_object_get(unc, "chi2_dof")),
+	       (int)json_integer_value(json_object_get(unc, "sample_sets")));
+	json_array_foreach(json_object_get(unc, "findings"), i, p)
+		printf("  note: %s\n", json_string_value(p));
 }
 
 /* A sample's capture session, as glint fit SESSION uses it. */
-struct fit_session {
-	char scene[4200], photo[4200], weights[4200], out[4200];
-};
-
-static int fit_session_open(const char *dir, int wait, struct fit_session *fs,
-			    int *lock)
+static int fit_session_open(const char *dir, int wait,
+			    struct glint_session_fit *fs, int *lock)
 {
-	char path[4200];
-	struct stat st;
-	json_t *doc;
-	int ret;
+	char path[GLINT_PATH_MAX];
+	int ret = glint_session_fit_inputs(dir, fs);
 
-	if (stat(dir, &st) < 0 || !S_ISDIR(st.st_mode))
-		return glint_error_set(ENOENT,
-				       "%s: not a capture session folder "
-				       "(give SCENE.json and PHOTO, or a "
-				       "session)",
-				       dir);
-	snprintf(path, sizeof(path), "%s/session.json", dir);
-	ret = glint_json_load(path, &doc);
 	if (ret < 0)
 		return ret;
-	const char *status = json_string_value(json_object_get(doc, "status"));
-	const char *kind = json_string_value(json_object_get(doc, "kind"));
-	if (!status || strcmp(status, "complete") != 0 || !kind ||
-	    strcmp(kind, "sample") != 0) {
-		ret = glint_error_set(EINVAL,
-				      "%s: a %s %s session: expected a "
-				      "complete sample session",
-				      dir, status ? status : "(no status)",
-				      kind ? kind : "(no kind)");
-		json_decref(doc);
+	ret = glint_path_join(path, sizeof(path), dir, GLINT_SESSION_FIT_LOCK);
+	if (ret < 0)
 		return ret;
-	}
-	json_decref(doc);
-	snprintf(fs->scene, sizeof(fs->scene), "%s/scene.json", dir);
-	snprintf(fs->photo, sizeof(fs->photo), "%s/sample.exr", dir);
-	snprintf(fs->weights, sizeof(fs->weights), "%s/sample-weights.exr",
-		 dir);
-	snprintf(fs->out, sizeof(fs->out), "%s/fit", dir);
-	if (stat(fs->scene, &st) < 0)
-		return glint_error_set(ENOENT,
-				       "%s: no scene.json (the sample was "
-				       "captured without a probe or optics; "
-				       "capture the probe, then the sample, "
-				       "or write a scene, docs/scene.md)",
-				       dir);
-	if (stat(fs->weights, &st) < 0)
-		fs->weights[0] = '\0';
-	snprintf(path, sizeof(path), "%s/fit.lock", dir);
 	if (wait) {
 		ret = glint_lockfile_acquire(path, "glint fit", 0, lock);
 		if (ret == -EBUSY) {
@@ -260,7 +268,12 @@ int cmd_fit(int argc, char **argv)
 		O_LADDER,
 		O_LADDER_LIMIT,
 		O_SELECT,
-		O_LADDER_KNOBS
+		O_LADDER_KNOBS,
+		O_SETS,
+		O_LEVEL,
+		O_NOSELECT,
+		O_ACCEPT,
+		O_FORCE
 	};
 	static const struct option opts[] = {
 		{ "out", required_argument, NULL, 'o' },
@@ -273,6 +286,10 @@ int cmd_fit(int argc, char **argv)
 		{ "mask-threshold", required_argument, NULL, O_MASK },
 		{ "max-pixels", required_argument, NULL, O_MAXPIX },
 		{ "samples", required_argument, NULL, O_SAMPLES },
+		{ "sample-sets", required_argument, NULL, O_SETS },
+		{ "level", required_argument, NULL, O_LEVEL },
+		{ "accept-rmse", required_argument, NULL, O_ACCEPT },
+		{ "force", no_argument, NULL, O_FORCE },
 		{ "max-iter", required_argument, NULL, O_MAXITER },
 		{ "threads", required_argument, NULL, O_THREADS },
 		{ "json", no_argument, NULL, O_JSON },
@@ -282,6 +299,7 @@ int cmd_fit(int argc, char **argv)
 		{ "anneal-evals", required_argument, NULL, O_ANNEAL_EVALS },
 		{ "ladder", no_argument, NULL, O_LADDER },
 		{ "select-model", no_argument, NULL, O_SELECT },
+		{ "no-select-model", no_argument, NULL, O_NOSELECT },
 		{ "ladder-knobs", required_argument, NULL, O_LADDER_KNOBS },
 		{ "ladder-limit", required_argument, NULL, O_LADDER_LIMIT },
 		{ "quiet", no_argument, NULL, 'q' },
@@ -321,6 +339,9 @@ int cmd_fit(int argc, char **argv)
 			break;
 		case O_SELECT:
 			job.select = 1;
+			break;
+		case O_NOSELECT:
+			job.no_auto_select = 1;
 			break;
 		case O_LADDER:
 			if (!(job.ladder > 0))
@@ -404,6 +425,39 @@ int cmd_fit(int argc, char **argv)
 				return GLINT_EXIT_USAGE;
 			job.opts.light_samples = job.opts.lobe_samples = n;
 			break;
+		case O_SETS:
+			if (cmd_parse_int("fit", "--sample-sets", optarg, 1, 16,
+					  &n) < 0)
+				return GLINT_EXIT_USAGE;
+			job.opts.mc_draws = n - 1;
+			break;
+		case O_LEVEL: {
+			char *end;
+			job.opts.level = strtod(optarg, &end);
+			if (*end || !(job.opts.level > 0.5) ||
+			    !(job.opts.level < 1))
+				return cmd_usage_error("fit",
+						       "--level '%s': expected "
+						       "a probability in "
+						       "(0.5, 1), e.g. 0.95",
+						       optarg);
+			break;
+		}
+		case O_FORCE:
+			job.force = 1;
+			break;
+		case O_ACCEPT: {
+			char *end;
+			job.accept_rmse = strtod(optarg, &end);
+			if (*end || !(job.accept_rmse > 0) ||
+			    !isfinite(job.accept_rmse))
+				return cmd_usage_error("fit",
+						       "--accept-rmse '%s': "
+						       "expected a relative "
+						       "RMSE > 0, e.g. 0.5",
+						       optarg);
+			break;
+		}
 		case O_MAXITER:
 			if (cmd_parse_int("fit", "--max-iter", optarg, 1, 10000,
 					  &job.opts.max_iter) < 0)
@@ -432,7 +486,7 @@ int cmd_fit(int argc, char **argv)
 	}
 	if (json)
 		glint_log_set_mode(GLINT_LOG_JSON);
-	struct fit_session fs;
+	struct glint_session_fit fs;
 	int lock = -1, ret;
 	if (optind == argc - 1) {
 		ret = fit_session_open(argv[optind], wait, &fs, &lock);
@@ -485,6 +539,9 @@ int cmd_fit(int argc, char **argv)
 	       json_real_value(json_object_get(doc, "relative_rmse")),
 	       (int)json_integer_value(json_object_get(doc, "pixels")));
 	cmd_print_params(doc, NULL);
+	printf("  verdict: %s\n",
+	       json_string_value(json_object_get(
+		       json_object_get(doc, "acceptance"), "verdict")));
 	printf("results: %s/params.json, render.exr, compare.png\n",
 	       job.out_dir);
 	json_decref(doc);

@@ -48,6 +48,8 @@ void glint_fit_default_opts(struct glint_fit_opts *o)
 	o->optimizer = GLINT_OPT_AUTO;
 	o->seed = 1;
 	o->anneal_evals = 150;
+	o->mc_draws = 2;
+	o->level = 0.95;
 }
 
 int glint_fit_optimizer_parse(const char *s, enum glint_fit_optimizer *o)
@@ -65,6 +67,8 @@ int glint_fit_optimizer_parse(const char *s, enum glint_fit_optimizer *o)
 				       s);
 	return 0;
 }
+
+#define MAX_SETS 16
 
 /* What one LM pass optimises. */
 struct objective {
@@ -89,6 +93,15 @@ struct objective {
 	const struct glint_fit_opts *o;
 	struct glint_image *img;
 	int evals;
+	/* independent sample sets of the final estimate (sets[0] = cache;
+	 * the others owned), whose mean the statistics use */
+	struct glint_shade_cache *sets[MAX_SETS];
+	int nsets;
+	/* the shade caches' light and lobe samples are o's times this
+	 * (raised when the sample sets disagree by more than the noise) */
+	int sample_scale;
+	double mc_over_noise; /* the largest such ratio at the last check */
+	double model_noise;   /* the sets' variance over the residual's */
 };
 
 static int nonlinear_same(const struct objective *ob, const double *a,
@@ -505,6 +518,37 @@ static int opaque_cost(void *ctx, const double *q, double *c)
 	return ret;
 }
 
+/* Record a pass in res (the first GLINT_FIT_MAX_PASSES of them). */
+static void add_pass(struct glint_fit_result *res, const char *name, int pixels,
+		     int iterations, int evaluations, double cost0, double cost,
+		     double t0)
+{
+	if (res->npasses >= GLINT_FIT_MAX_PASSES)
+		return;
+	struct glint_fit_pass *fp = &res->passes[res->npasses++];
+	snprintf(fp->name, sizeof(fp->name), "%s", name);
+	fp->pixels = pixels;
+	fp->iterations = iterations;
+	fp->evaluations = evaluations;
+	fp->cost0 = cost0;
+	fp->cost = cost;
+	fp->seconds = glint_now() - t0;
+}
+
+/* LM options for glint's objective, reporting progress through pc. */
+static void objective_lm_opts(struct glint_lm_opts *lo, int max_iter,
+			      struct progress_ctx *pc)
+{
+	glint_lm_default_opts(lo);
+	/* The objective is a Monte Carlo estimate good to ~1e-3: a relative
+	 * cost drop below 1e-6 is no progress. */
+	lo->ftol = 1e-6;
+	lo->se_tol = 0.1;
+	lo->max_iter = max_iter;
+	lo->progress = lm_progress;
+	lo->progress_ctx = pc;
+}
+
 /* Adaptive simulated annealing over every parameter on selection sel
  * (fit/anneal.h); the caller polishes with LM. */
 static int anneal_pass(struct objective *ob, const int *sel, int nsel,
@@ -544,16 +588,8 @@ static int anneal_pass(struct objective *ob, const int *sel, int nsel,
 		return ret;
 	memcpy(ob->p, q, sizeof(double) * (size_t)m->nparams);
 	ob->memo_valid = 0;
-	if (res->npasses < GLINT_FIT_MAX_PASSES) {
-		struct glint_fit_pass *ps = &res->passes[res->npasses++];
-		snprintf(ps->name, sizeof(ps->name), "anneal");
-		ps->pixels = nsel;
-		ps->iterations = ar.accepted;
-		ps->evaluations = ar.evals;
-		ps->cost0 = ar.cost0;
-		ps->cost = ar.cost;
-		ps->seconds = glint_now() - t0;
-	}
+	add_pass(res, "anneal", nsel, ar.accepted, ar.evals, ar.cost0, ar.cost,
+		 t0);
 	glint_log_info("anneal: %d evaluations (%d accepted, %d re-anneals), "
 		       "cost %.4g -> %.4g: %s",
 		       ar.evals, ar.accepted, ar.reanneals, ar.cost0, ar.cost,
@@ -600,17 +636,12 @@ static int run_pass(struct objective *ob, const char *name, const int *sel,
 		ob->cache && !varpro ? obj_jacobian : NULL,
 		ob,
 	};
-	glint_lm_default_opts(&lo_opts);
-	/* The objective is a Monte Carlo estimate good to ~1e-3: a relative
-	 * cost drop below 1e-6 is no progress. */
-	lo_opts.ftol = 1e-6;
-	lo_opts.se_tol = 0.1;
-	lo_opts.max_iter = ob->o->max_iter;
 	/* The fine pass polishes a coarse optimum: a few steps do. */
-	if (!strcmp(name, "fine") && lo_opts.max_iter > 20)
-		lo_opts.max_iter = 20;
-	lo_opts.progress = lm_progress;
-	lo_opts.progress_ctx = &pc;
+	objective_lm_opts(&lo_opts,
+			  !strcmp(name, "fine") && ob->o->max_iter > 20
+				  ? 20
+				  : ob->o->max_iter,
+			  &pc);
 	int ret = glint_lm_solve(&pr, &lo_opts, q, lr);
 	if (ret < 0)
 		return ret;
@@ -623,16 +654,8 @@ static int run_pass(struct objective *ob, const char *name, const int *sel,
 		obj_residuals(ob, q, scratch);
 		free(scratch);
 	}
-	if (res->npasses < GLINT_FIT_MAX_PASSES) {
-		struct glint_fit_pass *fp = &res->passes[res->npasses++];
-		snprintf(fp->name, sizeof(fp->name), "%s", name);
-		fp->pixels = nsel;
-		fp->iterations = lr->iterations;
-		fp->evaluations = ob->evals;
-		fp->cost0 = lr->cost0;
-		fp->cost = lr->cost;
-		fp->seconds = glint_now() - t0;
-	}
+	add_pass(res, name, nsel, lr->iterations, ob->evals, lr->cost0,
+		 lr->cost, t0);
 	return 0;
 }
 
@@ -683,6 +706,27 @@ static double backdrop_error(const struct glint_gbuffer *gb,
 	return n && sy > 0 ? sqrt(se / n) / (sy / n) : INFINITY;
 }
 
+/* Lobes at ob->p on sel: the mean over the sample sets when there are
+ * several (a pixel is linear in its lobes), else the cache's. */
+static void mean_lobes(struct objective *ob, const int *sel, int nsel,
+		       double *lobes)
+{
+	size_t sz = (size_t)nsel * ob->m->nlobes * 3;
+	double *tmp = ob->nsets > 1 ? malloc(sz * sizeof(double)) : NULL;
+
+	glint_shade_cache_lobes_sel(ob->cache, ob->p, sel, nsel, lobes);
+	if (!tmp)
+		return;
+	for (int k = 1; k < ob->nsets; k++) {
+		glint_shade_cache_lobes_sel(ob->sets[k], ob->p, sel, nsel, tmp);
+		for (size_t i = 0; i < sz; i++)
+			lobes[i] += tmp[i];
+	}
+	for (size_t i = 0; i < sz; i++)
+		lobes[i] /= ob->nsets;
+	free(tmp);
+}
+
 static void finish_stats(struct objective *ob, const int *sel, int nsel,
 			 struct glint_fit_result *res)
 {
@@ -693,7 +737,7 @@ static void finish_stats(struct objective *ob, const int *sel, int nsel,
 				  : NULL;
 
 	if (ob->cache && lobes)
-		glint_shade_cache_lobes_sel(ob->cache, ob->p, sel, nsel, lobes);
+		mean_lobes(ob, sel, nsel, lobes);
 	else if (!ob->cache)
 		render_full(ob, ob->p);
 	for (int t = 0; t < nsel; t++) {
@@ -722,6 +766,819 @@ static void finish_stats(struct objective *ob, const int *sel, int nsel,
 	res->pixels = nsel;
 }
 
+/* The pixel sets the passes run on, as indices into the fit's pixels. */
+struct selections {
+	int *all, *coarse, *spec, *diff;
+	int nall, ncoarse, nspec, ndiff;
+};
+
+static void selections_free(struct selections *s)
+{
+	free(s->all);
+	free(s->coarse);
+	free(s->spec);
+	free(s->diff);
+}
+
+static void objective_free(struct objective *ob)
+{
+	for (int k = 1; k < ob->nsets; k++)
+		glint_shade_cache_free(ob->sets[k]);
+	glint_shade_cache_free(ob->cache);
+	glint_image_free(ob->img);
+	free(ob->lobes);
+	free(ob->lobes2);
+}
+
+/* A shade cache over every fitted pixel at the objective's sample counts;
+ * seed 0 is glint's fixed set, others independent ones. */
+static int new_cache(const struct objective *ob, uint32_t seed,
+		     struct glint_shade_cache **out)
+{
+	const struct glint_fit_opts *o = ob->o;
+	struct glint_shade_cache_opts co = {
+		.light_samples = o->light_samples * ob->sample_scale,
+		.lobe_samples = o->lobe_samples * ob->sample_scale,
+		.static_samples = o->static_samples,
+		.seed = seed,
+		.nthreads = o->nthreads,
+	};
+	return glint_shade_cache_new(&ob->r->gb, ob->d->pix, ob->d->n,
+				     ob->r->env, ob->m, &co, out);
+}
+
+/* The objective over d at the start values: lobe buffers and the shade
+ * cache (or the faithful path's image). */
+static int objective_init(struct objective *ob, struct glint_renderer *r,
+			  const struct glint_model_ops *model,
+			  const struct fit_data *d,
+			  const struct glint_fit_opts *o)
+{
+	memset(ob, 0, sizeof(*ob));
+	ob->r = r;
+	ob->m = model;
+	ob->d = d;
+	ob->o = o;
+	ob->sample_scale = 1;
+	for (int k = 0; k < model->nparams; k++) {
+		ob->p[k] = o->start ? o->start[k] : model->params[k].def;
+		ob->lobe_of[k] = ob->chan_of[k] = -1;
+	}
+	for (int j = 0; j < model->nlobes; j++)
+		for (int c = 0; c < 3; c++) {
+			ob->lobe_of[model->lobe_param[j] + c] = j;
+			ob->chan_of[model->lobe_param[j] + c] = c;
+		}
+	size_t nl = (size_t)d->n * model->nlobes * 3;
+	ob->lobes = malloc(nl * sizeof(double));
+	ob->lobes2 = malloc(nl * sizeof(double));
+	if (!ob->lobes || !ob->lobes2)
+		return glint_error_set(ENOMEM, "out of memory");
+	if (o->faithful) {
+		ob->img = glint_image_new(r->gb.width, r->gb.height);
+		return ob->img ? 0 : glint_error_set(ENOMEM, "out of memory");
+	}
+	return new_cache(ob, 0, &ob->cache);
+}
+
+/* The white render at every fitted pixel: the constant lobes at albedo 1
+ * (the faithful path renders a white Lambertian sphere in full). */
+static int white_render(struct objective *ob, const int *all, double *white)
+{
+	const struct fit_data *d = ob->d;
+	const struct glint_model_ops *model = ob->m;
+
+	if (!ob->cache) {
+		double white_p[GLINT_MAX_PARAMS] = { 1, 1, 1 };
+		struct objective wob = *ob;
+		wob.m = &glint_model_lambert;
+		int ret = render_full(&wob, white_p);
+		for (int s = 0; s < d->n && !ret; s++)
+			for (int c = 0; c < 3; c++)
+				white[3 * s + c] =
+					glint_image_px(ob->img, d->xy[2 * s],
+						       d->xy[2 * s + 1])[c];
+		return ret;
+	}
+	int nj = model->nlobes;
+	double *wl = malloc((size_t)d->n * nj * 3 * sizeof(double));
+	if (!wl)
+		return glint_error_set(ENOMEM, "out of memory");
+	glint_shade_cache_lobes_sel(ob->cache, ob->p, all, d->n, wl);
+	for (int s = 0; s < d->n; s++)
+		for (int c = 0; c < 3; c++) {
+			double w = 0;
+			for (int j = 0; j < nj; j++)
+				if (!model->lobe_varies[j])
+					w += wl[((size_t)s * nj + j) * 3 + c];
+			white[3 * s + c] = w;
+		}
+	free(wl);
+	return 0;
+}
+
+/*
+ * The specular mask.  The paper marks pixels where the photo exceeds the
+ * white render by more than a threshold; but a dark glossy material's
+ * highlights never outshine a white sphere (satin paint: 0.27 against
+ * 1.5), which leaves the mask empty and pass 1 fitting diffuse albedo on
+ * highlights.  A Lambertian surface of unknown albedo a shows photo = a x
+ * white everywhere, so glint marks the pixels whose ratio photo / white
+ * exceeds the median ratio by more than the threshold; the paper's rule is
+ * the case a = 1.
+ */
+static int specular_mask(struct objective *ob, const int *all,
+			 unsigned char *is_spec)
+{
+	const struct fit_data *d = ob->d;
+	double *white = malloc((size_t)d->n * 3 * sizeof(double));
+	double *ratio = malloc((size_t)d->n * sizeof(double));
+	double *tmp = malloc((size_t)d->n * sizeof(double));
+	int ret = white && ratio && tmp
+			  ? 0
+			  : glint_error_set(ENOMEM, "out of memory");
+
+	if (!ret)
+		ret = white_render(ob, all, white);
+	for (int s = 0; s < d->n && !ret; s++) {
+		double pw = rgb_luminance(d->y[3 * s], d->y[3 * s + 1],
+					  d->y[3 * s + 2]);
+		double ww = rgb_luminance(white[3 * s], white[3 * s + 1],
+					  white[3 * s + 2]);
+		ratio[s] = ww > 0 ? pw / ww : 0;
+	}
+	if (!ret && d->n) {
+		memcpy(tmp, ratio, (size_t)d->n * sizeof(double));
+		double med = median_of(tmp, d->n);
+		for (int s = 0; s < d->n; s++)
+			is_spec[s] =
+				ratio[s] > (1 + ob->o->mask_threshold) * med;
+	}
+	free(white);
+	free(ratio);
+	free(tmp);
+	return ret;
+}
+
+/*
+ * The selections.  The masks are computed on every fitted pixel; the
+ * coarse set is every 4th row and column plus every specular pixel: a
+ * grid alone can miss a small glint, and the glint is what pins roughness
+ * down (without it the coarse passes drift to any lobe).  The diffuse set
+ * is the coarse set's non-specular pixels.
+ */
+static int make_selections(struct objective *ob, struct selections *sl)
+{
+	const struct fit_data *d = ob->d;
+	size_t sz = (size_t)(d->n > 0 ? d->n : 1) * sizeof(int);
+	unsigned char *is_spec = NULL;
+	int ret = 0;
+
+	memset(sl, 0, sizeof(*sl));
+	sl->all = malloc(sz);
+	sl->coarse = malloc(sz);
+	sl->spec = malloc(sz);
+	sl->diff = malloc(sz);
+	is_spec = calloc((size_t)d->n + 1, 1);
+	if (!sl->all || !sl->coarse || !sl->spec || !sl->diff || !is_spec) {
+		ret = glint_error_set(ENOMEM, "out of memory");
+		goto out;
+	}
+	sl->nall = d->n;
+	for (int i = 0; i < d->n; i++)
+		sl->all[i] = i;
+	ret = specular_mask(ob, sl->all, is_spec);
+	if (ret < 0)
+		goto out;
+	for (int s = 0; s < d->n; s++) {
+		int on_grid = d->xy[2 * s] % (4 * d->stride) == 0 &&
+			      d->xy[2 * s + 1] % (4 * d->stride) == 0;
+		if (is_spec[s])
+			sl->spec[sl->nspec++] = s;
+		if (on_grid || is_spec[s])
+			sl->coarse[sl->ncoarse++] = s;
+	}
+	if (!ob->o->coarse_to_fine || sl->ncoarse < 64 ||
+	    sl->ncoarse > sl->nall / 2) {
+		memcpy(sl->coarse, sl->all, (size_t)sl->nall * sizeof(int));
+		sl->ncoarse = sl->nall;
+	}
+	for (int t = 0; t < sl->ncoarse; t++)
+		if (!is_spec[sl->coarse[t]])
+			sl->diff[sl->ndiff++] = sl->coarse[t];
+out:
+	free(is_spec);
+	return ret;
+}
+
+/* The paper's three passes on the coarse set. */
+static int three_pass(struct objective *ob, struct selections *sl,
+		      struct glint_fit_result *res)
+{
+	const struct glint_model_ops *model = ob->m;
+	const struct glint_fit_opts *o = ob->o;
+	struct glint_lm_result lr;
+	int freev[GLINT_MAX_PARAMS], any = 0, ret;
+
+	/* Pass 1: constant lobes only, the others switched off. */
+	for (int k = 0; k < model->nparams; k++) {
+		int j = ob->lobe_of[k];
+		freev[k] = j >= 0 && !model->lobe_varies[j];
+		if (j >= 0 && model->lobe_varies[j])
+			ob->p[k] = 0;
+	}
+	if (sl->ndiff < 8) {
+		memcpy(sl->diff, sl->coarse, (size_t)sl->ncoarse * sizeof(int));
+		sl->ndiff = sl->ncoarse;
+	}
+	ret = run_pass(ob, "1 diffuse", sl->diff, sl->ndiff, freev, 0, res,
+		       &lr);
+	if (ret < 0)
+		return ret;
+	/* Pass 2: the rest from the paper's values, diffuse held. */
+	for (int k = 0; k < model->nparams; k++) {
+		int j = ob->lobe_of[k];
+		freev[k] = !(j >= 0 && !model->lobe_varies[j]);
+		any |= freev[k];
+		if (freev[k])
+			ob->p[k] =
+				o->start ? o->start[k] : model->params[k].def;
+	}
+	if (any) {
+		const int *sel = sl->nspec >= 8 ? sl->spec : sl->coarse;
+		int nsel = sl->nspec >= 8 ? sl->nspec : sl->ncoarse;
+		ret = scan_start(ob, sel, nsel);
+		if (ret == 0)
+			ret = run_pass(ob, "2 specular", sel, nsel, freev, 0,
+				       res, &lr);
+		if (ret < 0)
+			return ret;
+	}
+	/* Pass 3: everything, all pixels. */
+	for (int k = 0; k < model->nparams; k++)
+		freev[k] = 1;
+	return run_pass(ob, "3 all", sl->coarse, sl->ncoarse, freev, 0, res,
+			&lr);
+}
+
+/* Variable projection: a log-spaced scan of the first nonlinear parameter
+ * (roughness for Torrance-Sparrow), then LM over the nonlinear ones with
+ * the albedos solved inside. */
+static int varpro_pass(struct objective *ob, const struct selections *sl,
+		       struct glint_fit_result *res)
+{
+	const struct glint_model_ops *model = ob->m;
+	struct glint_lm_result lr;
+	int freev[GLINT_MAX_PARAMS], nl = -1;
+
+	if (!ob->cache)
+		return glint_error_set(EINVAL, "variable projection needs the "
+					       "shade cache (not --faithful)");
+	for (int k = 0; k < model->nparams; k++) {
+		freev[k] = ob->lobe_of[k] < 0;
+		if (freev[k] && nl < 0)
+			nl = k;
+	}
+	if (nl < 0)
+		return 0;
+	const struct glint_param *pi = &model->params[nl];
+	double best = INFINITY, bestv = pi->def;
+	double lo = fmax(pi->lo, 1e-3), hi = fmin(pi->hi, 0.6);
+	if (nl == model->roughness_param)
+		lo = fmax(lo, ob->rough_lo);
+	double *scratch = malloc((size_t)3 * sl->ncoarse * sizeof(double));
+	if (!scratch)
+		return glint_error_set(ENOMEM, "out of memory");
+	ob->sel = sl->coarse;
+	ob->nsel = sl->ncoarse;
+	ob->varpro = 1;
+	ob->nfree = 0;
+	for (int i = 0; i < 10; i++) {
+		double v = lo * pow(hi / lo, i / 9.0);
+		ob->p[nl] = v;
+		ob->memo_valid = 0;
+		obj_residuals(ob, ob->p, scratch);
+		double c = 0;
+		for (int k = 0; k < 3 * sl->ncoarse; k++)
+			c += scratch[k] * scratch[k];
+		if (c < best) {
+			best = c;
+			bestv = v;
+		}
+	}
+	free(scratch);
+	ob->p[nl] = bestv;
+	return run_pass(ob, "varpro", sl->coarse, sl->ncoarse, freev, 1, res,
+			&lr);
+}
+
+/* The method's passes (or annealing and a polish) on the coarse set. */
+static int coarse_passes(struct objective *ob, struct selections *sl,
+			 struct glint_fit_result *res)
+{
+	const struct glint_fit_opts *o = ob->o;
+	struct glint_lm_result lr;
+	int freev[GLINT_MAX_PARAMS];
+
+	if (o->optimizer == GLINT_OPT_ANNEAL) {
+		/* Annealing over everything, then LM over everything. */
+		int ret = anneal_pass(ob, sl->coarse, sl->ncoarse, res);
+		for (int k = 0; k < ob->m->nparams; k++)
+			freev[k] = 1;
+		if (ret == 0)
+			ret = run_pass(ob, "anneal-polish", sl->coarse,
+				       sl->ncoarse, freev, 0, res, &lr);
+		return ret;
+	}
+	switch (o->method) {
+	case GLINT_FIT_THREE_PASS:
+		return three_pass(ob, sl, res);
+	case GLINT_FIT_NAIVE: {
+		int ret = scan_start(ob, sl->coarse, sl->ncoarse);
+		if (ret < 0)
+			return ret;
+		for (int k = 0; k < ob->m->nparams; k++)
+			freev[k] = 1;
+		return run_pass(ob, "all at once", sl->coarse, sl->ncoarse,
+				freev, 0, res, &lr);
+	}
+	case GLINT_FIT_VARPRO:
+		return varpro_pass(ob, sl, res);
+	}
+	return glint_error_set(EINVAL, "unknown fit method %d", o->method);
+}
+
+/*
+ * Coarse to fine: the coarse level could not see lobes below its spacing,
+ * so before polishing, compare the coarse result with sharper lobes at
+ * full resolution (log-spaced down to the model's bound, albedos solved
+ * exactly for each), start from the best, and polish everything on the
+ * full pixel set.
+ */
+static int fine_pass(struct objective *ob, const struct selections *sl,
+		     double coarse_rough_lo, struct glint_fit_result *res)
+{
+	const struct glint_model_ops *model = ob->m;
+	struct glint_lm_result lr;
+	int freev[GLINT_MAX_PARAMS], ret;
+
+	ob->rough_lo = 0;
+	if (sl->ncoarse >= sl->nall)
+		return 0;
+	if (model->roughness_param >= 0) {
+		ret = rescan_roughness(
+			ob, sl->all, sl->nall,
+			fmax(model->params[model->roughness_param].lo, 1e-3),
+			coarse_rough_lo, 6);
+		if (ret < 0)
+			return ret;
+	}
+	int vp = ob->o->method == GLINT_FIT_VARPRO;
+	for (int k = 0; k < model->nparams; k++)
+		freev[k] = vp ? ob->lobe_of[k] < 0 : 1;
+	return run_pass(ob, "fine", sl->all, sl->nall, freev, vp, res, &lr);
+}
+
+/* The Jacobian of the residuals by forward differences of obj_residuals
+ * (the faithful path, which has no cache to difference). */
+static int jacobian_fd(struct objective *ob, const double *q, const double *r,
+		       double *jac)
+{
+	int nf = ob->nfree, m = 3 * ob->nsel, ret = 0;
+	double *r2 = malloc((size_t)m * sizeof(double));
+	double qq[GLINT_MAX_PARAMS];
+
+	if (!r2)
+		return glint_error_set(ENOMEM, "out of memory");
+	for (int k = 0; k < nf && !ret; k++) {
+		const struct glint_param *pi = &ob->m->params[ob->free_idx[k]];
+		double h = FD_REL_STEP * fmax(fabs(q[k]), 1e-2);
+		if (q[k] + h > pi->hi)
+			h = -h;
+		memcpy(qq, q, sizeof(double) * (size_t)nf);
+		qq[k] += h;
+		ret = obj_residuals(ob, qq, r2);
+		for (int i = 0; i < m && !ret; i++)
+			jac[(size_t)i * nf + k] = (r2[i] - r[i]) / h;
+	}
+	free(r2);
+	return ret;
+}
+
+/* The block of each residual: an 8 x 8 grid over the fitted pixels'
+ * bounding box, numbered densely; returns the number of blocks. */
+static int pixel_blocks(const struct fit_data *d, const int *sel, int nsel,
+			int *block)
+{
+	int x0 = INT32_MAX, y0 = INT32_MAX, x1 = 0, y1 = 0, ids[64], nb = 0;
+
+	for (int t = 0; t < nsel; t++) {
+		int x = d->xy[2 * sel[t]], y = d->xy[2 * sel[t] + 1];
+		x0 = x < x0 ? x : x0;
+		y0 = y < y0 ? y : y0;
+		x1 = x > x1 ? x : x1;
+		y1 = y > y1 ? y : y1;
+	}
+	for (int b = 0; b < 64; b++)
+		ids[b] = -1;
+	double sx = (x1 - x0 + 1) / 8.0, sy = (y1 - y0 + 1) / 8.0;
+	for (int t = 0; t < nsel; t++) {
+		int bx = (int)((d->xy[2 * sel[t]] - x0) / sx),
+		    by = (int)((d->xy[2 * sel[t] + 1] - y0) / sy);
+		int b = (by < 8 ? by : 7) * 8 + (bx < 8 ? bx : 7);
+		if (ids[b] < 0)
+			ids[b] = nb++;
+		for (int c = 0; c < 3; c++)
+			block[3 * t + c] = ids[b];
+	}
+	return nb;
+}
+
+/* The fitted cache and `more` independent ones (seeds 1, 2, ...). */
+static int sample_sets(struct objective *ob, int more,
+		       struct glint_shade_cache **sets, int *nsets)
+{
+	int ret = 0;
+
+	sets[0] = ob->cache;
+	*nsets = 1;
+	for (int k = 1; k <= more && !ret; k++) {
+		ret = new_cache(ob, (uint32_t)k, &sets[k]);
+		if (ret == 0)
+			(*nsets)++;
+	}
+	return ret;
+}
+
+/* The average of several sample sets' estimates, as an LM problem over
+ * every parameter (ob selects them all). */
+struct sets_objective {
+	struct objective *ob;
+	struct glint_shade_cache *const *sets;
+	int nsets;
+	double *each; /* nsets x rows: each set's residuals at the last p */
+};
+
+static int sets_residuals(void *ctx, const double *q, double *r)
+{
+	struct sets_objective *so = ctx;
+	struct objective *ob = so->ob;
+	struct glint_shade_cache *fitted = ob->cache;
+	int rows = 3 * ob->nsel, ret = 0;
+
+	memset(r, 0, sizeof(double) * (size_t)rows);
+	for (int k = 0; k < so->nsets && !ret; k++) {
+		double *rk = so->each + (size_t)k * rows;
+		ob->cache = so->sets[k];
+		ob->memo_valid = 0;
+		ret = obj_residuals(ob, q, rk);
+		for (int i = 0; i < rows && !ret; i++)
+			r[i] += rk[i] / so->nsets;
+	}
+	ob->cache = fitted;
+	ob->memo_valid = 0;
+	return ret;
+}
+
+/* The fitted set's Jacobian stands for the average's: the polish then
+ * stops where J_fitted^T r_mean = 0, which differs from the average's
+ * own optimum only by the fitted set's share of the error in J (a third
+ * of it with three sets), at a third of the cost. */
+static int sets_jacobian(void *ctx, const double *q, const double *r,
+			 double *jac)
+{
+	struct sets_objective *so = ctx;
+	struct objective *ob = so->ob;
+
+	(void)r;
+	ob->memo_valid = 0;
+	return obj_jacobian(ob, q, NULL, jac);
+}
+
+/*
+ * The final estimate on the average of several independent sample sets.
+ * A fit on one fixed set minimises that set's estimate, whose Monte Carlo
+ * error grows or shrinks with the parameters, and the optimum leans
+ * towards where the error is smallest, the same way for every set: at
+ * 192 px and 8 + 8 samples, silver under Venice came out 9 % low in
+ * roughness for every seed, a fit at 32 + 32 samples within 1 %.  So
+ * from the fitted optimum a short LM polish on the sets' average (their
+ * mean residuals; the fitted set's Jacobian).  Leaves each set's
+ * residuals and their mean at the final ob->p in each and r, the
+ * Jacobian in jac.
+ */
+static int refine_on_sets(struct objective *ob,
+			  struct glint_shade_cache *const *sets, int nsets,
+			  const double *lo, const double *hi, double *each,
+			  double *r, double *jac, struct glint_fit_result *res)
+{
+	struct sets_objective so = { ob, sets, nsets, each };
+	int n = ob->nfree, rows = 3 * ob->nsel, ret = 0;
+	struct glint_lm_opts lo_opts;
+	struct glint_lm_result lr;
+	struct progress_ctx pc = { ob->o, "sample sets" };
+	double q[GLINT_MAX_PARAMS], t0 = glint_now();
+
+	memcpy(q, ob->p, sizeof(q));
+	if (nsets > 1) {
+		struct glint_lm_problem pr = {
+			n, rows, lo, hi, sets_residuals, sets_jacobian, &so,
+		};
+		objective_lm_opts(&lo_opts, 4, &pc);
+		ret = glint_lm_solve(&pr, &lo_opts, q, &lr);
+		if (ret < 0)
+			return ret;
+		memcpy(ob->p, q, sizeof(double) * (size_t)n);
+		char name[32];
+		snprintf(name, sizeof(name), "%d sample sets", nsets);
+		add_pass(res, name, ob->nsel, lr.iterations, lr.evaluations,
+			 lr.cost0, lr.cost, t0);
+	}
+	ret = sets_residuals(&so, ob->p, r);
+	if (ret == 0)
+		ret = sets_jacobian(&so, ob->p, r, jac);
+	return ret;
+}
+
+/* Every pixel and every parameter, no variable projection. */
+static void select_all(struct objective *ob, const struct selections *sl)
+{
+	ob->sel = sl->all;
+	ob->nsel = sl->nall;
+	ob->varpro = 0;
+	ob->memo_valid = 0;
+	ob->nfree = ob->m->nparams;
+	for (int k = 0; k < ob->m->nparams; k++)
+		ob->free_idx[k] = k;
+}
+
+/*
+ * Weights from the noise model at the fit's prediction (fit_data.h), for
+ * a photo whose weights came with it (a weight image: a real noise model)
+ * and for the values the fit explains to within 3 standard deviations:
+ * there the photo's own noise is what is left, and weights made from it
+ * bias the fit.  Elsewhere the misfit is far above the noise, its weight
+ * correlates with nothing that matters, and moving the weights there
+ * would move the optimum (a near-mirror's sharp reflections: copper
+ * under the studio map ended 3x above the truth's cost).
+ */
+static int reweight(struct objective *ob, struct fit_data *d, double *r)
+{
+	double *pred;
+	int ret;
+
+	if (!d->noise_model)
+		return 0;
+	pred = malloc((size_t)3 * d->n * sizeof(double));
+	ret = pred ? 0 : glint_error_set(ENOMEM, "out of memory");
+	if (ret == 0)
+		ret = obj_residuals(ob, ob->p, r);
+	for (int i = 0; i < 3 * d->n && ret == 0; i++)
+		pred[i] = d->y[i];
+	for (int t = 0; t < ob->nsel && ret == 0; t++)
+		for (int c = 0; c < 3; c++) {
+			int i = 3 * ob->sel[t] + c;
+			double z = r[3 * t + c];
+			if (d->sw[i] > 0 && fabs(z) < 3)
+				pred[i] += z / d->sw[i];
+		}
+	if (ret == 0)
+		fit_data_reweight(d, pred);
+	ob->memo_valid = 0;
+	free(pred);
+	return ret;
+}
+
+/*
+ * The systematic standard uncertainty of each parameter: the accuracy of
+ * glint's fast render against the independent reference renderer, which
+ * no residual or sample set of one fit can show (fitter and reference
+ * differ in how they integrate the sun and the diffuse lobe: roughness
+ * comes out 3-9 % off depending on where the sun falls).  Measured by
+ * tests/sim/test_coverage.c (quick, two maps, 16-48 noise-free fits per
+ * group): the 68th percentile of |fit - truth| / truth is 0.4 % for the
+ * diffuse albedos, 4.6 % for the specular, 4.1 % for roughness and 1.1 %
+ * for ior; these are the standard uncertainties used (with an absolute
+ * 0.0005 floor on albedos, whose small values make relative errors large).
+ * Checked on the full study (every opaque Table-1 material, new
+ * placements): README, "Uncertainty".
+ */
+static void systematic(const struct glint_model_ops *m, const double *p,
+		       double *sys)
+{
+	for (int k = 0; k < m->nparams; k++) {
+		double rel = 0.011, floor = 0;
+		for (int j = 0; j < m->nlobes; j++)
+			if (k >= m->lobe_param[j] && k < m->lobe_param[j] + 3) {
+				rel = m->lobe_varies[j] ? 0.046 : 0.004;
+				floor = 0.0005;
+			}
+		if (k == m->roughness_param)
+			rel = 0.041;
+		sys[k] = hypot(rel * fabs(p[k]), floor);
+	}
+}
+
+/* One round of the uncertainty stage: reweight, the sample sets, the
+ * polish on their mean, the Jacobian and the covariance. */
+static int estimate_on_sets(struct objective *ob, struct fit_data *d,
+			    const struct selections *sl, int nsets,
+			    const double *lo, const double *hi, double *each,
+			    double *r, double *jac, int *block,
+			    struct glint_fit_result *res)
+{
+	const struct glint_model_ops *m = ob->m;
+	int n = m->nparams, rows = 3 * sl->nall, ret;
+
+	if (ob->cache) {
+		ret = reweight(ob, d, r);
+		if (ret == 0)
+			ret = sample_sets(ob, nsets - 1, ob->sets, &ob->nsets);
+		if (ret == 0)
+			ret = refine_on_sets(ob, ob->sets, nsets, lo, hi, each,
+					     r, jac, res);
+	} else {
+		ret = obj_residuals(ob, ob->p, r);
+		if (ret == 0)
+			ret = jacobian_fd(ob, ob->p, r, jac);
+	}
+	if (ret < 0)
+		return ret;
+	double sys[GLINT_MAX_PARAMS];
+	systematic(m, ob->p, sys);
+	struct glint_unc_problem pr = {
+		.n = n,
+		.m = rows,
+		.jac = jac,
+		.r = r,
+		.block = block,
+		.nblocks = pixel_blocks(ob->d, sl->all, sl->nall, block),
+		.p = ob->p,
+		.lo = lo,
+		.hi = hi,
+		.draws = nsets > 1 ? each : NULL,
+		.ndraws = nsets > 1 ? nsets : 0,
+		.sys = ob->o->no_systematic ? NULL : sys,
+		.level = ob->o->level,
+	};
+	return glint_uncertainty_compute(&pr, &res->unc);
+}
+
+/*
+ * Is the fitter's own sampling, not the photo, what limits the answer?
+ * Two measures from the sample sets: per parameter, the Monte Carlo
+ * variance of the optimum against the noise's (a map whose light sits in
+ * several softboxes: Blender's studio map moved silver's specular by
+ * 0.025 at 8 + 8 samples); per value, the sets' variance (the model's own
+ * noise) against the variance of the residual left.  The second catches
+ * the bias every set shares (errors in variables: least squares on a
+ * noisy model leans to where its noise fits; silver under Venice at
+ * 192 px, 0.36 at 8 + 8 and roughness 9 % low, within 5 % at 16 + 16),
+ * which the first cannot see.  Over 1, or over 0.25 (the model's noise
+ * above half the residual's), the caches are rebuilt with 2x the samples
+ * (4x when four times over), up to 64 + 64, and the stage runs again.
+ * Returns 1 to go again, 0 when done, or a negative errno.
+ */
+static int more_samples(struct objective *ob, const struct glint_uncertainty *u,
+			const double *each, const double *r, int rows)
+{
+	int n = u->n, base = ob->o->light_samples, nsets = ob->nsets;
+	double worst = 0, vm = 0, vr = 0;
+
+	if (!ob->cache || nsets < 2 || !(u->ndraws > 1))
+		return 0;
+	for (int k = 0; k < n; k++) {
+		double vn = u->cov_blocks[k * n + k], vk = u->cov_mc[k * n + k];
+		if (vn > 0 && isfinite(vn) && isfinite(vk))
+			worst = fmax(worst, vk / vn);
+	}
+	/* Per value: the sets' variance (the model's own noise) against
+	 * what the mean leaves (the photo's noise and any misfit). */
+	for (int i = 0; i < rows; i++) {
+		double s1 = 0, s2 = 0;
+		for (int k = 0; k < nsets; k++) {
+			double e = each[(size_t)k * rows + i];
+			s1 += e;
+			s2 += e * e;
+		}
+		vm += (s2 - s1 * s1 / nsets) / (nsets - 1);
+		vr += r[i] * r[i];
+	}
+	double vals = vr > 0 ? vm / vr : 0;
+	ob->mc_over_noise = worst;
+	ob->model_noise = vals;
+	if (!(worst > 1 || vals > 0.25) || base * ob->sample_scale * 2 > 64)
+		return 0;
+	int f = (worst > 4 || vals > 1) && base * ob->sample_scale * 4 <= 64
+			? 4
+			: 2;
+	glint_log_info(
+		"the fit's own sampling noise is %.2f of the residual "
+		"per value and %.2f of the noise per parameter "
+		"(variances): %d + %d samples per hit instead of %d + %d",
+		vals, worst, base * ob->sample_scale * f,
+		ob->o->lobe_samples * ob->sample_scale * f,
+		base * ob->sample_scale,
+		ob->o->lobe_samples * ob->sample_scale);
+	for (int k = 1; k < ob->nsets; k++)
+		glint_shade_cache_free(ob->sets[k]);
+	ob->nsets = 0;
+	glint_shade_cache_free(ob->cache);
+	ob->cache = NULL;
+	ob->sample_scale *= f;
+	ob->memo_valid = 0;
+	int ret = new_cache(ob, 0, &ob->cache);
+	return ret < 0 ? ret : 1;
+}
+
+/* The uncertainty at the optimum over every pixel and parameter
+ * (fit/optim/uncertainty.h): the Jacobian, the residuals, their blocks
+ * and each sample set's residuals,
+ * with more samples while the sets disagree by more than the noise. */
+static int uncertainty(struct objective *ob, struct fit_data *d,
+		       const struct selections *sl,
+		       struct glint_fit_result *res)
+{
+	const struct glint_model_ops *m = ob->m;
+	int n = m->nparams, rows = 3 * sl->nall, ret;
+	int nsets = ob->cache ? 1 + ob->o->mc_draws : 1;
+	double t0 = glint_now();
+	double *jac = malloc((size_t)rows * n * sizeof(double));
+	double *r = malloc((size_t)rows * sizeof(double));
+	double *each, lo[GLINT_MAX_PARAMS], hi[GLINT_MAX_PARAMS];
+	int *block = malloc((size_t)rows * sizeof(int));
+
+	if (nsets > MAX_SETS)
+		nsets = MAX_SETS;
+	each = malloc((size_t)nsets * rows * sizeof(double));
+	if (!jac || !r || !each || !block) {
+		ret = glint_error_set(ENOMEM, "out of memory");
+		goto out;
+	}
+	select_all(ob, sl);
+	for (int k = 0; k < n; k++) {
+		lo[k] = m->params[k].lo;
+		hi[k] = m->params[k].hi;
+	}
+	do
+		ret = estimate_on_sets(ob, d, sl, nsets, lo, hi, each, r, jac,
+				       block, res);
+	while (ret == 0 &&
+	       (ret = more_samples(ob, &res->unc, each, r, rows)) > 0);
+	if (ret < 0)
+		goto out;
+	res->light_samples = ob->o->light_samples * ob->sample_scale;
+	res->lobe_samples = ob->o->lobe_samples * ob->sample_scale;
+	res->mc_over_noise = ob->mc_over_noise;
+	res->model_noise = ob->model_noise;
+	res->cost = 0;
+	for (int i = 0; i < rows; i++)
+		res->cost += 0.5 * r[i] * r[i];
+	for (int k = 0; k < n; k++) {
+		double tol = 1e-9 * (hi[k] - lo[k]);
+		res->se[k] = res->unc.se[k];
+		res->at_bound[k] =
+			ob->p[k] <= lo[k] + tol || ob->p[k] >= hi[k] - tol;
+	}
+	res->unc_seconds = glint_now() - t0;
+out:
+	free(jac);
+	free(r);
+	free(each);
+	free(block);
+	return ret;
+}
+
+/* The evaluation at given parameters on the fit's terms: weights from the
+ * noise model at the prediction and the mean of the same sample sets. */
+static int eval_like_fit(struct objective *ob, struct fit_data *d,
+			 const struct selections *sl)
+{
+	double *r = malloc((size_t)3 * (sl->nall > 0 ? sl->nall : 1) *
+			   sizeof(double));
+	int ret = r ? 0 : glint_error_set(ENOMEM, "out of memory");
+
+	if (!ob->cache || ret < 0) {
+		free(r);
+		return ret;
+	}
+	select_all(ob, sl);
+	double p[GLINT_MAX_PARAMS];
+	memcpy(p, ob->p, sizeof(p));
+	if (ob->o->weights_at)
+		memcpy(ob->p, ob->o->weights_at,
+		       sizeof(double) * (size_t)ob->m->nparams);
+	ret = reweight(ob, d, r);
+	memcpy(ob->p, p, sizeof(p));
+	int nsets = 1 + ob->o->mc_draws;
+	if (ret == 0)
+		ret = sample_sets(ob,
+				  nsets < MAX_SETS ? nsets - 1 : MAX_SETS - 1,
+				  ob->sets, &ob->nsets);
+	free(r);
+	return ret;
+}
+
 static int fit_or_eval(struct glint_renderer *r,
 		       const struct glint_model_ops *model,
 		       const struct glint_image *photo,
@@ -729,12 +1586,9 @@ static int fit_or_eval(struct glint_renderer *r,
 		       const struct glint_fit_opts *o, const double *eval_p,
 		       struct glint_fit_result *res)
 {
-	const struct glint_gbuffer *gb = &r->gb;
 	struct fit_data d = { 0 };
-	struct objective ob;
-	int *all = NULL, *coarse = NULL, *spec = NULL, *diff = NULL;
-	int freev[GLINT_MAX_PARAMS];
-	struct glint_lm_result lr;
+	struct objective ob = { 0 };
+	struct selections sl = { 0 };
 	int ret, interior;
 	double t0 = glint_now();
 
@@ -742,179 +1596,42 @@ static int fit_or_eval(struct glint_renderer *r,
 		return glint_fit_dielectric(r, model, photo, weight, o, NULL,
 					    eval_p, res);
 	memset(res, 0, sizeof(*res));
-	memset(&ob, 0, sizeof(ob));
 	res->model = model;
 	if (model->nlobes <= 0)
 		return glint_error_set(EINVAL,
 				       "model %s cannot be fitted by LM here "
 				       "(no linear lobes)",
 				       model->name);
-	ret = fit_data_prepare(gb, photo, weight, o, &d, &interior);
+	ret = fit_data_prepare(&r->gb, photo, weight, o, &d, &interior);
 	if (ret < 0)
 		goto out;
 	res->interior = interior;
-
-	ob.r = r;
-	ob.m = model;
-	ob.d = &d;
-	ob.o = o;
-	for (int k = 0; k < model->nparams; k++) {
-		ob.p[k] = o->start ? o->start[k] : model->params[k].def;
-		ob.lobe_of[k] = ob.chan_of[k] = -1;
-	}
-	for (int j = 0; j < model->nlobes; j++)
-		for (int c = 0; c < 3; c++) {
-			ob.lobe_of[model->lobe_param[j] + c] = j;
-			ob.chan_of[model->lobe_param[j] + c] = c;
-		}
-	ob.lobes = malloc((size_t)d.n * model->nlobes * 3 * sizeof(double));
-	ob.lobes2 = malloc((size_t)d.n * model->nlobes * 3 * sizeof(double));
-	all = malloc((size_t)d.n * sizeof(int));
-	coarse = malloc((size_t)d.n * sizeof(int));
-	spec = malloc((size_t)d.n * sizeof(int));
-	diff = malloc((size_t)d.n * sizeof(int));
-	if (!ob.lobes || !ob.lobes2 || !all || !coarse || !spec || !diff) {
-		ret = glint_error_set(ENOMEM, "out of memory");
+	ret = objective_init(&ob, r, model, &d, o);
+	if (ret < 0)
 		goto out;
-	}
-	if (o->faithful) {
-		ob.img = glint_image_new(gb->width, gb->height);
-		if (!ob.img) {
-			ret = -ENOMEM;
-			goto out;
-		}
-	} else {
-		struct glint_shade_cache_opts co = {
-			.light_samples = o->light_samples,
-			.lobe_samples = o->lobe_samples,
-			.static_samples = o->static_samples,
-			.nthreads = o->nthreads,
-		};
-		ret = glint_shade_cache_new(gb, d.pix, d.n, r->env, model, &co,
-					    &ob.cache);
-		if (ret < 0)
-			goto out;
-	}
 	res->setup_seconds = glint_now() - t0;
 	if (eval_p) {
-		for (int i = 0; i < d.n; i++)
-			all[i] = i;
 		memcpy(ob.p, eval_p, (size_t)model->nparams * sizeof(double));
 		memcpy(res->p, ob.p, sizeof(res->p));
-		finish_stats(&ob, all, d.n, res);
-		res->seconds = glint_now() - t0;
-		ret = 0;
-		goto out;
-	}
-
-	/*
-	 * Selections.  The masks are computed on every fitted pixel; the
-	 * coarse set is every 4th row and column plus every specular pixel:
-	 * a grid alone can miss a small glint, and the glint is what pins
-	 * roughness down (without it the coarse passes drift to any lobe).
-	 */
-	int nall = d.n, ncoarse = 0, nspec = 0, ndiff = 0;
-	unsigned char *is_spec = calloc((size_t)d.n, 1);
-	if (!is_spec) {
-		ret = glint_error_set(ENOMEM, "out of memory");
-		goto out;
-	}
-	for (int i = 0; i < d.n; i++)
-		all[i] = i;
-	/* The white render: the constant lobes at albedo 1 (the faithful
-	 * path renders a white Lambertian sphere in full). */
-	double *white = malloc((size_t)d.n * 3 * sizeof(double));
-	double *ratio = malloc((size_t)d.n * sizeof(double));
-	if (!white || !ratio) {
-		free(white);
-		free(ratio);
-		free(is_spec);
-		ret = glint_error_set(ENOMEM, "out of memory");
-		goto out;
-	}
-	if (o->faithful) {
-		double white_p[GLINT_MAX_PARAMS] = { 1, 1, 1 };
-		struct objective wob = ob;
-		wob.m = &glint_model_lambert;
-		ret = render_full(&wob, white_p);
-		for (int s = 0; s < d.n && !ret; s++)
-			for (int c = 0; c < 3; c++)
-				white[3 * s + c] =
-					glint_image_px(ob.img, d.xy[2 * s],
-						       d.xy[2 * s + 1])[c];
-	} else {
-		int nj = model->nlobes;
-		double *wl = malloc((size_t)d.n * nj * 3 * sizeof(double));
-		ret = wl ? 0 : glint_error_set(ENOMEM, "out of memory");
-		if (wl)
-			glint_shade_cache_lobes_sel(ob.cache, ob.p, all, d.n,
-						    wl);
-		for (int s = 0; s < d.n && wl; s++)
-			for (int c = 0; c < 3; c++) {
-				double w = 0;
-				for (int j = 0; j < nj; j++)
-					if (!model->lobe_varies[j])
-						w += wl[((size_t)s * nj + j) *
-								3 +
-							c];
-				white[3 * s + c] = w;
-			}
-		free(wl);
-	}
-	/*
-	 * The specular mask.  The paper marks pixels where the photo exceeds
-	 * the white render by more than a threshold; but a dark glossy
-	 * material's highlights never outshine a white sphere (satin paint:
-	 * 0.27 against 1.5), which leaves the mask empty and pass 1 fitting
-	 * diffuse albedo on highlights.  A Lambertian surface of unknown
-	 * albedo a shows photo = a x white everywhere, so glint marks the
-	 * pixels whose ratio photo / white exceeds the median ratio by more
-	 * than the threshold; the paper's rule is the case a = 1.
-	 */
-	int nr = 0;
-	for (int s = 0; s < d.n && !ret; s++) {
-		double pw = rgb_luminance(d.y[3 * s], d.y[3 * s + 1],
-					  d.y[3 * s + 2]);
-		double ww = rgb_luminance(white[3 * s], white[3 * s + 1],
-					  white[3 * s + 2]);
-		ratio[s] = ww > 0 ? pw / ww : 0;
-		nr++;
-	}
-	double med = 0;
-	if (!ret && nr) {
-		double *tmp = malloc((size_t)nr * sizeof(double));
-		if (tmp) {
-			memcpy(tmp, ratio, (size_t)nr * sizeof(double));
-			med = median_of(tmp, nr);
-			free(tmp);
+		sl.all = malloc((size_t)(d.n > 0 ? d.n : 1) * sizeof(int));
+		if (!sl.all) {
+			ret = glint_error_set(ENOMEM, "out of memory");
+			goto out;
 		}
-	}
-	for (int s = 0; s < d.n && !ret; s++)
-		is_spec[s] = ratio[s] > (1 + o->mask_threshold) * med;
-	free(white);
-	free(ratio);
-	if (ret < 0) {
-		free(is_spec);
+		for (int i = 0; i < d.n; i++)
+			sl.all[i] = i;
+		sl.nall = d.n;
+		ret = eval_like_fit(&ob, &d, &sl);
+		if (ret < 0)
+			goto out;
+		finish_stats(&ob, sl.all, d.n, res);
+		res->seconds = glint_now() - t0;
 		goto out;
 	}
-	for (int s = 0; s < d.n; s++) {
-		int on_grid = d.xy[2 * s] % (4 * d.stride) == 0 &&
-			      d.xy[2 * s + 1] % (4 * d.stride) == 0;
-		if (is_spec[s])
-			spec[nspec++] = s;
-		if (on_grid || is_spec[s])
-			coarse[ncoarse++] = s;
-	}
-	if (!o->coarse_to_fine || ncoarse < 64 || ncoarse > nall / 2) {
-		memcpy(coarse, all, (size_t)nall * sizeof(int));
-		ncoarse = nall;
-	}
-	/* The diffuse mask, within the set the passes run on. */
-	for (int t = 0; t < ncoarse; t++)
-		if (!is_spec[coarse[t]])
-			diff[ndiff++] = coarse[t];
-	free(is_spec);
-	res->specular_pixels = nspec;
+	ret = make_selections(&ob, &sl);
+	if (ret < 0)
+		goto out;
+	res->specular_pixels = sl.nspec;
 	/*
 	 * A level sampled every `spacing` pixels cannot tell lobes narrower
 	 * than the reflected directions between its samples (about
@@ -923,205 +1640,24 @@ static int fit_or_eval(struct glint_renderer *r,
 	 * samples and "mirror" becomes a false minimum.  Coarse passes keep
 	 * roughness above that; the fine pass is free.
 	 */
-	if (ncoarse < nall) {
-		double radius_px = sqrt(interior / M_PI);
-		ob.rough_lo = 4.0 * d.stride / radius_px;
-	}
-
-	if (o->optimizer == GLINT_OPT_ANNEAL && !eval_p) {
-		/* Annealing over everything, then LM over everything. */
-		ret = anneal_pass(&ob, coarse, ncoarse, res);
-		for (int k = 0; k < model->nparams && ret == 0; k++)
-			freev[k] = 1;
-		if (ret == 0)
-			ret = run_pass(&ob, "anneal-polish", coarse, ncoarse,
-				       freev, 0, res, &lr);
-	} else
-		switch (o->method) {
-		case GLINT_FIT_THREE_PASS: {
-			/* Pass 1: constant lobes only, the others switched off.
-			 */
-			for (int k = 0; k < model->nparams; k++) {
-				int j = ob.lobe_of[k];
-				freev[k] = j >= 0 && !model->lobe_varies[j];
-				if (j >= 0 && model->lobe_varies[j])
-					ob.p[k] = 0;
-			}
-			if (ndiff < 8) {
-				memcpy(diff, coarse,
-				       (size_t)ncoarse * sizeof(int));
-				ndiff = ncoarse;
-			}
-			ret = run_pass(&ob, "1 diffuse", diff, ndiff, freev, 0,
-				       res, &lr);
-			if (ret < 0)
-				goto out;
-			/* Pass 2: the rest from the paper's values, diffuse
-			 * held. */
-			int any = 0;
-			for (int k = 0; k < model->nparams; k++) {
-				int j = ob.lobe_of[k];
-				freev[k] = !(j >= 0 && !model->lobe_varies[j]);
-				any |= freev[k];
-				if (freev[k])
-					ob.p[k] =
-						o->start ? o->start[k]
-							 : model->params[k].def;
-			}
-			if (any) {
-				const int *sel = nspec >= 8 ? spec : coarse;
-				int nsel = nspec >= 8 ? nspec : ncoarse;
-				ret = scan_start(&ob, sel, nsel);
-				if (ret < 0)
-					goto out;
-				ret = run_pass(&ob, "2 specular", sel, nsel,
-					       freev, 0, res, &lr);
-				if (ret < 0)
-					goto out;
-			}
-			/* Pass 3: everything, all pixels. */
-			for (int k = 0; k < model->nparams; k++)
-				freev[k] = 1;
-			ret = run_pass(&ob, "3 all", coarse, ncoarse, freev, 0,
-				       res, &lr);
-			break;
-		}
-		case GLINT_FIT_NAIVE:
-			ret = scan_start(&ob, coarse, ncoarse);
-			if (ret < 0)
-				goto out;
-			for (int k = 0; k < model->nparams; k++)
-				freev[k] = 1;
-			ret = run_pass(&ob, "all at once", coarse, ncoarse,
-				       freev, 0, res, &lr);
-			break;
-		case GLINT_FIT_VARPRO: {
-			if (o->faithful) {
-				ret = glint_error_set(
-					EINVAL, "variable projection needs the "
-						"shade cache (not --faithful)");
-				goto out;
-			}
-			/* Coarse scan of the first nonlinear parameter
-			 * (roughness for Torrance-Sparrow), log-spaced, then
-			 * LM. */
-			int nl = -1;
-			for (int k = 0; k < model->nparams; k++) {
-				freev[k] = ob.lobe_of[k] < 0;
-				if (freev[k] && nl < 0)
-					nl = k;
-			}
-			if (nl >= 0) {
-				const struct glint_param *pi =
-					&model->params[nl];
-				double best = INFINITY, bestv = pi->def;
-				double lo = fmax(pi->lo, 1e-3),
-				       hi = fmin(pi->hi, 0.6);
-				if (nl == model->roughness_param)
-					lo = fmax(lo, ob.rough_lo);
-				double *scratch = malloc((size_t)3 * ncoarse *
-							 sizeof(double));
-				if (!scratch) {
-					ret = -ENOMEM;
-					goto out;
-				}
-				ob.sel = coarse;
-				ob.nsel = ncoarse;
-				ob.varpro = 1;
-				ob.nfree = 0;
-				for (int i = 0; i < 10; i++) {
-					double v = lo * pow(hi / lo, i / 9.0);
-					ob.p[nl] = v;
-					ob.memo_valid = 0;
-					obj_residuals(&ob, ob.p, scratch);
-					double c = 0;
-					for (int k = 0; k < 3 * ncoarse; k++)
-						c += scratch[k] * scratch[k];
-					if (c < best) {
-						best = c;
-						bestv = v;
-					}
-				}
-				free(scratch);
-				ob.p[nl] = bestv;
-				ret = run_pass(&ob, "varpro", coarse, ncoarse,
-					       freev, 1, res, &lr);
-			}
-			break;
-		}
-		}
+	double coarse_rough_lo = 4.0 * d.stride / sqrt(interior / M_PI);
+	if (sl.ncoarse < sl.nall)
+		ob.rough_lo = coarse_rough_lo;
+	ret = coarse_passes(&ob, &sl, res);
+	if (ret == 0)
+		ret = fine_pass(&ob, &sl, coarse_rough_lo, res);
+	if (ret == 0)
+		ret = uncertainty(&ob, &d, &sl, res);
 	if (ret < 0)
 		goto out;
-	/* Coarse to fine: polish everything on the full pixel set. */
-	ob.rough_lo = 0;
-	if (ncoarse < nall && model->roughness_param >= 0) {
-		/* The coarse level could not see lobes below its spacing:
-		 * before polishing, compare the coarse result with sharper and
-		 * rougher lobes at full resolution, albedos solved exactly for
-		 * each, and start from the best. */
-		/* Below the coarse bound (which the coarse level could not
-		 * resolve), log-spaced down to the model's bound. */
-		ret = rescan_roughness(
-			&ob, all, nall,
-			fmax(model->params[model->roughness_param].lo, 1e-3),
-			4.0 * d.stride / sqrt(interior / M_PI), 6);
-		if (ret < 0)
-			goto out;
-	}
-	if (ncoarse < nall) {
-		int vp = o->method == GLINT_FIT_VARPRO;
-		for (int k = 0; k < model->nparams; k++)
-			freev[k] = vp ? ob.lobe_of[k] < 0 : 1;
-		ret = run_pass(&ob, "fine", all, nall, freev, vp, res, &lr);
-		if (ret < 0)
-			goto out;
-	}
-	/* Standard errors over every parameter at the optimum: an LM call
-	 * that takes no step but computes the Jacobian. */
-	{
-		struct glint_lm_result fin;
-		struct glint_fit_result dummy = { 0 };
-		struct glint_fit_opts o0 = *o;
-		o0.max_iter = 0;
-		ob.o = &o0;
-		for (int k = 0; k < model->nparams; k++)
-			freev[k] = 1;
-		ret = run_pass(&ob, "errors", all, nall, freev, 0, &dummy,
-			       &fin);
-		ob.o = o;
-		if (ret < 0)
-			goto out;
-		for (int k = 0; k < model->nparams; k++) {
-			res->se[k] = fin.se[k];
-			res->at_bound[k] = fin.at_bound[k];
-		}
-		res->cost = fin.cost;
-	}
 	memcpy(res->p, ob.p, sizeof(res->p));
-	finish_stats(&ob, all, nall, res);
-	res->backdrop_rel_rmse = backdrop_error(gb, r->env, &d);
+	finish_stats(&ob, sl.all, sl.nall, res);
+	res->backdrop_rel_rmse = backdrop_error(&r->gb, r->env, &d);
+	fit_data_baselines(&d, &res->flat_rel_rmse, &res->noise_rmse);
 	res->seconds = glint_now() - t0;
-	if (res->backdrop_rel_rmse < res->rel_rmse) {
-		ret = glint_error_set(EINVAL,
-				      "the photo shows the backdrop, not a "
-				      "sphere, where the scene puts it (the "
-				      "bare environment explains it with a "
-				      "relative RMSE of %.3f, the fitted "
-				      "sphere only %.3f): wrong scene or "
-				      "sphere position?",
-				      res->backdrop_rel_rmse, res->rel_rmse);
-		goto out;
-	}
-	ret = 0;
 out:
-	glint_shade_cache_free(ob.cache);
-	glint_image_free(ob.img);
-	free(ob.lobes);
-	free(ob.lobes2);
-	free(all);
-	free(coarse);
-	free(spec);
-	free(diff);
+	objective_free(&ob);
+	selections_free(&sl);
 	free_data(&d);
 	return ret;
 }

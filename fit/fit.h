@@ -25,6 +25,7 @@
  */
 
 #include "fit/optim/lm.h"
+#include "fit/optim/uncertainty.h"
 #include "fit/render/render.h"
 #include "fit/render/shade_cache.h"
 
@@ -73,6 +74,18 @@ struct glint_fit_opts {
 	int no_start_scan;   /* LM from the start as given, without the
 				roughness scan (fit.c, scan_start): for the
 				stability study's failure cases */
+	/* Independent sample sets of the shade cache whose spread gives the
+	 * fitter's own Monte Carlo error (fit/optim/uncertainty.h); 0: none
+	 * (the intervals then ignore it). */
+	int mc_draws;
+	double level; /* of the reported intervals (0.95) */
+	/* leave out the systematic term (the fast render's accuracy against
+	 * the reference renderer: fit.c, systematic()) */
+	int no_systematic;
+	/* glint_fit_evaluate(): the weights from the noise model at these
+	 * parameters' prediction (a fit's result: its own objective at
+	 * other parameters); NULL: at the evaluated parameters */
+	const double *weights_at;
 	int nthreads;
 	/* Called as passes run (may be NULL). */
 	void (*progress)(void *ctx, const char *pass, int iter, double cost);
@@ -95,15 +108,28 @@ struct glint_fit_pass {
 struct glint_fit_result {
 	const struct glint_model_ops *model;
 	double p[GLINT_MAX_PARAMS];
-	double se[GLINT_MAX_PARAMS];
+	double se[GLINT_MAX_PARAMS]; /* = unc.se: INFINITY if unseen */
 	int at_bound[GLINT_MAX_PARAMS];
+	/* Intervals, covariance and how they were made: noise over spatial
+	 * blocks of pixels plus the fitter's Monte Carlo spread. */
+	struct glint_uncertainty unc;
+	double unc_seconds;
 	double cost;	 /* 1/2 weighted SSD at the end (fitted pixels) */
 	double wcost;	 /* the same cost, recomputed over every pixel */
 	double rmse;	 /* unweighted, over the fitted pixels */
 	double rel_rmse; /* rmse / mean photo value there */
 	double backdrop_rel_rmse; /* the same for the bare backdrop */
-	int pixels;		  /* pixels in the final pass */
-	int interior;		  /* pixels wholly on the sphere */
+	double flat_rel_rmse;	  /* ... for a flat disc of the photo's mean */
+	double noise_rmse; /* what noise alone leaves (NAN: no noise model) */
+	/* The shade caches' samples per hit at the end: o's, or more where
+	 * the sample sets disagreed by more than the photo's noise, and that
+	 * variance ratio (largest over the parameters) at the last check */
+	int light_samples, lobe_samples;
+	double mc_over_noise;
+	/* ... and per value: the sets' variance over the residual's */
+	double model_noise;
+	int pixels;   /* pixels in the final pass */
+	int interior; /* pixels wholly on the sphere */
 	int specular_pixels;
 	struct glint_fit_pass passes[GLINT_FIT_MAX_PASSES];
 	int npasses;
@@ -131,8 +157,10 @@ int glint_fit(struct glint_renderer *r, const struct glint_model_ops *model,
 	      const struct glint_fit_opts *o, struct glint_fit_result *res);
 
 /*
- * The objective of glint_fit() at given parameters p, without fitting:
- * fills res->rmse, rel_rmse, pixels and interior (and p).  For judging a
+ * The objective of glint_fit() at given parameters p, without fitting,
+ * on the fit's terms (weights from the noise model at the prediction,
+ * the mean of the same sample sets): fills res->rmse, rel_rmse, wcost,
+ * pixels and interior (and p).  For judging a
  * fit against the truth, or a material against a photo.
  */
 int glint_fit_evaluate(struct glint_renderer *r,

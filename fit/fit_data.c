@@ -36,7 +36,9 @@ static int collect_pixels(const struct glint_gbuffer *gb, int stride,
 	d->xy = malloc((size_t)cap * 2 * sizeof(int));
 	d->y = malloc((size_t)cap * 3 * sizeof(double));
 	d->sw = malloc((size_t)cap * 3 * sizeof(double));
-	if (!d->pix || !d->xy || !d->y || !d->sw)
+	d->va = malloc((size_t)cap * 3 * sizeof(double));
+	d->vb = malloc((size_t)cap * 3 * sizeof(double));
+	if (!d->pix || !d->xy || !d->y || !d->sw || !d->va || !d->vb)
 		return glint_error_set(ENOMEM, "out of memory");
 	for (int y = 0; y < gb->height; y++)
 		for (int x = 0; x < gb->width; x++) {
@@ -75,6 +77,58 @@ void free_data(struct fit_data *d)
 	free(d->xy);
 	free(d->y);
 	free(d->sw);
+	free(d->va);
+	free(d->vb);
+}
+
+/*
+ * The noise model of a weight image: per channel, the variance 1 / w
+ * regressed on the value as a + b v (shot plus read noise); each value
+ * keeps its own variance, scaled along that line: va + vb v with
+ * va = var a / (a + b y), vb = var b / (a + b y).  A channel whose line
+ * is not a noise model (b <= 0 or a < 0) keeps its weights as given.
+ */
+static void weight_noise_model(struct fit_data *d)
+{
+	for (int c = 0; c < 3; c++) {
+		double s1 = 0, sy = 0, sv = 0, syy = 0, syv = 0;
+		for (int i = c; i < 3 * d->n; i += 3) {
+			if (!(d->sw[i] > 0))
+				continue;
+			double v = 1 / (d->sw[i] * d->sw[i]), y = d->y[i];
+			s1++;
+			sy += y;
+			sv += v;
+			syy += y * y;
+			syv += y * v;
+		}
+		double det = s1 * syy - sy * sy;
+		double b = det > 0 ? (s1 * syv - sy * sv) / det : 0;
+		double a = s1 > 0 ? (sv - b * sy) / s1 : 0;
+		int model = b > 0 && a >= 0;
+		for (int i = c; i < 3 * d->n; i += 3) {
+			double v = d->sw[i] > 0 ? 1 / (d->sw[i] * d->sw[i]) : 0;
+			double at = a + b * fmax(0, d->y[i]);
+			if (model && at > 0) {
+				d->va[i] = v * a / at;
+				d->vb[i] = v * b / at;
+			} else {
+				d->va[i] = v;
+				d->vb[i] = 0;
+			}
+		}
+	}
+}
+
+void fit_data_reweight(struct fit_data *d, const double *pred)
+{
+	for (int i = 0; i < 3 * d->n; i++) {
+		if (!(d->sw[i] > 0))
+			continue;
+		double v = d->va[i] + d->vb[i] * fmax(0, pred[i]);
+		if (v > 0)
+			d->sw[i] = 1 / sqrt(v);
+	}
 }
 
 /* Check the photo carries a signal where the sphere should be. */
@@ -160,7 +214,10 @@ int fit_data_prepare(const struct glint_gbuffer *gb,
 	ret = check_photo(d);
 	if (ret < 0)
 		return ret;
-	if (!weight && o->weighting == GLINT_WEIGHT_POISSON) {
+	if (weight) {
+		weight_noise_model(d);
+		d->noise_model = 1;
+	} else if (o->weighting == GLINT_WEIGHT_POISSON) {
 		double mean = 0;
 		int nv = 0;
 		for (int i = 0; i < 3 * d->n; i++)
@@ -169,10 +226,50 @@ int fit_data_prepare(const struct glint_gbuffer *gb,
 				nv++;
 			}
 		mean /= nv;
-		for (int i = 0; i < 3 * d->n; i++)
-			if (d->sw[i] > 0)
-				d->sw[i] =
-					1 / sqrt(fmax(0, d->y[i]) + 0.1 * mean);
+		for (int i = 0; i < 3 * d->n; i++) {
+			d->va[i] = 0.1 * mean;
+			d->vb[i] = 1;
+		}
+		fit_data_reweight(d, d->y);
+	} else {
+		for (int i = 0; i < 3 * d->n; i++) {
+			d->va[i] = 1;
+			d->vb[i] = 0;
+		}
 	}
 	return 0;
+}
+
+/*
+ * What the photo alone says about a fit's residual, over the same values
+ * as the backdrop check (fit.c): the relative RMSE of a flat disc of the
+ * photo's mean colour (a sphere's shading and reflections explain much of that
+ * spread; a photo of something else leaves it), and the RMSE noise alone
+ * would leave when the weights come from a real noise model (NAN else).
+ */
+void fit_data_baselines(const struct fit_data *d, double *flat_rel,
+			double *noise_rmse)
+{
+	double sum[3] = { 0, 0, 0 }, se = 0, sv = 0, sy = 0;
+	int cnt[3] = { 0, 0, 0 }, n = 0;
+
+	for (int i = 0; i < d->n; i++)
+		for (int c = 0; c < 3; c++)
+			if (d->sw[3 * i + c] > 0) {
+				sum[c] += d->y[3 * i + c];
+				cnt[c]++;
+			}
+	for (int i = 0; i < d->n; i++)
+		for (int c = 0; c < 3; c++) {
+			double sw = d->sw[3 * i + c];
+			if (!(sw > 0))
+				continue;
+			double e = d->y[3 * i + c] - sum[c] / cnt[c];
+			se += e * e;
+			sv += 1 / (sw * sw);
+			sy += d->y[3 * i + c];
+			n++;
+		}
+	*flat_rel = n && sy > 0 ? sqrt(se / n) / (sy / n) : INFINITY;
+	*noise_rmse = n && d->noise_model ? sqrt(sv / n) : NAN;
 }

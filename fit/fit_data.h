@@ -14,7 +14,15 @@ struct fit_data {
 	int *xy;      /* x, y pairs */
 	double *y;    /* photo, 3 per pixel */
 	double *sw;   /* sqrt of the weights, 3 per pixel */
-	int stride;   /* every stride-th row and column was taken */
+	/* The noise model behind the weights, 3 per pixel: the variance of
+	 * a value whose noise-free signal is v is va + vb v.  Weights made
+	 * from the photo's own noisy values correlate with its noise (a
+	 * pixel that came out dark gets more weight) and bias the fit low;
+	 * fit_data_reweight() evaluates the model at the fit's prediction
+	 * instead. */
+	double *va, *vb;
+	int noise_model; /* va, vb model a weight image (a real noise model) */
+	int stride;	 /* every stride-th row and column was taken */
 };
 
 void free_data(struct fit_data *d);
@@ -31,5 +39,15 @@ int fit_data_prepare(const struct glint_gbuffer *gb,
 		     const struct glint_image *weight,
 		     const struct glint_fit_opts *o, struct fit_data *d,
 		     int *interior);
+
+/* Weights from the noise model at the predicted values pred (3 per
+ * pixel), for values that have a weight (pred = y: unchanged). */
+void fit_data_reweight(struct fit_data *d, const double *pred);
+
+/* Baselines for judging a fit's residual, over every value with a weight:
+ * the relative RMSE of a flat disc of the photo's mean colour, and the
+ * RMSE that noise alone leaves (NAN without a real noise model). */
+void fit_data_baselines(const struct fit_data *d, double *flat_rel,
+			double *noise_rmse);
 
 #endif

@@ -430,6 +430,7 @@ int glint_fit_dielectric(struct glint_renderer *r,
 	res->rel_rmse = nv && sy > 0 ? res->rmse / (sy / nv) : NAN;
 	res->pixels = d.n;
 	res->backdrop_rel_rmse = NAN;
+	fit_data_baselines(&d, &res->flat_rel_rmse, &res->noise_rmse);
 	res->seconds = glint_now() - t0;
 	glint_log_info("dielectric fit: %d evaluations, %d path traces, "
 		       "largest dropped branch weight %.2g",

@@ -14,6 +14,7 @@
 #include "core/atomic_dir.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/path.h"
 #include "core/formats.h"
 #include "core/log.h"
 
@@ -89,8 +90,14 @@ static int select_model(struct glint_renderer *r,
 		break;
 	default:
 		*res = sel->full;
-		memcpy(res->p, c->p, sizeof(res->p));
-		memcpy(res->se, c->se, sizeof(res->se));
+		if (sel->chosen != GLINT_SEL_RGB) {
+			/* The reduced model's values and standard errors
+			 * (select.c); the full fit's intervals and
+			 * covariance do not apply to them. */
+			memcpy(res->p, c->p, sizeof(res->p));
+			memcpy(res->se, c->se, sizeof(res->se));
+			res->unc.n = 0;
+		}
 	}
 	*model = c->model;
 	res->model = c->model;
@@ -100,134 +107,119 @@ static int select_model(struct glint_renderer *r,
 	return ret;
 }
 
-int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
+/* The fit as the job asks: the model picked (--model auto) or selected
+ * (--select-model), then through the fidelity ladder or plainly.  *why,
+ * *selection and *fidelity get their JSON (or stay NULL). */
+static int run_fit(struct glint_renderer *r, const struct glint_fit_job *job,
+		   struct glint_fit_opts *o,
+		   const struct glint_model_ops **model,
+		   struct glint_fit_result *res, json_t **why,
+		   json_t **selection, json_t **fidelity)
 {
-	struct glint_renderer r;
-	struct glint_fit_result res;
-	struct glint_progress prog;
-	struct glint_atomic_dir ad;
-	struct glint_image *img = NULL, *cov = NULL;
-	char path[4300];
-	json_t *fidelity = NULL, *selection = NULL;
-	int ret;
+	int ret = 0;
 
-	*result = NULL;
-	glint_progress_start(&prog, "trace", job->scene.cam.height);
-	ret = glint_renderer_init(&r, &job->scene, job->nthreads, &prog);
-	glint_progress_finish(&prog);
-	if (ret < 0)
-		return ret;
-	struct glint_fit_opts o = job->opts;
-	o.nthreads = job->nthreads;
-	const struct glint_model_ops *model = job->model;
-	json_t *why = NULL;
-	if (!model) {
-		ret = pick_model(&r, job, &o, &model, &why);
+	*model = job->model;
+	if (!*model) {
+		ret = pick_model(r, job, o, model, why);
 		if (ret < 0)
-			goto out;
+			return ret;
 	}
-	if (job->select && !model->transparent) {
-		ret = select_model(&r, job, &o, &model, &res, &selection);
-		if (ret < 0)
-			goto out;
-	}
-	if (selection)
-		; /* fitted already */
-	else if (job->ladder > 0 && !model->transparent) {
+	if (job->select && !(*model)->transparent)
+		return select_model(r, job, o, model, res, selection);
+	if (job->ladder > 0 && !(*model)->transparent) {
 		struct glint_ladder_result *lr = calloc(1, sizeof(*lr));
-		ret = lr ? glint_ladder_run(&job->scene, model, job->photo,
-					    job->weight, &o, job->ladder,
+		ret = lr ? glint_ladder_run(&job->scene, *model, job->photo,
+					    job->weight, o, job->ladder,
 					    job->ladder_knobs, job->nthreads,
 					    lr)
-			 : -ENOMEM;
+			 : glint_error_set(ENOMEM, "out of memory");
 		if (!ret) {
-			res = lr->chosen_fit;
-			fidelity = glint_ladder_to_json(lr);
+			*res = lr->chosen_fit;
+			*fidelity = glint_ladder_to_json(lr);
 			if (glint_log_get_mode() == GLINT_LOG_HUMAN)
 				glint_ladder_print(lr, stderr);
 		}
 		free(lr);
-	} else
-		ret = glint_fit(&r, model, job->photo, job->weight, &o, &res);
-	if (o.progress)
-		o.progress(o.progress_ctx, NULL, 0,
-			   0); /* the passes are done */
-	if (ret < 0)
-		goto out;
-	/* A photo that does not show the sphere where the scene says fits
-	 * badly whatever the parameters: say so rather than report them. */
-	/* (A transparent sphere's sharp refracted detail aliases: its
-	 * relative RMSE runs higher; docs/fitting.md.) */
-	if (!(res.rel_rmse < (model->transparent ? 3.0 : 0.5))) {
-		ret = glint_error_set(EINVAL,
-				      "%s: the fit leaves a relative RMSE of "
-				      "%.2f on the sphere: the photo does not "
-				      "look like the scene's sphere (wrong "
-				      "scene, position or image?)",
-				      job->photo_path, res.rel_rmse);
-		goto out;
+		return ret;
 	}
-	/* The result rendered in full (MIS, the scene's sample counts). */
-	img = glint_image_new(job->scene.cam.width, job->scene.cam.height);
-	cov = glint_image_new(job->scene.cam.width, job->scene.cam.height);
-	if (!img || !cov) {
-		ret = -ENOMEM;
-		goto out;
-	}
-	struct glint_shade_opts so = {
-		.light_samples = job->scene.light_samples,
-		.brdf_samples = job->scene.brdf_samples,
-		.background = 1,
-		.nthreads = job->nthreads,
-	};
-	ret = glint_renderer_shade(&r, model, res.p, &so, img, cov);
-	if (ret < 0)
-		goto out;
+	ret = glint_fit(r, *model, job->photo, job->weight, o, res);
+	if (ret < 0 || job->no_auto_select || (*model)->transparent ||
+	    (*model)->nlobes < 2 || !glint_fit_needs_selection(res))
+		return ret;
+	glint_log_info("the photo does not determine every parameter of %s: "
+		       "choosing the model by BIC (--select-model)",
+		       (*model)->name);
+	return select_model(r, job, o, model, res, selection);
+}
+
+/* params.json for a fit (without the model choice, selection, fidelity
+ * and output, which the caller adds); a new reference. */
+static json_t *params_doc(const struct glint_fit_job *job,
+			  const struct glint_fit_opts *o,
+			  const struct glint_fit_result *res)
+{
+	const struct glint_model_ops *model = res->model;
 	json_t *doc = json_pack(
 		"{s:s,s:s,s:o,s:o,s:{s:s,s:b,s:b,s:f,s:i,s:i},s:f,s:f,s:f,"
 		"s:i,s:i,s:i,s:o,s:f,s:f,s:{s:s,s:s},s:s}",
 		"model", model->name, "conventions", model->conventions,
-		"material", glint_material_to_json(model, res.p), "parameters",
-		glint_fit_params_json(&res), "method", "name",
-		glint_fit_method_name(o.method), "coarse_to_fine",
-		o.coarse_to_fine, "faithful", o.faithful, "mask_threshold",
-		o.mask_threshold, "light_samples", o.light_samples,
-		"lobe_samples", o.lobe_samples, "cost", res.cost, "rmse",
-		res.rmse, "relative_rmse", res.rel_rmse, "pixels", res.pixels,
-		"interior_pixels", res.interior, "specular_pixels",
-		res.specular_pixels, "passes", glint_fit_passes_json(&res),
-		"seconds", res.seconds, "setup_seconds", res.setup_seconds,
-		"inputs", "scene", job->scene_path, "photo", job->photo_path,
-		"weighting",
-		job->weight			      ? "weight image"
-		: o.weighting == GLINT_WEIGHT_POISSON ? "poisson"
-						      : "uniform");
+		"material", glint_material_to_json(model, res->p), "parameters",
+		glint_fit_params_json(res), "method", "name",
+		glint_fit_method_name(o->method), "coarse_to_fine",
+		o->coarse_to_fine, "faithful", o->faithful, "mask_threshold",
+		o->mask_threshold, "light_samples",
+		res->light_samples ? res->light_samples : o->light_samples,
+		"lobe_samples",
+		res->lobe_samples ? res->lobe_samples : o->lobe_samples, "cost",
+		res->cost, "rmse", res->rmse, "relative_rmse", res->rel_rmse,
+		"pixels", res->pixels, "interior_pixels", res->interior,
+		"specular_pixels", res->specular_pixels, "passes",
+		glint_fit_passes_json(res), "seconds", res->seconds,
+		"setup_seconds", res->setup_seconds, "inputs", "scene",
+		job->scene_path, "photo", job->photo_path, "weighting",
+		job->weight			       ? "weight image"
+		: o->weighting == GLINT_WEIGHT_POISSON ? "poisson"
+						       : "uniform");
+	if (!doc)
+		return NULL;
 	json_object_set_new(doc, "optimizer",
-			    json_string(o.optimizer == GLINT_OPT_LM ? "lm"
-					: o.optimizer == GLINT_OPT_ANNEAL
+			    json_string(o->optimizer == GLINT_OPT_LM ? "lm"
+					: o->optimizer == GLINT_OPT_ANNEAL
 						? "anneal"
 						: "auto"));
-	if (why) {
-		json_object_set_new(doc, "model_choice", why);
-		why = NULL;
+	json_object_set_new(doc, "uncertainty",
+			    glint_fit_uncertainty_json(res));
+	/* The fitter's own Monte Carlo noise against the photo's, per
+	 * parameter and per value (variance ratios at the last check; the
+	 * samples are raised above 1 and 0.25: docs/fitting.md). */
+	if (res->light_samples) {
+		json_t *meth = json_object_get(doc, "method");
+		json_object_set_new(meth, "sampling_over_noise",
+				    json_real(res->mc_over_noise));
+		json_object_set_new(meth, "model_noise_over_residual",
+				    json_real(res->model_noise));
 	}
-	if (fidelity) {
-		json_object_set_new(doc, "fidelity", fidelity);
-		fidelity = NULL;
-	}
-	if (selection) {
-		json_object_set_new(doc, "model_selection", selection);
-		selection = NULL;
-	}
-	ret = glint_atomic_dir_open(&ad, job->out_dir);
-	if (ret < 0) {
-		json_decref(doc);
-		goto out;
-	}
+	return doc;
+}
+
+/* params.json, render.exr and compare.png into job->out_dir, as one
+ * atomic folder (the old one stays whole on failure). */
+static int write_results(const struct glint_fit_job *job, const char *dir,
+			 const json_t *doc, const struct glint_image *img,
+			 const struct glint_image *cov)
+{
+	struct glint_atomic_dir ad;
+	char path[GLINT_PATH_MAX];
+	int ret = glint_atomic_dir_open(&ad, dir);
+
+	if (ret < 0)
+		return ret;
 	char *text = json_dumps(doc, JSON_INDENT(2) | JSON_REAL_PRECISION(9));
-	ret = glint_atomic_write_file(
-		glint_atomic_dir_file(&ad, "params.json", path, sizeof(path)),
-		text, strlen(text));
+	ret = text ? glint_atomic_write_file(
+			     glint_atomic_dir_file(&ad, "params.json", path,
+						   sizeof(path)),
+			     text, strlen(text))
+		   : glint_error_set(ENOMEM, "out of memory");
 	free(text);
 	if (!ret)
 		ret = glint_image_write(glint_atomic_dir_file(&ad, "render.exr",
@@ -243,13 +235,108 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 		ret = glint_atomic_dir_commit(&ad);
 	else
 		glint_atomic_dir_abort(&ad);
-	if (ret < 0) {
-		json_decref(doc);
+	return ret;
+}
+
+/* The output folder and the refused fit's sibling may be replaced (a
+ * previous result, or nothing): checked before any work. */
+static int check_outputs(const struct glint_fit_job *job)
+{
+	static const char *const names[] = { "params.json", "render.exr",
+					     "compare.png", NULL };
+	char dir[GLINT_PATH_MAX];
+	int ret = glint_atomic_dir_check(job->out_dir, names, job->force);
+
+	if (!ret)
+		ret = glint_path_fmt(dir, sizeof(dir), "%s.refused",
+				     job->out_dir);
+	if (!ret)
+		ret = glint_atomic_dir_check(dir, names, job->force);
+	return ret;
+}
+
+int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
+{
+	struct glint_renderer r;
+	struct glint_fit_result res;
+	struct glint_progress prog;
+	struct glint_image *img = NULL, *cov = NULL;
+	const struct glint_model_ops *model = NULL;
+	json_t *fidelity = NULL, *selection = NULL, *why = NULL, *doc = NULL;
+	int ret;
+
+	*result = NULL;
+	ret = check_outputs(job);
+	if (ret < 0)
+		return ret;
+	glint_progress_start(&prog, "trace", job->scene.cam.height);
+	ret = glint_renderer_init(&r, &job->scene, job->nthreads, &prog);
+	glint_progress_finish(&prog);
+	if (ret < 0)
+		return ret;
+	struct glint_fit_opts o = job->opts;
+	o.nthreads = job->nthreads;
+	ret = run_fit(&r, job, &o, &model, &res, &why, &selection, &fidelity);
+	if (o.progress)
+		o.progress(o.progress_ctx, NULL, 0,
+			   0); /* the passes are done */
+	if (ret < 0)
+		goto out;
+	/* The result rendered in full (MIS, the scene's sample counts). */
+	img = glint_image_new(job->scene.cam.width, job->scene.cam.height);
+	cov = glint_image_new(job->scene.cam.width, job->scene.cam.height);
+	if (!img || !cov) {
+		ret = glint_error_set(ENOMEM, "out of memory");
 		goto out;
 	}
+	struct glint_shade_opts so = {
+		.light_samples = job->scene.light_samples,
+		.brdf_samples = job->scene.brdf_samples,
+		.background = 1,
+		.nthreads = job->nthreads,
+	};
+	ret = glint_renderer_shade(&r, model, res.p, &so, img, cov);
+	if (ret < 0)
+		goto out;
+	doc = params_doc(job, &o, &res);
+	if (!doc) {
+		ret = glint_error_set(ENOMEM, "out of memory");
+		goto out;
+	}
+	if (why)
+		json_object_set(doc, "model_choice", why);
+	if (fidelity)
+		json_object_set(doc, "fidelity", fidelity);
+	if (selection)
+		json_object_set(doc, "model_selection", selection);
+	/* A fit is taken as a measurement by a stated rule; a refused one
+	 * leaves its evidence beside the output, which stays as it was. */
+	struct glint_fit_verdict v;
+	int accepted = glint_fit_judge(&res, job->accept_rmse, &v);
+	json_object_set_new(doc, "accepted", json_boolean(accepted));
+	json_object_set_new(doc, "acceptance",
+			    glint_fit_verdict_json(&res, &v));
+	if (!accepted) {
+		char dir[GLINT_PATH_MAX];
+		ret = glint_path_fmt(dir, sizeof(dir), "%s.refused",
+				     job->out_dir);
+		if (!ret)
+			ret = write_results(job, dir, doc, img, cov);
+		if (!ret)
+			ret = glint_error_set(EINVAL,
+					      "%s: fit refused: %s (the fit's "
+					      "diagnostics are in %s)",
+					      job->photo_path, v.verdict, dir);
+		goto out;
+	}
+	ret = write_results(job, job->out_dir, doc, img, cov);
+	if (ret < 0)
+		goto out;
 	json_object_set_new(doc, "output", json_string(job->out_dir));
 	*result = doc;
+	doc = NULL;
 out:
+	json_decref(doc);
 	json_decref(why);
 	json_decref(fidelity);
 	json_decref(selection);

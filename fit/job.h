@@ -27,15 +27,28 @@ struct glint_fit_job {
 	 * standard errors and report its fit */
 	double ladder;
 	unsigned ladder_knobs; /* 0: all */
-	/* choose among the opaque models by BIC (fit/select.h) */
+	/* choose among the opaque models by BIC (fit/select.h); without it
+	 * the choice is made anyway when the fit leaves a parameter
+	 * undetermined, unless no_auto_select */
 	int select;
+	int no_auto_select;
+	/* > 0: accept a fit whose relative RMSE is below this instead of
+	 * the default rule (glint_fit_judge) */
+	double accept_rmse;
+	/* replace out_dir even when it holds files glint did not write */
+	int force;
 };
 
 /*
  * Trace, fit, render the result and write out_dir/{params.json,
- * render.exr, compare.png} as one atomic folder.  A fit whose relative
- * RMSE says the photo does not show the scene's sphere is refused
- * (-EINVAL, nothing written).  *result is the params.json document plus
+ * render.exr, compare.png} as one atomic folder.  Before any work, an
+ * out_dir (or its ".refused" sibling) that holds anything but a previous
+ * result is refused unless force, and the current folder always
+ * (glint_atomic_dir_check).  A fit that
+ * glint_fit_judge() refuses fails with -EINVAL and the reason; its
+ * diagnostics (the same three files, params.json with "accepted": false)
+ * go to the sibling folder out_dir + ".refused", and out_dir is left as
+ * it was.  *result is the params.json document plus
  * "output" (the caller json_decref()s it).
  */
 int glint_fit_job_run(const struct glint_fit_job *job, json_t **result);
@@ -44,5 +57,41 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result);
  * "passes" arrays for a result; new references. */
 json_t *glint_fit_params_json(const struct glint_fit_result *r);
 json_t *glint_fit_passes_json(const struct glint_fit_result *r);
+
+/* params.json's "uncertainty": how the intervals were made, the
+ * covariance and correlation, and findings: parameters the photo does
+ * not determine, trade-offs (with the combination it does determine),
+ * roughness below the pixel footprint.  JSON null when the fitter gave
+ * no covariance (transparent models).  A new reference. */
+json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r);
+
+/*
+ * Whether a fit is taken as a measurement, by a stated rule: its relative
+ * RMSE must be below both the bare backdrop's (else the photo shows the
+ * backdrop where the scene puts the sphere) and a flat disc's of the
+ * photo's mean colour (else it shows something else); or, when
+ * accept_rmse > 0, below that.  An accepted fit gets a misfit verdict:
+ * its residual against what noise alone leaves.
+ */
+struct glint_fit_verdict {
+	int accepted;
+	double limit; /* the relative RMSE the fit had to stay below */
+	double ratio; /* rmse / noise_rmse (NAN without a noise model) */
+	char rule[160];
+	char verdict[320];
+};
+
+/* Fill v; returns v->accepted. */
+int glint_fit_judge(const struct glint_fit_result *r, double accept_rmse,
+		    struct glint_fit_verdict *v);
+
+/* params.json's "acceptance" (a new reference). */
+json_t *glint_fit_verdict_json(const struct glint_fit_result *r,
+			       const struct glint_fit_verdict *v);
+
+/* Does the photo leave a parameter of r undetermined, or specular and ior
+ * trading off (|correlation| >= 0.95)?  Then glint_fit_job_run() chooses
+ * the model by BIC as --select-model does (issue 15). */
+int glint_fit_needs_selection(const struct glint_fit_result *r);
 
 #endif

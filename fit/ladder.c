@@ -125,6 +125,11 @@ static int fit_at(struct ladder *l, const struct glint_ladder_setting *s,
 	 * second row and column): rich, and not minutes per fit. */
 	o.max_pixels = o.max_pixels > 16384 ? o.max_pixels : 16384;
 	o.start = start;
+	/* Knobs are judged against the photo's noise: one fixed sample set
+	 * per fit, standard errors from the noise part alone (the polish on
+	 * several sets moves each fit by its own Monte Carlo draw, which is
+	 * the fitter's, not the scene model's). */
+	o.mc_draws = 0;
 	o.progress = NULL;
 	o.nthreads = l->nthreads;
 	int ret = photo_at(l, s->res_factor, &photo, &weight);
@@ -136,8 +141,8 @@ static int fit_at(struct ladder *l, const struct glint_ladder_setting *s,
 			: glint_image_dup(l->env_img);
 	if (!img)
 		return glint_error_set(ENOMEM, "out of memory");
-	snprintf(what, sizeof(what), "%s (box-averaged by %d)", sc.env_path,
-		 s->env_factor);
+	glint_text(what, sizeof(what), "%s (box-averaged by %d)", sc.env_path,
+		   s->env_factor);
 	ret = glint_envmap_new(img, sc.env_rotation, sc.env_scale, what, &env);
 	if (ret < 0)
 		return ret;
@@ -240,6 +245,107 @@ static void explain(struct glint_ladder_knob *kn,
 			 kn->level[0].seconds, kn->level[0].value);
 }
 
+/* Knobs not tried stay as the scene and options have them. */
+static void untried(struct glint_ladder_result *out,
+		    const struct glint_scene *scene,
+		    const struct glint_fit_opts *base, unsigned knobs)
+{
+	for (int k = 0; k < GLINT_LADDER_NKNOBS; k++) {
+		if (!knobs || knobs & 1u << k)
+			continue;
+		struct glint_ladder_knob *kn = &out->knob[k];
+		int v = k == GLINT_LADDER_SPP	    ? scene->spp
+			: k == GLINT_LADDER_SAMPLES ? base->light_samples
+			: k == GLINT_LADDER_DOF ? scene->cam.aperture_radius > 0
+						: 1;
+		kn->nlevels = 1;
+		kn->level[0].value = v;
+		*knob_value(&out->reference, k) = v;
+		snprintf(kn->why, sizeof(kn->why),
+			 "not tried: as the scene and options have it");
+	}
+}
+
+/* Each knob's cheaper levels, one at a time from the reference fit: the
+ * cheapest whose effect stays below the threshold is chosen. */
+static void try_levels(struct ladder *l, struct glint_ladder_result *out,
+		       double threshold)
+{
+	int which;
+
+	for (int k = 0; k < GLINT_LADDER_NKNOBS; k++) {
+		struct glint_ladder_knob *kn = &out->knob[k];
+		kn->level[0].seconds = out->ref_seconds;
+		kn->level[0].tried = 1;
+		for (int i = 1; i < kn->nlevels; i++) {
+			struct glint_ladder_setting s = out->reference;
+			struct glint_fit_result fr;
+			struct glint_ladder_level *lv = &kn->level[i];
+			*knob_value(&s, k) = lv->value;
+			if (fit_at(l, &s, out->ref_fit.p, &fr, &lv->seconds) <
+			    0) {
+				glint_log_warn("fidelity ladder: %s = %d: %s",
+					       kn->name, lv->value,
+					       glint_error_msg());
+				lv->effect = INFINITY;
+				continue;
+			}
+			lv->tried = 1;
+			lv->effect = effect_of(&fr, &out->ref_fit, &which);
+			lv->param = which;
+			glint_log_info("fidelity ladder: %s %d: %.2f standard "
+				       "errors, %.2f s",
+				       kn->name, lv->value, lv->effect,
+				       lv->seconds);
+			if (lv->effect < threshold)
+				kn->chosen = i;
+		}
+	}
+}
+
+/* The choices together: fitted, and while they move the fit by a
+ * standard error or more, the knob whose own choice moved it most steps
+ * back up. */
+static int combine(struct ladder *l, struct glint_ladder_result *out,
+		   const double *start, const struct glint_model_ops *model)
+{
+	int which;
+
+	for (;;) {
+		for (int k = 0; k < GLINT_LADDER_NKNOBS; k++)
+			*knob_value(&out->chosen, k) =
+				out->knob[k].level[out->knob[k].chosen].value;
+		int ret = fit_at(l, &out->chosen, start, &out->chosen_fit,
+				 &out->chosen_seconds);
+		if (ret < 0)
+			return ret;
+		out->final_effect =
+			effect_of(&out->chosen_fit, &out->ref_fit, &which);
+		out->final_param = which;
+		if (out->final_effect < 1)
+			return 0;
+		int worst = -1;
+		for (int k = 0; k < GLINT_LADDER_NKNOBS; k++) {
+			struct glint_ladder_knob *kn = &out->knob[k];
+			if (kn->chosen > 0 &&
+			    (worst < 0 ||
+			     kn->level[kn->chosen].effect >
+				     out->knob[worst]
+					     .level[out->knob[worst].chosen]
+					     .effect))
+				worst = k;
+		}
+		if (worst < 0)
+			return 0; /* at the reference: the start matters */
+		out->knob[worst].chosen--;
+		out->backoffs++;
+		glint_log_info("fidelity ladder: the choices together move %s "
+			       "by %.2f standard errors; %s steps back up",
+			       which >= 0 ? model->params[which].name : "?",
+			       out->final_effect, out->knob[worst].name);
+	}
+}
+
 int glint_ladder_run(const struct glint_scene *scene,
 		     const struct glint_model_ops *model,
 		     const struct glint_image *photo,
@@ -249,7 +355,7 @@ int glint_ladder_run(const struct glint_scene *scene,
 		     struct glint_ladder_result *out)
 {
 	struct ladder l = { 0 };
-	int ret, which;
+	int ret;
 
 	memset(out, 0, sizeof(*out));
 	if (model->transparent)
@@ -269,93 +375,17 @@ int glint_ladder_run(const struct glint_scene *scene,
 	if (ret < 0)
 		return glint_error_prefix(ret, "fidelity ladder");
 	set_levels(&l, out);
-	/* Knobs not tried stay as the scene and options have them. */
-	for (int k = 0; k < GLINT_LADDER_NKNOBS; k++)
-		if (knobs && !(knobs & 1u << k)) {
-			struct glint_ladder_knob *kn = &out->knob[k];
-			int v = k == GLINT_LADDER_SPP ? scene->spp
-				: k == GLINT_LADDER_SAMPLES
-					? base->light_samples
-				: k == GLINT_LADDER_DOF
-					? scene->cam.aperture_radius > 0
-					: 1;
-			kn->nlevels = 1;
-			kn->level[0].value = v;
-			*knob_value(&out->reference, k) = v;
-			snprintf(kn->why, sizeof(kn->why),
-				 "not tried: as the scene and options have it");
-		}
-
+	untried(out, scene, base, knobs);
 	glint_log_info("fidelity ladder: reference fit (every knob tried at "
 		       "its richest)");
 	ret = fit_at(&l, &out->reference, base->start, &out->ref_fit,
 		     &out->ref_seconds);
 	if (ret < 0)
 		goto done;
-	for (int k = 0; k < GLINT_LADDER_NKNOBS; k++) {
-		struct glint_ladder_knob *kn = &out->knob[k];
-		kn->level[0].seconds = out->ref_seconds;
-		kn->level[0].tried = 1;
-		for (int i = 1; i < kn->nlevels; i++) {
-			struct glint_ladder_setting s = out->reference;
-			struct glint_fit_result fr;
-			struct glint_ladder_level *lv = &kn->level[i];
-			*knob_value(&s, k) = lv->value;
-			ret = fit_at(&l, &s, out->ref_fit.p, &fr, &lv->seconds);
-			if (ret < 0) {
-				glint_log_warn("fidelity ladder: %s = %d: %s",
-					       kn->name, lv->value,
-					       glint_error_msg());
-				lv->effect = INFINITY;
-				continue;
-			}
-			lv->tried = 1;
-			lv->effect = effect_of(&fr, &out->ref_fit, &which);
-			lv->param = which;
-			glint_log_info("fidelity ladder: %s %d: %.2f standard "
-				       "errors, %.2f s",
-				       kn->name, lv->value, lv->effect,
-				       lv->seconds);
-			if (lv->effect < threshold)
-				kn->chosen = i;
-		}
-	}
-	ret = 0;
-	for (;;) {
-		for (int k = 0; k < GLINT_LADDER_NKNOBS; k++)
-			*knob_value(&out->chosen, k) =
-				out->knob[k].level[out->knob[k].chosen].value;
-		ret = fit_at(&l, &out->chosen, base->start, &out->chosen_fit,
-			     &out->chosen_seconds);
-		if (ret < 0)
-			goto done;
-		out->final_effect =
-			effect_of(&out->chosen_fit, &out->ref_fit, &which);
-		out->final_param = which;
-		if (out->final_effect < 1)
-			break;
-		/* Together the choices move the fit too far: step back the
-		 * knob whose choice moved it most. */
-		int worst = -1;
-		for (int k = 0; k < GLINT_LADDER_NKNOBS; k++) {
-			struct glint_ladder_knob *kn = &out->knob[k];
-			if (kn->chosen > 0 &&
-			    (worst < 0 ||
-			     kn->level[kn->chosen].effect >
-				     out->knob[worst]
-					     .level[out->knob[worst].chosen]
-					     .effect))
-				worst = k;
-		}
-		if (worst < 0)
-			break; /* at the reference: the start matters */
-		out->knob[worst].chosen--;
-		out->backoffs++;
-		glint_log_info("fidelity ladder: the choices together move %s "
-			       "by %.2f standard errors; %s steps back up",
-			       which >= 0 ? model->params[which].name : "?",
-			       out->final_effect, out->knob[worst].name);
-	}
+	try_levels(&l, out, threshold);
+	ret = combine(&l, out, base->start, model);
+	if (ret < 0)
+		goto done;
 	for (int k = 0; k < GLINT_LADDER_NKNOBS; k++)
 		explain(&out->knob[k], model, threshold);
 done:

@@ -1,23 +1,69 @@
 /* SPDX-License-Identifier: MIT */
-/* A fit's result as JSON (the parameters and passes of params.json). */
+/* A fit's result as JSON (the parameters, passes and uncertainty of
+ * params.json) and what the photo does not determine. */
 #include "job.h"
 
+#include "fit/brdf/microfacet.h"
+
 #include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+/* A parameter is not determined when its interval spans half its bounds
+ * or more, or the photo cannot see it at all. */
+static int undetermined(const struct glint_fit_result *r, int k)
+{
+	const struct glint_param *pi = &r->model->params[k];
+	if (r->unc.n == 0)
+		return 0;
+	return !isfinite(r->unc.se[k]) ||
+	       r->unc.hi[k] - r->unc.lo[k] >= 0.5 * (pi->hi - pi->lo);
+}
+
+static int param_index(const struct glint_model_ops *m, const char *name)
+{
+	for (int k = 0; k < m->nparams; k++)
+		if (!strcmp(m->params[k].name, name))
+			return k;
+	return -1;
+}
+
+static json_t *real_or_null(double v)
+{
+	return isfinite(v) ? json_real(v) : json_null();
+}
+
+/* The roughness a pixel resolves on a sphere R pixels in radius: the
+ * normal turns by 1 / R radians from one pixel to the next. */
+static double footprint(const struct glint_fit_result *r)
+{
+	return r->interior > 0 ? 1 / sqrt(r->interior / M_PI) : 0;
+}
 
 json_t *glint_fit_params_json(const struct glint_fit_result *r)
 {
 	const struct glint_model_ops *m = r->model;
 	json_t *list = json_array();
+	int rk = m->roughness_param;
 
 	for (int k = 0; k < m->nparams; k++) {
 		const struct glint_param *pi = &m->params[k];
-		json_array_append_new(
-			list, json_pack("{s:s,s:f,s:o,s:b,s:[f,f]}", "name",
-					pi->name, "value", r->p[k], "stderr",
-					isfinite(r->se[k]) ? json_real(r->se[k])
-							   : json_null(),
-					"at_bound", r->at_bound[k], "bounds",
-					pi->lo, pi->hi));
+		json_t *o = json_pack("{s:s,s:f,s:o,s:b,s:[f,f]}", "name",
+				      pi->name, "value", r->p[k], "stderr",
+				      real_or_null(r->se[k]), "at_bound",
+				      r->at_bound[k], "bounds", pi->lo, pi->hi);
+		if (r->unc.n) {
+			json_object_set_new(
+				o, "interval",
+				json_pack("[f,f]", r->unc.lo[k], r->unc.hi[k]));
+			json_object_set_new(o, "determined",
+					    json_boolean(!undetermined(r, k)));
+		}
+		if (k == rk && r->unc.n && r->unc.hi[k] < footprint(r))
+			json_object_set_new(
+				o, "upper_bound",
+				json_real(fmax(r->unc.hi[k], footprint(r))));
+		json_array_append_new(list, o);
 	}
 	return list;
 }
@@ -37,4 +83,231 @@ json_t *glint_fit_passes_json(const struct glint_fit_result *r)
 				  "seconds", p->seconds));
 	}
 	return a;
+}
+
+static json_t *matrix_json(const double *a, int n)
+{
+	json_t *rows = json_array();
+	for (int i = 0; i < n; i++) {
+		json_t *row = json_array();
+		for (int j = 0; j < n; j++)
+			json_array_append_new(row, real_or_null(a[i * n + j]));
+		json_array_append_new(rows, row);
+	}
+	return rows;
+}
+
+/*
+ * Specular albedo and ior enter a Torrance-Sparrow image mostly as
+ * specular x F0(ior): when they correlate strongly the photo determines
+ * that product, reported with its delta-method error.
+ */
+static void specular_fresnel(const struct glint_fit_result *r, json_t *find,
+			     json_t *comb)
+{
+	const struct glint_model_ops *m = r->model;
+	int ki = param_index(m, "ior"), n = r->unc.n;
+	static const char *const ch[3] = { "specular.r", "specular.g",
+					   "specular.b" };
+	double worst = 0;
+
+	if (ki < 0)
+		return;
+	for (int c = 0; c < 3; c++) {
+		int ks = param_index(m, ch[c]);
+		if (ks >= 0)
+			worst = fmax(worst, fabs(r->unc.corr[ks * n + ki]));
+	}
+	if (worst < 0.9 && !undetermined(r, ki))
+		return;
+	double nn = r->p[ki], f0 = glint_fresnel_dielectric(1, nn);
+	double df0 = 4 * (nn - 1) / ((nn + 1) * (nn + 1) * (nn + 1));
+	char msg[512];
+	int len = worst >= 0.9
+			  ? snprintf(msg, sizeof(msg),
+				     "specular and ior trade off along "
+				     "specular x F0(ior) (correlation up to "
+				     "%.2f):",
+				     worst)
+			  : snprintf(msg, sizeof(msg),
+				     "the photo determines specular x "
+				     "F0(ior):");
+	for (int c = 0; c < 3; c++) {
+		int ks = param_index(m, ch[c]);
+		if (ks < 0)
+			continue;
+		double g[GLINT_UNC_MAX_N] = { 0 };
+		g[ks] = f0;
+		g[ki] = r->p[ks] * df0;
+		double v = r->p[ks] * f0,
+		       se = glint_uncertainty_delta(&r->unc, g);
+		char name[48];
+		snprintf(name, sizeof(name), "%s x F0(ior)", ch[c]);
+		json_array_append_new(
+			comb, json_pack("{s:s,s:f,s:o}", "name", name, "value",
+					v, "stderr", real_or_null(se)));
+		if (len < (int)sizeof(msg))
+			len += snprintf(msg + len, sizeof(msg) - (size_t)len,
+					" %s%.4f +- %.4f", c ? ", " : "", v,
+					1.96 * se);
+	}
+	if (undetermined(r, ki) && len < (int)sizeof(msg))
+		snprintf(msg + len, sizeof(msg) - (size_t)len,
+			 "; ior is not determined by this photo");
+	json_array_append_new(find, json_string(msg));
+}
+
+int glint_fit_needs_selection(const struct glint_fit_result *r)
+{
+	const struct glint_model_ops *m = r->model;
+	int n = r->unc.n, ki = param_index(m, "ior");
+
+	for (int k = 0; k < n; k++)
+		if (undetermined(r, k))
+			return 1;
+	for (int k = 0; k < n && ki >= 0; k++)
+		if (!strncmp(m->params[k].name, "specular", 8) &&
+		    fabs(r->unc.corr[k * n + ki]) >= 0.95)
+			return 1;
+	return 0;
+}
+
+json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
+{
+	const struct glint_model_ops *m = r->model;
+	const struct glint_uncertainty *u = &r->unc;
+	int n = u->n, rk = m->roughness_param;
+	json_t *find, *comb, *tb, *sys;
+	char msg[256];
+
+	if (!n)
+		return json_null();
+	find = json_array();
+	comb = json_array();
+	tb = json_array();
+	sys = json_array();
+	specular_fresnel(r, find, comb);
+	if (rk >= 0 && u->hi[rk] < footprint(r)) {
+		snprintf(msg, sizeof(msg),
+			 "roughness is below the pixel footprint (%.4f): an "
+			 "upper bound, roughness < %.4f, not a value",
+			 footprint(r), fmax(u->hi[rk], footprint(r)));
+		json_array_append_new(find, json_string(msg));
+	}
+	for (int k = 0; k < n; k++) {
+		json_array_append_new(tb, real_or_null(u->se_textbook[k]));
+		json_array_append_new(sys, json_real(u->sys[k]));
+		if (undetermined(r, k) &&
+		    strcmp(m->params[k].name, "ior") != 0) {
+			snprintf(msg, sizeof(msg),
+				 "%s is not determined by this photo "
+				 "(%.0f %% interval %.4g .. %.4g)",
+				 m->params[k].name, 100 * u->level, u->lo[k],
+				 u->hi[k]);
+			json_array_append_new(find, json_string(msg));
+		}
+		for (int j = k + 1; j < n; j++) {
+			double c = u->corr[k * n + j];
+			int spec_ior =
+				!strcmp(m->params[j].name, "ior") &&
+				!strncmp(m->params[k].name, "specular", 8);
+			if (fabs(c) < 0.95 || spec_ior)
+				continue;
+			snprintf(msg, sizeof(msg),
+				 "%s and %s trade off (correlation %.3f): the "
+				 "photo determines a combination of them "
+				 "better than either",
+				 m->params[k].name, m->params[j].name, c);
+			json_array_append_new(find, json_string(msg));
+		}
+	}
+	return json_pack(
+		"{s:s,s:f,s:f,s:i,s:i,s:o,s:o,s:o,s:o,s:o,s:o,s:f}", "method",
+		"cluster-robust covariance over spatial blocks (not below "
+		"chi2/dof-scaled) plus the spread over independent sample "
+		"sets plus the fast render's systematic accuracy; Student t at "
+		"Welch-Satterthwaite degrees of freedom",
+		"level", u->level, "chi2_dof", u->chi2_dof, "blocks",
+		u->nblocks, "sample_sets", u->ndraws, "covariance",
+		matrix_json(u->cov, n), "correlation", matrix_json(u->corr, n),
+		"textbook_stderr", tb, "systematic_stderr", sys, "findings",
+		find, "combinations", comb, "seconds", r->unc_seconds);
+}
+
+int glint_fit_judge(const struct glint_fit_result *r, double accept_rmse,
+		    struct glint_fit_verdict *v)
+{
+	double back = r->backdrop_rel_rmse, flat = r->flat_rel_rmse;
+	int by_back = isfinite(back) && !(back > flat);
+
+	memset(v, 0, sizeof(*v));
+	v->ratio = r->rmse / r->noise_rmse;
+	if (accept_rmse > 0) {
+		v->limit = accept_rmse;
+		snprintf(v->rule, sizeof(v->rule),
+			 "relative RMSE below --accept-rmse %g", accept_rmse);
+	} else {
+		v->limit = by_back ? back : flat;
+		snprintf(v->rule, sizeof(v->rule),
+			 "the fitted sphere explains the photo better than %s",
+			 isfinite(back) ? "the bare backdrop and a flat disc "
+					  "of the photo's mean colour"
+					: "a flat disc of the photo's mean "
+					  "colour");
+	}
+	v->accepted = r->rel_rmse < v->limit;
+	if (!v->accepted) {
+		if (accept_rmse > 0)
+			snprintf(v->verdict, sizeof(v->verdict),
+				 "relative RMSE %.3f is above --accept-rmse "
+				 "%g",
+				 r->rel_rmse, accept_rmse);
+		else if (by_back)
+			snprintf(v->verdict, sizeof(v->verdict),
+				 "the photo shows the backdrop, not a sphere, "
+				 "where the scene puts it (the bare "
+				 "environment explains it with a relative "
+				 "RMSE of %.3f, the fitted sphere only "
+				 "%.3f): wrong scene or sphere position?",
+				 back, r->rel_rmse);
+		else
+			snprintf(v->verdict, sizeof(v->verdict),
+				 "the photo does not show this scene's "
+				 "sphere: a flat disc of its mean colour "
+				 "explains it as well (relative RMSE %.3f) "
+				 "as the fitted sphere (%.3f): another photo, "
+				 "or another scene?",
+				 flat, r->rel_rmse);
+	} else if (!isfinite(v->ratio)) {
+		snprintf(v->verdict, sizeof(v->verdict),
+			 "relative RMSE %.3f (a flat disc leaves %.3f); no "
+			 "noise model to judge the misfit by (give the "
+			 "capture's weights)",
+			 r->rel_rmse, flat);
+	} else if (v->ratio <= 1.5) {
+		snprintf(v->verdict, sizeof(v->verdict),
+			 "fits to the noise: the residual is %.2f times what "
+			 "noise alone leaves",
+			 v->ratio);
+	} else {
+		snprintf(v->verdict, sizeof(v->verdict),
+			 "misfit: the residual is %.1f times what noise alone "
+			 "leaves: the model (or the scene) does not explain "
+			 "all of the photo; the intervals include the misfit",
+			 v->ratio);
+	}
+	return v->accepted;
+}
+
+json_t *glint_fit_verdict_json(const struct glint_fit_result *r,
+			       const struct glint_fit_verdict *v)
+{
+	return json_pack("{s:b,s:s,s:s,s:o,s:o,s:o,s:o,s:o,s:o}", "accepted",
+			 v->accepted, "rule", v->rule, "verdict", v->verdict,
+			 "relative_rmse", real_or_null(r->rel_rmse), "limit",
+			 real_or_null(v->limit), "backdrop_relative_rmse",
+			 real_or_null(r->backdrop_rel_rmse),
+			 "flat_relative_rmse", real_or_null(r->flat_rel_rmse),
+			 "noise_rmse", real_or_null(r->noise_rmse),
+			 "residual_over_noise", real_or_null(v->ratio));
 }

@@ -99,7 +99,16 @@ int glint_material_load(const char *path, const char *entry,
 	if (ret < 0)
 		return ret;
 	if (!entry) {
-		ret = glint_material_from_json(path, "", root, model, params);
+		/* A fit's params.json holds its material under "material"
+		 * (beside its statistics): render a fit's result directly. */
+		json_t *fitted = json_object_get(root, "material");
+		if (json_is_object(fitted) &&
+		    json_object_get(root, "parameters"))
+			ret = glint_material_from_json(path, "material", fitted,
+						       model, params);
+		else
+			ret = glint_material_from_json(path, "", root, model,
+						       params);
 		goto out;
 	}
 	list = json_object_get(root, "materials");

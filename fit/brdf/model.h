@@ -97,8 +97,9 @@ const char *glint_model_names(void);
 int glint_material_from_json(const char *file, const char *where, json_t *obj,
 			     const struct glint_model_ops **model,
 			     double *params);
-/* Read a material file, or one entry of a Table-1 style file when `entry`
- * is not NULL (matched against "materials"[].name). */
+/* Read a material file (or a fit's params.json: its "material"), or one
+ * entry of a Table-1 style file when `entry` is not NULL (matched against
+ * "materials"[].name). */
 int glint_material_load(const char *path, const char *entry,
 			const struct glint_model_ops **model, double *params);
 /* The material as JSON (same shape as read). Caller json_decref()s. */

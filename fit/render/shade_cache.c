@@ -345,7 +345,8 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 			h->wo[1] = (float)v3_dot(wo, b);
 			h->wo[2] = (float)v3_dot(wo, nn);
 			h->seed = glint_hash32(
-				(uint32_t)(pix[i] * gb->spp + s) ^ 0x85ebca6bu);
+				(uint32_t)(pix[i] * gb->spp + s) ^ 0x85ebca6bu ^
+				glint_hash32(opts->seed));
 		}
 	}
 	struct setup_job job = { c, opts->static_samples, p0, 0 };

@@ -37,6 +37,10 @@ struct glint_shade_cache_opts {
 	int lobe_samples;   /* fixed lobe samples per hit (varying lobes) */
 	int static_samples; /* per hit and technique for constant lobes */
 	int no_hot;	    /* sample the env map's brightest texels too */
+	/* Sample-set seed: caches with different seeds are independent
+	 * Monte Carlo estimates of the same integrals (0: glint's fixed
+	 * sets). */
+	uint32_t seed;
 	int nthreads;
 };
 

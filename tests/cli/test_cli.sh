@@ -121,6 +121,8 @@ assert r['method']['name']=='three-pass' and len(r['passes'])>=3, r['passes']
 assert abs(r['material']['diffuse'][0]-0.124)<0.02, r['material']
 assert all('stderr' in p for p in r['parameters'])"
 check "fit wrote params.json, render.exr, compare.png" test -s "$tmp/fit1/params.json" -a -s "$tmp/fit1/render.exr" -a -s "$tmp/fit1/compare.png"
+check "render the fitted material from params.json" run 0 "" render "$tmp/fscene.json" --material "$tmp/fit1/params.json" -o "$tmp/refit.exr" -q
+check "... wrote it" test -s "$tmp/refit.exr"
 cp -r "$tmp/fit1" "$tmp/fit1.keep"
 check "fit --select-model" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fitsel" --select-model --json -q
 check "--select-model reports every candidate with AIC, BIC, errors" python3 -c "
@@ -151,6 +153,39 @@ JSON
 check "fit: photo and scene sizes differ" run 1 "photo is 96x96: expected the scene camera's 100x96" fit "$tmp/wide.json" "$tmp/photo.exr" -o "$tmp/fit1"
 sed 's/"cx": 48, "cy": 48, "r": 30/"cx": 14, "cy": 14, "r": 10/' "$tmp/fscene.json" >"$tmp/elsewhere.json"
 check "fit: no sphere where the scene says" run 1 "the photo shows the backdrop, not a sphere" fit "$tmp/elsewhere.json" "$tmp/photo.exr" -o "$tmp/fit1"
+check "a refused fit's diagnostics go beside the output" python3 -c "
+import json; r=json.load(open('$tmp/fit1.refused/params.json'))
+assert r['accepted'] is False and 'backdrop' in r['acceptance']['verdict'], r['acceptance']
+assert r['acceptance']['backdrop_relative_rmse'] < r['acceptance']['relative_rmse'], r['acceptance']"
+check "--accept-rmse replaces the rule" run 1 "relative RMSE 0.1" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fit1" --accept-rmse 0.001
+check "--accept-rmse must be a positive number" run 2 "--accept-rmse 'no'" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fit1" --accept-rmse no
+python3 -c "
+import random, struct
+random.seed(1)
+with open('$tmp/other.pfm', 'wb') as f:
+    f.write(b'PF\\n96 96\\n-1.0\\n')
+    f.write(struct.pack('<%df' % (96 * 96 * 3), *[random.random() for _ in range(96 * 96 * 3)]))"
+check "a photo of something else is refused" run 1 "does not show this scene's sphere" fit "$tmp/fscene.json" "$tmp/other.pfm" -o "$tmp/fit1"
+# An output folder holding a user's files is refused before any work.
+mkdir -p "$tmp/mine" "$tmp/here"
+echo "my notes" >"$tmp/mine/notes.txt"
+check "-o DIR holding a user's file is refused" run 1 "holds files glint did not write ('notes.txt')" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/mine"
+check "the user's file is still there" grep -q "my notes" "$tmp/mine/notes.txt"
+check "-o . (the current folder) is refused" bash -c "cd '$tmp/here' && { '$glint' fit '$tmp/fscene.json' '$tmp/photo.exr' -o . 2>'$tmp/err'; test \$? = 1; } && grep -q 'is the current folder' '$tmp/err'"
+check "--force replaces it" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/mine" --force -q
+check "--force wrote a result" test -s "$tmp/mine/params.json" -a ! -e "$tmp/mine/notes.txt"
+mkdir -p "$tmp/theirs"
+echo "their notes" >"$tmp/theirs/notes.txt"
+ln -s "$tmp/theirs" "$tmp/link"
+check "-o LINK (a symbolic link to a folder) is refused, even with --force" run 1 "is a symbolic link" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/link" --force
+check "... the folder it points to is untouched" bash -c "test -L '$tmp/link' && grep -q 'their notes' '$tmp/theirs/notes.txt'"
+check "render a near-mirror (copper) from the same scene" run 0 "" render "$tmp/fscene.json" --paper copper -o "$tmp/copper.exr" -q
+check "the near-mirror is fitted, not refused" run 0 "" fit "$tmp/fscene.json" "$tmp/copper.exr" -o "$tmp/fitcu" --json -q
+check "its params.json states the rule and the verdict" python3 -c "
+import json; r=json.load(open('$tmp/out'))
+a=r['accepted'], r['acceptance']
+assert r['accepted'] is True and r['acceptance']['relative_rmse'] < r['acceptance']['limit'], a
+assert 'flat disc' in r['acceptance']['rule'] and r['acceptance']['verdict'], a"
 python3 - "$tmp" <<'PY'
 import struct, sys
 d = sys.argv[1]

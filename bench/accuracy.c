@@ -1,0 +1,298 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * The accuracy matrix: every shared light probe x every opaque Table-1
+ * material, photos from the independent reference renderer (sim/) at
+ * 256 px (4 jittered samples per pixel, 256 per technique: with 64 the
+ * photo's own Monte Carlo noise moves roughness by 5-8 %), noise-free and
+ * through the sensor model (mean at 10 % of the ADC range, 1/variance weights);
+ * each fitted with glint's defaults.
+ *
+ * Per case it reports
+ *   bias     the fitter's own objective at the TRUE parameters (its
+ *            default 8 + 8 samples, one set) against the noise-free photo: its
+ * RMSE over the photo's Monte Carlo noise (estimated from a second reference
+ * render with another seed, on the same pixels).  About 1 when the fast path's
+ * estimate is unbiased and quiet; above it, the fitter's sampling shows; within
+ * every parameter within the tolerances (albedo 0.01, roughness 5 %, ior 0.05);
+ *   flagged  outside them, but glint itself said so: the interval holds
+ *            the truth or the parameter is reported undetermined;
+ *   refused  the fit failed (no answer at all);
+ *   wrong    outside the tolerances, and the interval misses the truth.
+ *
+ *   bench/accuracy [quick] [MAP...]
+ * No maps: every map in ../shared/data/probes (lat-long) and data/env.
+ * quick: four materials (the representative slice the sim test runs).
+ * Writes bench-out/accuracy.csv; prints a line per case and a table per
+ * map.  For studies: ACCURACY_ONLY=MATERIAL, ACCURACY_SAMPLES=N (the
+ * fit's light and lobe samples per set), ACCURACY_REF_SAMPLES=N and
+ * ACCURACY_REF_SPP=N (the reference photos').
+ */
+#define _DEFAULT_SOURCE
+#include "bench.h"
+#include "captures.h"
+
+#include "core/error.h"
+#include "core/log.h"
+#include "fit/fit.h"
+#include "fit/job.h"
+#include "sim/reference.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/stat.h>
+
+static const char *const all_mats[] = {
+	"satin-paint",	  "semi-gloss-paint", "matte-paint",
+	"yellow-plastic", "teflon",	      "nylon",
+	"silver",	  "green-acrylic",    "aluminium-bronze",
+	"copper",	  "nickel",
+};
+static const char *const quick_mats[] = { "yellow-plastic", "nylon", "silver",
+					  "copper" };
+
+static const char *const default_maps[] = {
+	GLINT_DATA_DIR "/env/venice_sunset_1k.hdr",
+	GLINT_SHARED_DATA "/probes/polyhaven_1k/quarry_01_1k.hdr",
+	GLINT_SHARED_DATA "/probes/polyhaven_1k/royal_esplanade_1k.hdr",
+	GLINT_SHARED_DATA "/probes/blender_studiolights/studio.exr",
+	GLINT_SHARED_DATA "/probes/blender_studiolights/courtyard.exr",
+	GLINT_SHARED_DATA "/probes/probulator_small/grace.hdr",
+	GLINT_SHARED_DATA "/probes/probulator_small/uffizi.hdr",
+	GLINT_SHARED_DATA "/probes/probulator_small/pisa.hdr",
+	GLINT_SHARED_DATA "/probes/probulator_small/ennis.hdr",
+	GLINT_SHARED_DATA "/probes/probulator_small/wells.hdr",
+};
+
+enum { WITHIN, FLAGGED, WRONG, REFUSED, NOUT };
+static const char *const outcome_names[NOUT] = { "within", "flagged", "wrong",
+						 "refused" };
+
+struct map_tally {
+	int n[NOUT];
+	double worst; /* largest error in tolerance units */
+	char worst_case[96];
+	double bias[64];
+	int nbias;
+};
+
+/* Reference photo of (m, p) with a given seed. */
+static struct glint_image *reference(const struct glint_renderer *r,
+				     const struct glint_model_ops *m,
+				     const double *p, uint32_t seed)
+{
+	struct glint_image *img =
+		glint_image_new(r->scene.cam.width, r->scene.cam.height);
+	struct glint_reference_opts ro;
+
+	glint_reference_default_opts(&ro);
+	ro.spp = getenv("ACCURACY_REF_SPP") ? atoi(getenv("ACCURACY_REF_SPP"))
+					    : 4;
+	ro.samples = getenv("ACCURACY_REF_SAMPLES")
+			     ? atoi(getenv("ACCURACY_REF_SAMPLES"))
+			     : 256;
+	ro.seed = seed;
+	if (img &&
+	    glint_reference_render(&r->scene, r->env, m, p, &ro, img) < 0) {
+		glint_image_free(img);
+		img = NULL;
+	}
+	return img;
+}
+
+/* The photo's own Monte Carlo noise: rms(a - b) / sqrt 2 over the sphere's
+ * interior (2 px in from its outline). */
+static double mc_noise(const struct glint_renderer *r,
+		       const struct glint_image *a, const struct glint_image *b)
+{
+	const struct glint_scene *sc = &r->scene;
+	double rad = sc->cam.fpx * sc->sphere_radius / -sc->sphere_centre.z - 2;
+	double cx = sc->cam.cx, cy = sc->cam.cy, s = 0;
+	long n = 0;
+
+	for (int y = 0; y < a->height; y++)
+		for (int x = 0; x < a->width; x++) {
+			double dx = x + 0.5 - cx, dy = y + 0.5 - cy;
+			if (dx * dx + dy * dy > rad * rad)
+				continue;
+			const float *pa = glint_image_px(a, x, y);
+			const float *pb = glint_image_px(b, x, y);
+			for (int c = 0; c < 3; c++, n++)
+				s += (pa[c] - pb[c]) * (pa[c] - pb[c]);
+		}
+	return n ? sqrt(s / n / 2) : NAN;
+}
+
+/* Outcome of a fit against the truth. */
+static int judge(const struct glint_model_ops *m, const double *truth,
+		 const struct glint_fit_result *res, double *err)
+{
+	*err = bench_tolerance_error(res->p, truth);
+	if (*err <= 1)
+		return WITHIN;
+	for (int k = 0; k < m->nparams; k++) {
+		double tol = k < 6 ? 0.01 : k == 6 ? 0.05 * truth[6] : 0.05;
+		if (fabs(res->p[k] - truth[k]) <= tol)
+			continue;
+		int undet = !isfinite(res->se[k]) ||
+			    res->unc.hi[k] - res->unc.lo[k] >=
+				    0.5 * (m->params[k].hi - m->params[k].lo);
+		int covered = res->unc.n && truth[k] >= res->unc.lo[k] &&
+			      truth[k] <= res->unc.hi[k];
+		if (!undet && !covered)
+			return WRONG;
+	}
+	return FLAGGED;
+}
+
+static const char *base(const char *path)
+{
+	const char *s = strrchr(path, '/');
+	return s ? s + 1 : path;
+}
+
+static void one_map(const char *map, const char *const *mats, int nmats,
+		    FILE *csv, struct map_tally *t)
+{
+	struct glint_scene sc;
+	struct glint_renderer r;
+
+	memset(t, 0, sizeof(*t));
+	bench_scene(&sc, 256, map);
+	if (glint_renderer_init(&r, &sc, 0, NULL) < 0) {
+		fprintf(stderr, "%s: %s\n", map, glint_error_msg());
+		return;
+	}
+	for (int i = 0; i < nmats; i++) {
+		const struct glint_model_ops *m;
+		double truth[GLINT_MAX_PARAMS];
+		if (getenv("ACCURACY_ONLY") &&
+		    strcmp(getenv("ACCURACY_ONLY"), mats[i]))
+			continue;
+		if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
+					mats[i], &m, truth) < 0)
+			continue;
+		struct glint_image *a = reference(&r, m, truth, 1);
+		struct glint_image *b = reference(&r, m, truth, 2);
+		if (!a || !b) {
+			fprintf(stderr, "%s\n", glint_error_msg());
+			glint_image_free(a);
+			glint_image_free(b);
+			continue;
+		}
+		double noise = mc_noise(&r, a, b);
+		struct glint_fit_opts o;
+		struct glint_fit_result ev;
+		glint_fit_default_opts(&o);
+		o.mc_draws = 0;
+		double bias = NAN;
+		if (glint_fit_evaluate(&r, m, a, NULL, &o, truth, &ev) == 0)
+			bias = ev.rmse / noise;
+		if (t->nbias < 64)
+			t->bias[t->nbias++] = bias;
+		for (int lv = 0; lv < 2; lv++) {
+			struct glint_image *photo = glint_image_dup(a);
+			struct glint_image *w = NULL;
+			struct glint_fit_result res;
+			double err = INFINITY, t0 = glint_now();
+			int out = REFUSED;
+			if (lv && bench_add_noise(photo, &w, 0.1) < 0)
+				goto next;
+			glint_fit_default_opts(&o);
+			if (getenv("ACCURACY_SAMPLES"))
+				o.light_samples = o.lobe_samples =
+					atoi(getenv("ACCURACY_SAMPLES"));
+			struct glint_fit_verdict v = { 0 };
+			if (glint_fit(&r, m, photo, w, &o, &res) == 0 &&
+			    glint_fit_judge(&res, 0, &v))
+				out = judge(m, truth, &res, &err);
+			t->n[out]++;
+			if (err > t->worst || out == REFUSED) {
+				t->worst = out == REFUSED ? INFINITY : err;
+				snprintf(t->worst_case, sizeof(t->worst_case),
+					 "%s %s", mats[i],
+					 lv ? "noisy" : "clean");
+			}
+			int smp = out == REFUSED ? 0 : res.light_samples;
+			printf("%-26s %-17s %-5s bias %5.2f  %-8s err %6.2f "
+			       "tol  rel.rmse %.3f  %2d smp %5.1f s",
+			       base(map), mats[i], lv ? "noisy" : "clean", bias,
+			       outcome_names[out], err,
+			       out == REFUSED ? NAN : res.rel_rmse, smp,
+			       glint_now() - t0);
+			if (out == REFUSED)
+				printf("  (%s)", v.verdict[0]
+							 ? v.verdict
+							 : glint_error_msg());
+			else
+				for (int k = 0; k < m->nparams; k++)
+					printf(" %s %.4f/%.4f",
+					       m->params[k].name, res.p[k],
+					       truth[k]);
+			printf("\n");
+			fflush(stdout);
+			fprintf(csv, "%s,%s,%s,%.4f,%s,%.4f,%.5f,%d\n",
+				base(map), mats[i], lv ? "noisy" : "clean",
+				bias, outcome_names[out], err,
+				out == REFUSED ? NAN : res.rel_rmse, smp);
+		next:
+			glint_image_free(photo);
+			glint_image_free(w);
+		}
+		glint_image_free(a);
+		glint_image_free(b);
+	}
+	glint_renderer_release(&r);
+}
+
+int main(int argc, char **argv)
+{
+	int quick = argc > 1 && !strcmp(argv[1], "quick");
+	const char *const *mats = quick ? quick_mats : all_mats;
+	int nmats = quick ? 4 : 11, first = 1 + quick;
+	const char *const *maps = default_maps;
+	int nmaps = (int)(sizeof(default_maps) / sizeof(*default_maps));
+	static struct map_tally tally[32];
+
+	if (argc > first) {
+		maps = (const char *const *)argv + first;
+		nmaps = argc - first < 32 ? argc - first : 32;
+	}
+	glint_log_set_mode(GLINT_LOG_QUIET);
+	mkdir("bench-out", 0777);
+	FILE *csv = fopen("bench-out/accuracy.csv", "w");
+	if (!csv) {
+		perror("bench-out/accuracy.csv");
+		return 1;
+	}
+	fprintf(csv, "map,material,noise,bias_ratio,outcome,error_tol,"
+		     "relative_rmse,light_samples\n");
+	for (int i = 0; i < nmaps; i++)
+		one_map(maps[i], mats, nmats, csv, &tally[i]);
+	fclose(csv);
+
+	printf("\n%-26s %6s %7s %7s %5s %7s %11s  %s\n", "map", "cases",
+	       "within", "flagged", "wrong", "refused", "bias median",
+	       "worst case (tolerance units)");
+	int tot[NOUT] = { 0 };
+	for (int i = 0; i < nmaps; i++) {
+		struct map_tally *t = &tally[i];
+		int n = 0;
+		for (int k = 0; k < NOUT; k++) {
+			n += t->n[k];
+			tot[k] += t->n[k];
+		}
+		double med = t->nbias ? bench_median(t->bias, t->nbias) : NAN;
+		printf("%-26s %6d %7d %7d %5d %7d %11.2f  %s (%.1f)\n",
+		       base(maps[i]), n, t->n[WITHIN], t->n[FLAGGED],
+		       t->n[WRONG], t->n[REFUSED], med, t->worst_case,
+		       t->worst);
+	}
+	int all = tot[0] + tot[1] + tot[2] + tot[3];
+	printf("all: %d cases, %.1f %% within tolerance, %.1f %% flagged by "
+	       "glint, %d wrong, %d refused; peak memory %.0f MiB\n",
+	       all, all ? 100.0 * tot[WITHIN] / all : 0,
+	       all ? 100.0 * tot[FLAGGED] / all : 0, tot[WRONG], tot[REFUSED],
+	       bench_peak_mib());
+	return 0;
+}

@@ -1,0 +1,280 @@
+/* SPDX-License-Identifier: MIT */
+#include "uncertainty.h"
+
+#include "core/error.h"
+
+#include <gsl/gsl_cdf.h>
+#include <gsl/gsl_eigen.h>
+#include <gsl/gsl_errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define N GLINT_UNC_MAX_N
+
+/*
+ * The pseudo-inverse of the normal matrix A = J^T J (n x n) into ainv,
+ * computed on A scaled to unit diagonal (so parameters of very different
+ * scales do not hide a null direction); unseen[k] is set for parameters
+ * with a component along a direction J does not see.
+ */
+static int normal_inverse(const double *a, int n, double *ainv, int *unseen)
+{
+	double as[N * N], d[N];
+	int ret = 0;
+
+	for (int k = 0; k < n; k++) {
+		d[k] = a[k * n + k] > 0 ? 1 / sqrt(a[k * n + k]) : 0;
+		unseen[k] = !(a[k * n + k] > 0);
+	}
+	for (int i = 0; i < n; i++)
+		for (int j = 0; j < n; j++)
+			as[i * n + j] = a[i * n + j] * d[i] * d[j];
+	gsl_matrix_view mv = gsl_matrix_view_array(as, (size_t)n, (size_t)n);
+	gsl_vector *eval = gsl_vector_alloc((size_t)n);
+	gsl_matrix *evec = gsl_matrix_alloc((size_t)n, (size_t)n);
+	gsl_eigen_symmv_workspace *ws = gsl_eigen_symmv_alloc((size_t)n);
+	if (!eval || !evec || !ws) {
+		ret = glint_error_set(ENOMEM, "out of memory");
+		goto out;
+	}
+	gsl_error_handler_t *old = gsl_set_error_handler_off();
+	int st = gsl_eigen_symmv(&mv.matrix, eval, evec, ws);
+	gsl_set_error_handler(old);
+	if (st) {
+		ret = glint_error_set(EDOM, "uncertainty: eigen decomposition "
+					    "of J^T J failed");
+		goto out;
+	}
+	double lmax = 0;
+	for (int e = 0; e < n; e++)
+		lmax = fmax(lmax, gsl_vector_get(eval, (size_t)e));
+	memset(ainv, 0, sizeof(double) * (size_t)(n * n));
+	for (int e = 0; e < n; e++) {
+		double l = gsl_vector_get(eval, (size_t)e);
+		int null = !(l > 1e-12 * lmax);
+		for (int i = 0; i < n; i++) {
+			double vi = gsl_matrix_get(evec, (size_t)i, (size_t)e);
+			if (null) {
+				if (vi * vi > 1e-6)
+					unseen[i] = 1;
+				continue;
+			}
+			for (int j = 0; j < n; j++)
+				ainv[i * n + j] +=
+					vi *
+					gsl_matrix_get(evec, (size_t)j,
+						       (size_t)e) /
+					l;
+		}
+	}
+	for (int i = 0; i < n; i++)
+		for (int j = 0; j < n; j++)
+			ainv[i * n + j] *= d[i] * d[j];
+out:
+	gsl_vector_free(eval);
+	gsl_matrix_free(evec);
+	gsl_eigen_symmv_free(ws);
+	return ret;
+}
+
+/* out = ainv m ainv (n x n). */
+static void sandwich(const double *ainv, const double *m, int n, double *out)
+{
+	double t[N * N];
+	for (int i = 0; i < n; i++)
+		for (int j = 0; j < n; j++) {
+			double s = 0;
+			for (int k = 0; k < n; k++)
+				s += ainv[i * n + k] * m[k * n + j];
+			t[i * n + j] = s;
+		}
+	for (int i = 0; i < n; i++)
+		for (int j = 0; j < n; j++) {
+			double s = 0;
+			for (int k = 0; k < n; k++)
+				s += t[i * n + k] * ainv[k * n + j];
+			out[i * n + j] = s;
+		}
+}
+
+/* The cluster-robust covariance over the blocks (CR1). */
+static int block_covariance(const struct glint_unc_problem *pr,
+			    const double *ainv, double *out)
+{
+	int n = pr->n, g = pr->nblocks;
+	double *score = calloc((size_t)g * n, sizeof(double));
+	double meat[N * N] = { 0 };
+	int used = 0;
+
+	if (!score)
+		return glint_error_set(ENOMEM, "out of memory");
+	for (int i = 0; i < pr->m; i++) {
+		int b = pr->block[i];
+		if (b < 0 || b >= g)
+			continue;
+		for (int k = 0; k < n; k++)
+			score[(size_t)b * n + k] +=
+				pr->jac[(size_t)i * n + k] * pr->r[i];
+	}
+	for (int b = 0; b < g; b++) {
+		const double *s = score + (size_t)b * n;
+		int any = 0;
+		for (int k = 0; k < n; k++)
+			any |= s[k] != 0;
+		used += any;
+		for (int i = 0; i < n; i++)
+			for (int j = 0; j < n; j++)
+				meat[i * n + j] += s[i] * s[j];
+	}
+	free(score);
+	double f = used > 1 && pr->m > n ? (double)used / (used - 1) *
+						   (pr->m - 1.0) / (pr->m - n)
+					 : 1;
+	for (int k = 0; k < n * n; k++)
+		meat[k] *= f;
+	sandwich(ainv, meat, n, out);
+	return used;
+}
+
+/* The Monte Carlo covariance of the optimum of the sample sets' mean:
+ * the sample covariance of each set's Gauss-Newton step over K. */
+static void mc_covariance(const struct glint_unc_problem *pr,
+			  const double *ainv, double *out)
+{
+	int n = pr->n, k1 = pr->ndraws;
+	double d[GLINT_UNC_MAX_N * 64], mean[N] = { 0 };
+
+	memset(out, 0, sizeof(double) * (size_t)(n * n));
+	if (k1 < 2 || k1 > 64)
+		return;
+	for (int k = 0; k < k1; k++) {
+		const double *r = pr->draws + (size_t)k * pr->m;
+		double g[N] = { 0 };
+		for (int i = 0; i < pr->m; i++)
+			for (int j = 0; j < n; j++)
+				g[j] += pr->jac[(size_t)i * n + j] * r[i];
+		for (int j = 0; j < n; j++) {
+			double s = 0;
+			for (int l = 0; l < n; l++)
+				s -= ainv[j * n + l] * g[l];
+			double q =
+				fmin(pr->hi[j], fmax(pr->lo[j], pr->p[j] + s));
+			d[k * n + j] = q - pr->p[j];
+			mean[j] += d[k * n + j] / k1;
+		}
+	}
+	for (int k = 0; k < k1; k++)
+		for (int i = 0; i < n; i++)
+			for (int j = 0; j < n; j++)
+				out[i * n + j] += (d[k * n + i] - mean[i]) *
+						  (d[k * n + j] - mean[j]) /
+						  ((k1 - 1.0) * k1);
+}
+
+int glint_uncertainty_compute(const struct glint_unc_problem *pr,
+			      struct glint_uncertainty *u)
+{
+	int n = pr->n, m = pr->m, unseen[N];
+	double a[N * N] = { 0 }, ainv[N * N];
+
+	memset(u, 0, sizeof(*u));
+	if (n < 1 || n > N || m <= n || pr->ndraws < 0 || pr->ndraws > 64)
+		return glint_error_set(
+			EINVAL,
+			"uncertainty: %d parameters, %d "
+			"residuals, %d sample sets: out of range",
+			n, m, pr->ndraws);
+	u->n = n;
+	u->level = pr->level > 0 && pr->level < 1 ? pr->level : 0.95;
+	u->ndraws = pr->ndraws;
+	double rr = 0;
+	for (int i = 0; i < m; i++) {
+		const double *ji = pr->jac + (size_t)i * n;
+		for (int k = 0; k < n; k++)
+			for (int l = 0; l < n; l++)
+				a[k * n + l] += ji[k] * ji[l];
+		rr += pr->r[i] * pr->r[i];
+	}
+	u->chi2_dof = rr / (m - n);
+	int ret = normal_inverse(a, n, ainv, unseen);
+	if (ret < 0)
+		return ret;
+	for (int k = 0; k < n * n; k++)
+		u->cov_textbook[k] = u->chi2_dof * ainv[k];
+	memcpy(u->cov_blocks, u->cov_textbook, sizeof(u->cov_blocks));
+	if (pr->nblocks > 1 && pr->block) {
+		ret = block_covariance(pr, ainv, u->cov_blocks);
+		if (ret < 0)
+			return ret;
+		u->nblocks = ret;
+	}
+	/* The noise part never below the textbook one: scale each
+	 * parameter's row and column up (keeps it positive semi-definite). */
+	double sc[N];
+	for (int k = 0; k < n; k++) {
+		double b = u->cov_blocks[k * n + k],
+		       t = u->cov_textbook[k * n + k];
+		sc[k] = b > 0 && t > b ? sqrt(t / b) : 1;
+	}
+	mc_covariance(pr, ainv, u->cov_mc);
+	for (int i = 0; i < n; i++)
+		for (int j = 0; j < n; j++)
+			u->cov[i * n + j] =
+				sc[i] * sc[j] * u->cov_blocks[i * n + j] +
+				u->cov_mc[i * n + j];
+	for (int k = 0; k < n; k++) {
+		u->sys[k] = pr->sys && pr->sys[k] > 0 ? pr->sys[k] : 0;
+		u->cov[k * n + k] += u->sys[k] * u->sys[k];
+	}
+	for (int k = 0; k < n; k++) {
+		double vb = sc[k] * sc[k] * u->cov_blocks[k * n + k],
+		       vm = u->cov_mc[k * n + k],
+		       v = vb + vm + u->sys[k] * u->sys[k];
+		double nb = u->nblocks > 1 ? u->nblocks - 1.0 : m - n;
+		double den =
+			(vb > 0 ? vb * vb / nb : 0) +
+			(vm > 0 && u->ndraws > 1 ? vm * vm / (u->ndraws - 1)
+						 : 0);
+		u->dof[k] = den > 0 ? v * v / den : m - n;
+		u->t[k] = gsl_cdf_tdist_Pinv(0.5 + 0.5 * u->level, u->dof[k]);
+		u->se[k] = unseen[k] ? INFINITY : sqrt(fmax(0, v));
+		u->se_textbook[k] =
+			unseen[k] ? INFINITY
+				  : sqrt(fmax(0, u->cov_textbook[k * n + k]));
+		u->lo[k] = unseen[k] ? pr->lo[k]
+				     : fmax(pr->lo[k],
+					    pr->p[k] - u->t[k] * u->se[k]);
+		u->hi[k] = unseen[k] ? pr->hi[k]
+				     : fmin(pr->hi[k],
+					    pr->p[k] + u->t[k] * u->se[k]);
+	}
+	for (int i = 0; i < n; i++)
+		for (int j = 0; j < n; j++) {
+			double d = u->se[i] * u->se[j];
+			u->corr[i * n + j] =
+				i == j ? 1
+				: unseen[i] || unseen[j] || !(d > 0)
+					? 0
+					: u->cov[i * n + j] / d;
+			if (unseen[i] || unseen[j])
+				u->cov[i * n + j] = i == j ? INFINITY : 0;
+		}
+	return 0;
+}
+
+double glint_uncertainty_delta(const struct glint_uncertainty *u,
+			       const double *grad)
+{
+	double s = 0;
+	for (int i = 0; i < u->n; i++) {
+		if (grad[i] == 0)
+			continue;
+		if (!isfinite(u->se[i]))
+			return INFINITY;
+		for (int j = 0; j < u->n; j++)
+			if (grad[j] != 0)
+				s += grad[i] * u->cov[i * u->n + j] * grad[j];
+	}
+	return sqrt(fmax(0, s));
+}

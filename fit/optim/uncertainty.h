@@ -1,0 +1,90 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_FIT_OPTIM_UNCERTAINTY_H
+#define GLINT_FIT_OPTIM_UNCERTAINTY_H
+
+/*
+ * Uncertainty of a weighted least-squares estimate that a measurement can
+ * stand on.  The textbook covariance s^2 (J^T J)^-1 assumes independent
+ * residuals and an exact model evaluation; a photo of a sphere breaks
+ * both: a model too small for the material leaves residuals that are
+ * correlated over whole regions of the sphere, and the fitter's own
+ * Monte Carlo estimate of the render has an error that moves the optimum.
+ * So the reported covariance is the sum of two parts:
+ *
+ *   noise: a cluster-robust ("sandwich") covariance over spatial blocks of
+ *     pixels, A^-1 (sum_b g_b g_b^T) A^-1 with A = J^T J and g_b = J_b^T
+ *     r_b, scaled by G / (G - 1) (m - 1) / (m - n) (CR1); it equals the
+ *     textbook one when residuals are independent and grows when they are
+ *     not.  Never below the textbook one, s^2 A^-1 with s^2 = |r|^2 /
+ *     (m - n) (the chi^2/dof scaling: a misfit inflates it);
+ *   Monte Carlo: the fitter's estimate of the render is the average of
+ *     K independent sample sets, r = (r_1 + ... + r_K) / K.  Each set's
+ *     Gauss-Newton step from the optimum, d_k = -A^-1 J^T r_k (clamped to
+ *     the bounds), is the optimum that set alone would give; the sample
+ *     covariance of the d_k over K is the Monte Carlo covariance of the
+ *     optimum of their average.
+ *
+ *   systematic (optional): a standard uncertainty per parameter that the
+ *     fit's residuals and sample sets cannot show, known from validation
+ *     (the fast render against an independent renderer), added to the
+ *     diagonal with infinite degrees of freedom.
+ *
+ * Intervals are p +- t se, clipped to the bounds, with t Student's
+ * quantile at the Welch-Satterthwaite degrees of freedom of the two parts
+ * (G - 1 and K).  Directions J cannot see (A singular: e.g. roughness when
+ * the specular albedo is 0) get an infinite standard error.  Coverage of
+ * these intervals is measured, not assumed: tests/sim/test_coverage.c and
+ * the README's coverage table.
+ */
+
+#define GLINT_UNC_MAX_N 16
+
+struct glint_unc_problem {
+	int n;		       /* parameters */
+	int m;		       /* residuals */
+	const double *jac;     /* m x n, row-major, weighted, at the optimum */
+	const double *r;       /* m weighted residuals at the optimum */
+	const int *block;      /* block of each residual, 0 .. nblocks - 1 */
+	int nblocks;	       /* 0: no block part (textbook only) */
+	const double *p;       /* the optimum, n */
+	const double *lo, *hi; /* bounds, n each */
+	/* ndraws x m: the residuals at p under each independent sample set
+	 * of the fitter, r their mean (may be NULL with ndraws 0; needs 2
+	 * or more) */
+	const double *draws;
+	int ndraws;
+	/* n systematic standard uncertainties, or NULL */
+	const double *sys;
+	double level; /* of the intervals, e.g. 0.95 */
+};
+
+struct glint_uncertainty {
+	int n;
+	/* n x n, row-major */
+	double cov[GLINT_UNC_MAX_N * GLINT_UNC_MAX_N];		/* reported */
+	double cov_textbook[GLINT_UNC_MAX_N * GLINT_UNC_MAX_N]; /* s^2 A^-1 */
+	double cov_blocks[GLINT_UNC_MAX_N * GLINT_UNC_MAX_N];	/* sandwich */
+	double cov_mc[GLINT_UNC_MAX_N * GLINT_UNC_MAX_N]; /* sample sets */
+	double sys[GLINT_UNC_MAX_N]; /* systematic standard uncertainties */
+	double corr[GLINT_UNC_MAX_N * GLINT_UNC_MAX_N];
+	double se[GLINT_UNC_MAX_N]; /* sqrt(diag cov); INFINITY: unseen */
+	double se_textbook[GLINT_UNC_MAX_N];		 /* for comparison */
+	double lo[GLINT_UNC_MAX_N], hi[GLINT_UNC_MAX_N]; /* the interval */
+	double dof[GLINT_UNC_MAX_N];			 /* of t */
+	double t[GLINT_UNC_MAX_N];			 /* the quantile used */
+	double chi2_dof;				 /* |r|^2 / (m - n) */
+	double level;
+	int nblocks, ndraws;
+};
+
+/* Fill u from pr.  Returns 0 or a negative errno with the message set
+ * (bad sizes, out of memory). */
+int glint_uncertainty_compute(const struct glint_unc_problem *pr,
+			      struct glint_uncertainty *u);
+
+/* Standard error of a function f of the parameters, from its gradient
+ * grad (n) by the delta method: sqrt(grad^T cov grad). */
+double glint_uncertainty_delta(const struct glint_uncertainty *u,
+			       const double *grad);
+
+#endif

@@ -134,6 +134,12 @@ int glint_frame_read(const char *path, struct glint_frame *f)
 	f->width = (int)png_get_image_width(png, info);
 	f->height = (int)png_get_image_height(png, info);
 	f->channels = ch;
+	/* Deflate packs at most 1032 bytes into one byte of the file. */
+	ret = glint_image_size_check(path, "IHDR", f->width, f->height,
+				     glint_file_size(path),
+				     2.0 * ch * f->width * f->height / 1032);
+	if (ret < 0)
+		goto out;
 	f->data = malloc((size_t)f->width * f->height * ch * sizeof(uint16_t));
 	row = malloc((size_t)f->width * ch * 2);
 	if (!f->data || !row) {

@@ -16,6 +16,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 /* The C core reports errors through a callback; keep the last one. */
@@ -205,6 +206,18 @@ static int check_channels(exr_context_t ctx, const char *path, int *has_y)
 			       path, chl->num_channels);
 }
 
+/*
+ * The fewest bytes a data window can be stored in: 2 bytes a pixel (one
+ * half channel) uncompressed; compressed, deflate's best case (1032:1)
+ * bounds every codec glint reads.
+ */
+static double min_data_bytes(const exr_attr_box2i_t *dw, exr_compression_t comp)
+{
+	double px = ((double)dw->max.x - dw->min.x + 1) *
+		    ((double)dw->max.y - dw->min.y + 1);
+	return comp == EXR_COMPRESSION_NONE ? 2 * px : 2 * px / 1032;
+}
+
 static int exr_read_core(const char *path, struct glint_image **out)
 {
 	exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
@@ -232,6 +245,12 @@ static int exr_read_core(const char *path, struct glint_image **out)
 		ret = exr_fail(path, "reading the header", rv);
 		goto out;
 	}
+	ret = glint_image_size_check(
+		path, "dataWindow", (long long)dw.max.x - dw.min.x + 1,
+		(long long)dw.max.y - dw.min.y + 1, glint_file_size(path),
+		min_data_bytes(&dw, comp));
+	if (ret < 0)
+		goto out;
 	if (storage != EXR_STORAGE_SCANLINE && storage != EXR_STORAGE_TILED) {
 		ret = glint_error_set(EINVAL,
 				      "%s: deep EXR data: expected a flat "

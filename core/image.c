@@ -3,12 +3,16 @@
 
 #include "error.h"
 #include "formats.h"
+#include "log.h"
 
 #include <ctype.h>
+#include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 /* Large enough for any real sensor or probe, small enough to be sane. */
 #define GLINT_IMAGE_MAX_DIM 65536
@@ -40,6 +44,84 @@ err_oom:
 	glint_error_set(ENOMEM, "out of memory for a %dx%d image", width,
 			height);
 	return NULL;
+}
+
+static long long env_limit(const char *name, long long fallback, long long unit)
+{
+	const char *v = getenv(name);
+	char *end;
+	if (!v || !*v)
+		return fallback;
+	errno = 0;
+	long long n = strtoll(v, &end, 10);
+	if (errno || *end || n <= 0 || n > LLONG_MAX / unit) {
+		glint_log_warn("%s=%s: expected a positive whole number; "
+			       "using %lld",
+			       name, v, fallback / unit);
+		return fallback;
+	}
+	return n * unit;
+}
+
+long long glint_image_max_pixels(void)
+{
+	return env_limit("GLINT_MAX_PIXELS", 1LL << 27, 1);
+}
+
+long long glint_image_max_bytes(void)
+{
+	return env_limit("GLINT_MAX_IMAGE_MB", 2048LL << 20, 1LL << 20);
+}
+
+long long glint_file_bytes_left(FILE *fp)
+{
+	struct stat st;
+	long pos = ftell(fp);
+	if (pos < 0 || fstat(fileno(fp), &st) < 0 || !S_ISREG(st.st_mode))
+		return -1;
+	return st.st_size > pos ? (long long)st.st_size - pos : 0;
+}
+
+long long glint_file_size(const char *path)
+{
+	struct stat st;
+	return stat(path, &st) == 0 && S_ISREG(st.st_mode)
+		       ? (long long)st.st_size
+		       : -1;
+}
+
+int glint_image_size_check(const char *path, const char *field, long long w,
+			   long long h, long long have_bytes, double need_bytes)
+{
+	if (w <= 0 || h <= 0 || w > GLINT_IMAGE_MAX_DIM ||
+	    h > GLINT_IMAGE_MAX_DIM)
+		return glint_error_set(EINVAL,
+				       "%s: %s says %lldx%lld: expected 1..%d "
+				       "on each side",
+				       path, field, w, h, GLINT_IMAGE_MAX_DIM);
+	long long px = w * h, max_px = glint_image_max_pixels();
+	long long max_b = glint_image_max_bytes();
+	if (px > max_px)
+		return glint_error_set(EFBIG,
+				       "%s: %s says %lldx%lld = %lld pixels, "
+				       "above the limit of %lld "
+				       "(GLINT_MAX_PIXELS)",
+				       path, field, w, h, px, max_px);
+	if (px * 12 > max_b)
+		return glint_error_set(EFBIG,
+				       "%s: %s says %lldx%lld, %lld MiB as "
+				       "floats, above the limit of %lld MiB "
+				       "(GLINT_MAX_IMAGE_MB)",
+				       path, field, w, h, (px * 12) >> 20,
+				       max_b >> 20);
+	if (have_bytes >= 0 && (double)have_bytes < need_bytes)
+		return glint_error_set(EINVAL,
+				       "%s: %s says %lldx%lld, which needs at "
+				       "least %.0f bytes of data, but the "
+				       "file holds %lld",
+				       path, field, w, h, need_bytes,
+				       have_bytes);
+	return 0;
 }
 
 void glint_image_free(struct glint_image *img)

@@ -9,6 +9,7 @@
  */
 
 #include <stddef.h>
+#include <stdio.h>
 
 struct glint_image {
 	int width;
@@ -32,6 +33,34 @@ static inline float *glint_image_px(const struct glint_image *img, int x, int y)
 {
 	return img->data + ((size_t)y * img->width + x) * 3;
 }
+
+/*
+ * The size policy of every reader of outside images, applied to a header's
+ * width and height before anything is allocated.  Accepted only when
+ *  - each side is 1..65536;
+ *  - w * h is at most the pixel limit: GLINT_MAX_PIXELS in the environment,
+ *    default 2^27 (134 M pixels, a 1.6 GB float image);
+ *  - the decoded float image (12 bytes a pixel) is at most the byte limit:
+ *    GLINT_MAX_IMAGE_MB (MiB), default 2048;
+ *  - the file holds enough data for that many pixels: have_bytes (what the
+ *    file holds after its header) >= need_bytes (the least the format can
+ *    store w x h pixels in: the raw size, or the codec's best case).
+ * `field` names the header field that gave the size ("PFM header", "EXR
+ * dataWindow").  Returns 0 or -EFBIG / -EINVAL with a message naming the
+ * file, the field and the limit.
+ */
+int glint_image_size_check(const char *path, const char *field, long long w,
+			   long long h, long long have_bytes,
+			   double need_bytes);
+
+/* The limits above as set now (for messages and tests). */
+long long glint_image_max_pixels(void);
+long long glint_image_max_bytes(void);
+
+/* Bytes from `fp`'s position to its end (st_size - ftell), or -1. */
+long long glint_file_bytes_left(FILE *fp);
+/* Size of the regular file at path, or -1. */
+long long glint_file_size(const char *path);
 
 /*
  * Check that every value is finite (and >= 0 when nonneg is set).  On

@@ -20,6 +20,17 @@ int glint_ldr_read(const char *path, int *w, int *h, uint8_t **rgb)
 	glint_path_ext(path, ext, sizeof(ext));
 	if (!strcmp(ext, "png"))
 		return glint_png_read_rgb8(path, w, h, rgb);
+	/* stb allocates what the header says: check the size first.  Its
+	 * densest formats (run-length TGA: 128 pixels in 2 bytes; JPEG
+	 * blocks of a flat image) stay under 1032 pixels a byte. */
+	if (!stbi_info(path, w, h, &n))
+		return glint_error_set(EIO, "%s: %s", path,
+				       stbi_failure_reason());
+	int ret = glint_image_size_check(path, "header", *w, *h,
+					 glint_file_size(path),
+					 (double)*w * *h / 1032);
+	if (ret < 0)
+		return ret;
 	uint8_t *p = stbi_load(path, w, h, &n, 3);
 	if (!p)
 		return glint_error_set(EIO, "%s: %s", path,

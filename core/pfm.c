@@ -48,6 +48,11 @@ int glint_pfm_read(const char *path, struct glint_image **out)
 		goto out;
 	}
 	nc = magic[1] == 'F' ? 3 : 1;
+	ret = glint_image_size_check(path, "PFM header", w, h,
+				     glint_file_bytes_left(fp),
+				     (double)w * h * nc * sizeof(float));
+	if (ret < 0)
+		goto out;
 	img = glint_image_new(w, h);
 	if (!img) {
 		ret = glint_error_prefix(EINVAL, "%s", path);

@@ -174,6 +174,15 @@ int glint_png_read_rgb8(const char *path, int *w, int *h, uint8_t **px)
 	img.version = PNG_IMAGE_VERSION;
 	if (!png_image_begin_read_from_file(&img, path))
 		return glint_error_set(EIO, "%s: %s", path, img.message);
+	/* Deflate packs at most 1032 bytes (pixels, at 8-bit grey) into one
+	 * byte of the file. */
+	int ret = glint_image_size_check(path, "IHDR", img.width, img.height,
+					 glint_file_size(path),
+					 (double)img.width * img.height / 1032);
+	if (ret < 0) {
+		png_image_free(&img);
+		return ret;
+	}
 	/* No gamma handling: 8-bit in, the same 8-bit values out. */
 	img.format = PNG_FORMAT_RGB;
 	size_t n = PNG_IMAGE_SIZE(img);

@@ -161,6 +161,19 @@ static int read_header(FILE *fp, const char *path, int *w, int *h, int *flip_y)
 	return 0;
 }
 
+/*
+ * The fewest bytes w x h pixels can be stored in: rows narrower than 8 or
+ * wider than 32767 are flat (4 bytes a pixel); others may be old-style
+ * runs: a first pixel and runs of up to 255 << 8k repeats, 4 bytes each
+ * (8 bytes a row up to 256 pixels, 12 beyond).
+ */
+static double min_data_bytes(int w, int h)
+{
+	if (w < 8 || w > 0x7fff)
+		return 4.0 * w * h;
+	return (w <= 256 ? 8.0 : 12.0) * h;
+}
+
 int glint_rgbe_read(const char *path, struct glint_image **out)
 {
 	struct rgbe_reader r = { .path = path };
@@ -176,10 +189,19 @@ int glint_rgbe_read(const char *path, struct glint_image **out)
 	ret = read_header(r.fp, path, &w, &h, &flip);
 	if (ret < 0)
 		goto out;
+	ret = glint_image_size_check(path, "resolution line", w, h,
+				     glint_file_bytes_left(r.fp),
+				     min_data_bytes(w, h));
+	if (ret < 0)
+		goto out;
 	img = glint_image_new(w, h);
-	row = malloc((size_t)(w > 0 ? w : 1) * 4);
-	if (!img || !row) {
+	if (!img) {
 		ret = glint_error_prefix(EINVAL, "%s", path);
+		goto out;
+	}
+	row = malloc((size_t)w * 4);
+	if (!row) {
+		ret = glint_error_set(ENOMEM, "%s: out of memory", path);
 		goto out;
 	}
 	for (r.row = 0; r.row < h; r.row++) {

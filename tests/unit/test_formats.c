@@ -10,6 +10,7 @@
 
 #include <OpenEXR/openexr.h>
 #include <dirent.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <png.h>
 #include <stdint.h>
@@ -386,12 +387,127 @@ static void test_bad_pfm(void)
 	glint_pfm_write(tmp_path("g.pfm"), a);
 	copy_prefix(tmp_path("g.pfm"), tmp_path("t.pfm"),
 		    file_size(tmp_path("g.pfm")) - 10);
-	expect_read_error(tmp_path("t.pfm"), "truncated");
+	expect_read_error(tmp_path("t.pfm"), "needs at least 4800 bytes");
 	FILE *fp = fopen(tmp_path("h.pfm"), "w");
 	fputs("P6\n2 2\n255\n", fp);
 	fclose(fp);
 	expect_read_error(tmp_path("h.pfm"), "bad PFM header");
 	glint_image_free(a);
+}
+
+static void write_bytes(const char *p, const void *data, size_t n)
+{
+	FILE *fp = fopen(p, "wb");
+	fwrite(data, 1, n, fp);
+	fclose(fp);
+}
+
+static uint32_t crc32_of(const uint8_t *b, size_t n)
+{
+	uint32_t c = 0xffffffffu;
+	for (size_t i = 0; i < n; i++) {
+		c ^= b[i];
+		for (int k = 0; k < 8; k++)
+			c = (c >> 1) ^ (0xedb88320u & (0u - (c & 1)));
+	}
+	return ~c;
+}
+
+static void put_be32(uint8_t *p, uint32_t v)
+{
+	p[0] = (uint8_t)(v >> 24);
+	p[1] = (uint8_t)(v >> 16);
+	p[2] = (uint8_t)(v >> 8);
+	p[3] = (uint8_t)v;
+}
+
+/* Overwrite a small EXR's dataWindow (box2i after its name and type). */
+static void exr_set_window(const char *p, int w, int h)
+{
+	FILE *fp = fopen(p, "r+b");
+	char buf[4096];
+	size_t n = fread(buf, 1, sizeof(buf), fp);
+	const char key[] = "dataWindow\0box2i\0";
+	for (size_t i = 0; i + sizeof(key) + 4 + 16 < n; i++)
+		if (!memcmp(buf + i, key, sizeof(key) - 1)) {
+			int32_t box[4] = { 0, 0, w - 1, h - 1 };
+			fseek(fp, (long)(i + sizeof(key) - 1 + 4), SEEK_SET);
+			fwrite(box, 4, 4, fp);
+			break;
+		}
+	fclose(fp);
+}
+
+/*
+ * Headers that promise more than the file holds are refused before
+ * anything is allocated (issue 17): each of these once allocated up to
+ * 2.8 GB.  The peak memory of the whole test stays small.
+ */
+static void test_header_bombs(void)
+{
+	/* A 20-byte TGA: 18-byte header of 30000 x 25000 RGB, 2 bytes. */
+	uint8_t tga[20] = { 0, 0, 2 };
+	tga[12] = 30000 & 0xff, tga[13] = 30000 >> 8;
+	tga[14] = 25000 & 0xff, tga[15] = 25000 >> 8;
+	tga[16] = 24;
+	write_bytes(tmp_path("bomb.tga"), tga, sizeof(tga));
+	expect_read_error(tmp_path("bomb.tga"), "header says 30000x25000");
+	tga[12] = 8000 & 0xff, tga[13] = 8000 >> 8;
+	tga[14] = 6000 & 0xff, tga[15] = 6000 >> 8;
+	write_bytes(tmp_path("bomb2.tga"), tga, sizeof(tga));
+	expect_read_error(tmp_path("bomb2.tga"), "the file holds 20");
+
+	const char rgbe[] = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n"
+			    "-Y 8000 +X 8000\n\2\2\x1f\x40";
+	write_bytes(tmp_path("bomb.hdr"), rgbe, sizeof(rgbe) - 1);
+	expect_read_error(tmp_path("bomb.hdr"),
+			  "resolution line says 8000x8000");
+	const char rgbe_big[] = "#?RADIANCE\n\n-Y 60000 +X 60000\n";
+	write_bytes(tmp_path("huge.hdr"), rgbe_big, sizeof(rgbe_big) - 1);
+	expect_read_error(tmp_path("huge.hdr"), "GLINT_MAX_PIXELS");
+
+	const char pfm[] = "PF\n8000 8000\n-1.0\n0123456789abcdef";
+	write_bytes(tmp_path("bomb.pfm"), pfm, sizeof(pfm) - 1);
+	expect_read_error(tmp_path("bomb.pfm"), "PFM header says 8000x8000");
+
+	struct glint_image *a = card(16, 16);
+	CHECK(glint_exr_write(tmp_path("bomb.exr"), a, 1) == 0, "%s",
+	      glint_error_msg());
+	exr_set_window(tmp_path("bomb.exr"), 8000, 8000);
+	expect_read_error(tmp_path("bomb.exr"), "dataWindow says 8000x8000");
+
+	/* A PNG whose IHDR (CRC fixed) says 20000 x 20000. */
+	CHECK(glint_png_write(tmp_path("bomb.png"), a, 0) == 0, "%s",
+	      glint_error_msg());
+	FILE *fp = fopen(tmp_path("bomb.png"), "r+b");
+	uint8_t ihdr[17];
+	fseek(fp, 12, SEEK_SET);
+	CHECK(fread(ihdr, 1, 17, fp) == 17 && !memcmp(ihdr, "IHDR", 4),
+	      "no IHDR");
+	put_be32(ihdr + 4, 20000);
+	put_be32(ihdr + 8, 20000);
+	uint8_t crc[4];
+	put_be32(crc, crc32_of(ihdr, 17));
+	fseek(fp, 12, SEEK_SET);
+	fwrite(ihdr, 1, 17, fp);
+	fwrite(crc, 1, 4, fp);
+	fclose(fp);
+	expect_read_error(tmp_path("bomb.png"), "IHDR says 20000x20000");
+
+	/* The limit is configurable; a good file over it is refused. */
+	glint_pfm_write(tmp_path("ok.pfm"), a);
+	setenv("GLINT_MAX_PIXELS", "100", 1);
+	expect_read_error(tmp_path("ok.pfm"), "above the limit of 100");
+	unsetenv("GLINT_MAX_PIXELS");
+	struct glint_image *b = NULL;
+	CHECK(glint_image_read(tmp_path("ok.pfm"), &b) == 0, "%s",
+	      glint_error_msg());
+	glint_image_free(b);
+	glint_image_free(a);
+
+	struct rusage ru;
+	getrusage(RUSAGE_SELF, &ru);
+	CHECK(ru.ru_maxrss < 400 * 1024, "peak memory %ld KiB", ru.ru_maxrss);
 }
 
 static void test_nonfinite(void)
@@ -517,6 +633,7 @@ int main(void)
 	RUN(test_bad_exr);
 	RUN(test_bad_rgbe);
 	RUN(test_bad_pfm);
+	RUN(test_header_bombs);
 	RUN(test_nonfinite);
 	RUN(test_write_errors);
 	return test_result();

@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: MIT */
-#define _XOPEN_SOURCE 700
+#define _GNU_SOURCE /* renameat2 */
 #include "atomic_dir.h"
 
 #include "error.h"
@@ -99,6 +99,31 @@ int glint_atomic_dir_commit(struct glint_atomic_dir *ad)
 			return glint_error_set(EEXIST,
 					       "%s exists and is not a folder",
 					       ad->final_path);
+		}
+		/* Swap the two folders in one step: a complete result is
+		 * visible at every instant, and a crash after the swap
+		 * leaves the old one under the temporary name, which the
+		 * next sweep removes. */
+		if (renameat2(AT_FDCWD, ad->tmp_path, AT_FDCWD, ad->final_path,
+			      RENAME_EXCHANGE) == 0) {
+			glint_path_fmt(parent, sizeof(parent), "%s",
+				       ad->final_path);
+			fsync_path(dirname(parent));
+			remove_tree(ad->tmp_path);
+			ad->tmp_path[0] = '\0';
+			return 0;
+		}
+		/* A file system without the exchange (EINVAL): move the old
+		 * result aside first.  A crash between the two renames
+		 * leaves no result until glint_atomic_dir_sweep puts the old
+		 * one back. */
+		if (errno != EINVAL && errno != ENOSYS) {
+			int e = errno;
+			glint_atomic_dir_abort(ad);
+			return glint_error_set(e,
+					       "%s: cannot put results in "
+					       "place: %s",
+					       ad->final_path, strerror(e));
 		}
 		if (glint_path_fmt(old, sizeof(old), "%s.old.%ld",
 				   ad->final_path, (long)getpid()) < 0) {

@@ -4,8 +4,12 @@
 
 /*
  * A result folder that appears whole or not at all: files are written into
- * a temporary sibling folder, which is renamed over the target when
- * complete (an existing target is moved aside first and removed after).
+ * a temporary sibling folder, which takes the target's place when complete.
+ * An existing target is swapped with it in one renameat2(RENAME_EXCHANGE),
+ * so a complete result (old or new) is visible at every instant, even
+ * under SIGKILL or a power cut; the old one is then removed.  On a file
+ * system without the exchange the old one is moved aside first, and
+ * glint_atomic_dir_sweep() puts it back after a crash between the two.
  */
 
 /* The longest target path accepted (bytes, without the NUL): leaves room

@@ -75,8 +75,16 @@ int glint_queue_add(const char *queue, const char *kind, const char *session,
 {
 	static int counter;
 	char id[64], stamp[32], added[32], path[GLINT_PATH_MAX];
-	int ret = glint_queue_init(queue);
+	char abs[GLINT_PATH_MAX];
+	int ret;
 
+	/* The worker runs in another folder, maybe as another user: the
+	 * job names its session by its absolute, resolved path. */
+	if (!realpath(session, abs))
+		return glint_error_set(errno, "%s: %s", session,
+				       strerror(errno));
+	session = abs;
+	ret = glint_queue_init(queue);
 	if (ret < 0)
 		return ret;
 	utc_now(stamp, sizeof(stamp), 1);

@@ -12,6 +12,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
@@ -57,19 +59,41 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 		return glint_queue_finish(
 			queue, job, "failed",
 			json_pack("{s:s}", "error", glint_error_msg()));
+	/* A job file is data: its session must be an absolute path (as
+	 * glint queue add writes it), and it is passed after "--", so it
+	 * can never be taken for an option. */
+	if (strcmp(job->kind, "fit") || job->session[0] != '/')
+		return glint_queue_finish(
+			queue, job, "failed",
+			json_pack("{s:s}", "error",
+				  "bad job: expected kind \"fit\" and an "
+				  "absolute session path"));
 	glint_log_info("job %s: fitting %s", job->id, job->session);
+	pid_t worker = getpid();
 	pid_t pid = fork();
 	if (pid == 0) {
+		/* The fit dies with its worker (SIGTERM when the worker
+		 * exits, even by SIGKILL), in a process group of its own,
+		 * and holds the job's lock while it lives: no next worker
+		 * re-runs a job whose fit is still running. */
+		setpgid(0, 0);
+		prctl(PR_SET_PDEATHSIG, SIGTERM);
+		if (getppid() != worker)
+			_exit(127);
+		if (job->lock_fd >= 0)
+			fcntl(job->lock_fd, F_SETFD, 0);
 		int fo = open(out, O_WRONLY | O_CREAT | O_TRUNC, 0666);
 		int fe = open(err, O_WRONLY | O_CREAT | O_TRUNC, 0666);
 		if (fo >= 0)
 			dup2(fo, 1);
 		if (fe >= 0)
 			dup2(fe, 2);
-		execl(self, "glint", "fit", job->session, "--wait", "--json",
-		      (char *)NULL);
+		execl(self, "glint", "fit", "--wait", "--json", "--",
+		      job->session, (char *)NULL);
 		_exit(127);
 	}
+	if (pid > 0)
+		setpgid(pid, pid); /* as the child does: no race with kill */
 	if (pid < 0)
 		return glint_queue_finish(
 			queue, job, "failed",
@@ -82,7 +106,7 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 		if (!cancelled &&
 		    (*stop || glint_queue_cancel_requested(queue, job))) {
 			cancelled = 1 + (*stop != 0);
-			kill(pid, SIGTERM);
+			kill(-pid, SIGTERM);
 		}
 		nap(0.1);
 	}

@@ -192,11 +192,17 @@ wait_until 30 pgrep -P $wpid
 child=$(pgrep -P $wpid)
 kill -KILL $wpid
 wait $wpid 2>/dev/null
-kill -KILL $child 2>/dev/null
-wait_until 30 bash -c "! kill -0 $child"
+# The fit dies with its worker, by itself (issue 17: it kept running and
+# the next worker fitted the session again).
+check "the killed worker's fit dies with it" wait_until 5 bash -c "! kill -0 $child"
 check "killed worker: its job is still listed as running" bash -c "'$glint' jobs --root '$tmp/one' | grep -q ' running '"
 check "a new worker re-runs it" run 0 "put back in the queue" queue run --until-empty --root "$tmp/one"
 check "... and it is done" bash -c "'$glint' jobs --root '$tmp/one' --json | python3 -c 'import json,sys; j=json.load(sys.stdin)[\"jobs\"]; s=[x[\"state\"] for x in j]; print(\"  states\", s); sys.exit(s.count(\"done\") != 2 or \"running\" in s or \"pending\" in s)'"
+check "a relative session path is stored absolute" bash -c "cd '$(dirname "$sess")' && '$glint' queue add '$(basename "$sess")' --root '$tmp/one' >/dev/null && grep -Eq '\"session\": ?\"/' '$tmp'/one/queue/pending/*.json"
+check "... and runs from another folder" bash -c "cd / && '$glint' queue run --until-empty --root '$tmp/one' -q && '$glint' jobs --root '$tmp/one' | grep -c ' done ' | grep -qx 3"
+# A job file is data, never options: "--help" as its session fails the job.
+echo '{"id": "zz-evil", "kind": "fit", "session": "--help"}' >"$tmp/one/queue/pending/zz-evil.json"
+check "a job whose session is '--help' fails as a bad job" bash -c "'$glint' queue run --until-empty --root '$tmp/one' -q && '$glint' jobs --root '$tmp/one' --json | python3 -c 'import json,sys; j=[x for x in json.load(sys.stdin)[\"jobs\"] if x[\"id\"] == \"zz-evil\"]; print(\"  \", j); sys.exit(j[0][\"state\"] != \"failed\")'"
 id=$("$glint" queue add "$sess" --root "$tmp/one")
 check "cancel a pending job" run 0 "" queue cancel "$id" --root "$tmp/one"
 check "... listed as cancelled" bash -c "'$glint' jobs --root '$tmp/one' | grep -q '$id *cancelled'"

@@ -6,22 +6,41 @@
 
 #include <jansson.h>
 #include <png.h>
+#include <zlib.h>
 #include <setjmp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+/* CRC-32 (zlib's) of the samples as the PNG stores them. */
+static uint32_t pixels_crc32(const uint16_t *data, size_t n)
+{
+	uint8_t buf[4096];
+	uLong crc = crc32(0L, Z_NULL, 0);
+	for (size_t i = 0; i < n;) {
+		size_t k = 0;
+		for (; k < sizeof(buf) && i < n; k += 2, i++) {
+			buf[k] = (uint8_t)(data[i] >> 8);
+			buf[k + 1] = (uint8_t)(data[i] & 0xff);
+		}
+		crc = crc32(crc, buf, (uInt)k);
+	}
+	return (uint32_t)crc;
+}
+
 char *glint_frame_metadata_json(const struct glint_frame *f, int index)
 {
+	size_t n = (size_t)f->width * f->height * (f->channels == 3 ? 3 : 1);
 	json_t *o = json_pack(
 		"{s:i, s:i, s:i, s:s, s:s, s:i, s:i, s:b, s:f, s:f, s:f, s:f, "
-		"s:f, s:I}",
+		"s:f, s:I, s:I}",
 		"index", index, "width", f->width, "height", f->height,
 		"format", f->format, "source_format", f->source_format,
 		"channels", f->channels, "bit_depth", f->bit_depth, "linear",
 		f->linear, "exposure_s", f->exposure_s, "gain", f->gain,
 		"black_level", f->black_level, "t_start", f->t_start, "t_end",
-		f->t_end, "sequence", (json_int_t)f->sequence);
+		f->t_end, "sequence", (json_int_t)f->sequence, "pixels_crc32",
+		(json_int_t)pixels_crc32(f->data, n));
 	char *s = o ? json_dumps(o, JSON_INDENT(2) | JSON_REAL_PRECISION(17))
 		    : NULL;
 	json_decref(o);
@@ -52,7 +71,7 @@ int glint_frame_write(const char *path, const struct glint_frame *f,
 }
 
 static int meta_from_text(const char *path, const char *text,
-			  struct glint_frame *f)
+			  struct glint_frame *f, int *index, json_int_t *crc)
 {
 	json_error_t e;
 	json_t *o = json_loads(text, 0, &e);
@@ -61,11 +80,12 @@ static int meta_from_text(const char *path, const char *text,
 	json_int_t seq = 0;
 
 	if (!o ||
-	    json_unpack(o, "{s:s, s?s, s:i, s?b, s:F, s:F, s:F, s?I}", "format",
-			&fmt, "source_format", &src, "bit_depth", &f->bit_depth,
-			"linear", &lin, "exposure_s", &f->exposure_s, "gain",
-			&f->gain, "black_level", &f->black_level, "sequence",
-			&seq) != 0) {
+	    json_unpack(o, "{s:s, s?s, s:i, s?b, s:F, s:F, s:F, s?I, s?i, s?I}",
+			"format", &fmt, "source_format", &src, "bit_depth",
+			&f->bit_depth, "linear", &lin, "exposure_s",
+			&f->exposure_s, "gain", &f->gain, "black_level",
+			&f->black_level, "sequence", &seq, "index", index,
+			"pixels_crc32", crc) != 0) {
 		json_decref(o);
 		return glint_error_set(EINVAL,
 				       "%s: glint:frame metadata is missing "
@@ -80,8 +100,10 @@ static int meta_from_text(const char *path, const char *text,
 	return 0;
 }
 
-int glint_frame_read(const char *path, struct glint_frame *f)
+int glint_frame_read(const char *path, struct glint_frame *f, int *index)
 {
+	int idx = -1;
+	json_int_t crc = -1;
 	FILE *fp = fopen(path, "rb");
 	png_structp png = NULL;
 	png_infop info = NULL;
@@ -125,7 +147,8 @@ int glint_frame_read(const char *path, struct glint_frame *f)
 	ret = -EINVAL;
 	for (int i = 0; i < ntext; i++)
 		if (!strcmp(texts[i].key, "glint:frame"))
-			ret = meta_from_text(path, texts[i].text, f);
+			ret = meta_from_text(path, texts[i].text, f, &idx,
+					     &crc);
 	if (ret == -EINVAL && !ntext)
 		ret = glint_error_set(EINVAL, "%s: no glint:frame metadata",
 				      path);
@@ -153,6 +176,16 @@ int glint_frame_read(const char *path, struct glint_frame *f)
 			d[i] = (uint16_t)(row[2 * i] << 8 | row[2 * i + 1]);
 	}
 	png_read_end(png, NULL);
+	uint32_t got = pixels_crc32(f->data, (size_t)f->width * f->height * ch);
+	if (crc >= 0 && got != (uint32_t)crc)
+		ret = glint_error_set(EINVAL,
+				      "%s: the pixels do not match their "
+				      "checksum (CRC-32 %08x, its metadata "
+				      "says %08x): the frame was edited or "
+				      "damaged",
+				      path, got, (uint32_t)crc);
+	if (index)
+		*index = idx;
 out:
 	if (png)
 		png_destroy_read_struct(&png, info ? &info : NULL, NULL);

@@ -14,14 +14,18 @@
 
 #include "camera.h"
 
-/* The frame's metadata as a JSON object text (caller frees). */
+/* The frame's metadata as a JSON object text (caller frees): its index
+ * in the session, the camera's values and "pixels_crc32", the CRC-32 of
+ * the samples as the PNG stores them (16-bit big-endian, row by row). */
 char *glint_frame_metadata_json(const struct glint_frame *f, int index);
 
 int glint_frame_write(const char *path, const struct glint_frame *f,
 		      const char *metadata_json);
 
 /* Read pixel data back (format and bit depth from the metadata chunk);
- * fails naming the file on anything truncated or inconsistent. */
-int glint_frame_read(const char *path, struct glint_frame *f);
+ * fails naming the file on anything truncated or inconsistent, or when
+ * the pixels do not match their checksum (an edited frame).  *index (may
+ * be NULL) is the index the metadata gives, -1 when it has none. */
+int glint_frame_read(const char *path, struct glint_frame *f, int *index);
 
 #endif

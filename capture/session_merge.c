@@ -15,6 +15,7 @@
 #include "core/path.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -57,6 +58,45 @@ int glint_session_noise(const char *dir, struct glint_noise_model *m)
 	return ret;
 }
 
+/*
+ * Read frame `name` of a session and check it is the frame the session
+ * recorded there: its own metadata gives the index in its name and the
+ * exposure the session lists, its sequence number follows the previous
+ * frame's, and its pixels match their checksum.  A frame copied over
+ * another, swapped or edited is an error naming it.
+ */
+static int frame_in_place(const char *path, const char *name,
+			  const json_t *listed, struct glint_frame *f,
+			  const struct glint_frame *prev)
+{
+	int index, named;
+	int ret = glint_frame_read(path, f, &index);
+	if (ret < 0)
+		return ret;
+	double t = json_number_value(json_object_get(listed, "exposure_s"));
+	if (sscanf(name, "frame-%d.png", &named) == 1 && index >= 0 &&
+	    index != named)
+		return glint_error_set(EINVAL,
+				       "%s: holds frame %d of the bracket, "
+				       "not frame %d: a frame was copied or "
+				       "swapped",
+				       path, index, named);
+	if (t > 0 && fabs(f->exposure_s - t) > 1e-6 * t)
+		return glint_error_set(EINVAL,
+				       "%s: exposed %g s, but the session "
+				       "lists %g s for it: a frame was copied "
+				       "or swapped",
+				       path, f->exposure_s, t);
+	if (prev && f->sequence && prev->sequence &&
+	    f->sequence <= prev->sequence)
+		return glint_error_set(EINVAL,
+				       "%s: camera sequence %llu after %llu: "
+				       "frames out of order",
+				       path, (unsigned long long)f->sequence,
+				       (unsigned long long)prev->sequence);
+	return 0;
+}
+
 int glint_session_load_frames(const char *dir, struct glint_frame **frames,
 			      int *n)
 {
@@ -93,7 +133,9 @@ int glint_session_load_frames(const char *dir, struct glint_frame **frames,
 		}
 		ret = glint_path_join(path, sizeof(path), dir, name);
 		if (!ret)
-			ret = glint_frame_read(path, &(*frames)[i]);
+			ret = frame_in_place(
+				path, name, json_array_get(list, (size_t)i),
+				&(*frames)[i], i ? &(*frames)[i - 1] : NULL);
 	}
 	json_decref(doc);
 	return ret;

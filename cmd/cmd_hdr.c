@@ -330,7 +330,8 @@ int cmd_hdr(int argc, char **argv)
 		frames = calloc((size_t)n, sizeof(*frames));
 		ret = frames ? 0 : glint_error_set(ENOMEM, "out of memory");
 		for (int i = 0; i < n && ret == 0; i++)
-			ret = glint_frame_read(argv[optind + i], &frames[i]);
+			ret = glint_frame_read(argv[optind + i], &frames[i],
+					       NULL);
 	}
 	if (!isnan(cpe))
 		nm.dn_per_electron = cpe;

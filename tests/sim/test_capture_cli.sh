@@ -91,6 +91,34 @@ JSON
 "$glint" capture sample --config "$tmp/small.json" -q
 check "hdr of frames of different sizes: exit 1" run 1 "must match" hdr "$sess/frame-003.png" "$(only_session "$tmp/small")/frame-001.png" -o "$tmp/hdry"
 check "hdr of a missing session: exit 1" run 1 "nowhere" hdr "$tmp/nowhere"
+# Bracket integrity (issue 17): a frame copied over another, or one whose
+# pixels were edited (a valid PNG, its metadata kept), is named.
+cp -r "$sess" "$tmp/copied"
+cp "$tmp/copied/frame-007.png" "$tmp/copied/frame-002.png"
+check "hdr of a session with a frame copied over another: exit 1, named" \
+	run 1 "frame-002.png: holds frame 7 of the bracket, not frame 2" hdr "$tmp/copied"
+cp -r "$sess" "$tmp/edited"
+python3 - "$tmp/edited/frame-004.png" <<'PY'
+import struct, sys, zlib
+path = sys.argv[1]
+data = open(path, "rb").read()
+pos, chunks = 8, []
+while pos < len(data):
+    n, = struct.unpack(">I", data[pos:pos + 4])
+    chunks.append((data[pos + 4:pos + 8], data[pos + 8:pos + 8 + n]))
+    pos += 12 + n
+raw = bytearray(zlib.decompress(b"".join(d for t, d in chunks if t == b"IDAT")))
+raw[1 + 2 * 40] ^= 0x10  # row 0, one sample: filter byte first
+out = [c for c in chunks if c[0] != b"IDAT"]
+out.insert(len(out) - 1, (b"IDAT", zlib.compress(bytes(raw))))
+with open(path, "wb") as f:
+    f.write(data[:8])
+    for t, d in out:
+        f.write(struct.pack(">I", len(d)) + t + d +
+                struct.pack(">I", zlib.crc32(t + d) & 0xffffffff))
+PY
+check "hdr of a session with an edited frame: exit 1, named" \
+	run 1 "frame-004.png: the pixels do not match their checksum" hdr "$tmp/edited"
 
 # A probe capture on the simulated rig: the merged probe.exr, the ball
 # found in it and unwrapped to env.exr, which must match the map it

@@ -46,7 +46,7 @@ static void roundtrip(int ch, int bits, const char *dir)
 	char *meta = glint_frame_metadata_json(&f, 3);
 	CHECK(glint_frame_write(path, &f, meta) == 0, "%s", glint_error_msg());
 	free(meta);
-	CHECK(glint_frame_read(path, &g) == 0, "%s", glint_error_msg());
+	CHECK(glint_frame_read(path, &g, NULL) == 0, "%s", glint_error_msg());
 	if (g.data) {
 		CHECK(g.width == 37 && g.height == 23 && g.channels == ch,
 		      "%dx%dx%d", g.width, g.height, g.channels);
@@ -83,7 +83,7 @@ static void test_frames(const char *dir)
 	fwrite(buf, 1, (size_t)n / 2, out);
 	fclose(in);
 	fclose(out);
-	CHECK(glint_frame_read(dst, &g) < 0 && g.data == NULL,
+	CHECK(glint_frame_read(dst, &g, NULL) < 0 && g.data == NULL,
 	      "a truncated frame was read");
 	CHECK_MSG(glint_error_msg(), "half.png");
 	/* Not a PNG. */
@@ -91,7 +91,7 @@ static void test_frames(const char *dir)
 	out = fopen(dst, "wb");
 	fputs("hello\n", out);
 	fclose(out);
-	CHECK(glint_frame_read(dst, &g) < 0, "a text file was read");
+	CHECK(glint_frame_read(dst, &g, NULL) < 0, "a text file was read");
 	CHECK_MSG(glint_error_msg(), "text.png");
 	free(buf);
 }
@@ -150,7 +150,8 @@ static void test_session(const char *dir)
 	struct glint_frame g;
 	char p[4200];
 	snprintf(p, sizeof(p), "%s/frame-001.png", sdir);
-	CHECK(glint_frame_read(p, &g) == 0 && g.exposure_s == f.exposure_s,
+	CHECK(glint_frame_read(p, &g, NULL) == 0 &&
+		      g.exposure_s == f.exposure_s,
 	      "frame 1 not kept: %s", glint_error_msg());
 	glint_frame_release(&g);
 	glint_frame_release(&f);

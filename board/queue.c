@@ -215,7 +215,8 @@ int glint_queue_cancel(const char *queue, const char *id)
 		ret = qpath(path, queue, "running", id, ".cancel");
 		if (ret < 0)
 			return ret;
-		int fd = open(path, O_WRONLY | O_CREAT, 0666);
+		int fd = open(path, O_WRONLY | O_CREAT | O_NOFOLLOW | O_CLOEXEC,
+			      0666);
 		if (fd < 0)
 			return glint_error_set(errno, "%s: %s", path,
 					       strerror(errno));
@@ -234,7 +235,7 @@ static int orphaned(const char *queue, const char *id)
 	char path[GLINT_PATH_MAX];
 	if (qpath(path, queue, "running", id, ".lock") < 0)
 		return 0;
-	int fd = open(path, O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+	int fd = open(path, O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0666);
 	if (fd < 0)
 		return 0;
 	int free_ = flock(fd, LOCK_EX | LOCK_NB) == 0;

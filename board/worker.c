@@ -82,12 +82,18 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 			_exit(127);
 		if (job->lock_fd >= 0)
 			fcntl(job->lock_fd, F_SETFD, 0);
-		int fo = open(out, O_WRONLY | O_CREAT | O_TRUNC, 0666);
-		int fe = open(err, O_WRONLY | O_CREAT | O_TRUNC, 0666);
-		if (fo >= 0)
-			dup2(fo, 1);
-		if (fe >= 0)
-			dup2(fe, 2);
+		/* New files only: a link planted in their place (the queue
+		 * is shared) is removed, never followed or truncated. */
+		unlink(out);
+		unlink(err);
+		int fo = open(out, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW,
+			      0600);
+		int fe = open(err, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW,
+			      0600);
+		if (fo < 0 || fe < 0)
+			_exit(126);
+		dup2(fo, 1);
+		dup2(fe, 2);
 		execl(self, "glint", "fit", "--wait", "--json", "--",
 		      job->session, (char *)NULL);
 		_exit(127);

@@ -14,7 +14,7 @@
 int glint_lockfile_acquire(const char *path, const char *what, int wait,
 			   int *fd)
 {
-	int f = open(path, O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+	int f = open(path, O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0666);
 
 	*fd = -1;
 	if (f < 0)

@@ -88,6 +88,13 @@ static void test_outputs(void)
 	      glint_error_msg());
 	if (!b)
 		return;
+	/* Safe from the first instant (issue 17): each output is requested
+	 * at its inactive value, with no later write needed. */
+	last_value(22, &v, &p, &n);
+	CHECK(v == 0 && n == 1, "lights at open: %d after %d changes", v, n);
+	last_value(25, &v, &p, &n);
+	CHECK(v == 0 && p == 1 && n == 1,
+	      "active-low enable at open: logical %d, physical %d", v, p);
 	CHECK(glint_board_lights(b, 1) == 0, "%s", glint_error_msg());
 	last_value(22, &v, &p, &n);
 	CHECK(v == 1 && p == 1, "lights on: logical %d physical %d", v, p);

@@ -200,6 +200,13 @@ check "a new worker re-runs it" run 0 "put back in the queue" queue run --until-
 check "... and it is done" bash -c "'$glint' jobs --root '$tmp/one' --json | python3 -c 'import json,sys; j=json.load(sys.stdin)[\"jobs\"]; s=[x[\"state\"] for x in j]; print(\"  states\", s); sys.exit(s.count(\"done\") != 2 or \"running\" in s or \"pending\" in s)'"
 check "a relative session path is stored absolute" bash -c "cd '$(dirname "$sess")' && '$glint' queue add '$(basename "$sess")' --root '$tmp/one' >/dev/null && grep -Eq '\"session\": ?\"/' '$tmp'/one/queue/pending/*.json"
 check "... and runs from another folder" bash -c "cd / && '$glint' queue run --until-empty --root '$tmp/one' -q && '$glint' jobs --root '$tmp/one' | grep -c ' done ' | grep -qx 3"
+# Links planted where the worker writes a job's output (the queue is
+# shared over SSH) are removed, never followed: the victim keeps its text.
+echo "my notes" >"$tmp/victim.txt"
+echo '{"id": "zz-link", "kind": "fit", "session": "/nonexistent/session"}' >"$tmp/one/queue/pending/zz-link.json"
+ln -s "$tmp/victim.txt" "$tmp/one/queue/running/zz-link.out"
+ln -s "$tmp/victim.txt" "$tmp/one/queue/running/zz-link.err"
+check "links planted at a job's output files: not followed" bash -c "'$glint' queue run --until-empty --root '$tmp/one' -q && [ \"\$(cat '$tmp/victim.txt')\" = 'my notes' ] && '$glint' jobs --root '$tmp/one' | grep -q 'zz-link *failed'"
 # A job file is data, never options: "--help" as its session fails the job.
 echo '{"id": "zz-evil", "kind": "fit", "session": "--help"}' >"$tmp/one/queue/pending/zz-evil.json"
 check "a job whose session is '--help' fails as a bad job" bash -c "'$glint' queue run --until-empty --root '$tmp/one' -q && '$glint' jobs --root '$tmp/one' --json | python3 -c 'import json,sys; j=[x for x in json.load(sys.stdin)[\"jobs\"] if x[\"id\"] == \"zz-evil\"]; print(\"  \", j); sys.exit(j[0][\"state\"] != \"failed\")'"

@@ -113,6 +113,11 @@ int glint_frame_read(const char *path, struct glint_frame *f, int *index)
 	memset(f, 0, sizeof(*f));
 	if (!fp)
 		return glint_error_set(errno, "%s: %s", path, strerror(errno));
+	ret = glint_png_check_chunks(path);
+	if (ret < 0) {
+		fclose(fp);
+		return ret;
+	}
 	png = png_create_read_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
 	if (png)
 		info = png_create_info_struct(png);

@@ -54,6 +54,12 @@ int glint_png_write_rgb8(const char *path, int w, int h, const uint8_t *px);
  * code values as stored, no gamma or colour conversion. */
 int glint_png_read_rgb8(const char *path, int *w, int *h, uint8_t **px);
 
+/* Walk a PNG's chunks before libpng reads it: libpng allocates what a
+ * chunk's length says, so each must fit in the file; one promising more
+ * is an error naming the chunk and its offset.  0 for a non-PNG (libpng
+ * then says what is wrong). */
+int glint_png_check_chunks(const char *path);
+
 /* Any 8-bit image (PNG, TGA, JPEG, BMP) as RGB bytes, caller frees. */
 int glint_ldr_read(const char *path, int *w, int *h, uint8_t **rgb);
 /* The same as an image of code / 255 (camera-encoded, not radiance). */

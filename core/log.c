@@ -30,6 +30,9 @@ double glint_now(void)
 }
 
 static void log_v(const char *level, const char *fmt, va_list ap)
+	GLINT_PRINTF(2, 0);
+
+static void log_v(const char *level, const char *fmt, va_list ap)
 {
 	char msg[2048];
 

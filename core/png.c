@@ -7,7 +7,10 @@
 
 #include <png.h>
 
+#include <ctype.h>
+#include <errno.h>
 #include <math.h>
+#include <stdio.h>
 #include <setjmp.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -165,20 +168,64 @@ int glint_png_write_rgb8(const char *path, int w, int h, const uint8_t *px)
 	return glint_png_write_rows(path, w, h, &rgb8, rgb8_row, &t);
 }
 
+int glint_png_check_chunks(const char *path)
+{
+	static const uint8_t sig[8] = { 137, 'P', 'N', 'G', 13, 10, 26, 10 };
+	uint8_t head[8];
+	long long size = glint_file_size(path), pos = 8;
+	FILE *fp = fopen(path, "rb");
+	int ret = 0;
+
+	if (!fp)
+		return glint_error_set(errno, "%s: cannot open: %s", path,
+				       strerror(errno));
+	if (size < 0 || fread(head, 1, 8, fp) != 8 || memcmp(head, sig, 8))
+		goto out; /* not a PNG: libpng says so */
+	while (fread(head, 1, 8, fp) == 8) {
+		uint32_t len = (uint32_t)head[0] << 24 |
+			       (uint32_t)head[1] << 16 |
+			       (uint32_t)head[2] << 8 | head[3];
+		char type[5];
+		for (int i = 0; i < 4; i++)
+			type[i] =
+				isalpha(head[4 + i]) ? (char)head[4 + i] : '?';
+		type[4] = '\0';
+		if (len > 0x7fffffffu || pos + 12 + (long long)len > size) {
+			ret = glint_error_set(
+				EINVAL,
+				"%s: chunk '%s' at byte %lld says "
+				"%u bytes, but the file holds %lld",
+				path, type, pos, len, size);
+			break;
+		}
+		if (!memcmp(head + 4, "IEND", 4))
+			break;
+		pos += 12 + (long long)len;
+		if (fseek(fp, (long)pos, SEEK_SET) < 0)
+			break;
+	}
+out:
+	fclose(fp);
+	return ret;
+}
+
 int glint_png_read_rgb8(const char *path, int *w, int *h, uint8_t **px)
 {
 	png_image img;
 
 	*px = NULL;
+	int ret = glint_png_check_chunks(path);
+	if (ret < 0)
+		return ret;
 	memset(&img, 0, sizeof(img));
 	img.version = PNG_IMAGE_VERSION;
 	if (!png_image_begin_read_from_file(&img, path))
 		return glint_error_set(EIO, "%s: %s", path, img.message);
 	/* Deflate packs at most 1032 bytes (pixels, at 8-bit grey) into one
 	 * byte of the file. */
-	int ret = glint_image_size_check(path, "IHDR", img.width, img.height,
-					 glint_file_size(path),
-					 (double)img.width * img.height / 1032);
+	ret = glint_image_size_check(path, "IHDR", img.width, img.height,
+				     glint_file_size(path),
+				     (double)img.width * img.height / 1032);
 	if (ret < 0) {
 		png_image_free(&img);
 		return ret;

@@ -494,6 +494,22 @@ static void test_header_bombs(void)
 	fclose(fp);
 	expect_read_error(tmp_path("bomb.png"), "IHDR says 20000x20000");
 
+	/* A chunk whose length promises 2 GB in a small file (found by
+	 * fuzz_png: libpng allocated it before reading). */
+	CHECK(glint_png_write(tmp_path("ok.png"), a, 0) == 0, "%s",
+	      glint_error_msg());
+	uint8_t head[33], itxt[8] = { 0x7a, 0, 0, 0, 'i', 'T', 'X', 't' };
+	fp = fopen(tmp_path("ok.png"), "rb");
+	CHECK(fread(head, 1, 33, fp) == 33, "short PNG");
+	fclose(fp);
+	fp = fopen(tmp_path("chunk.png"), "wb");
+	fwrite(head, 1, 33, fp);
+	fwrite(itxt, 1, 8, fp);
+	fwrite("0123456789", 1, 10, fp);
+	fclose(fp);
+	expect_read_error(tmp_path("chunk.png"),
+			  "chunk 'iTXt' at byte 33 says 2046820352 bytes");
+
 	/* The limit is configurable; a good file over it is refused. */
 	glint_pfm_write(tmp_path("ok.pfm"), a);
 	setenv("GLINT_MAX_PIXELS", "100", 1);

@@ -1,0 +1,13 @@
+/* SPDX-License-Identifier: MIT */
+/* Radiance RGBE: header, flat, old- and new-style run-length rows. */
+#include "fuzz.h"
+
+#include "core/formats.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+	struct glint_image *img = NULL;
+	glint_rgbe_read(fuzz_path(data, size), &img);
+	glint_image_free(img);
+	return 0;
+}

@@ -1,0 +1,16 @@
+/* SPDX-License-Identifier: MIT */
+/* 8-bit TGA, JPEG, BMP through stb_image (any format stb detects). */
+#include "fuzz.h"
+
+#include "core/formats.h"
+
+#include <stdlib.h>
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+	uint8_t *rgb = NULL;
+	int w, h;
+	glint_ldr_read(fuzz_path(data, size), &w, &h, &rgb);
+	free(rgb);
+	return 0;
+}

@@ -20,7 +20,7 @@ set -e
 execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$scratch/log" | tail -1)
 rss=$(sed -n 's/^stat::peak_rss_mb: *//p' "$scratch/log" | tail -1)
 cov=$(grep -oE "cov: [0-9]+" "$scratch/log" | tail -1 | cut -d' ' -f2)
-echo "fuzz $(basename "$harness"): ${execs:-0} executions in $seconds s, coverage ${cov:-0} edges, peak ${rss:-0} MB"
+echo "fuzz $(basename "$harness"): ${execs:-0} executions (budget $seconds s), coverage ${cov:-0} edges, peak ${rss:-0} MB"
 if [ "$rc" != 0 ]; then
 	tail -40 "$scratch/log" >&2
 	keep=$(mktemp -d "${TMPDIR:-/tmp}/glint-fuzz-crash.XXXXXX")

@@ -510,6 +510,14 @@ static void test_header_bombs(void)
 	expect_read_error(tmp_path("chunk.png"),
 			  "chunk 'iTXt' at byte 33 says 2046820352 bytes");
 
+	/* An EXR header attribute of 1.7 GB in a 704-byte file, which the
+	 * C++ fallback allocated (found by fuzz_exr). */
+	copy_prefix(GLINT_TEST_DATA "/../fuzz/regressions/exr/"
+				    "type-string-1.7gb-in-704-bytes",
+		    tmp_path("attr.exr"), 704);
+	expect_read_error(tmp_path("attr.exr"),
+			  "header attribute 'type' says 1701273965 bytes");
+
 	/* The limit is configurable; a good file over it is refused. */
 	glint_pfm_write(tmp_path("ok.pfm"), a);
 	setenv("GLINT_MAX_PIXELS", "100", 1);

@@ -5,10 +5,14 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/lockfile.h"
+#include "core/log.h"
 #include "core/path.h"
 
 #include <dirent.h>
 #include <errno.h>
+#include <grp.h>
+#include <libgen.h>
+#include <pwd.h>
 #include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -79,10 +83,13 @@ int glint_queue_add(const char *queue, const char *kind, const char *session,
 	int ret;
 
 	/* The worker runs in another folder, maybe as another user: the
-	 * job names its session by its absolute, resolved path. */
-	if (!realpath(session, abs))
-		return glint_error_set(errno, "%s: %s", session,
-				       strerror(errno));
+	 * job names its session by its absolute, resolved path, inside the
+	 * captures root. */
+	struct glint_job me = { .uid = (unsigned)getuid() };
+	snprintf(me.session, sizeof(me.session), "%s", session);
+	ret = glint_job_session_allowed(queue, &me, abs, sizeof(abs));
+	if (ret < 0)
+		return ret;
 	session = abs;
 	ret = glint_queue_init(queue);
 	if (ret < 0)
@@ -105,6 +112,60 @@ int glint_queue_add(const char *queue, const char *kind, const char *session,
 	return 0;
 }
 
+/* Is uid in group gid (its primary group or a supplementary one)? */
+static int in_group(unsigned uid, gid_t gid)
+{
+	struct passwd *pw = getpwuid((uid_t)uid);
+	gid_t groups[256];
+	int n = 256;
+	if (!pw)
+		return 0;
+	if (pw->pw_gid == gid)
+		return 1;
+	if (getgrouplist(pw->pw_name, pw->pw_gid, groups, &n) < 0)
+		return 0;
+	for (int i = 0; i < n; i++)
+		if (groups[i] == gid)
+			return 1;
+	return 0;
+}
+
+int glint_job_session_allowed(const char *queue, const struct glint_job *job,
+			      char *real, size_t n)
+{
+	char root[GLINT_PATH_MAX], q[GLINT_PATH_MAX];
+	struct stat st;
+
+	if (n < GLINT_PATH_MAX || glint_path_fmt(q, sizeof(q), "%s", queue) < 0)
+		return glint_error_set(ENAMETOOLONG, "%s: path too long",
+				       queue);
+	if (!realpath(dirname(q), root))
+		return glint_error_set(errno, "%s: the captures root: %s",
+				       queue, strerror(errno));
+	if (job->session[0] == '\0' || !realpath(job->session, real))
+		return glint_error_set(ENOENT, "session '%s': %s", job->session,
+				       strerror(errno ? errno : ENOENT));
+	size_t rl = strlen(root);
+	if (strncmp(real, root, rl) || (real[rl] != '/' && rl != 1))
+		return glint_error_set(EPERM,
+				       "session %s is outside the captures "
+				       "root %s: a job may only fit sessions "
+				       "under the folder holding its queue",
+				       real, root);
+	if (stat(real, &st) < 0 || !S_ISDIR(st.st_mode))
+		return glint_error_set(ENOENT, "session %s: not a folder",
+				       real);
+	if ((unsigned)st.st_uid == job->uid)
+		return 0;
+	if ((st.st_mode & S_IWGRP) && in_group(job->uid, st.st_gid))
+		return 0;
+	return glint_error_set(EPERM,
+			       "session %s belongs to uid %u and is not "
+			       "shared with the job's submitter (uid %u): "
+			       "refused",
+			       real, (unsigned)st.st_uid, job->uid);
+}
+
 static int job_name(const struct dirent *e)
 {
 	size_t n = strlen(e->d_name);
@@ -123,9 +184,31 @@ static int load_job(const char *queue, const char *state, const char *file,
 	int ret = qpath(path, queue, state, file, "");
 	if (ret < 0)
 		return ret;
-	job->doc = json_load_file(path, 0, &err);
+	/* A link planted in the queue is never followed; the submitter is
+	 * the file's owner. */
+	int fd = open(path, O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+	struct stat st;
+	if (fd < 0 || fstat(fd, &st) < 0 || !S_ISREG(st.st_mode)) {
+		int e = fd < 0 ? errno : EINVAL;
+		if (fd >= 0)
+			close(fd);
+		return glint_error_set(e, "%s: not a job file: %s", path,
+				       strerror(e));
+	}
+	job->uid = (unsigned)st.st_uid;
+	job->doc = json_loadfd(fd, 0, &err);
+	close(fd);
 	if (!job->doc)
 		return glint_error_set(EINVAL, "%s: %s", path, err.text);
+	/* A waiting or running job's file is its submitter's; a finished
+	 * one was rewritten by the worker, which kept the submitter. */
+	json_t *by = json_object_get(job->doc, "submitter_uid");
+	if (strcmp(state, "pending") && strcmp(state, "running") &&
+	    json_is_integer(by))
+		job->uid = (unsigned)json_integer_value(by);
+	else
+		json_object_set_new(job->doc, "submitter_uid",
+				    json_integer(job->uid));
 	snprintf(job->id, sizeof(job->id), "%.*s", (int)(strlen(file) - 5),
 		 file);
 	snprintf(job->state, sizeof(job->state), "%s", state);
@@ -301,6 +384,11 @@ int glint_queue_claim(const char *queue, struct glint_job *job)
 					job->lock_fd = fd;
 					got = 1;
 				} else {
+					/* Unreadable (a link, bad JSON):
+					 * failed, not retried forever. */
+					glint_log_warn("job %s: %s", id,
+						       glint_error_msg());
+					move(queue, id, "running", "failed");
 					glint_lockfile_release(fd);
 				}
 			}

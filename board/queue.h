@@ -29,15 +29,17 @@ struct glint_job {
 	char state[16]; /* pending, running, done, failed, cancelled */
 	char kind[16];	/* "fit" */
 	char session[GLINT_PATH_MAX];
-	json_t *doc; /* the job file */
-	int lock_fd; /* running: the worker's lock */
+	json_t *doc;  /* the job file */
+	int lock_fd;  /* running: the worker's lock */
+	unsigned uid; /* the submitter: the job file's owner, never
+		       * what the file says */
 };
 
 /* Create QUEUE and its folders if missing. */
 int glint_queue_init(const char *queue);
 
-/* Add a job (kind "fit" on a session); *id (may be NULL, >= 64 bytes)
- * gets its ID. */
+/* Add a job (kind "fit" on a session inside the captures root, the
+ * folder holding QUEUE); *id (may be NULL, >= 64 bytes) gets its ID. */
 int glint_queue_add(const char *queue, const char *kind, const char *session,
 		    char *id);
 
@@ -69,5 +71,15 @@ int glint_queue_finish(const char *queue, struct glint_job *job,
 		       const char *state, json_t *result);
 
 void glint_job_release(struct glint_job *job);
+
+/*
+ * May this job's submitter have its session fitted?  Into `real` (size n)
+ * the session's resolved path, which must be a folder inside the captures
+ * root (the folder holding QUEUE; links are resolved, so none leads out)
+ * and owned by the submitter or shared with it (group-writable, a group
+ * it is in).  0 or -EPERM/-ENOENT with the reason.
+ */
+int glint_job_session_allowed(const char *queue, const struct glint_job *job,
+			      char *real, size_t n);
 
 #endif

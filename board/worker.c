@@ -62,12 +62,17 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 	/* A job file is data: its session must be an absolute path (as
 	 * glint queue add writes it), and it is passed after "--", so it
 	 * can never be taken for an option. */
+	char session[GLINT_PATH_MAX];
 	if (strcmp(job->kind, "fit") || job->session[0] != '/')
 		return glint_queue_finish(
 			queue, job, "failed",
 			json_pack("{s:s}", "error",
 				  "bad job: expected kind \"fit\" and an "
 				  "absolute session path"));
+	if (glint_job_session_allowed(queue, job, session, sizeof(session)) < 0)
+		return glint_queue_finish(
+			queue, job, "failed",
+			json_pack("{s:s}", "error", glint_error_msg()));
 	glint_log_info("job %s: fitting %s", job->id, job->session);
 	pid_t worker = getpid();
 	pid_t pid = fork();
@@ -94,8 +99,8 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 			_exit(126);
 		dup2(fo, 1);
 		dup2(fe, 2);
-		execl(self, "glint", "fit", "--wait", "--json", "--",
-		      job->session, (char *)NULL);
+		execl(self, "glint", "fit", "--wait", "--json", "--", session,
+		      (char *)NULL);
 		_exit(127);
 	}
 	if (pid > 0)

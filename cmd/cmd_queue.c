@@ -17,6 +17,7 @@
 #include <dirent.h>
 #include <getopt.h>
 #include <signal.h>
+#include <pwd.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -124,15 +125,24 @@ static int parse_status(int r)
 static int print_job(const struct glint_job *j, void *ctx)
 {
 	json_t *arr = ctx;
+	/* The submitter is the job file's owner, never what it says. */
+	struct passwd *pw = getpwuid((uid_t)j->uid);
+	char user[32];
+	if (pw)
+		snprintf(user, sizeof(user), "%s", pw->pw_name);
+	else
+		snprintf(user, sizeof(user), "%u", j->uid);
 	if (arr) {
 		json_t *d = json_deep_copy(j->doc);
 		json_object_set_new(d, "state", json_string(j->state));
+		json_object_set_new(d, "submitter", json_string(user));
+		json_object_set_new(d, "submitter_uid", json_integer(j->uid));
 		json_array_append_new(arr, d);
 		return 0;
 	}
 	const char *err = json_string_value(json_object_get(j->doc, "error"));
-	printf("%-34s %-9s %-4s %s%s%s\n", j->id, j->state, j->kind, j->session,
-	       err ? "  -- " : "", err ? err : "");
+	printf("%-34s %-9s %-4s %-10s %s%s%s\n", j->id, j->state, j->kind, user,
+	       j->session, err ? "  -- " : "", err ? err : "");
 	return 0;
 }
 
@@ -147,8 +157,8 @@ int cmd_jobs(int argc, char **argv)
 				       argv[optind]);
 	json_t *arr = q.json ? json_array() : NULL;
 	if (!q.json)
-		printf("%-34s %-9s %-4s %s\n", "ID", "STATE", "KIND",
-		       "SESSION");
+		printf("%-34s %-9s %-4s %-10s %s\n", "ID", "STATE", "KIND",
+		       "USER", "SESSION");
 	if (glint_queue_list(q.queue, print_job, arr) < 0) {
 		json_decref(arr);
 		return cmd_fail("jobs");

@@ -203,10 +203,29 @@ check "... and runs from another folder" bash -c "cd / && '$glint' queue run --u
 # Links planted where the worker writes a job's output (the queue is
 # shared over SSH) are removed, never followed: the victim keeps its text.
 echo "my notes" >"$tmp/victim.txt"
-echo '{"id": "zz-link", "kind": "fit", "session": "/nonexistent/session"}' >"$tmp/one/queue/pending/zz-link.json"
+mkdir -p "$tmp/one/not-a-session"
+echo '{"id": "zz-link", "kind": "fit", "session": "'"$tmp"'/one/not-a-session"}' >"$tmp/one/queue/pending/zz-link.json"
 ln -s "$tmp/victim.txt" "$tmp/one/queue/running/zz-link.out"
 ln -s "$tmp/victim.txt" "$tmp/one/queue/running/zz-link.err"
 check "links planted at a job's output files: not followed" bash -c "'$glint' queue run --until-empty --root '$tmp/one' -q && [ \"\$(cat '$tmp/victim.txt')\" = 'my notes' ] && '$glint' jobs --root '$tmp/one' | grep -q 'zz-link *failed'"
+# A job may only fit a session under the folder holding its queue.
+mkdir -p "$tmp/elsewhere"
+echo '{"id": "zz-out", "kind": "fit", "session": "'"$tmp"'/elsewhere"}' >"$tmp/one/queue/pending/zz-out.json"
+check "a job naming a session outside the captures root fails" bash -c "'$glint' queue run --until-empty --root '$tmp/one' -q && '$glint' jobs --root '$tmp/one' | grep 'zz-out' | grep -q 'failed.*outside the captures root'"
+# Two users (root and nobody, no accounts made): one may not have the
+# other's session fitted, by glint queue add or by a job file written by
+# hand; the submitter is the job file's owner.
+if [ "$(id -u)" = 0 ] && command -v setpriv >/dev/null; then
+	nobody=(setpriv --reuid=65534 --regid=65534 --clear-groups)
+	chmod 0755 "$tmp"
+	chmod 0777 "$tmp/one/queue/pending"
+	check "another user's session: queue add refuses" bash -c "! ${nobody[*]} '$glint' queue add '$sess' --root '$tmp/one' 2>'$tmp/err' && grep -q 'is not shared with the job.s submitter (uid 65534)' '$tmp/err'"
+	${nobody[@]} bash -c "echo '{\"id\": \"zz-other\", \"kind\": \"fit\", \"session\": \"$sess\"}' >'$tmp/one/queue/pending/zz-other.json'"
+	check "... and a job file written by hand fails, its submitter named" bash -c "'$glint' queue run --until-empty --root '$tmp/one' -q && '$glint' jobs --root '$tmp/one' | grep 'zz-other' | grep -q 'failed *fit  nobody .*belongs to uid 0 and is not shared'"
+	chmod 0700 "$tmp"
+else
+	echo "skip two-user checks: not root or no setpriv"
+fi
 # A job file is data, never options: "--help" as its session fails the job.
 echo '{"id": "zz-evil", "kind": "fit", "session": "--help"}' >"$tmp/one/queue/pending/zz-evil.json"
 check "a job whose session is '--help' fails as a bad job" bash -c "'$glint' queue run --until-empty --root '$tmp/one' -q && '$glint' jobs --root '$tmp/one' --json | python3 -c 'import json,sys; j=[x for x in json.load(sys.stdin)[\"jobs\"] if x[\"id\"] == \"zz-evil\"]; print(\"  \", j); sys.exit(j[0][\"state\"] != \"failed\")'"
@@ -218,10 +237,10 @@ check "cancel of an unknown job: named" run 1 "nosuchjob" queue cancel nosuchjob
 probe=$(ls -d "$tmp"/one/run-*/probe-* | head -1)
 check "queue add of a probe session: refused with the reason" run 1 "a probe session is the light of a sample's scene" queue add "$probe" --root "$tmp/one"
 # A job that fails when it runs keeps its reason as text.
-cp -r "$sess" "$tmp/broken"
-rm -rf "$tmp/broken/fit"
-echo "not an image" >"$tmp/broken/sample.exr"
-check "queue add of a session whose photo is damaged" run 0 "" queue add "$tmp/broken" --root "$tmp/one"
+cp -r "$sess" "$tmp/one/broken"
+rm -rf "$tmp/one/broken/fit"
+echo "not an image" >"$tmp/one/broken/sample.exr"
+check "queue add of a session whose photo is damaged" run 0 "" queue add "$tmp/one/broken" --root "$tmp/one"
 check "... the worker runs it" run 0 "" queue run --until-empty --root "$tmp/one" -q
 check "... glint jobs shows why it failed, as text" bash -c "'$glint' jobs --root '$tmp/one' | grep ' failed ' | tee /dev/stderr | grep -q -- '-- .*sample.exr: not a readable OpenEXR' && ! '$glint' jobs --root '$tmp/one' | grep -q '{\"level'"
 

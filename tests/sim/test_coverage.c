@@ -289,7 +289,8 @@ int main(int argc, char **argv)
 		double c = n ? (double)in / n : 1, floor = g == 2 ? 0.5 : 0.7;
 		printf("all levels  %-10s %6d %7.1f%%\n", group_names[g], n,
 		       100 * c);
-		CHECK(c >= floor, "%s over all levels: coverage %.2f below %.2f",
+		CHECK(c >= floor,
+		      "%s over all levels: coverage %.2f below %.2f",
 		      group_names[g], c, floor);
 	}
 	return test_result();

@@ -48,6 +48,14 @@ int glint_queue_init(const char *queue)
 		if (mkdir(path, 0777) < 0 && errno != EEXIST)
 			return glint_error_set(errno, "%s: %s", path,
 					       strerror(errno));
+		/* A link in a state folder's place would send job files
+		 * and the worker's output elsewhere. */
+		struct stat st;
+		if (lstat(path, &st) < 0 || !S_ISDIR(st.st_mode))
+			return glint_error_set(ENOTDIR,
+					       "%s: not a folder (a link?): "
+					       "the queue refuses it",
+					       path);
 	}
 	return 0;
 }

@@ -226,6 +226,10 @@ if [ "$(id -u)" = 0 ] && command -v setpriv >/dev/null; then
 else
 	echo "skip two-user checks: not root or no setpriv"
 fi
+# A link in place of one of the queue's folders is refused.
+mkdir -p "$tmp/linkq/queue" "$tmp/linkq/elsewhere"
+ln -s "$tmp/linkq/elsewhere" "$tmp/linkq/queue/running"
+check "a queue whose running/ is a link: refused" run 1 "running: not a folder (a link?)" queue run --until-empty --root "$tmp/linkq"
 # A job file is data, never options: "--help" as its session fails the job.
 echo '{"id": "zz-evil", "kind": "fit", "session": "--help"}' >"$tmp/one/queue/pending/zz-evil.json"
 check "a job whose session is '--help' fails as a bad job" bash -c "'$glint' queue run --until-empty --root '$tmp/one' -q && '$glint' jobs --root '$tmp/one' --json | python3 -c 'import json,sys; j=[x for x in json.load(sys.stdin)[\"jobs\"] if x[\"id\"] == \"zz-evil\"]; print(\"  \", j); sys.exit(j[0][\"state\"] != \"failed\")'"

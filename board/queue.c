@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: MIT */
-#define _DEFAULT_SOURCE /* flock, scandir */
+#define _GNU_SOURCE /* flock, scandirat */
 #include "queue.h"
 
 #include "core/atomic_file.h"
@@ -24,48 +24,115 @@
 
 static const char *const states[] = { "pending", "running", "done", "failed",
 				      "cancelled" };
+enum { PENDING, RUNNING, DONE, FAILED, CANCELLED, NSTATES };
 
-/* QUEUE/STATE/IDEXT (IDEXT "" for the state's folder): whole or
- * -ENAMETOOLONG with a message. */
-static int qpath(char *buf, const char *queue, const char *state,
-		 const char *id, const char *ext)
+/*
+ * The queue's folders, open.  Every file in them is reached relative to
+ * these descriptors and never through a link: a folder swapped for a link
+ * after it was opened changes nothing, and a link planted as a job's file
+ * is refused.
+ */
+struct qdir {
+	int root;
+	int st[NSTATES];
+	unsigned owner; /* the queue folder's owner: the rig's worker */
+};
+
+static void qclose(struct qdir *d)
 {
-	return glint_path_fmt(buf, GLINT_PATH_MAX, "%s/%s%s%s%s", queue, state,
-			      id[0] ? "/" : "", id, ext);
+	for (int i = 0; i < NSTATES; i++)
+		if (d->st[i] >= 0)
+			close(d->st[i]);
+	if (d->root >= 0)
+		close(d->root);
 }
 
-int glint_queue_init(const char *queue)
+static int state_of(const char *name)
 {
-	char path[GLINT_PATH_MAX];
+	for (int i = 0; i < NSTATES; i++)
+		if (!strcmp(states[i], name))
+			return i;
+	return -1;
+}
 
-	if (mkdir(queue, 0777) < 0 && errno != EEXIST)
+/*
+ * Open QUEUE (made with its folders when `create`).  New state folders
+ * are sticky (01777 less the umask): in a queue shared through a group,
+ * only a job's submitter and the queue's owner may move or remove it.
+ */
+static int qopen(const char *queue, struct qdir *d, int create)
+{
+	struct stat st;
+
+	d->root = -1;
+	for (int i = 0; i < NSTATES; i++)
+		d->st[i] = -1;
+	if (create && mkdir(queue, 0777) < 0 && errno != EEXIST)
 		return glint_error_set(errno, "%s: cannot create the queue: %s",
 				       queue, strerror(errno));
-	for (int i = 0; i < 5; i++) {
-		int ret = qpath(path, queue, states[i], "", "");
-		if (ret < 0)
-			return ret;
-		if (mkdir(path, 0777) < 0 && errno != EEXIST)
-			return glint_error_set(errno, "%s: %s", path,
-					       strerror(errno));
-		/* A link in a state folder's place would send job files
-		 * and the worker's output elsewhere. */
-		struct stat st;
-		if (lstat(path, &st) < 0 || !S_ISDIR(st.st_mode))
-			return glint_error_set(ENOTDIR,
-					       "%s: not a folder (a link?): "
-					       "the queue refuses it",
-					       path);
+	d->root = open(queue, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+	if (d->root < 0 || fstat(d->root, &st) < 0)
+		return glint_error_set(errno, "%s: the queue: %s", queue,
+				       strerror(errno));
+	d->owner = (unsigned)st.st_uid;
+	for (int i = 0; i < NSTATES; i++) {
+		if (create && mkdirat(d->root, states[i], 01777) < 0 &&
+		    errno != EEXIST) {
+			int e = errno;
+			qclose(d);
+			return glint_error_set(e, "%s/%s: %s", queue, states[i],
+					       strerror(e));
+		}
+		d->st[i] =
+			openat(d->root, states[i],
+			       O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+		if (d->st[i] < 0) {
+			int e = errno;
+			qclose(d);
+			/* A link in a state folder's place would send job
+			 * files and the worker's output elsewhere. */
+			if (e == ENOTDIR || e == ELOOP)
+				return glint_error_set(
+					ENOTDIR,
+					"%s/%s: not a folder (a link?): the "
+					"queue refuses it",
+					queue, states[i]);
+			if (e == ENOENT && !create)
+				return -ENOENT;
+			return glint_error_set(e, "%s/%s: %s", queue, states[i],
+					       strerror(e));
+		}
 	}
 	return 0;
 }
 
-static int write_job(const char *path, json_t *doc)
+/* ID + ext, or -ENAMETOOLONG. */
+static int jname(char *buf, size_t n, const char *id, const char *ext)
 {
+	if (!id[0] || strchr(id, '/'))
+		return glint_error_set(EINVAL, "job id '%s': not an id", id);
+	return glint_path_fmt(buf, n, "%s%s", id, ext);
+}
+
+int glint_queue_init(const char *queue)
+{
+	struct qdir d;
+	int ret = qopen(queue, &d, 1);
+	if (ret == 0)
+		qclose(&d);
+	return ret;
+}
+
+static int write_job(int dirfd, const char *id, json_t *doc)
+{
+	char name[GLINT_PATH_MAX];
+	int ret = jname(name, sizeof(name), id, ".json");
+	if (ret < 0)
+		return ret;
 	char *text = json_dumps(doc, JSON_INDENT(2) | JSON_SORT_KEYS);
 	if (!text)
 		return glint_error_set(ENOMEM, "out of memory");
-	int ret = glint_atomic_write_file(path, text, strlen(text));
+	ret = glint_atomic_write_fileat(dirfd, name, text, strlen(text));
 	free(text);
 	return ret;
 }
@@ -86,8 +153,9 @@ int glint_queue_add(const char *queue, const char *kind, const char *session,
 		    char *id_out)
 {
 	static int counter;
-	char id[64], stamp[32], added[32], path[GLINT_PATH_MAX];
+	char id[64], stamp[32], added[32];
 	char abs[GLINT_PATH_MAX];
+	struct qdir d;
 	int ret;
 
 	/* The worker runs in another folder, maybe as another user: the
@@ -99,7 +167,7 @@ int glint_queue_add(const char *queue, const char *kind, const char *session,
 	if (ret < 0)
 		return ret;
 	session = abs;
-	ret = glint_queue_init(queue);
+	ret = qopen(queue, &d, 1);
 	if (ret < 0)
 		return ret;
 	utc_now(stamp, sizeof(stamp), 1);
@@ -108,11 +176,10 @@ int glint_queue_add(const char *queue, const char *kind, const char *session,
 	json_t *doc = json_pack("{s:s, s:s, s:s, s:s, s:i}", "id", id, "kind",
 				kind, "session", session, "added", added,
 				"added_by_pid", (int)getpid());
-	ret = qpath(path, queue, "pending", id, ".json");
-	if (!ret)
-		ret = doc ? write_job(path, doc)
-			  : glint_error_set(ENOMEM, "out of memory");
+	ret = doc ? write_job(d.st[PENDING], id, doc)
+		  : glint_error_set(ENOMEM, "out of memory");
 	json_decref(doc);
+	qclose(&d);
 	if (ret < 0)
 		return ret;
 	if (id_out)
@@ -181,45 +248,43 @@ static int job_name(const struct dirent *e)
 	       !strstr(e->d_name, ".tmp");
 }
 
-static int load_job(const char *queue, const char *state, const char *file,
+static int load_job(const struct qdir *d, int state, const char *file,
 		    struct glint_job *job)
 {
-	char path[GLINT_PATH_MAX];
 	json_error_t err;
 
 	memset(job, 0, sizeof(*job));
 	job->lock_fd = -1;
-	int ret = qpath(path, queue, state, file, "");
-	if (ret < 0)
-		return ret;
+	job->dir_fd = -1;
+	job->queue_uid = d->owner;
 	/* A link planted in the queue is never followed; the submitter is
 	 * the file's owner. */
-	int fd = open(path, O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+	int fd = openat(d->st[state], file, O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
 	struct stat st;
 	if (fd < 0 || fstat(fd, &st) < 0 || !S_ISREG(st.st_mode)) {
 		int e = fd < 0 ? errno : EINVAL;
 		if (fd >= 0)
 			close(fd);
-		return glint_error_set(e, "%s: not a job file: %s", path,
-				       strerror(e));
+		return glint_error_set(e, "%s/%s: not a job file: %s",
+				       states[state], file, strerror(e));
 	}
 	job->uid = (unsigned)st.st_uid;
 	job->doc = json_loadfd(fd, 0, &err);
 	close(fd);
 	if (!job->doc)
-		return glint_error_set(EINVAL, "%s: %s", path, err.text);
+		return glint_error_set(EINVAL, "%s/%s: %s", states[state], file,
+				       err.text);
 	/* A waiting or running job's file is its submitter's; a finished
 	 * one was rewritten by the worker, which kept the submitter. */
 	json_t *by = json_object_get(job->doc, "submitter_uid");
-	if (strcmp(state, "pending") && strcmp(state, "running") &&
-	    json_is_integer(by))
+	if (state != PENDING && state != RUNNING && json_is_integer(by))
 		job->uid = (unsigned)json_integer_value(by);
 	else
 		json_object_set_new(job->doc, "submitter_uid",
 				    json_integer(job->uid));
 	snprintf(job->id, sizeof(job->id), "%.*s", (int)(strlen(file) - 5),
 		 file);
-	snprintf(job->state, sizeof(job->state), "%s", state);
+	snprintf(job->state, sizeof(job->state), "%s", states[state]);
 	const char *k = json_string_value(json_object_get(job->doc, "kind"));
 	const char *s = json_string_value(json_object_get(job->doc, "session"));
 	snprintf(job->kind, sizeof(job->kind), "%s", k ? k : "");
@@ -227,7 +292,8 @@ static int load_job(const char *queue, const char *state, const char *file,
 			   s ? s : "") < 0) {
 		json_decref(job->doc);
 		job->doc = NULL;
-		return glint_error_prefix(ENAMETOOLONG, "%s: session", path);
+		return glint_error_prefix(ENAMETOOLONG, "%s/%s: session",
+					  states[state], file);
 	}
 	return 0;
 }
@@ -238,189 +304,349 @@ void glint_job_release(struct glint_job *job)
 	job->doc = NULL;
 	glint_lockfile_release(job->lock_fd);
 	job->lock_fd = -1;
+	if (job->dir_fd >= 0)
+		close(job->dir_fd);
+	job->dir_fd = -1;
+}
+
+/* Job files in a state folder, oldest first; -1 with errno on error. */
+static int scan(const struct qdir *d, int state, struct dirent ***names)
+{
+	return scandirat(d->st[state], ".", names, job_name, alphasort);
+}
+
+static void free_names(struct dirent **names, int n)
+{
+	for (int i = 0; i < n; i++)
+		free(names[i]);
+	free(names);
+}
+
+static void id_of(char *id, size_t n, const struct dirent *e)
+{
+	snprintf(id, n, "%.*s", (int)(strlen(e->d_name) - 5), e->d_name);
 }
 
 int glint_queue_list(const char *queue,
 		     int (*cb)(const struct glint_job *job, void *ctx),
 		     void *ctx)
 {
-	char dir[GLINT_PATH_MAX];
-	int stop = 0;
+	struct qdir d;
+	int stop = 0, ret = qopen(queue, &d, 0);
 
-	for (int s = 0; s < 5 && !stop; s++) {
+	if (ret == -ENOENT)
+		return 0; /* no queue yet: no jobs */
+	if (ret < 0)
+		return ret;
+	for (int s = 0; s < NSTATES && !stop; s++) {
 		struct dirent **names = NULL;
-		int ret = qpath(dir, queue, states[s], "", "");
-		if (ret < 0)
-			return ret;
-		int n = scandir(dir, &names, job_name, alphasort);
+		int n = scan(&d, s, &names);
 		if (n < 0) {
-			if (errno == ENOENT)
-				continue;
-			return glint_error_set(errno, "%s: %s", dir,
-					       strerror(errno));
+			int e = errno;
+			qclose(&d);
+			return glint_error_set(e, "%s/%s: %s", queue, states[s],
+					       strerror(e));
 		}
-		for (int i = 0; i < n; i++) {
+		for (int i = 0; i < n && !stop; i++) {
 			struct glint_job job;
 			/* A job that moved on between listing and reading
 			 * is skipped, not an error. */
-			if (!stop && load_job(queue, states[s],
-					      names[i]->d_name, &job) == 0) {
+			if (load_job(&d, s, names[i]->d_name, &job) == 0) {
 				stop = cb(&job, ctx);
 				glint_job_release(&job);
 			}
-			free(names[i]);
 		}
-		free(names);
+		free_names(names, n);
 	}
+	qclose(&d);
 	return 0;
 }
 
-static int move(const char *queue, const char *id, const char *from,
-		const char *to)
+static int move(const struct qdir *d, const char *id, int from, int to)
 {
-	char a[GLINT_PATH_MAX], b[GLINT_PATH_MAX];
-	int ret = qpath(a, queue, from, id, ".json");
-	if (!ret)
-		ret = qpath(b, queue, to, id, ".json");
-	if (ret < 0)
-		return ret;
-	if (rename(a, b) < 0)
+	char name[GLINT_PATH_MAX];
+	if (jname(name, sizeof(name), id, ".json") < 0)
+		return -ENAMETOOLONG;
+	if (renameat(d->st[from], name, d->st[to], name) < 0)
 		return -errno;
 	return 0;
 }
 
+/* May files owned by uid steer this job (its lock, a cancel request)?
+ * Its submitter, the queue's owner, root and this process may; anyone
+ * else sharing the queue may not. */
+static int trusted(const struct glint_job *job, unsigned queue_uid,
+		   unsigned uid)
+{
+	return uid == (unsigned)geteuid() || uid == 0 || uid == queue_uid ||
+	       (job && uid == job->uid);
+}
+
 int glint_queue_cancel(const char *queue, const char *id)
 {
-	char path[GLINT_PATH_MAX];
-	struct stat st;
-	int ret;
+	char name[GLINT_PATH_MAX];
+	struct qdir d;
+	int ret = jname(name, sizeof(name), id, ".json");
 
-	if (strchr(id, '/') || !id[0])
-		return glint_error_set(EINVAL, "job id '%s': not an id", id);
-	if (move(queue, id, "pending", "cancelled") == 0)
-		return 0; /* it never ran */
-	ret = qpath(path, queue, "running", id, ".json");
 	if (ret < 0)
 		return ret;
-	if (stat(path, &st) == 0) {
-		ret = qpath(path, queue, "running", id, ".cancel");
-		if (ret < 0)
-			return ret;
-		int fd = open(path, O_WRONLY | O_CREAT | O_NOFOLLOW | O_CLOEXEC,
-			      0666);
+	ret = qopen(queue, &d, 0);
+	if (ret == -ENOENT)
+		return glint_error_set(ENOENT, "%s: no queue here", queue);
+	if (ret < 0)
+		return ret;
+	/* Only its submitter (or the queue's owner, or root) cancels a
+	 * job; the sticky folders make the kernel agree. */
+	for (int s = PENDING; s <= RUNNING; s++) {
+		struct glint_job job;
+		if (load_job(&d, s, name, &job) < 0)
+			continue;
+		unsigned by = job.uid;
+		glint_job_release(&job);
+		unsigned me = (unsigned)geteuid();
+		if (by != me && me != 0 && me != d.owner) {
+			qclose(&d);
+			return glint_error_set(EPERM,
+					       "job %s was submitted by uid "
+					       "%u: only it (or the queue's "
+					       "owner) may cancel it",
+					       id, by);
+		}
+		if (s == PENDING) {
+			ret = move(&d, id, PENDING, CANCELLED);
+			if (ret == 0) {
+				qclose(&d);
+				return 0; /* it never ran */
+			}
+			continue; /* claimed meanwhile: running now */
+		}
+		char cancel[GLINT_PATH_MAX];
+		ret = jname(cancel, sizeof(cancel), id, ".cancel");
+		int fd = ret < 0 ? -1
+				 : openat(d.st[RUNNING], cancel,
+					  O_WRONLY | O_CREAT | O_NOFOLLOW |
+						  O_CLOEXEC,
+					  0666);
+		int e = errno;
+		qclose(&d);
 		if (fd < 0)
-			return glint_error_set(errno, "%s: %s", path,
-					       strerror(errno));
+			return glint_error_set(e, "%s/running/%s: %s", queue,
+					       cancel, strerror(e));
 		close(fd);
 		return 1; /* running: its worker stops it */
 	}
+	qclose(&d);
 	return glint_error_set(ENOENT,
 			       "job %s: not pending or running in %s (glint "
 			       "jobs lists them)",
 			       id, queue);
 }
 
-/* Is running/ID held by a live worker?  Take its lock to find out. */
-static int orphaned(const char *queue, const char *id)
+/* Is running/ID held by a live worker?  Take its lock to find out.  A
+ * lock file someone untrusted made is no worker's: orphaned. */
+static int orphaned(const struct qdir *d, const struct glint_job *job)
 {
-	char path[GLINT_PATH_MAX];
-	if (qpath(path, queue, "running", id, ".lock") < 0)
+	char name[GLINT_PATH_MAX];
+	struct stat st;
+	if (jname(name, sizeof(name), job->id, ".lock") < 0)
 		return 0;
-	int fd = open(path, O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0666);
+	int fd = openat(d->st[RUNNING], name,
+			O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0666);
 	if (fd < 0)
 		return 0;
-	int free_ = flock(fd, LOCK_EX | LOCK_NB) == 0;
+	int free_ = fstat(fd, &st) == 0 &&
+		    (!trusted(job, d->owner, (unsigned)st.st_uid) ||
+		     flock(fd, LOCK_EX | LOCK_NB) == 0);
 	close(fd);
 	return free_;
 }
 
+static void remove_file(const struct qdir *d, int state, const char *id,
+			const char *ext)
+{
+	char name[GLINT_PATH_MAX];
+	if (jname(name, sizeof(name), id, ext) == 0)
+		unlinkat(d->st[state], name, 0);
+}
+
+static int recover(const struct qdir *d)
+{
+	struct dirent **names = NULL;
+	int moved = 0, n = scan(d, RUNNING, &names);
+
+	for (int i = 0; i < n; i++) {
+		struct glint_job job;
+		if (load_job(d, RUNNING, names[i]->d_name, &job) < 0)
+			continue;
+		if (orphaned(d, &job) &&
+		    move(d, job.id, RUNNING, PENDING) == 0) {
+			moved++;
+			remove_file(d, RUNNING, job.id, ".cancel");
+		}
+		glint_job_release(&job);
+	}
+	free_names(names, n);
+	return moved;
+}
+
 int glint_queue_recover(const char *queue)
 {
-	char dir[GLINT_PATH_MAX], path[GLINT_PATH_MAX];
-	struct dirent **names = NULL;
-	int n, moved = 0;
-
-	if (qpath(dir, queue, "running", "", "") < 0)
+	struct qdir d;
+	if (qopen(queue, &d, 0) < 0)
 		return 0;
-	n = scandir(dir, &names, job_name, alphasort);
-	for (int i = 0; i < n; i++) {
-		char id[256];
-		snprintf(id, sizeof(id), "%.*s",
-			 (int)(strlen(names[i]->d_name) - 5), names[i]->d_name);
-		if (orphaned(queue, id) &&
-		    move(queue, id, "running", "pending") == 0) {
-			moved++;
-			if (!qpath(path, queue, "running", id, ".cancel"))
-				unlink(path);
-		}
-		free(names[i]);
-	}
-	free(names);
+	int moved = recover(&d);
+	qclose(&d);
 	return moved;
+}
+
+/*
+ * Lock running/ID.lock for a job about to be claimed.  A lock file owned
+ * by someone the job does not trust (planted to hold the job hostage) is
+ * removed first; the lock taken must be on a file this process or a
+ * trusted user made.
+ */
+static int lock_job(const struct qdir *d, const char *id, unsigned submitter,
+		    int *fd)
+{
+	char name[GLINT_PATH_MAX];
+	struct stat st;
+	struct glint_job who = { .uid = submitter };
+
+	*fd = -1;
+	if (jname(name, sizeof(name), id, ".lock") < 0)
+		return -1;
+	if (fstatat(d->st[RUNNING], name, &st, AT_SYMLINK_NOFOLLOW) == 0 &&
+	    (!S_ISREG(st.st_mode) ||
+	     !trusted(&who, d->owner, (unsigned)st.st_uid))) {
+		glint_log_warn("job %s: removing a lock file of uid %u, who "
+			       "may not hold it",
+			       id, (unsigned)st.st_uid);
+		unlinkat(d->st[RUNNING], name, 0);
+	}
+	if (glint_lockfile_acquireat(d->st[RUNNING], name, "glint queue worker",
+				     0, fd) < 0)
+		return -1;
+	if (fstat(*fd, &st) < 0 ||
+	    !trusted(&who, d->owner, (unsigned)st.st_uid)) {
+		glint_lockfile_release(*fd);
+		*fd = -1;
+		return -1;
+	}
+	return 0;
 }
 
 int glint_queue_claim(const char *queue, struct glint_job *job)
 {
-	char dir[GLINT_PATH_MAX], path[GLINT_PATH_MAX];
 	struct dirent **names = NULL;
-	int n, got = 0, ret = glint_queue_init(queue);
+	struct qdir d;
+	int n, got = 0, ret = qopen(queue, &d, 1);
 
 	if (ret < 0)
 		return ret;
-	glint_queue_recover(queue);
-	ret = qpath(dir, queue, "pending", "", "");
-	if (ret < 0)
-		return ret;
-	n = scandir(dir, &names, job_name, alphasort);
-	if (n < 0)
-		return glint_error_set(errno, "%s: %s", dir, strerror(errno));
-	for (int i = 0; i < n; i++) {
-		char id[256];
-		snprintf(id, sizeof(id), "%.*s",
-			 (int)(strlen(names[i]->d_name) - 5), names[i]->d_name);
-		if (!got) {
-			/* Lock first, then claim: a claimed job is never
-			 * seen unlocked (which would make it "orphaned"). */
-			int fd;
-			if (!qpath(path, queue, "running", id, ".lock") &&
-			    glint_lockfile_acquire(path, "glint queue worker",
-						   0, &fd) == 0) {
-				if (move(queue, id, "pending", "running") ==
-					    0 &&
-				    load_job(queue, "running", names[i]->d_name,
-					     job) == 0) {
-					job->lock_fd = fd;
-					got = 1;
-				} else {
-					/* Unreadable (a link, bad JSON):
-					 * failed, not retried forever. */
-					glint_log_warn("job %s: %s", id,
-						       glint_error_msg());
-					move(queue, id, "running", "failed");
-					glint_lockfile_release(fd);
-				}
-			}
-		}
-		free(names[i]);
+	recover(&d);
+	n = scan(&d, PENDING, &names);
+	if (n < 0) {
+		int e = errno;
+		qclose(&d);
+		return glint_error_set(e, "%s/pending: %s", queue, strerror(e));
 	}
-	free(names);
+	for (int i = 0; i < n && !got; i++) {
+		char id[256];
+		struct stat st;
+		id_of(id, sizeof(id), names[i]);
+		if (fstatat(d.st[PENDING], names[i]->d_name, &st,
+			    AT_SYMLINK_NOFOLLOW) < 0)
+			continue; /* taken meanwhile */
+		/* Lock first, then claim: a claimed job is never seen
+		 * unlocked (which would make it "orphaned"). */
+		int fd;
+		if (lock_job(&d, id, (unsigned)st.st_uid, &fd) < 0)
+			continue;
+		ret = move(&d, id, PENDING, RUNNING);
+		if (ret < 0) {
+			/* Taken by another worker, or (sticky folder) a
+			 * job this user may not move: the queue's owner
+			 * runs it. */
+			remove_file(&d, RUNNING, id, ".lock");
+			glint_lockfile_release(fd);
+			continue;
+		}
+		if (load_job(&d, RUNNING, names[i]->d_name, job) == 0) {
+			job->lock_fd = fd;
+			job->dir_fd = fcntl(d.st[RUNNING], F_DUPFD_CLOEXEC, 0);
+			got = 1;
+		} else {
+			/* Unreadable (a link, bad JSON): failed, not
+			 * retried forever. */
+			glint_log_warn("job %s: %s", id, glint_error_msg());
+			move(&d, id, RUNNING, FAILED);
+			glint_lockfile_release(fd);
+		}
+	}
+	free_names(names, n);
+	qclose(&d);
 	return got;
 }
 
-int glint_queue_cancel_requested(const char *queue, const struct glint_job *job)
+int glint_queue_cancel_requested(const struct glint_job *job)
 {
-	char path[GLINT_PATH_MAX];
+	char name[GLINT_PATH_MAX];
 	struct stat st;
-	if (qpath(path, queue, "running", job->id, ".cancel") < 0)
+	if (job->dir_fd < 0 ||
+	    jname(name, sizeof(name), job->id, ".cancel") < 0 ||
+	    fstatat(job->dir_fd, name, &st, AT_SYMLINK_NOFOLLOW) < 0)
 		return 0;
-	return stat(path, &st) == 0;
+	if (S_ISREG(st.st_mode) &&
+	    trusted(job, job->queue_uid, (unsigned)st.st_uid))
+		return 1;
+	/* Someone else sharing the queue: not theirs to stop. */
+	glint_log_warn("job %s: ignoring a cancel request by uid %u (not its "
+		       "submitter)",
+		       job->id, (unsigned)st.st_uid);
+	unlinkat(job->dir_fd, name, 0);
+	return 0;
+}
+
+int glint_queue_output(const struct glint_job *job, const char *ext)
+{
+	char name[GLINT_PATH_MAX];
+	int ret = jname(name, sizeof(name), job->id, ext);
+	if (ret < 0)
+		return ret;
+	/* New files only: a link planted in their place (the queue is
+	 * shared) is removed, never followed or truncated. */
+	unlinkat(job->dir_fd, name, 0);
+	int fd = openat(job->dir_fd, name,
+			O_RDWR | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC,
+			0600);
+	if (fd < 0)
+		return glint_error_set(errno, "running/%s: %s", name,
+				       strerror(errno));
+	return fd;
+}
+
+static void drop_files(const struct glint_job *job, int with_json)
+{
+	static const char *const ext[] = { ".out", ".err", ".cancel", ".json",
+					   ".lock" };
+	char name[GLINT_PATH_MAX];
+	for (int i = 0; i < (with_json ? 5 : 3); i++)
+		if (jname(name, sizeof(name), job->id, ext[i]) == 0)
+			unlinkat(job->dir_fd, name, 0);
+}
+
+void glint_queue_drop_outputs(const struct glint_job *job)
+{
+	if (job->dir_fd >= 0)
+		drop_files(job, 0);
 }
 
 int glint_queue_finish(const char *queue, struct glint_job *job,
 		       const char *state, json_t *result)
 {
-	char path[GLINT_PATH_MAX], when[32];
-	int ret;
+	char when[32];
+	struct qdir d;
+	int s = state_of(state);
 
 	utc_now(when, sizeof(when), 0);
 	json_object_set_new(job->doc, "finished", json_string(when));
@@ -428,13 +654,14 @@ int glint_queue_finish(const char *queue, struct glint_job *job,
 	if (result)
 		json_object_update(job->doc, result);
 	json_decref(result);
-	ret = qpath(path, queue, state, job->id, ".json");
-	if (!ret)
-		ret = write_job(path, job->doc);
-	for (int i = 0; i < 3 && ret == 0; i++)
-		if (!qpath(path, queue, "running", job->id,
-			   (const char *[]){ ".json", ".cancel", ".lock" }[i]))
-			unlink(path);
+	int ret = s <= RUNNING ? glint_error_set(EINVAL, "state %s", state)
+			       : qopen(queue, &d, 0);
+	if (ret == 0) {
+		ret = write_job(d.st[s], job->id, job->doc);
+		qclose(&d);
+	}
+	if (ret == 0 && job->dir_fd >= 0)
+		drop_files(job, 1);
 	glint_job_release(job);
 	return ret;
 }

@@ -14,7 +14,13 @@
  *   QUEUE/failed/ID.json      finished with an error
  *   QUEUE/cancelled/ID.json
  *
- * Job files are written whole (temp, fsync, rename).  A worker that dies
+ *   QUEUE/running/ID.out|err  the fit's output while it runs
+ *
+ * Job files are written whole (temp, fsync, rename).  Every file is
+ * opened relative to its folder, never through a link; new state folders
+ * are sticky, and a lock or cancel request made by someone other than the
+ * job's submitter, the queue's owner or root is ignored, so users sharing
+ * a queue (group glint) cannot steer each other's jobs.  A worker that dies
  * (SIGKILL, power cut) leaves running/ID.json with no lock held: the next
  * claim puts it back in pending/, so it is re-run with no manual clean-up.
  * IDs sort by time added: "YYYYmmddTHHMMSSZ-PID-N".
@@ -29,10 +35,12 @@ struct glint_job {
 	char state[16]; /* pending, running, done, failed, cancelled */
 	char kind[16];	/* "fit" */
 	char session[GLINT_PATH_MAX];
-	json_t *doc;  /* the job file */
-	int lock_fd;  /* running: the worker's lock */
-	unsigned uid; /* the submitter: the job file's owner, never
-		       * what the file says */
+	json_t *doc;	    /* the job file */
+	int lock_fd;	    /* running: the worker's lock */
+	int dir_fd;	    /* running: the running/ folder it was claimed in */
+	unsigned uid;	    /* the submitter: the job file's owner, never
+			     * what the file says */
+	unsigned queue_uid; /* the queue folder's owner */
 };
 
 /* Create QUEUE and its folders if missing. */
@@ -51,7 +59,8 @@ int glint_queue_list(const char *queue,
 
 /* Cancel a pending job (moved to cancelled/: returns 0) or ask a running
  * one's worker to stop (returns 1).  -ENOENT names the ID if it is in no
- * such state. */
+ * such state; -EPERM if the caller is not its submitter, the queue's
+ * owner or root. */
 int glint_queue_cancel(const char *queue, const char *id);
 
 /* Put jobs whose worker died back in pending/; returns how many. */
@@ -61,9 +70,16 @@ int glint_queue_recover(const char *queue);
  * none. */
 int glint_queue_claim(const char *queue, struct glint_job *job);
 
-/* Has someone asked the claimed job to stop? */
-int glint_queue_cancel_requested(const char *queue,
-				 const struct glint_job *job);
+/* Has its submitter (or the queue's owner) asked the claimed job to
+ * stop?  A request by anyone else is removed and ignored. */
+int glint_queue_cancel_requested(const struct glint_job *job);
+
+/* A new file running/ID`ext` for a claimed job's output (a file or link
+ * already there is removed, never followed), open read-write; fd or -1. */
+int glint_queue_output(const struct glint_job *job, const char *ext);
+
+/* Remove a claimed job's output files and cancel request. */
+void glint_queue_drop_outputs(const struct glint_job *job);
 
 /* Move a claimed job to done/, failed/ or cancelled/ with `result` (an
  * object merged into the job file; consumed) and release it. */

@@ -27,13 +27,18 @@ static void nap(double s)
 /* The child's error message: the last non-empty line of its stderr, the
  * text of a JSON log line ({"level": ..., "msg": ...}) rather than the
  * line itself. */
-static void last_line(const char *path, char *out, size_t n)
+static void last_line(int fd, char *out, size_t n)
 {
 	char line[1024];
-	FILE *f = fopen(path, "r");
+	int dup_fd = fcntl(fd, F_DUPFD_CLOEXEC, 0);
+	FILE *f = dup_fd < 0 ? NULL : fdopen(dup_fd, "r");
 	out[0] = '\0';
-	if (!f)
+	if (!f) {
+		if (dup_fd >= 0)
+			close(dup_fd);
 		return;
+	}
+	rewind(f);
 	while (fgets(line, sizeof(line), f))
 		if (line[0] != '\n') {
 			line[strcspn(line, "\n")] = '\0';
@@ -49,13 +54,9 @@ static void last_line(const char *path, char *out, size_t n)
 
 static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 {
-	char out[GLINT_PATH_MAX], err[GLINT_PATH_MAX], self[GLINT_PATH_MAX];
+	char self[GLINT_PATH_MAX];
 
-	if (glint_path_self(self, sizeof(self)) < 0 ||
-	    glint_path_fmt(out, sizeof(out), "%s/running/%s.out", queue,
-			   job->id) < 0 ||
-	    glint_path_fmt(err, sizeof(err), "%s/running/%s.err", queue,
-			   job->id) < 0)
+	if (glint_path_self(self, sizeof(self)) < 0)
 		return glint_queue_finish(
 			queue, job, "failed",
 			json_pack("{s:s}", "error", glint_error_msg()));
@@ -73,6 +74,15 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 		return glint_queue_finish(
 			queue, job, "failed",
 			json_pack("{s:s}", "error", glint_error_msg()));
+	int fo = glint_queue_output(job, ".out");
+	int fe = fo < 0 ? -1 : glint_queue_output(job, ".err");
+	if (fe < 0) {
+		if (fo >= 0)
+			close(fo);
+		return glint_queue_finish(
+			queue, job, "failed",
+			json_pack("{s:s}", "error", glint_error_msg()));
+	}
 	glint_log_info("job %s: fitting %s", job->id, job->session);
 	pid_t worker = getpid();
 	pid_t pid = fork();
@@ -87,35 +97,29 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 			_exit(127);
 		if (job->lock_fd >= 0)
 			fcntl(job->lock_fd, F_SETFD, 0);
-		/* New files only: a link planted in their place (the queue
-		 * is shared) is removed, never followed or truncated. */
-		unlink(out);
-		unlink(err);
-		int fo = open(out, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW,
-			      0600);
-		int fe = open(err, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW,
-			      0600);
-		if (fo < 0 || fe < 0)
+		if (dup2(fo, 1) < 0 || dup2(fe, 2) < 0)
 			_exit(126);
-		dup2(fo, 1);
-		dup2(fe, 2);
 		execl(self, "glint", "fit", "--wait", "--json", "--", session,
 		      (char *)NULL);
 		_exit(127);
 	}
 	if (pid > 0)
 		setpgid(pid, pid); /* as the child does: no race with kill */
-	if (pid < 0)
+	if (pid < 0) {
+		int e = errno;
+		close(fo);
+		close(fe);
 		return glint_queue_finish(
 			queue, job, "failed",
-			json_pack("{s:s}", "error", strerror(errno)));
+			json_pack("{s:s}", "error", strerror(e)));
+	}
 	int status = 0, cancelled = 0;
 	for (;;) {
 		pid_t w = waitpid(pid, &status, WNOHANG);
 		if (w == pid || (w < 0 && errno != EINTR))
 			break;
 		if (!cancelled &&
-		    (*stop || glint_queue_cancel_requested(queue, job))) {
+		    (*stop || glint_queue_cancel_requested(job))) {
 			cancelled = 1 + (*stop != 0);
 			kill(-pid, SIGTERM);
 		}
@@ -126,17 +130,20 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 	if (cancelled == 2) {
 		/* The worker is stopping: the job goes back to pending for
 		 * the next worker. */
+		close(fo);
+		close(fe);
+		glint_queue_drop_outputs(job);
 		glint_job_release(job);
 		glint_queue_recover(queue);
-		unlink(out);
-		unlink(err);
 		return 0;
 	}
 	if (cancelled) {
 		state = "cancelled";
 		res = json_object();
 	} else if (WIFEXITED(status) && WEXITSTATUS(status) == 0) {
-		json_t *doc = json_load_file(out, 0, NULL);
+		json_t *doc = lseek(fo, 0, SEEK_SET) == 0
+				      ? json_loadfd(fo, 0, NULL)
+				      : NULL;
 		state = "done";
 		res = json_pack(
 			"{s:o, s:f*}", "parameters",
@@ -147,7 +154,7 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 		json_decref(doc);
 	} else {
 		char msg[1024];
-		last_line(err, msg, sizeof(msg));
+		last_line(fe, msg, sizeof(msg));
 		state = "failed";
 		res = json_pack("{s:s, s:i}", "error",
 				msg[0] ? msg : "glint fit failed", "exit",
@@ -155,10 +162,9 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 						  : 128 + WTERMSIG(status));
 	}
 	glint_log_info("job %s: %s", job->id, state);
-	int ret = glint_queue_finish(queue, job, state, res);
-	unlink(out);
-	unlink(err);
-	return ret;
+	close(fo);
+	close(fe);
+	return glint_queue_finish(queue, job, state, res);
 }
 
 int glint_queue_work(const char *queue, int until_empty, atomic_int *stop)

@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: MIT */
-#define _POSIX_C_SOURCE 200809L
+#define _DEFAULT_SOURCE /* getentropy */
 #include "atomic_file.h"
 
 #include "error.h"
@@ -9,6 +9,7 @@
 #include <libgen.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/random.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -128,4 +129,57 @@ int glint_atomic_write_file(const char *path, const void *data, size_t n)
 		return glint_error_set(e ? e : EIO, "%s: write failed", path);
 	}
 	return glint_atomic_commit(&af);
+}
+
+int glint_atomic_write_fileat(int dirfd, const char *name, const void *data,
+			      size_t n)
+{
+	char tmp[512];
+	int fd = -1, e;
+
+	for (int tries = 0; fd < 0 && tries < 16; tries++) {
+		unsigned r = 0;
+		if (getentropy(&r, sizeof(r)) < 0)
+			r = (unsigned)getpid() * 2654435761u + (unsigned)tries;
+		if ((size_t)snprintf(tmp, sizeof(tmp), "%s.tmp.%08x", name,
+				     r) >= sizeof(tmp))
+			return glint_error_set(ENAMETOOLONG,
+					       "%s: name too long", name);
+		fd = openat(dirfd, tmp,
+			    O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW |
+				    O_CLOEXEC,
+			    0666);
+		if (fd < 0 && errno != EEXIST)
+			break;
+	}
+	if (fd < 0)
+		return glint_error_set(errno, "%s: cannot create a file: %s",
+				       name, strerror(errno));
+	const char *p = data;
+	size_t left = n;
+	while (left > 0) {
+		ssize_t w = write(fd, p, left);
+		if (w < 0 && errno == EINTR)
+			continue;
+		if (w <= 0)
+			goto fail;
+		p += w;
+		left -= (size_t)w;
+	}
+	if (fsync(fd) < 0)
+		goto fail;
+	close(fd);
+	fd = -1;
+	if (renameat(dirfd, tmp, dirfd, name) < 0)
+		goto fail;
+	if (fsync(dirfd) < 0 && errno != EINVAL)
+		return glint_error_set(errno, "%s: fsync of its folder: %s",
+				       name, strerror(errno));
+	return 0;
+fail:
+	e = errno ? errno : EIO;
+	if (fd >= 0)
+		close(fd);
+	unlinkat(dirfd, tmp, 0);
+	return glint_error_set(e, "%s: write failed: %s", name, strerror(e));
 }

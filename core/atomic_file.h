@@ -37,4 +37,9 @@ int glint_atomic_rename(const char *tmp, const char *path);
 /* Write a whole buffer atomically. */
 int glint_atomic_write_file(const char *path, const void *data, size_t n);
 
+/* The same, as `name` in the folder open as dirfd, never following a
+ * link (for shared folders: the temporary file is new, O_EXCL). */
+int glint_atomic_write_fileat(int dirfd, const char *name, const void *data,
+			      size_t n);
+
 #endif

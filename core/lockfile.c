@@ -14,7 +14,14 @@
 int glint_lockfile_acquire(const char *path, const char *what, int wait,
 			   int *fd)
 {
-	int f = open(path, O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0666);
+	return glint_lockfile_acquireat(AT_FDCWD, path, what, wait, fd);
+}
+
+int glint_lockfile_acquireat(int dirfd, const char *path, const char *what,
+			     int wait, int *fd)
+{
+	int f = openat(dirfd, path, O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC,
+		       0666);
 
 	*fd = -1;
 	if (f < 0)

@@ -15,6 +15,9 @@
  * *fd gets the descriptor to pass to glint_lockfile_release(). */
 int glint_lockfile_acquire(const char *path, const char *what, int wait,
 			   int *fd);
+/* The same for `name` in the folder open as dirfd (never a link). */
+int glint_lockfile_acquireat(int dirfd, const char *name, const char *what,
+			     int wait, int *fd);
 void glint_lockfile_release(int fd);
 
 #endif

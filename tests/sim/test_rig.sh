@@ -218,10 +218,31 @@ check "a job naming a session outside the captures root fails" bash -c "'$glint'
 if [ "$(id -u)" = 0 ] && command -v setpriv >/dev/null; then
 	nobody=(setpriv --reuid=65534 --regid=65534 --clear-groups)
 	chmod 0755 "$tmp"
-	chmod 0777 "$tmp/one/queue/pending"
+	q="$tmp/one/queue"
+	check "the queue's state folders are sticky (a user moves only his own jobs)" bash -c "[ \$(( 0\$(stat -c %a '$q/pending') & 01000 )) != 0 ]"
+	chmod 1777 "$q/pending" "$q/running" "$q/cancelled"
 	check "another user's session: queue add refuses" bash -c "! ${nobody[*]} '$glint' queue add '$sess' --root '$tmp/one' 2>'$tmp/err' && grep -q 'is not shared with the job.s submitter (uid 65534)' '$tmp/err'"
 	${nobody[@]} bash -c "echo '{\"id\": \"zz-other\", \"kind\": \"fit\", \"session\": \"$sess\"}' >'$tmp/one/queue/pending/zz-other.json'"
 	check "... and a job file written by hand fails, its submitter named" bash -c "'$glint' queue run --until-empty --root '$tmp/one' -q && '$glint' jobs --root '$tmp/one' | grep 'zz-other' | grep -q 'failed *fit  nobody .*belongs to uid 0 and is not shared'"
+	# Another user may not steer a job: cancel it, move it, hold its
+	# lock, or ask its worker to stop it.
+	id=$("$glint" queue add "$sess" --root "$tmp/one")
+	check "another user's glint queue cancel: refused, the submitter named" bash -c "! ${nobody[*]} '$glint' queue cancel '$id' --root '$tmp/one' 2>'$tmp/err' && grep -q 'submitted by uid 0: only it' '$tmp/err' && [ -e '$q/pending/$id.json' ]"
+	check "... and the kernel refuses his mv of it (sticky folder)" bash -c "! ${nobody[*]} mv '$q/pending/$id.json' '$q/cancelled/' 2>/dev/null && [ -e '$q/pending/$id.json' ]"
+	${nobody[@]} flock -o "$q/running/$id.lock" sleep 120 &
+	holder=$!
+	wait_until 10 exists "$q/running/$id.lock"
+	check "a lock planted by another user to hold a job hostage is removed" bash -c "'$glint' queue run --until-empty --root '$tmp/one' 2>'$tmp/err' && grep -q 'removing a lock file of uid 65534' '$tmp/err' && '$glint' jobs --root '$tmp/one' | grep -q '$id *done'"
+	pkill -P $holder
+	kill $holder 2>/dev/null
+	wait $holder 2>/dev/null
+	id=$("$glint" queue add "$sess" --root "$tmp/one")
+	"$glint" queue run --until-empty --root "$tmp/one" 2>"$tmp/werr" &
+	wpid=$!
+	wait_until 30 exists "$q/running/$id.err"
+	${nobody[@]} touch "$q/running/$id.cancel"
+	wait $wpid
+	check "a cancel request by another user is ignored: the job is done" bash -c "grep -q 'ignoring a cancel request by uid 65534' '$tmp/werr' && '$glint' jobs --root '$tmp/one' | grep -q '$id *done'"
 	chmod 0700 "$tmp"
 else
 	echo "skip two-user checks: not root or no setpriv"

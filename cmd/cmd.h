@@ -4,6 +4,7 @@
 
 /* The glint command: a thin layer over the libraries. */
 
+#include "core/error.h"
 #include "core/path.h"
 
 #include <jansson.h>
@@ -57,7 +58,7 @@ const char *cmd_rig_config(char *buf, size_t n, const char *config);
 /* Report the current error (human or JSON) and return GLINT_EXIT_FAIL. */
 int cmd_fail(const char *cmd);
 /* Print a usage error and return GLINT_EXIT_USAGE. */
-int cmd_usage_error(const char *cmd, const char *fmt, ...);
+int cmd_usage_error(const char *cmd, const char *fmt, ...) GLINT_PRINTF(2, 3);
 /* Print a JSON result on stdout (consumes obj). */
 void cmd_print_json(json_t *obj);
 
@@ -67,9 +68,5 @@ void cmd_print_params(const json_t *doc, const double *truth);
 
 /* A fit's progress on a terminal (struct glint_fit_opts.progress). */
 void cmd_fit_progress(void *ctx, const char *pass, int iter, double cost);
-
-/* Parse a positive int option value; -1 on error (message printed). */
-int cmd_parse_int(const char *cmd, const char *opt, const char *val, int lo,
-		  int hi, int *out);
 
 #endif

@@ -6,6 +6,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
+#include "options.h"
 
 #include "board/daemon.h"
 
@@ -17,7 +18,6 @@
 #include "core/json.h"
 #include "core/log.h"
 
-#include <getopt.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -46,12 +46,12 @@ void cmd_capture_help(void)
 	       "simulated rig,\n"
 	       "                      data/rig-sim.json; see "
 	       "docs/capture.md)\n"
-	       "  --out DIR           sessions go under DIR (default: the "
+	       "  -o, --output DIR    sessions go under DIR (default: the "
 	       "config's \"output\")\n"
 	       "  --probe SESSION     the probe session that lights a sample "
 	       "(default: the\n"
 	       "                      newest complete one under DIR)\n"
-	       "      --verbose       show camera libraries' own logging\n"
+	       "  -v, --verbose       show camera libraries' own logging\n"
 	       "      --json          print a JSON result on stdout, logs as "
 	       "JSON lines\n"
 	       "  -q, --quiet         no progress or info messages\n"
@@ -72,7 +72,7 @@ void cmd_cameras_help(void)
 	       "  --backend NAME      sim, v4l2 or libcamera (as built)\n"
 	       "  --device DEV        describe this device only (e.g. "
 	       "/dev/video0)\n"
-	       "      --verbose       show camera libraries' own logging\n"
+	       "  -v, --verbose       show camera libraries' own logging\n"
 	       "      --json          print JSON on stdout\n");
 }
 
@@ -87,56 +87,33 @@ static void on_sigint(int sig)
 
 int cmd_capture(int argc, char **argv)
 {
-	enum { O_CONFIG = 256, O_OUT, O_JSON, O_VERBOSE, O_PROBE };
-	static const struct option opts[] = {
-		{ "config", required_argument, NULL, O_CONFIG },
-		{ "probe", required_argument, NULL, O_PROBE },
-		{ "out", required_argument, NULL, O_OUT },
-		{ "json", no_argument, NULL, O_JSON },
-		{ "verbose", no_argument, NULL, O_VERBOSE },
-		{ "quiet", no_argument, NULL, 'q' },
-		{ "help", no_argument, NULL, 'h' },
-		{ NULL, 0, NULL, 0 },
-	};
+	static const char *const kinds[] = { "probe", "sample", NULL };
 	const char *config = NULL, *out = NULL, *probe = NULL;
 	char default_config[4096];
-	int json = 0, c, ret;
-
-	optind = 1;
-	while ((c = getopt_long(argc, argv, "qh", opts, NULL)) != -1) {
-		switch (c) {
-		case O_CONFIG:
-			config = optarg;
-			break;
-		case O_OUT:
-			out = optarg;
-			break;
-		case O_PROBE:
-			probe = optarg;
-			break;
-		case O_JSON:
-			json = 1;
-			glint_log_set_mode(GLINT_LOG_JSON);
-			break;
-		case O_VERBOSE:
-			glint_camera_set_verbose(1);
-			break;
-		case 'q':
-			glint_log_set_mode(GLINT_LOG_QUIET);
-			break;
-		case 'h':
-			cmd_capture_help();
-			return GLINT_EXIT_OK;
-		default:
-			return GLINT_EXIT_USAGE;
-		}
-	}
-	if (optind != argc - 1 || (strcmp(argv[optind], "probe") != 0 &&
-				   strcmp(argv[optind], "sample") != 0))
+	int ret;
+	const struct cmd_opt opts[] = {
+		CMD_STRING("config", 0, &config),
+		CMD_STRING("probe", 0, &probe),
+		CMD_STRING("output", 'o', &out),
+		{ 0 },
+	};
+	struct cmd_args a;
+	int r = cmd_options_parse("capture", cmd_capture_help, opts, argc, argv,
+				  &a);
+	if (r)
+		return cmd_options_exit(r);
+	int json = a.json;
+	glint_camera_set_verbose(a.verbose);
+	if (a.argc != 1)
 		return cmd_usage_error("capture",
 				       "expected what to capture: probe or "
 				       "sample");
-	const char *kind = argv[optind];
+	if (strcmp(a.argv[0], "probe") && strcmp(a.argv[0], "sample")) {
+		cmd_choice_error(a.argv[0], kinds);
+		return cmd_usage_error("capture", "'%s': %s", a.argv[0],
+				       glint_error_msg());
+	}
+	const char *kind = a.argv[0];
 	config = cmd_rig_config(default_config, sizeof(default_config), config);
 
 	struct glint_rig rig;
@@ -236,44 +213,23 @@ static void found_device(const char *device, void *ctx)
 
 int cmd_cameras(int argc, char **argv)
 {
-	enum { O_BACKEND = 256, O_DEVICE, O_JSON, O_VERBOSE };
-	static const struct option opts[] = {
-		{ "backend", required_argument, NULL, O_BACKEND },
-		{ "device", required_argument, NULL, O_DEVICE },
-		{ "json", no_argument, NULL, O_JSON },
-		{ "verbose", no_argument, NULL, O_VERBOSE },
-		{ "help", no_argument, NULL, 'h' },
-		{ NULL, 0, NULL, 0 },
-	};
 	const char *backend = NULL, *device = NULL;
 	struct listing l = { NULL, NULL, 0 };
-	int c;
-
-	optind = 1;
-	while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
-		switch (c) {
-		case O_BACKEND:
-			backend = optarg;
-			break;
-		case O_DEVICE:
-			device = optarg;
-			break;
-		case O_JSON:
-			l.json = 1;
-			break;
-		case O_VERBOSE:
-			glint_camera_set_verbose(1);
-			break;
-		case 'h':
-			cmd_cameras_help();
-			return GLINT_EXIT_OK;
-		default:
-			return GLINT_EXIT_USAGE;
-		}
-	}
-	if (optind != argc)
+	const struct cmd_opt opts[] = {
+		CMD_STRING("backend", 0, &backend),
+		CMD_STRING("device", 0, &device),
+		{ 0 },
+	};
+	struct cmd_args a;
+	int r = cmd_options_parse("cameras", cmd_cameras_help, opts, argc, argv,
+				  &a);
+	if (r)
+		return cmd_options_exit(r);
+	l.json = a.json;
+	glint_camera_set_verbose(a.verbose);
+	if (a.argc != 0)
 		return cmd_usage_error("cameras", "unexpected argument '%s'",
-				       argv[optind]);
+				       a.argv[0]);
 	if (device && !backend)
 		backend = device[0] == '/'	       ? "v4l2"
 			  : !strncmp(device, "sim", 3) ? "sim"

@@ -7,6 +7,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
+#include "options.h"
 #include "fit/job.h"
 
 #include "core/error.h"
@@ -14,7 +15,6 @@
 #include "sim/reference.h"
 #include "sim/sensor.h"
 
-#include <getopt.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -55,67 +55,32 @@ void cmd_demo_help(void)
 
 int cmd_demo(int argc, char **argv)
 {
-	enum { O_JSON = 256, O_THREADS, O_NOISE, O_METHOD };
-	static const struct option opts[] = {
-		{ "material", required_argument, NULL, 'm' },
-		{ "out", required_argument, NULL, 'o' },
-		{ "method", required_argument, NULL, O_METHOD },
-		{ "noise", no_argument, NULL, O_NOISE },
-		{ "threads", required_argument, NULL, O_THREADS },
-		{ "json", no_argument, NULL, O_JSON },
-		{ "quiet", no_argument, NULL, 'q' },
-		{ "help", no_argument, NULL, 'h' },
-		{ NULL, 0, NULL, 0 },
-	};
 	const char *material = "yellow-plastic", *dir = "demo-out";
 	char scene_path[4096], table[4096], photo_path[4200], fit_dir[4200];
 	struct glint_fit_job job = { 0 };
 	const struct glint_model_ops *model;
 	double truth[GLINT_MAX_PARAMS];
-	int json = 0, noise = 0, c, ret;
+	int noise = 0, method = -1, ret;
 
 	glint_fit_default_opts(&job.opts);
-	optind = 1;
-	while ((c = getopt_long(argc, argv, "m:o:qh", opts, NULL)) != -1) {
-		switch (c) {
-		case 'm':
-			material = optarg;
-			break;
-		case 'o':
-			dir = optarg;
-			break;
-		case O_METHOD:
-			if (glint_fit_method_parse(optarg, &job.opts.method) <
-			    0)
-				return cmd_usage_error("demo", "%s",
-						       glint_error_msg());
-			break;
-		case O_NOISE:
-			noise = 1;
-			break;
-		case O_JSON:
-			json = 1;
-			break;
-		case 'q':
-			glint_log_set_mode(GLINT_LOG_QUIET);
-			break;
-		case 'h':
-			cmd_demo_help();
-			return GLINT_EXIT_OK;
-		case O_THREADS:
-			if (cmd_parse_int("demo", "--threads", optarg, 0, 256,
-					  &job.nthreads) < 0)
-				return GLINT_EXIT_USAGE;
-			break;
-		default:
-			return cmd_usage_error("demo", "unknown option");
-		}
-	}
-	if (optind != argc)
+	const struct cmd_opt opts[] = {
+		CMD_STRING("material", 'm', &material),
+		CMD_STRING("output", 'o', &dir),
+		CMD_CHOICE("method", &method, glint_fit_method_names),
+		CMD_FLAG("noise", 0, &noise),
+		CMD_INT("threads", &job.nthreads, 0, 256),
+		{ 0 },
+	};
+	struct cmd_args a;
+	int r = cmd_options_parse("demo", cmd_demo_help, opts, argc, argv, &a);
+	if (r)
+		return cmd_options_exit(r);
+	int json = a.json;
+	if (method >= 0)
+		job.opts.method = (enum glint_fit_method)method;
+	if (a.argc != 0)
 		return cmd_usage_error("demo", "unexpected argument '%s'",
-				       argv[optind]);
-	if (json)
-		glint_log_set_mode(GLINT_LOG_JSON);
+				       a.argv[0]);
 	snprintf(scene_path, sizeof(scene_path), "%s/demo-scene.json",
 		 glint_data_dir());
 	snprintf(table, sizeof(table), "%s/paper-table1.json",

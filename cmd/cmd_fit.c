@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
+#include "options.h"
 #include "capture/session.h"
 #include "fit/job.h"
 
@@ -14,8 +15,8 @@
 #include "fit/render/compare.h"
 #include "fit/ladder.h"
 #include "fit/select.h"
+#include "fit/brdf/model.h"
 
-#include <getopt.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -40,7 +41,7 @@ void cmd_fit_help(void)
 	       "merge's weights into SESSION/fit; one fit per\nsession at a "
 	       "time (a second one is refused, or waits with --wait).\n"
 	       "\n"
-	       "  -o, --out DIR         result folder (default fit-out); "
+	       "  -o, --output DIR      result folder (default fit-out); "
 	       "replaced whole,\n"
 	       "                        never left half-written\n"
 	       "  --model NAME          torrance-sparrow (default), lambert, "
@@ -246,250 +247,91 @@ static int fit_session_open(const char *dir, int wait,
 	return 0;
 }
 
+static int parse_model(const char *arg, void *dest)
+{
+	const struct glint_model_ops **m = dest;
+	if (!strcmp(arg, "auto")) {
+		*m = NULL;
+		return 0;
+	}
+	*m = glint_model_find(arg);
+	if (*m)
+		return 0;
+	const char *const *names = glint_model_list();
+	const char *all[16] = { "auto" };
+	for (int i = 0; names[i] && i < 14; i++)
+		all[i + 1] = names[i];
+	return cmd_choice_error(arg, all);
+}
+
+static int parse_knobs(const char *arg, void *dest)
+{
+	return glint_ladder_knobs_parse(arg, dest);
+}
+
 int cmd_fit(int argc, char **argv)
 {
-	enum {
-		O_MODEL = 256,
-		O_METHOD,
-		O_NOCOARSE,
-		O_FAITHFUL,
-		O_WEIGHTS,
-		O_WEIGHTING,
-		O_MASK,
-		O_MAXPIX,
-		O_SAMPLES,
-		O_MAXITER,
-		O_THREADS,
-		O_JSON,
-		O_WAIT,
-		O_OPTIMIZER,
-		O_SEED,
-		O_ANNEAL_EVALS,
-		O_LADDER,
-		O_LADDER_LIMIT,
-		O_SELECT,
-		O_LADDER_KNOBS,
-		O_SETS,
-		O_LEVEL,
-		O_NOSELECT,
-		O_ACCEPT,
-		O_FORCE
-	};
-	static const struct option opts[] = {
-		{ "out", required_argument, NULL, 'o' },
-		{ "model", required_argument, NULL, O_MODEL },
-		{ "method", required_argument, NULL, O_METHOD },
-		{ "no-coarse", no_argument, NULL, O_NOCOARSE },
-		{ "faithful", no_argument, NULL, O_FAITHFUL },
-		{ "weights", required_argument, NULL, O_WEIGHTS },
-		{ "weighting", required_argument, NULL, O_WEIGHTING },
-		{ "mask-threshold", required_argument, NULL, O_MASK },
-		{ "max-pixels", required_argument, NULL, O_MAXPIX },
-		{ "samples", required_argument, NULL, O_SAMPLES },
-		{ "sample-sets", required_argument, NULL, O_SETS },
-		{ "level", required_argument, NULL, O_LEVEL },
-		{ "accept-rmse", required_argument, NULL, O_ACCEPT },
-		{ "force", no_argument, NULL, O_FORCE },
-		{ "max-iter", required_argument, NULL, O_MAXITER },
-		{ "threads", required_argument, NULL, O_THREADS },
-		{ "json", no_argument, NULL, O_JSON },
-		{ "wait", no_argument, NULL, O_WAIT },
-		{ "optimizer", required_argument, NULL, O_OPTIMIZER },
-		{ "seed", required_argument, NULL, O_SEED },
-		{ "anneal-evals", required_argument, NULL, O_ANNEAL_EVALS },
-		{ "ladder", no_argument, NULL, O_LADDER },
-		{ "select-model", no_argument, NULL, O_SELECT },
-		{ "no-select-model", no_argument, NULL, O_NOSELECT },
-		{ "ladder-knobs", required_argument, NULL, O_LADDER_KNOBS },
-		{ "ladder-limit", required_argument, NULL, O_LADDER_LIMIT },
-		{ "quiet", no_argument, NULL, 'q' },
-		{ "help", no_argument, NULL, 'h' },
-		{ NULL, 0, NULL, 0 },
-	};
+	static const char *const weightings[] = { "poisson", "uniform", NULL };
 	struct glint_fit_job job = { .model = &glint_model_torrance_sparrow };
 	const char *weights = NULL;
-	int json = 0, wait = 0, c, n;
+	int wait = 0, samples = 0, sets = 0, seed = -1, ladder = 0;
+	int method = -1, optimizer = -1, weighting = -1, nocoarse = 0;
 
 	glint_fit_default_opts(&job.opts);
-	optind = 1;
-	while ((c = getopt_long(argc, argv, "o:qh", opts, NULL)) != -1) {
-		switch (c) {
-		case 'o':
-			job.out_dir = optarg;
-			break;
-		case O_OPTIMIZER:
-			if (glint_fit_optimizer_parse(optarg,
-						      &job.opts.optimizer) < 0)
-				return cmd_usage_error("fit", "%s",
-						       glint_error_msg());
-			break;
-		case O_ANNEAL_EVALS:
-			if (cmd_parse_int("fit", "--anneal-evals", optarg, 10,
-					  1000000, &job.opts.anneal_evals) < 0)
-				return GLINT_EXIT_USAGE;
-			break;
-		case O_LADDER_KNOBS:
-			if (glint_ladder_knobs_parse(optarg,
-						     &job.ladder_knobs) < 0)
-				return cmd_usage_error("fit",
-						       "--ladder-knobs %s",
-						       glint_error_msg());
-			if (!(job.ladder > 0))
-				job.ladder = 0.5;
-			break;
-		case O_SELECT:
-			job.select = 1;
-			break;
-		case O_NOSELECT:
-			job.no_auto_select = 1;
-			break;
-		case O_LADDER:
-			if (!(job.ladder > 0))
-				job.ladder = 0.5;
-			break;
-		case O_LADDER_LIMIT: {
-			char *end;
-			job.ladder = strtod(optarg, &end);
-			if (*end || !(job.ladder > 0 && job.ladder <= 10))
-				return cmd_usage_error("fit",
-						       "--ladder-limit '%s': "
-						       "expected standard "
-						       "errors in (0, 10]",
-						       optarg);
-			break;
-		}
-		case O_SEED:
-			if (cmd_parse_int("fit", "--seed", optarg, 0,
-					  2147483647, &n) < 0)
-				return GLINT_EXIT_USAGE;
-			job.opts.seed = (uint64_t)n;
-			break;
-		case O_MODEL:
-			if (!strcmp(optarg, "auto")) {
-				job.model = NULL;
-				break;
-			}
-			job.model = glint_model_find(optarg);
-			if (!job.model)
-				return cmd_usage_error("fit",
-						       "--model '%s': expected "
-						       "one of %s, or auto",
-						       optarg,
-						       glint_model_names());
-			break;
-		case O_METHOD:
-			if (glint_fit_method_parse(optarg, &job.opts.method) <
-			    0)
-				return cmd_usage_error("fit", "%s",
-						       glint_error_msg());
-			break;
-		case O_NOCOARSE:
-			job.opts.coarse_to_fine = 0;
-			break;
-		case O_FAITHFUL:
-			job.opts.faithful = 1;
-			break;
-		case O_WEIGHTS:
-			weights = optarg;
-			break;
-		case O_WEIGHTING:
-			if (!strcmp(optarg, "poisson"))
-				job.opts.weighting = GLINT_WEIGHT_POISSON;
-			else if (!strcmp(optarg, "uniform"))
-				job.opts.weighting = GLINT_WEIGHT_UNIFORM;
-			else
-				return cmd_usage_error("fit",
-						       "--weighting '%s': "
-						       "expected poisson or "
-						       "uniform",
-						       optarg);
-			break;
-		case O_MASK: {
-			char *end;
-			job.opts.mask_threshold = strtod(optarg, &end);
-			if (*end || !(job.opts.mask_threshold >= 0))
-				return cmd_usage_error("fit",
-						       "--mask-threshold '%s': "
-						       "expected a number >= 0",
-						       optarg);
-			break;
-		}
-		case O_MAXPIX:
-			if (cmd_parse_int("fit", "--max-pixels", optarg, 64,
-					  1 << 24, &job.opts.max_pixels) < 0)
-				return GLINT_EXIT_USAGE;
-			break;
-		case O_SAMPLES:
-			if (cmd_parse_int("fit", "--samples", optarg, 1, 4096,
-					  &n) < 0)
-				return GLINT_EXIT_USAGE;
-			job.opts.light_samples = job.opts.lobe_samples = n;
-			break;
-		case O_SETS:
-			if (cmd_parse_int("fit", "--sample-sets", optarg, 1, 16,
-					  &n) < 0)
-				return GLINT_EXIT_USAGE;
-			job.opts.mc_draws = n - 1;
-			break;
-		case O_LEVEL: {
-			char *end;
-			job.opts.level = strtod(optarg, &end);
-			if (*end || !(job.opts.level > 0.5) ||
-			    !(job.opts.level < 1))
-				return cmd_usage_error("fit",
-						       "--level '%s': expected "
-						       "a probability in "
-						       "(0.5, 1), e.g. 0.95",
-						       optarg);
-			break;
-		}
-		case O_FORCE:
-			job.force = 1;
-			break;
-		case O_ACCEPT: {
-			char *end;
-			job.accept_rmse = strtod(optarg, &end);
-			if (*end || !(job.accept_rmse > 0) ||
-			    !isfinite(job.accept_rmse))
-				return cmd_usage_error("fit",
-						       "--accept-rmse '%s': "
-						       "expected a relative "
-						       "RMSE > 0, e.g. 0.5",
-						       optarg);
-			break;
-		}
-		case O_MAXITER:
-			if (cmd_parse_int("fit", "--max-iter", optarg, 1, 10000,
-					  &job.opts.max_iter) < 0)
-				return GLINT_EXIT_USAGE;
-			break;
-		case O_THREADS:
-			if (cmd_parse_int("fit", "--threads", optarg, 0, 256,
-					  &job.nthreads) < 0)
-				return GLINT_EXIT_USAGE;
-			break;
-		case O_JSON:
-			json = 1;
-			break;
-		case O_WAIT:
-			wait = 1;
-			break;
-		case 'q':
-			glint_log_set_mode(GLINT_LOG_QUIET);
-			break;
-		case 'h':
-			cmd_fit_help();
-			return GLINT_EXIT_OK;
-		default:
-			return cmd_usage_error("fit", "unknown option");
-		}
-	}
-	if (json)
-		glint_log_set_mode(GLINT_LOG_JSON);
+	const struct cmd_opt opts[] = {
+		CMD_STRING("output", 'o', &job.out_dir),
+		CMD_CALL("model", &job.model, parse_model),
+		CMD_CHOICE("method", &method, glint_fit_method_names),
+		CMD_CHOICE("optimizer", &optimizer, glint_fit_optimizer_names),
+		CMD_FLAG("no-coarse", 0, &nocoarse),
+		CMD_FLAG("faithful", 0, &job.opts.faithful),
+		CMD_STRING("weights", 0, &weights),
+		CMD_CHOICE("weighting", &weighting, weightings),
+		CMD_REAL("mask-threshold", &job.opts.mask_threshold, 0, 1e6),
+		CMD_INT("max-pixels", &job.opts.max_pixels, 64, 1 << 24),
+		CMD_INT("samples", &samples, 1, 4096),
+		CMD_INT("sample-sets", &sets, 1, 16),
+		CMD_REAL("level", &job.opts.level, 0.51, 0.999),
+		CMD_REAL("accept-rmse", &job.accept_rmse, 1e-9, 1e9),
+		CMD_FLAG("force", 0, &job.force),
+		CMD_INT("max-iter", &job.opts.max_iter, 1, 10000),
+		CMD_INT("threads", &job.nthreads, 0, 256),
+		CMD_FLAG("wait", 0, &wait),
+		CMD_INT("seed", &seed, 0, 2147483647),
+		CMD_INT("anneal-evals", &job.opts.anneal_evals, 10, 1000000),
+		CMD_FLAG("ladder", 0, &ladder),
+		CMD_REAL("ladder-limit", &job.ladder, 1e-6, 10),
+		CMD_CALL("ladder-knobs", &job.ladder_knobs, parse_knobs),
+		CMD_FLAG("select-model", 0, &job.select),
+		CMD_FLAG("no-select-model", 0, &job.no_auto_select),
+		{ 0 },
+	};
+	struct cmd_args a;
+	int r = cmd_options_parse("fit", cmd_fit_help, opts, argc, argv, &a);
+	if (r)
+		return cmd_options_exit(r);
+	int json = a.json;
+	if (method >= 0)
+		job.opts.method = (enum glint_fit_method)method;
+	if (optimizer >= 0)
+		job.opts.optimizer = (enum glint_fit_optimizer)optimizer;
+	if (weighting >= 0)
+		job.opts.weighting =
+			weighting ? GLINT_WEIGHT_UNIFORM : GLINT_WEIGHT_POISSON;
+	if (nocoarse)
+		job.opts.coarse_to_fine = 0;
+	if (samples)
+		job.opts.light_samples = job.opts.lobe_samples = samples;
+	if (sets)
+		job.opts.mc_draws = sets - 1;
+	if (seed >= 0)
+		job.opts.seed = (uint64_t)seed;
+	if ((ladder || job.ladder_knobs) && !(job.ladder > 0))
+		job.ladder = 0.5;
 	struct glint_session_fit fs;
 	int lock = -1, ret;
-	if (optind == argc - 1) {
-		ret = fit_session_open(argv[optind], wait, &fs, &lock);
+	if (a.argc == 1) {
+		ret = fit_session_open(a.argv[0], wait, &fs, &lock);
 		if (ret < 0)
 			return cmd_fail("fit");
 		job.scene_path = fs.scene;
@@ -498,9 +340,9 @@ int cmd_fit(int argc, char **argv)
 			weights = fs.weights;
 		if (!job.out_dir)
 			job.out_dir = fs.out;
-	} else if (optind == argc - 2) {
-		job.scene_path = argv[optind];
-		job.photo_path = argv[optind + 1];
+	} else if (a.argc == 2) {
+		job.scene_path = a.argv[0];
+		job.photo_path = a.argv[1];
 	} else {
 		return cmd_usage_error("fit",
 				       "expected SCENE.json and PHOTO, or a "

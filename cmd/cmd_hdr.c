@@ -5,6 +5,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
+#include "options.h"
 
 #include "capture/frame_file.h"
 #include "capture/hdr_linear.h"
@@ -16,7 +17,6 @@
 #include "core/json.h"
 #include "core/log.h"
 
-#include <getopt.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -51,7 +51,7 @@ void cmd_hdr_help(void)
 	       "default, or debevec), written to\nresponse.csv, and the "
 	       "photos merged; codes at the black floor and at 255 get\nno "
 	       "weight (no variance image for 8-bit input).\n\n"
-	       "  -o, --out DIR         output folder (default: the session; "
+	       "  -o, --output DIR      output folder (default: the session; "
 	       "required for files)\n"
 	       "      --times LIST      8-bit mode: exposure times in "
 	       "seconds, e.g. 32,16,1/2\n"
@@ -70,17 +70,6 @@ void cmd_hdr_help(void)
 	       "  -q, --quiet           no info messages\n"
 	       "\nExit status: 0 done (a moved bracket is reported, not an "
 	       "error), 1 bad input,\n2 bad command line.\n");
-}
-
-static int parse_double(const char *opt, const char *v, double lo, double *out)
-{
-	char *end;
-	double d = strtod(v, &end);
-	if (*end || !isfinite(d) || d < lo)
-		return cmd_usage_error(
-			"hdr", "%s '%s': expected a number >= %g", opt, v, lo);
-	*out = d;
-	return 0;
 }
 
 /* "32", "1/1024", "0.5" */
@@ -221,83 +210,37 @@ static int ldr_main(char **files, int n, const char *times,
 
 int cmd_hdr(int argc, char **argv)
 {
-	enum { O_CPE = 256, O_READ, O_SAT, O_JSON, O_TIMES, O_TFILE, O_RESP };
-	static const struct option opts[] = {
-		{ "out", required_argument, NULL, 'o' },
-		{ "dn-per-electron", required_argument, NULL, O_CPE },
-		{ "read-noise", required_argument, NULL, O_READ },
-		{ "saturation", required_argument, NULL, O_SAT },
-		{ "json", no_argument, NULL, O_JSON },
-		{ "times", required_argument, NULL, O_TIMES },
-		{ "times-file", required_argument, NULL, O_TFILE },
-		{ "response", required_argument, NULL, O_RESP },
-		{ "quiet", no_argument, NULL, 'q' },
-		{ "help", no_argument, NULL, 'h' },
-		{ NULL, 0, NULL, 0 },
-	};
-	const char *out = NULL, *times = NULL, *times_file = NULL,
-		   *method = "robertson";
+	static const char *const responses[] = { "robertson", "debevec", NULL };
+	const char *out = NULL, *times = NULL, *times_file = NULL;
 	double cpe = NAN, rn = NAN, sat = NAN;
-	int json = 0, c, ret;
-
-	optind = 1;
-	while ((c = getopt_long(argc, argv, "o:qh", opts, NULL)) != -1) {
-		switch (c) {
-		case 'o':
-			out = optarg;
-			break;
-		case O_CPE:
-			if (parse_double("--dn-per-electron", optarg, 1e-9,
-					 &cpe))
-				return GLINT_EXIT_USAGE;
-			break;
-		case O_READ:
-			if (parse_double("--read-noise", optarg, 0, &rn))
-				return GLINT_EXIT_USAGE;
-			break;
-		case O_SAT:
-			if (parse_double("--saturation", optarg, 1, &sat))
-				return GLINT_EXIT_USAGE;
-			break;
-		case O_JSON:
-			json = 1;
-			glint_log_set_mode(GLINT_LOG_JSON);
-			break;
-		case O_TIMES:
-			times = optarg;
-			break;
-		case O_TFILE:
-			times_file = optarg;
-			break;
-		case O_RESP:
-			if (strcmp(optarg, "robertson") &&
-			    strcmp(optarg, "debevec"))
-				return cmd_usage_error(
-					"hdr",
-					"--response '%s': expected "
-					"robertson or debevec",
-					optarg);
-			method = optarg;
-			break;
-		case 'q':
-			glint_log_set_mode(GLINT_LOG_QUIET);
-			break;
-		case 'h':
-			cmd_hdr_help();
-			return GLINT_EXIT_OK;
-		default:
-			return GLINT_EXIT_USAGE;
-		}
-	}
-	if (optind >= argc)
+	int response = 0, ret;
+	const struct cmd_opt opts[] = {
+		CMD_STRING("output", 'o', &out),
+		CMD_REAL("dn-per-electron", &cpe, 1e-9, 1e9),
+		CMD_REAL("read-noise", &rn, 0, 1e9),
+		CMD_REAL("saturation", &sat, 1, 1e12),
+		CMD_STRING("times", 0, &times),
+		CMD_STRING("times-file", 0, &times_file),
+		CMD_CHOICE("response", &response, responses),
+		{ 0 },
+	};
+	struct cmd_args a;
+	int r = cmd_options_parse("hdr", cmd_hdr_help, opts, argc, argv, &a);
+	if (r)
+		return cmd_options_exit(r);
+	int json = a.json;
+	const char *method = responses[response];
+	argc = a.argc;
+	argv = a.argv;
+	if (argc < 1)
 		return cmd_usage_error("hdr", "expected a session folder or "
 					      "frame files");
 	if (times || times_file) {
 		if (!out)
 			return cmd_usage_error("hdr",
 					       "8-bit photos need -o DIR");
-		return ldr_main(argv + optind, argc - optind, times, times_file,
-				method, out, json);
+		return ldr_main(argv, argc, times, times_file, method, out,
+				json);
 	}
 
 	struct glint_noise_model nm;
@@ -313,25 +256,23 @@ int cmd_hdr(int argc, char **argv)
 	glint_noise_default(&nm);
 	/* One argument that is not a file: a session (or an error naming
 	 * its session.json). */
-	int is_session = optind == argc - 1 &&
-			 !(stat(argv[optind], &st) == 0 && S_ISREG(st.st_mode));
+	int is_session =
+		argc == 1 && !(stat(argv[0], &st) == 0 && S_ISREG(st.st_mode));
 	if (is_session) {
-		ret = glint_session_noise(argv[optind], &nm);
+		ret = glint_session_noise(argv[0], &nm);
 		if (ret == 0)
-			ret = glint_session_load_frames(argv[optind], &frames,
-							&n);
+			ret = glint_session_load_frames(argv[0], &frames, &n);
 		if (!out)
-			out = argv[optind];
+			out = argv[0];
 	} else {
 		if (!out)
 			return cmd_usage_error("hdr",
 					       "frame files need -o DIR");
-		n = argc - optind;
+		n = argc;
 		frames = calloc((size_t)n, sizeof(*frames));
 		ret = frames ? 0 : glint_error_set(ENOMEM, "out of memory");
 		for (int i = 0; i < n && ret == 0; i++)
-			ret = glint_frame_read(argv[optind + i], &frames[i],
-					       NULL);
+			ret = glint_frame_read(argv[i], &frames[i], NULL);
 	}
 	if (!isnan(cpe))
 		nm.dn_per_electron = cpe;

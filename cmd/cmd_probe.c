@@ -5,6 +5,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
+#include "options.h"
 
 #include "capture/probe.h"
 #include "capture/probe_register.h"
@@ -13,7 +14,6 @@
 #include "core/log.h"
 
 #include <errno.h>
-#include <getopt.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -73,24 +73,31 @@ void cmd_probe_help(void)
 	       "\nExit status: 0 done, 1 bad input, 2 bad command line.\n");
 }
 
-static int parse_list(const char *opt, const char *v, int n, double *out)
+/* N numbers separated by ',' or 'x' ("640,480", "1024x512") into a
+ * struct numbers. */
+struct numbers {
+	int n, given;
+	double v[3];
+};
+
+static int parse_numbers(const char *arg, void *dest)
 {
+	struct numbers *nb = dest;
 	char buf[256];
 	int k = 0;
-	snprintf(buf, sizeof(buf), "%s", v);
+	snprintf(buf, sizeof(buf), "%s", arg);
 	for (char *save = NULL, *t = strtok_r(buf, ",x", &save); t;
 	     t = strtok_r(NULL, ",x", &save)) {
 		char *end;
 		double d = strtod(t, &end);
-		if (*end || !isfinite(d) || k == n)
-			return cmd_usage_error("probe",
-					       "%s '%s': expected %d numbers",
-					       opt, v, n);
-		out[k++] = d;
+		if (*end || !isfinite(d) || k == nb->n)
+			break;
+		nb->v[k++] = d;
 	}
-	if (k != n)
-		return cmd_usage_error("probe", "%s '%s': expected %d numbers",
-				       opt, v, n);
+	if (k != nb->n || strchr(",x", arg[strlen(arg) - 1]))
+		return glint_error_set(EINVAL, "expected %d number%s", nb->n,
+				       nb->n > 1 ? "s, e.g. 1,2" : "");
+	nb->given = 1;
 	return 0;
 }
 
@@ -167,170 +174,102 @@ static int find_ball(const struct glint_image *photo, int given,
 
 static int unwrap_main(int argc, char **argv)
 {
-	enum {
-		O_F = 256,
-		O_PP,
-		O_BALL,
-		O_CHROME,
-		O_REFL,
-		O_GRAZE,
-		O_SIZE,
-		O_ORTHO,
-		O_SRGB
-	};
-	static const struct option opts[] = {
-		{ "focal-px", required_argument, NULL, O_F },
-		{ "principal", required_argument, NULL, O_PP },
-		{ "ball", required_argument, NULL, O_BALL },
-		{ "chrome", required_argument, NULL, O_CHROME },
-		{ "reflectivity", required_argument, NULL, O_REFL },
-		{ "grazing", required_argument, NULL, O_GRAZE },
-		{ "size", required_argument, NULL, O_SIZE },
-		{ "orthographic", no_argument, NULL, O_ORTHO },
-		{ "srgb", no_argument, NULL, O_SRGB },
-		{ "out", required_argument, NULL, 'o' },
-		{ "quiet", no_argument, NULL, 'q' },
-		{ "help", no_argument, NULL, 'h' },
-		{ NULL, 0, NULL, 0 },
-	};
 	struct glint_unwrap_opts o;
 	const char *out = NULL;
-	double v[3];
-	int c, have_ball = 0, srgb = 0;
+	struct numbers f = { .n = 1 }, pp = { .n = 2 }, ball = { .n = 3 },
+		       chrome = { .n = 2 }, size = { .n = 2 };
+	int srgb = 0;
 
 	glint_unwrap_default_opts(&o);
-	optind = 1;
-	while ((c = getopt_long(argc, argv, "o:qh", opts, NULL)) != -1) {
-		switch (c) {
-		case O_F:
-			if (parse_list("--focal-px", optarg, 1, v))
-				return GLINT_EXIT_USAGE;
-			o.fpx = v[0];
-			break;
-		case O_PP:
-			if (parse_list("--principal", optarg, 2, v))
-				return GLINT_EXIT_USAGE;
-			o.cx = v[0];
-			o.cy = v[1];
-			break;
-		case O_BALL:
-			if (parse_list("--ball", optarg, 3, v))
-				return GLINT_EXIT_USAGE;
-			o.ball_cx = v[0];
-			o.ball_cy = v[1];
-			o.ball_r = v[2];
-			have_ball = 1;
-			break;
-		case O_CHROME:
-			if (parse_list("--chrome", optarg, 2, v))
-				return GLINT_EXIT_USAGE;
-			for (int k = 0; k < 3; k++) {
-				o.n[k] = v[0];
-				o.k[k] = v[1];
-			}
-			break;
-		case O_REFL:
-			if (parse_list("--reflectivity", optarg, 1, v) ||
-			    !(v[0] > 0 && v[0] <= 1))
-				return cmd_usage_error("probe",
-						       "--reflectivity '%s': "
-						       "expected (0, 1]",
-						       optarg);
-			o.reflectivity = v[0];
-			break;
-		case O_GRAZE:
-			if (parse_list("--grazing", optarg, 1, v))
-				return GLINT_EXIT_USAGE;
-			o.grazing_deg = v[0];
-			break;
-		case O_SIZE:
-			if (parse_list("--size", optarg, 2, v))
-				return GLINT_EXIT_USAGE;
-			o.width = (int)v[0];
-			o.height = (int)v[1];
-			break;
-		case O_SRGB:
-			srgb = 1;
-			break;
-		case O_ORTHO:
-			o.orthographic = 1;
-			break;
-		case 'o':
-			out = optarg;
-			break;
-		case 'q':
-			glint_log_set_mode(GLINT_LOG_QUIET);
-			break;
-		case 'h':
-			cmd_probe_help();
-			return GLINT_EXIT_OK;
-		default:
-			return GLINT_EXIT_USAGE;
-		}
+	const struct cmd_opt opts[] = {
+		CMD_CALL("focal-px", &f, parse_numbers),
+		CMD_CALL("principal", &pp, parse_numbers),
+		CMD_CALL("ball", &ball, parse_numbers),
+		CMD_CALL("chrome", &chrome, parse_numbers),
+		CMD_REAL("reflectivity", &o.reflectivity, 1e-6, 1),
+		CMD_REAL("grazing", &o.grazing_deg, 0, 90),
+		CMD_CALL("size", &size, parse_numbers),
+		CMD_FLAG("orthographic", 0, &o.orthographic),
+		CMD_FLAG("srgb", 0, &srgb),
+		CMD_STRING("output", 'o', &out),
+		{ 0 },
+	};
+	struct cmd_args a;
+	int r = cmd_options_parse("probe unwrap", cmd_probe_help, opts, argc,
+				  argv, &a);
+	if (r)
+		return cmd_options_exit(r);
+	if (f.given)
+		o.fpx = f.v[0];
+	if (pp.given) {
+		o.cx = pp.v[0];
+		o.cy = pp.v[1];
 	}
-	if (optind != argc - 1 || !out)
+	if (ball.given) {
+		o.ball_cx = ball.v[0];
+		o.ball_cy = ball.v[1];
+		o.ball_r = ball.v[2];
+	}
+	int have_ball = ball.given;
+	for (int k = 0; k < 3 && chrome.given; k++) {
+		o.n[k] = chrome.v[0];
+		o.k[k] = chrome.v[1];
+	}
+	if (size.given) {
+		o.width = (int)size.v[0];
+		o.height = (int)size.v[1];
+	}
+	argc = a.argc;
+	argv = a.argv;
+	if (argc != 1 || !out)
 		return cmd_usage_error("probe", "unwrap: expected PHOTO and -o "
 						"ENV.exr");
 	if (!(o.fpx > 0))
-		return cmd_usage_error("probe",
-				       "unwrap: --focal-px is required");
+		return cmd_usage_error("probe", "unwrap: "
+						"--focal-px is "
+						"required");
 	struct glint_image *photo = NULL;
 	int w, h;
-	int ret = glint_image_read(argv[optind], &photo);
+	int ret = glint_image_read(argv[0], &photo);
 	if (ret == 0)
-		ret = radiance_of(argv[optind], photo, srgb);
+		ret = radiance_of(argv[0], photo, srgb);
 	if (ret == 0)
 		ret = find_ball(photo, have_ball, &o);
 	if (ret == 0)
 		ret = glint_probe_unwrap_write(photo, &o, out, &w, &h);
 	if (ret == 0)
-		glint_log_info("%s -> %s (%dx%d), mask and density beside it",
-			       argv[optind], out, w, h);
+		glint_log_info("%s -> %s "
+			       "(%dx%d), mask "
+			       "and density "
+			       "beside it",
+			       argv[0], out, w, h);
 	glint_image_free(photo);
-	return ret < 0 ? cmd_fail("probe") : GLINT_EXIT_OK;
+	return ret < 0 ? cmd_fail("prob"
+				  "e")
+		       : GLINT_EXIT_OK;
 }
 
 static int convert_main(int argc, char **argv)
 {
-	enum { O_FROM = 256, O_TO, O_SIZE };
-	static const struct option opts[] = {
-		{ "from", required_argument, NULL, O_FROM },
-		{ "to", required_argument, NULL, O_TO },
-		{ "size", required_argument, NULL, O_SIZE },
-		{ "quiet", no_argument, NULL, 'q' },
-		{ "help", no_argument, NULL, 'h' },
-		{ NULL, 0, NULL, 0 },
-	};
 	enum glint_probe_format from = GLINT_PROBE_LATLONG,
 				to = GLINT_PROBE_LATLONG;
 	const char *fs = NULL, *ts = NULL;
-	double v[2] = { 0, 0 };
-	int c;
-
-	optind = 1;
-	while ((c = getopt_long(argc, argv, "qh", opts, NULL)) != -1) {
-		switch (c) {
-		case O_FROM:
-			fs = optarg;
-			break;
-		case O_TO:
-			ts = optarg;
-			break;
-		case O_SIZE:
-			if (parse_list("--size", optarg, 2, v))
-				return GLINT_EXIT_USAGE;
-			break;
-		case 'q':
-			glint_log_set_mode(GLINT_LOG_QUIET);
-			break;
-		case 'h':
-			cmd_probe_help();
-			return GLINT_EXIT_OK;
-		default:
-			return GLINT_EXIT_USAGE;
-		}
-	}
-	if (optind != argc - 2 || !fs || !ts)
+	struct numbers size = { .n = 2 };
+	const struct cmd_opt opts[] = {
+		CMD_STRING("from", 0, &fs),
+		CMD_STRING("to", 0, &ts),
+		CMD_CALL("size", &size, parse_numbers),
+		{ 0 },
+	};
+	struct cmd_args a;
+	int r = cmd_options_parse("probe convert", cmd_probe_help, opts, argc,
+				  argv, &a);
+	if (r)
+		return cmd_options_exit(r);
+	double v[2] = { size.v[0], size.v[1] };
+	argc = a.argc;
+	argv = a.argv;
+	if (argc != 2 || !fs || !ts)
 		return cmd_usage_error("probe",
 				       "convert: expected IN OUT --from "
 				       "FMT --to FMT");
@@ -338,17 +277,17 @@ static int convert_main(int argc, char **argv)
 	    glint_probe_format_parse(ts, &to) < 0)
 		return cmd_usage_error("probe", "%s", glint_error_msg());
 	struct glint_image *src = NULL, *dst = NULL;
-	int ret = glint_image_read(argv[optind], &src);
+	int ret = glint_image_read(argv[0], &src);
 	if (ret == 0)
 		ret = glint_probe_convert(src, from, to, (int)v[0], (int)v[1],
 					  &dst);
 	if (ret < 0)
-		glint_error_prefix(ret, "%s", argv[optind]);
+		glint_error_prefix(ret, "%s", argv[0]);
 	if (ret == 0)
-		ret = glint_image_write(argv[optind + 1], dst, NULL);
+		ret = glint_image_write(argv[1], dst, NULL);
 	if (ret == 0)
-		glint_log_info("%s (%s) -> %s (%s, %dx%d)", argv[optind], fs,
-			       argv[optind + 1], ts, dst->width, dst->height);
+		glint_log_info("%s (%s) -> %s (%s, %dx%d)", argv[0], fs,
+			       argv[1], ts, dst->width, dst->height);
 	glint_image_free(src);
 	glint_image_free(dst);
 	return ret < 0 ? cmd_fail("probe") : GLINT_EXIT_OK;
@@ -376,57 +315,33 @@ static struct glint_image *view_weight(const char *env)
 
 static int register_main(int argc, char **argv)
 {
-	enum { O_YAW = 256, O_POINTS };
-	static const struct option opts[] = {
-		{ "yaw", required_argument, NULL, O_YAW },
-		{ "points", required_argument, NULL, O_POINTS },
-		{ "out", required_argument, NULL, 'o' },
-		{ "json", no_argument, NULL, 'j' },
-		{ "quiet", no_argument, NULL, 'q' },
-		{ "help", no_argument, NULL, 'h' },
-		{ NULL, 0, NULL, 0 },
-	};
 	const char *out = NULL, *points = NULL;
 	double yaw = 90;
-	int c, json = 0;
-
-	optind = 1;
-	while ((c = getopt_long(argc, argv, "o:qh", opts, NULL)) != -1) {
-		switch (c) {
-		case O_YAW:
-			if (parse_list("--yaw", optarg, 1, &yaw))
-				return GLINT_EXIT_USAGE;
-			break;
-		case O_POINTS:
-			points = optarg;
-			break;
-		case 'o':
-			out = optarg;
-			break;
-		case 'j':
-			json = 1;
-			break;
-		case 'q':
-			glint_log_set_mode(GLINT_LOG_QUIET);
-			break;
-		case 'h':
-			cmd_probe_help();
-			return GLINT_EXIT_OK;
-		default:
-			return GLINT_EXIT_USAGE;
-		}
-	}
-	if (optind != argc - 2 || !out)
+	const struct cmd_opt opts[] = {
+		CMD_REAL("yaw", &yaw, -360, 360),
+		CMD_STRING("points", 0, &points),
+		CMD_STRING("output", 'o', &out),
+		{ 0 },
+	};
+	struct cmd_args args;
+	int pr = cmd_options_parse("probe register", cmd_probe_help, opts, argc,
+				   argv, &args);
+	if (pr)
+		return cmd_options_exit(pr);
+	int json = args.json;
+	argc = args.argc;
+	argv = args.argv;
+	if (argc != 2 || !out)
 		return cmd_usage_error("probe", "register: expected ENV1 ENV2 "
 						"-o OUT");
 	struct glint_image *e1 = NULL, *e2 = NULL, *w1, *w2, *blend = NULL;
 	struct mat3 r;
 	double quality = NAN;
-	int ret = glint_image_read(argv[optind], &e1);
+	int ret = glint_image_read(argv[0], &e1);
 	if (ret == 0)
-		ret = glint_image_read(argv[optind + 1], &e2);
-	w1 = ret == 0 ? view_weight(argv[optind]) : NULL;
-	w2 = ret == 0 ? view_weight(argv[optind + 1]) : NULL;
+		ret = glint_image_read(argv[1], &e2);
+	w1 = ret == 0 ? view_weight(argv[0]) : NULL;
+	w2 = ret == 0 ? view_weight(argv[1]) : NULL;
 	if (ret == 0 && points) {
 		FILE *f = fopen(points, "r");
 		struct vec3 a[256], b[256];
@@ -495,6 +410,8 @@ int cmd_probe(int argc, char **argv)
 		return convert_main(argc - 1, argv + 1);
 	if (!strcmp(argv[1], "register"))
 		return register_main(argc - 1, argv + 1);
-	return cmd_usage_error(
-		"probe", "'%s': expected unwrap, convert or register", argv[1]);
+	static const char *const subs[] = { "unwrap", "convert", "register",
+					    NULL };
+	cmd_choice_error(argv[1], subs);
+	return cmd_usage_error("probe", "'%s': %s", argv[1], glint_error_msg());
 }

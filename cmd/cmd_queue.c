@@ -6,6 +6,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
+#include "options.h"
 #include "board/worker.h"
 #include "board/rig.h"
 
@@ -15,7 +16,6 @@
 #include "core/log.h"
 
 #include <dirent.h>
-#include <getopt.h>
 #include <signal.h>
 #include <pwd.h>
 #include <stdio.h>
@@ -53,58 +53,39 @@ void cmd_queue_help(void)
 struct qopts {
 	char root[4096], queue[4200];
 	int json, until_empty;
+	int nargs; /* the positional arguments */
+	char **args;
+	int status; /* the exit status when parse() returns -1 */
 };
 
 static int parse(const char *cmd, int argc, char **argv, struct qopts *q)
 {
-	enum { O_ROOT = 256, O_CONFIG, O_JSON, O_UNTIL };
-	static const struct option opts[] = {
-		{ "root", required_argument, NULL, O_ROOT },
-		{ "config", required_argument, NULL, O_CONFIG },
-		{ "json", no_argument, NULL, O_JSON },
-		{ "until-empty", no_argument, NULL, O_UNTIL },
-		{ "quiet", no_argument, NULL, 'q' },
-		{ "help", no_argument, NULL, 'h' },
-		{ NULL, 0, NULL, 0 },
-	};
 	const char *root = NULL, *config = NULL;
 	char def[4096];
-	int c;
 
 	memset(q, 0, sizeof(*q));
-	optind = 1;
-	while ((c = getopt_long(argc, argv, "qh", opts, NULL)) != -1) {
-		switch (c) {
-		case O_ROOT:
-			root = optarg;
-			break;
-		case O_CONFIG:
-			config = optarg;
-			break;
-		case O_JSON:
-			q->json = 1;
-			glint_log_set_mode(GLINT_LOG_JSON);
-			break;
-		case O_UNTIL:
-			q->until_empty = 1;
-			break;
-		case 'q':
-			glint_log_set_mode(GLINT_LOG_QUIET);
-			break;
-		case 'h':
-			cmd_queue_help();
-			return 1;
-		default:
-			return -1;
-		}
+	const struct cmd_opt opts[] = {
+		CMD_STRING("root", 0, &root),
+		CMD_STRING("config", 0, &config),
+		CMD_FLAG("until-empty", 0, &q->until_empty),
+		{ 0 },
+	};
+	struct cmd_args a;
+	int r = cmd_options_parse(cmd, cmd_queue_help, opts, argc, argv, &a);
+	if (r) {
+		q->status = cmd_options_exit(r);
+		return -1;
 	}
+	q->json = a.json;
+	q->nargs = a.argc;
+	q->args = a.argv;
 	if (!root) {
 		struct glint_rig rig;
 		config = cmd_rig_config(def, sizeof(def), config);
 		if (glint_rig_load(config, &rig) < 0) {
 			glint_rig_free(&rig);
-			cmd_fail(cmd);
-			return -2;
+			q->status = cmd_fail(cmd);
+			return -1;
 		}
 		snprintf(q->root, sizeof(q->root), "%s", rig.output);
 		glint_rig_free(&rig);
@@ -113,13 +94,6 @@ static int parse(const char *cmd, int argc, char **argv, struct qopts *q)
 	}
 	snprintf(q->queue, sizeof(q->queue), "%s/queue", q->root);
 	return 0;
-}
-
-static int parse_status(int r)
-{
-	return r == 1	 ? GLINT_EXIT_OK
-	       : r == -2 ? GLINT_EXIT_FAIL
-			 : GLINT_EXIT_USAGE;
 }
 
 static int print_job(const struct glint_job *j, void *ctx)
@@ -149,12 +123,11 @@ static int print_job(const struct glint_job *j, void *ctx)
 int cmd_jobs(int argc, char **argv)
 {
 	struct qopts q;
-	int r = parse("jobs", argc, argv, &q);
-	if (r)
-		return parse_status(r);
-	if (optind != argc)
+	if (parse("jobs", argc, argv, &q) < 0)
+		return q.status;
+	if (q.nargs != 0)
 		return cmd_usage_error("jobs", "unexpected argument '%s'",
-				       argv[optind]);
+				       q.args[0]);
 	json_t *arr = q.json ? json_array() : NULL;
 	if (!q.json)
 		printf("%-34s %-9s %-4s %-10s %s\n", "ID", "STATE", "KIND",
@@ -207,12 +180,11 @@ int cmd_sessions(int argc, char **argv)
 	struct qopts q;
 	char **list = NULL;
 	int n = 0;
-	int r = parse("sessions", argc, argv, &q);
-	if (r)
-		return parse_status(r);
-	if (optind != argc)
+	if (parse("sessions", argc, argv, &q) < 0)
+		return q.status;
+	if (q.nargs != 0)
 		return cmd_usage_error("sessions", "unexpected argument '%s'",
-				       argv[optind]);
+				       q.args[0]);
 	collect(q.root, 0, &list, &n);
 	qsort(list, (size_t)n, sizeof(char *), cmp_str);
 	json_t *arr = json_array();
@@ -281,17 +253,24 @@ int cmd_queue(int argc, char **argv)
 		}
 		return cmd_usage_error("queue", "expected add, cancel or run");
 	}
+	static const char *const subs[] = { "add", "cancel", "run", NULL };
+	if (strcmp(argv[1], "add") && strcmp(argv[1], "cancel") &&
+	    strcmp(argv[1], "run")) {
+		cmd_choice_error(argv[1], subs);
+		return cmd_usage_error("queue", "'%s': %s", argv[1],
+				       glint_error_msg());
+	}
 	const char *what = argv[1];
-	int r = parse("queue", argc - 1, argv + 1, &q);
-	if (r)
-		return parse_status(r);
-	int nargs = argc - 1 - optind;
-	char **args = argv + 1 + optind;
+	char name[32];
+	snprintf(name, sizeof(name), "queue %s", argv[1]);
+	if (parse(name, argc - 1, argv + 1, &q) < 0)
+		return q.status;
+	int nargs = q.nargs;
+	char **args = q.args;
 	if (!strcmp(what, "add")) {
 		char id[64];
 		if (nargs != 1)
-			return cmd_usage_error("queue",
-					       "add: expected SESSION");
+			return cmd_usage_error(name, "expected SESSION");
 		/* What a fit of it needs, checked now rather than when
 		 * the job runs: a probe session, an incomplete one or one
 		 * without a scene is refused with the reason. */
@@ -308,7 +287,7 @@ int cmd_queue(int argc, char **argv)
 	}
 	if (!strcmp(what, "cancel")) {
 		if (nargs != 1)
-			return cmd_usage_error("queue", "cancel: expected ID");
+			return cmd_usage_error(name, "expected ID");
 		int was_running = glint_queue_cancel(q.queue, args[0]);
 		if (was_running < 0)
 			return cmd_fail("queue");
@@ -327,8 +306,7 @@ int cmd_queue(int argc, char **argv)
 	if (!strcmp(what, "run")) {
 		struct sigaction sa;
 		if (nargs != 0)
-			return cmd_usage_error("queue",
-					       "run: unexpected argument '%s'",
+			return cmd_usage_error(name, "unexpected argument '%s'",
 					       args[0]);
 		memset(&sa, 0, sizeof(sa));
 		sa.sa_handler = on_stop;

@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 #include "cmd.h"
+#include "options.h"
 #include "fit/render/render_job.h"
 
 #include "core/error.h"
@@ -7,7 +8,6 @@
 #include "core/log.h"
 #include "fit/render/render.h"
 
-#include <getopt.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -56,120 +56,37 @@ void cmd_render_help(void)
 
 int cmd_render(int argc, char **argv)
 {
-	enum {
-		O_PNG = 256,
-		O_EXPOSURE,
-		O_COVERAGE,
-		O_HALF,
-		O_SPP,
-		O_LS,
-		O_BS,
-		O_NOBG,
-		O_THREADS,
-		O_JSON,
-		O_ENTRY,
-		O_PAPER
-	};
-	static const struct option opts[] = {
-		{ "material", required_argument, NULL, 'm' },
-		{ "entry", required_argument, NULL, O_ENTRY },
-		{ "paper", required_argument, NULL, O_PAPER },
-		{ "output", required_argument, NULL, 'o' },
-		{ "png", required_argument, NULL, O_PNG },
-		{ "exposure", required_argument, NULL, O_EXPOSURE },
-		{ "coverage", required_argument, NULL, O_COVERAGE },
-		{ "half", no_argument, NULL, O_HALF },
-		{ "spp", required_argument, NULL, O_SPP },
-		{ "light-samples", required_argument, NULL, O_LS },
-		{ "brdf-samples", required_argument, NULL, O_BS },
-		{ "no-background", no_argument, NULL, O_NOBG },
-		{ "threads", required_argument, NULL, O_THREADS },
-		{ "json", no_argument, NULL, O_JSON },
-		{ "quiet", no_argument, NULL, 'q' },
-		{ "help", no_argument, NULL, 'h' },
-		{ NULL, 0, NULL, 0 },
-	};
 	struct glint_render_job job = { .out_exr = "render.exr",
 					.background = 1,
 					.exposure = NAN };
 	const char *material = NULL, *entry = NULL, *paper = NULL;
-	int spp = 0, ls = -1, bs = -1, json = 0, c;
+	int spp = 0, ls = -1, bs = -1, nobg = 0;
 	char paper_path[4096];
-
-	optind = 1;
-	while ((c = getopt_long(argc, argv, "m:o:qh", opts, NULL)) != -1) {
-		switch (c) {
-		case 'm':
-			material = optarg;
-			break;
-		case O_ENTRY:
-			entry = optarg;
-			break;
-		case O_PAPER:
-			paper = optarg;
-			break;
-		case 'o':
-			job.out_exr = optarg;
-			break;
-		case O_PNG:
-			job.out_png = optarg;
-			break;
-		case O_COVERAGE:
-			job.out_coverage = optarg;
-			break;
-		case O_HALF:
-			job.half = 1;
-			break;
-		case O_NOBG:
-			job.background = 0;
-			break;
-		case O_JSON:
-			json = 1;
-			break;
-		case 'q':
-			glint_log_set_mode(GLINT_LOG_QUIET);
-			break;
-		case 'h':
-			cmd_render_help();
-			return GLINT_EXIT_OK;
-		case O_EXPOSURE: {
-			char *end;
-			job.exposure = strtod(optarg, &end);
-			if (*end || !isfinite(job.exposure))
-				return cmd_usage_error(
-					"render",
-					"--exposure '%s': expected "
-					"a number of stops",
-					optarg);
-			break;
-		}
-		case O_SPP:
-			if (cmd_parse_int("render", "--spp", optarg, 1, 4096,
-					  &spp) < 0)
-				return GLINT_EXIT_USAGE;
-			break;
-		case O_LS:
-			if (cmd_parse_int("render", "--light-samples", optarg,
-					  0, 1 << 16, &ls) < 0)
-				return GLINT_EXIT_USAGE;
-			break;
-		case O_BS:
-			if (cmd_parse_int("render", "--brdf-samples", optarg, 0,
-					  1 << 16, &bs) < 0)
-				return GLINT_EXIT_USAGE;
-			break;
-		case O_THREADS:
-			if (cmd_parse_int("render", "--threads", optarg, 0, 256,
-					  &job.nthreads) < 0)
-				return GLINT_EXIT_USAGE;
-			break;
-		default:
-			return cmd_usage_error("render", "unknown option");
-		}
-	}
-	if (json)
-		glint_log_set_mode(GLINT_LOG_JSON);
-	if (optind != argc - 1)
+	const struct cmd_opt opts[] = {
+		CMD_STRING("material", 'm', &material),
+		CMD_STRING("entry", 0, &entry),
+		CMD_STRING("paper", 0, &paper),
+		CMD_STRING("output", 'o', &job.out_exr),
+		CMD_STRING("png", 0, &job.out_png),
+		CMD_REAL("exposure", &job.exposure, -64, 64),
+		CMD_STRING("coverage", 0, &job.out_coverage),
+		CMD_FLAG("half", 0, &job.half),
+		CMD_INT("spp", &spp, 1, 4096),
+		CMD_INT("light-samples", &ls, 0, 1 << 16),
+		CMD_INT("brdf-samples", &bs, 0, 1 << 16),
+		CMD_FLAG("no-background", 0, &nobg),
+		CMD_INT("threads", &job.nthreads, 0, 256),
+		{ 0 },
+	};
+	struct cmd_args a;
+	int r = cmd_options_parse("render", cmd_render_help, opts, argc, argv,
+				  &a);
+	if (r)
+		return cmd_options_exit(r);
+	int json = a.json;
+	if (nobg)
+		job.background = 0;
+	if (a.argc != 1)
 		return cmd_usage_error("render",
 				       "expected one SCENE.json argument");
 	if (!material == !paper)
@@ -177,7 +94,7 @@ int cmd_render(int argc, char **argv)
 						 "--material and --paper");
 	if (entry && !material)
 		return cmd_usage_error("render", "--entry needs --material");
-	if (glint_scene_load(argv[optind], &job.scene) < 0)
+	if (glint_scene_load(a.argv[0], &job.scene) < 0)
 		return cmd_fail("render");
 	if (paper) {
 		snprintf(paper_path, sizeof(paper_path), "%s/paper-table1.json",

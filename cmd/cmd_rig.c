@@ -11,6 +11,7 @@
 #define _GNU_SOURCE /* pthread_timedjoin_np not used; strsignal */
 #include "capture/run.h"
 #include "cmd.h"
+#include "options.h"
 #include "board/daemon.h"
 #include "board/rig.h"
 
@@ -22,7 +23,6 @@
 #include "core/path.h"
 
 #include <errno.h>
-#include <getopt.h>
 #include <pthread.h>
 #include <signal.h>
 #include <stdio.h>
@@ -91,11 +91,10 @@ static pid_t start_worker(const char *root, void *ctx)
 		return -1;
 	pid_t pid = fork();
 	if (pid == 0) {
-		const char *mode = glint_log_get_mode() == GLINT_LOG_JSON
-					   ? "--json"
-				   : glint_log_get_mode() == GLINT_LOG_QUIET
-					   ? "-q"
-					   : "--until-empty";
+		const char *mode =
+			glint_log_get_mode() == GLINT_LOG_JSON ? "--json"
+			: glint_log_get_verbosity() < 0	       ? "-q"
+							: "--until-empty";
 		execl(self, "glint", "queue", "run", "--until-empty", "--root",
 		      root, mode, (char *)NULL);
 		_exit(127);
@@ -130,49 +129,23 @@ static void print_result(const struct glint_rig_run *ro, int json)
 
 int cmd_rig(int argc, char **argv)
 {
-	enum { O_CONFIG = 256, O_ONCE, O_JSON, O_NOWORKER };
-	static const struct option opts[] = {
-		{ "config", required_argument, NULL, O_CONFIG },
-		{ "once", no_argument, NULL, O_ONCE },
-		{ "no-worker", no_argument, NULL, O_NOWORKER },
-		{ "json", no_argument, NULL, O_JSON },
-		{ "quiet", no_argument, NULL, 'q' },
-		{ "help", no_argument, NULL, 'h' },
-		{ NULL, 0, NULL, 0 },
-	};
 	const char *config = NULL;
 	char path[GLINT_PATH_MAX];
-	int once = 0, json = 0, worker = 1, c, ret;
-
-	optind = 1;
-	while ((c = getopt_long(argc, argv, "qh", opts, NULL)) != -1) {
-		switch (c) {
-		case O_CONFIG:
-			config = optarg;
-			break;
-		case O_ONCE:
-			once = 1;
-			break;
-		case O_NOWORKER:
-			worker = 0;
-			break;
-		case O_JSON:
-			json = 1;
-			glint_log_set_mode(GLINT_LOG_JSON);
-			break;
-		case 'q':
-			glint_log_set_mode(GLINT_LOG_QUIET);
-			break;
-		case 'h':
-			cmd_rig_help();
-			return GLINT_EXIT_OK;
-		default:
-			return GLINT_EXIT_USAGE;
-		}
-	}
-	if (optind != argc)
+	int once = 0, noworker = 0, ret;
+	const struct cmd_opt opts[] = {
+		CMD_STRING("config", 0, &config),
+		CMD_FLAG("once", 0, &once),
+		CMD_FLAG("no-worker", 0, &noworker),
+		{ 0 },
+	};
+	struct cmd_args a;
+	int r = cmd_options_parse("rig", cmd_rig_help, opts, argc, argv, &a);
+	if (r)
+		return cmd_options_exit(r);
+	int json = a.json, worker = !noworker;
+	if (a.argc != 0)
 		return cmd_usage_error("rig", "unexpected argument '%s'",
-				       argv[optind]);
+				       a.argv[0]);
 	cmd_rig_config(path, sizeof(path), config);
 
 	struct glint_rig rig;
@@ -216,37 +189,22 @@ int cmd_rig(int argc, char **argv)
 
 int cmd_check_rig(int argc, char **argv)
 {
-	enum { O_CONFIG = 256, O_JSON };
-	static const struct option opts[] = {
-		{ "config", required_argument, NULL, O_CONFIG },
-		{ "json", no_argument, NULL, O_JSON },
-		{ "help", no_argument, NULL, 'h' },
-		{ NULL, 0, NULL, 0 },
-	};
 	const char *config = NULL;
 	char path[4096];
-	int json = 0, c, ret;
-
-	optind = 1;
-	while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
-		switch (c) {
-		case O_CONFIG:
-			config = optarg;
-			break;
-		case O_JSON:
-			json = 1;
-			glint_log_set_mode(GLINT_LOG_JSON);
-			break;
-		case 'h':
-			cmd_check_rig_help();
-			return GLINT_EXIT_OK;
-		default:
-			return GLINT_EXIT_USAGE;
-		}
-	}
-	if (optind != argc)
+	int ret;
+	const struct cmd_opt opts[] = {
+		CMD_STRING("config", 0, &config),
+		{ 0 },
+	};
+	struct cmd_args a;
+	int pr = cmd_options_parse("check-rig", cmd_check_rig_help, opts, argc,
+				   argv, &a);
+	if (pr)
+		return cmd_options_exit(pr);
+	int json = a.json;
+	if (a.argc != 0)
 		return cmd_usage_error("check-rig", "unexpected argument '%s'",
-				       argv[optind]);
+				       a.argv[0]);
 	cmd_rig_config(path, sizeof(path), config);
 	struct glint_rig rig;
 	struct glint_board *board = NULL;

@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 #include "backends.h"
 #include "cmd.h"
+#include "core/suggest.h"
 
 #include "core/error.h"
 #include "core/log.h"
@@ -82,21 +83,6 @@ void cmd_print_json(json_t *obj)
 	json_decref(obj);
 }
 
-int cmd_parse_int(const char *cmd, const char *opt, const char *val, int lo,
-		  int hi, int *out)
-{
-	char *end;
-	long v = strtol(val, &end, 10);
-
-	if (!val[0] || *end || v < lo || v > hi) {
-		cmd_usage_error(cmd, "%s '%s': expected an integer in [%d, %d]",
-				opt, val, lo, hi);
-		return -1;
-	}
-	*out = (int)v;
-	return 0;
-}
-
 static void usage(FILE *fp)
 {
 	fprintf(fp,
@@ -109,8 +95,9 @@ static void usage(FILE *fp)
 		fprintf(fp, "  %-10s %s\n", commands[i].name,
 			commands[i].summary);
 	fprintf(fp, "\n'glint <command> --help' describes each command.\n"
-		    "Common options: --json (machine-readable output), "
-		    "--quiet.\n");
+		    "Every command takes --json (results and logs as JSON), "
+		    "-q/--quiet,\n-v/--verbose and -h/--help; outputs are "
+		    "-o/--output.\n");
 }
 
 int main(int argc, char **argv)
@@ -139,7 +126,14 @@ int main(int argc, char **argv)
 	for (size_t i = 0; i < NCOMMANDS; i++)
 		if (!strcmp(commands[i].name, argv[1]))
 			return commands[i].run(argc - 1, argv + 1);
-	fprintf(stderr, "glint: unknown command '%s'\n\n", argv[1]);
-	usage(stderr);
+	const char *names[NCOMMANDS + 1];
+	for (size_t i = 0; i < NCOMMANDS; i++)
+		names[i] = commands[i].name;
+	names[NCOMMANDS] = NULL;
+	const char *near = glint_suggest(argv[1], names);
+	fprintf(stderr,
+		"glint: unknown command '%s'%s%s%s\nTry 'glint --help'.\n",
+		argv[1], near ? " (did you mean '" : "", near ? near : "",
+		near ? "'?)" : "");
 	return GLINT_EXIT_USAGE;
 }

@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 #include "json.h"
+#include "suggest.h"
 
 #include "error.h"
 
@@ -188,10 +189,13 @@ int glint_json_known_keys(const char *file, const char *where, json_t *obj,
 						sizeof(list) - strlen(list) -
 							1);
 			}
-			return glint_error_set(EINVAL,
-					       "%s: %s: unknown key: expected "
-					       "one of %s",
-					       file, kp, list);
+			const char *near = glint_suggest(key, known);
+			return glint_error_set(
+				EINVAL,
+				"%s: %s: unknown key%s%s%s: "
+				"expected one of %s",
+				file, kp, near ? " (did you mean '" : "",
+				near ? near : "", near ? "'?)" : "", list);
 		}
 	}
 	return 0;

@@ -11,6 +11,17 @@
 #include <unistd.h>
 
 static enum glint_log_mode log_mode = GLINT_LOG_HUMAN;
+static int verbosity;
+
+void glint_log_set_verbosity(int level)
+{
+	verbosity = level;
+}
+
+int glint_log_get_verbosity(void)
+{
+	return log_mode == GLINT_LOG_QUIET ? -1 : verbosity;
+}
 
 void glint_log_set_mode(enum glint_log_mode mode)
 {
@@ -56,10 +67,21 @@ void glint_log_info(const char *fmt, ...)
 {
 	va_list ap;
 
-	if (log_mode == GLINT_LOG_QUIET)
+	if (glint_log_get_verbosity() < 0)
 		return;
 	va_start(ap, fmt);
 	log_v("info", fmt, ap);
+	va_end(ap);
+}
+
+void glint_log_debug(const char *fmt, ...)
+{
+	va_list ap;
+
+	if (glint_log_get_verbosity() < 1)
+		return;
+	va_start(ap, fmt);
+	log_v("debug", fmt, ap);
 	va_end(ap);
 }
 

@@ -21,8 +21,15 @@ enum glint_log_mode {
 void glint_log_set_mode(enum glint_log_mode mode);
 enum glint_log_mode glint_log_get_mode(void);
 
+/* -1: errors and warnings only (as GLINT_LOG_QUIET, in either format);
+ * 0: info too (the default); 1: debug messages too (-v). */
+void glint_log_set_verbosity(int level);
+int glint_log_get_verbosity(void);
+
 void glint_log_info(const char *fmt, ...) GLINT_PRINTF(1, 2);
 void glint_log_error(const char *fmt, ...) GLINT_PRINTF(1, 2);
+/* Only with -v: what a user debugging a run wants to see. */
+void glint_log_debug(const char *fmt, ...) GLINT_PRINTF(1, 2);
 /* Shown even when quiet: something the user should act on. */
 void glint_log_warn(const char *fmt, ...) GLINT_PRINTF(1, 2);
 

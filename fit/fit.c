@@ -12,7 +12,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const char *const method_names[] = { "three-pass", "naive", "varpro" };
+const char *const glint_fit_method_names[] = { "three-pass", "naive", "varpro",
+					       NULL };
+const char *const glint_fit_optimizer_names[] = { "auto", "lm", "anneal",
+						  NULL };
+#define method_names glint_fit_method_names
 
 const char *glint_fit_method_name(enum glint_fit_method m)
 {

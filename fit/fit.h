@@ -44,6 +44,9 @@ int glint_fit_method_parse(const char *s, enum glint_fit_method *m);
  * simulated annealing (fit/anneal.h) then an LM polish; auto: anneal for
  * transparent models, LM otherwise. */
 enum glint_fit_optimizer { GLINT_OPT_AUTO, GLINT_OPT_LM, GLINT_OPT_ANNEAL };
+/* Their names, indexed by the enums, NULL-terminated. */
+extern const char *const glint_fit_method_names[];
+extern const char *const glint_fit_optimizer_names[];
 int glint_fit_optimizer_parse(const char *s, enum glint_fit_optimizer *o);
 
 /* Weights when no weight image is given. */

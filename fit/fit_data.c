@@ -134,13 +134,12 @@ void fit_data_reweight(struct fit_data *d, const double *pred)
 /* Check the photo carries a signal where the sphere should be. */
 static int check_photo(const struct fit_data *d)
 {
-	double sum = 0, mx = 0;
+	double mx = 0;
 	int usable = 0;
 
 	for (int i = 0; i < 3 * d->n; i++) {
 		if (d->sw[i] > 0) {
 			usable++;
-			sum += d->y[i];
 			mx = fmax(mx, d->y[i]);
 		}
 	}

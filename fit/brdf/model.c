@@ -3,6 +3,7 @@
 
 #include "core/error.h"
 #include "core/json.h"
+#include "core/suggest.h"
 
 #include <stdio.h>
 #include <string.h>
@@ -22,6 +23,15 @@ const struct glint_model_ops *glint_model_find(const char *name)
 		if (!strcmp(registry[i]->name, name))
 			return registry[i];
 	return NULL;
+}
+
+const char *const *glint_model_list(void)
+{
+	static const char *names[NMODELS + 1];
+
+	for (size_t i = 0; i < NMODELS; i++)
+		names[i] = registry[i]->name;
+	return names;
 }
 
 const char *glint_model_names(void)
@@ -53,12 +63,16 @@ int glint_material_from_json(const char *file, const char *where, json_t *obj,
 	if (ret < 0)
 		return ret;
 	m = glint_model_find(name);
-	if (!m)
+	if (!m) {
+		const char *near = glint_suggest(name, glint_model_list());
 		return glint_error_set(EINVAL,
 				       "%s: %s%smodel = \"%s\": expected one "
-				       "of %s",
+				       "of %s%s%s%s",
 				       file, where, where[0] ? "." : "", name,
-				       glint_model_names());
+				       glint_model_names(),
+				       near ? " (did you mean '" : "",
+				       near ? near : "", near ? "'?)" : "");
+	}
 	for (int i = 0; i < m->nparams; i++) {
 		const struct glint_param *pi = &m->params[i];
 		struct glint_range r = { pi->lo, pi->hi, 0, 0 };

@@ -87,6 +87,8 @@ double glint_sample_cosine(const double u[2], struct vec3 *wi);
 const struct glint_model_ops *glint_model_find(const char *name);
 /* "lambert, torrance-sparrow" for messages (static storage). */
 const char *glint_model_names(void);
+/* The models' names, NULL-terminated. */
+const char *const *glint_model_list(void);
 
 /*
  * A material document: {"model": NAME, <json_key>: value or [r, g, b], ...}

@@ -200,7 +200,7 @@ check "fit: an all-black photo" run 1 "black where the scene puts the sphere" fi
 check "fit: every pixel saturated (zero weight)" run 1 "no usable pixel on the sphere" fit "$tmp/fscene.json" "$tmp/photo.exr" --weights "$tmp/zeros_w.pfm" -o "$tmp/fit1"
 sed 's/env.exr/nan.pfm/' "$tmp/fscene.json" >"$tmp/fnan.json"
 check "fit: NaN in the env map" run 1 "nan.pfm: pixel (0, 0) channel G is nan" fit "$tmp/fnan.json" "$tmp/photo.exr" -o "$tmp/fit1"
-check "fit: bad method" run 2 "fit method 'best': expected three-pass, naive or varpro" fit "$tmp/fscene.json" "$tmp/photo.exr" --method best
+check "fit: bad method" run 2 "--method 'best': expected one of three-pass, naive, varpro" fit "$tmp/fscene.json" "$tmp/photo.exr" --method best
 check "failed fits left the old results whole" diff -r "$tmp/fit1" "$tmp/fit1.keep"
 check "no half-written result folders" bash -c "! ls '$tmp' | grep -q 'fit1.tmp'"
 

@@ -34,7 +34,7 @@ check "... nothing written" test ! -e "$tmp/rev/hdr.exr"
 check "a duplicated frame: exit 1, named" run 1 "are the same image" hdr --times 4,2,1 "${photos[5]}" "${photos[5]}" "${photos[7]}" -o "$tmp/dup"
 check "equal times: exit 1" run 1 "must differ" hdr --times 1,1 "${photos[0]}" "${photos[1]}" -o "$tmp/x"
 check "a bad time: exit 1" run 1 "'-2'" hdr --times 1,-2 "${photos[0]}" "${photos[1]}" -o "$tmp/x"
-check "unknown response method: exit 2" run 2 "robertson or debevec" hdr --times 1,2 a.png b.png -o "$tmp/x" --response fancy
+check "unknown response method: exit 2" run 2 "--response 'fancy': expected one of robertson, debevec" hdr --times 1,2 a.png b.png -o "$tmp/x" --response fancy
 head -c 3000 "${photos[3]}" >"$tmp/cut.png"
 check "truncated photo: exit 1, named" run 1 "cut.png" hdr --times 1,2 "${photos[0]}" "$tmp/cut.png" -o "$tmp/x"
 check "nothing written on failure" test ! -e "$tmp/x/hdr.exr"

@@ -37,11 +37,11 @@ cd "$tmp" || exit 1
 # not fall back to the source tree: it names the installed folder.
 if [ ! -d "$prefix/$datadir/glint" ]; then
 	check "installed binary: data from the datadir, not the source tree" \
-		bash -c "'$bin' demo --out '$tmp/d0' -q >'$tmp/d0.log' 2>&1; s=\$?; cat '$tmp/d0.log'; test \$s != 0 && grep -q '$prefix/$datadir/glint' '$tmp/d0.log'"
+		bash -c "'$bin' demo -o '$tmp/d0' -q >'$tmp/d0.log' 2>&1; s=\$?; cat '$tmp/d0.log'; test \$s != 0 && grep -q '$prefix/$datadir/glint' '$tmp/d0.log'"
 fi
 export GLINT_DATA_DIR=$data
 check "installed glint --help" "$bin" --help
 check "installed check-rig on the installed sim rig" "$bin" check-rig --config "$data/rig-sim.json"
-check "installed demo" "$bin" demo --material yellow-plastic --out "$tmp/demo" -q
+check "installed demo" "$bin" demo --material yellow-plastic -o "$tmp/demo" -q
 check "demo wrote its fit" test -f "$tmp/demo/fit/params.json"
 exit $fail

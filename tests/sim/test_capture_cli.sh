@@ -58,7 +58,7 @@ only_session() { # the one session directory under $1
 check "capture --help" run 0 "" capture --help
 check "cameras --help" run 0 "" cameras --help
 check "capture without what: exit 2" run 2 "probe or sample" capture
-check "capture of something else: exit 2" run 2 "probe or sample" capture teapot
+check "capture of something else: exit 2" run 2 "'teapot': expected one of probe, sample" capture teapot
 
 cat >"$tmp/rig.json" <<JSON
 {"camera": {"backend": "sim", "device": "sim:width=96,height=64,timescale=0.01,decades=4"},
@@ -70,7 +70,7 @@ check "sim capture completes" run 0 "range covered" capture sample --config "$tm
 check "its session is complete and whole" python3 "$checker" "$(only_session "$tmp/caps")" complete 8
 check "... with the merged HDR beside the frames" bash -c "cd '$(only_session "$tmp/caps")' && test -s sample.exr && test -s sample-variance.exr && test -s sample-weights.exr && test -s sample-mask.png"
 check "... with the merged HDR beside the frames" bash -c "cd '$(only_session "$tmp/caps")' && test -s sample.exr && test -s sample-variance.exr && test -s sample-weights.exr && test -s sample-mask.png"
-check "--json result" run 0 "" capture probe --config "$tmp/rig.json" --out "$tmp/caps2" --json
+check "--json result" run 0 "" capture probe --config "$tmp/rig.json" -o "$tmp/caps2" --json
 check "--json says complete" python3 -c "import json,sys; d=json.load(open('$tmp/out')); sys.exit(d['status']!='complete' or d['frames']<8)"
 
 # glint hdr on that session, and on bad frame sets.
@@ -132,7 +132,7 @@ check "... env.exr is the reflected map (median error <= 5 %)" "$check_env" "$ps
 echo '{"camera": {"backend": "sim"}, "bracket": {"stepev": 1}}' >"$tmp/typo.json"
 check "misspelt rig key: exit 1, named" run 1 "stepev" capture sample --config "$tmp/typo.json"
 echo '{"camera": {"backend": "gopro"}}' >"$tmp/nob.json"
-check "unknown backend: exit 1, named" run 1 "gopro" capture sample --config "$tmp/nob.json" --out "$tmp/x"
+check "unknown backend: exit 1, named" run 1 "gopro" capture sample --config "$tmp/nob.json" -o "$tmp/x"
 check "missing config: exit 1, named" run 1 "nowhere.json" capture sample --config "$tmp/nowhere.json"
 cat >"$tmp/auto.json" <<JSON
 {"camera": {"backend": "sim", "device": "sim:manual=0,timescale=0.01"}, "output": "$tmp/auto"}

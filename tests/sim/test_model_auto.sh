@@ -16,7 +16,7 @@ check() {
 	shift
 	if "$@"; then echo "ok   $what"; else echo "FAIL $what"; fails=$((fails + 1)); fi
 }
-check "demo of a transparent material" bash -c "'$glint' demo --material blue-quartz --out bq --json >bq.json 2>bq.err"
+check "demo of a transparent material" bash -c "'$glint' demo --material blue-quartz -o bq --json >bq.json 2>bq.err"
 check "... recovers it (ior 0.01, transmission 0.02)" python3 -c "
 import json
 r = json.load(open('bq.json'))

@@ -1,0 +1,10 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_CORE_SUGGEST_H
+#define GLINT_CORE_SUGGEST_H
+
+/* The candidate (of a NULL-terminated list) closest to `word` by edit
+ * distance, when close enough to be a likely misspelling; NULL
+ * otherwise.  For "did you mean" in errors about names. */
+const char *glint_suggest(const char *word, const char *const *candidates);
+
+#endif

@@ -184,7 +184,7 @@ const char *glint_path_ext(const char *path, char *buf, size_t n)
 	return buf;
 }
 
-int glint_image_read(const char *path, struct glint_image **out)
+static int image_read(const char *path, struct glint_image **out)
 {
 	char ext[16];
 
@@ -204,6 +204,16 @@ int glint_image_read(const char *path, struct glint_image **out)
 			       ".exr, .hdr, .pic, .pfm (HDR) or .png, .tga, "
 			       ".jpg, .bmp (8-bit)",
 			       path, ext);
+}
+
+int glint_image_read(const char *path, struct glint_image **out)
+{
+	double t0 = glint_now();
+	int ret = image_read(path, out);
+	if (ret == 0)
+		glint_log_debug("read %s: %dx%d in %.3f s", path, (*out)->width,
+				(*out)->height, glint_now() - t0);
+	return ret;
 }
 
 int glint_image_write(const char *path, const struct glint_image *img,

@@ -58,6 +58,7 @@ static void log_v(const char *level, const char *fmt, va_list ap)
 		fprintf(stderr, "glint: %s%s\n",
 			level[0] == 'e'	  ? "error: "
 			: level[0] == 'w' ? "warning: "
+			: level[0] == 'd' ? "debug: "
 					  : "",
 			msg);
 	}

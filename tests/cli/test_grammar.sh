@@ -82,6 +82,8 @@ check "options after the arguments and '--' ending them" eval 'g 0 convert "$dat
 check "convert --json" eval 'g 0 convert "$data/env/venice_sunset_1k.hdr" "$tmp/e.pfm" --json && is_json'
 check "convert -q: silent" eval 'g 0 convert "$data/env/venice_sunset_1k.hdr" "$tmp/f.pfm" -q && [ ! -s "$tmp/err" ] && [ ! -s "$tmp/out" ]'
 check "convert without -q says what it did" eval 'g 0 convert "$data/env/venice_sunset_1k.hdr" "$tmp/f.pfm" && has_err "venice_sunset_1k.hdr ->"'
+check "convert -v: debug messages" eval 'g 0 convert "$data/env/venice_sunset_1k.hdr" "$tmp/f.pfm" -v && has_err "glint: debug: read " && has_err "1024x512"'
+check "convert --json -v: debug messages as JSON lines" eval 'g 0 convert "$data/env/venice_sunset_1k.hdr" "$tmp/f.pfm" --json -v && grep -q "\"level\": *\"debug\"" "$tmp/err"'
 check "cameras --json" eval 'g 0 cameras --json && is_json'
 check "jobs --json" eval 'g 0 jobs --json --root "$tmp" && is_json'
 check "sessions --json" eval 'g 0 sessions --json --root "$tmp" && is_json'

@@ -4,6 +4,7 @@
 #include "fit/optim/anneal.h"
 
 #include "core/error.h"
+#include "core/suggest.h"
 #include "core/log.h"
 #include "core/vec.h"
 
@@ -16,24 +17,25 @@ const char *const glint_fit_method_names[] = { "three-pass", "naive", "varpro",
 					       NULL };
 const char *const glint_fit_optimizer_names[] = { "auto", "lm", "anneal",
 						  NULL };
-#define method_names glint_fit_method_names
 
 const char *glint_fit_method_name(enum glint_fit_method m)
 {
-	return method_names[m];
+	return glint_fit_method_names[m];
 }
 
 int glint_fit_method_parse(const char *s, enum glint_fit_method *m)
 {
-	for (int i = 0; i < 3; i++)
-		if (!strcmp(s, method_names[i])) {
+	for (int i = 0; glint_fit_method_names[i]; i++)
+		if (!strcmp(s, glint_fit_method_names[i])) {
 			*m = (enum glint_fit_method)i;
 			return 0;
 		}
+	const char *near = glint_suggest(s, glint_fit_method_names);
 	return glint_error_set(EINVAL,
 			       "fit method '%s': expected three-pass, naive or "
-			       "varpro",
-			       s);
+			       "varpro%s%s%s",
+			       s, near ? " (did you mean '" : "",
+			       near ? near : "", near ? "'?)" : "");
 }
 
 void glint_fit_default_opts(struct glint_fit_opts *o)
@@ -58,18 +60,16 @@ void glint_fit_default_opts(struct glint_fit_opts *o)
 
 int glint_fit_optimizer_parse(const char *s, enum glint_fit_optimizer *o)
 {
-	if (!strcmp(s, "auto"))
-		*o = GLINT_OPT_AUTO;
-	else if (!strcmp(s, "lm"))
-		*o = GLINT_OPT_LM;
-	else if (!strcmp(s, "anneal"))
-		*o = GLINT_OPT_ANNEAL;
-	else
-		return glint_error_set(EINVAL,
-				       "optimizer '%s': expected lm, anneal or "
-				       "auto",
-				       s);
-	return 0;
+	for (int i = 0; glint_fit_optimizer_names[i]; i++)
+		if (!strcmp(s, glint_fit_optimizer_names[i])) {
+			*o = (enum glint_fit_optimizer)i;
+			return 0;
+		}
+	const char *near = glint_suggest(s, glint_fit_optimizer_names);
+	return glint_error_set(
+		EINVAL, "optimizer '%s': expected lm, anneal or auto%s%s%s", s,
+		near ? " (did you mean '" : "", near ? near : "",
+		near ? "'?)" : "");
 }
 
 #define MAX_SETS 16
@@ -1076,40 +1076,80 @@ static int varpro_pass(struct objective *ob, const struct selections *sl,
 			&lr);
 }
 
+/* Annealing over everything, then LM over everything. */
+static int anneal_coarse(struct objective *ob, struct selections *sl,
+			 struct glint_fit_result *res)
+{
+	struct glint_lm_result lr;
+	int freev[GLINT_MAX_PARAMS];
+	int ret = anneal_pass(ob, sl->coarse, sl->ncoarse, res);
+	for (int k = 0; k < ob->m->nparams; k++)
+		freev[k] = 1;
+	if (ret == 0)
+		ret = run_pass(ob, "anneal-polish", sl->coarse, sl->ncoarse,
+			       freev, 0, res, &lr);
+	return ret;
+}
+
+/* Every parameter at once from a scanned start (the naive method). */
+static int naive_coarse(struct objective *ob, struct selections *sl,
+			struct glint_fit_result *res)
+{
+	struct glint_lm_result lr;
+	int freev[GLINT_MAX_PARAMS];
+	int ret = scan_start(ob, sl->coarse, sl->ncoarse);
+	if (ret < 0)
+		return ret;
+	for (int k = 0; k < ob->m->nparams; k++)
+		freev[k] = 1;
+	return run_pass(ob, "all at once", sl->coarse, sl->ncoarse, freev, 0,
+			res, &lr);
+}
+
+static int varpro_coarse(struct objective *ob, struct selections *sl,
+			 struct glint_fit_result *res)
+{
+	return varpro_pass(ob, sl, res);
+}
+
+/*
+ * The fit methods, one interface: a method is its coarse stage (what it
+ * optimises on the coarse pixel set, from the objective's start) and
+ * whether its fine pass solves the linear parameters exactly.  Indexed by
+ * enum glint_fit_method, named as glint_fit_method_names; annealing is the
+ * coarse stage --optimizer anneal puts in place of any method's.
+ */
+struct fit_method {
+	int (*coarse)(struct objective *ob, struct selections *sl,
+		      struct glint_fit_result *res);
+	int linear_fine; /* the fine pass projects out the albedos */
+};
+
+static const struct fit_method methods[] = {
+	[GLINT_FIT_THREE_PASS] = { three_pass, 0 },
+	[GLINT_FIT_NAIVE] = { naive_coarse, 0 },
+	[GLINT_FIT_VARPRO] = { varpro_coarse, 1 },
+};
+static const struct fit_method annealing = { anneal_coarse, 0 };
+
+static const struct fit_method *method_of(const struct glint_fit_opts *o)
+{
+	if (o->optimizer == GLINT_OPT_ANNEAL)
+		return &annealing;
+	if ((unsigned)o->method >= sizeof(methods) / sizeof(methods[0]))
+		return NULL;
+	return &methods[o->method];
+}
+
 /* The method's passes (or annealing and a polish) on the coarse set. */
 static int coarse_passes(struct objective *ob, struct selections *sl,
 			 struct glint_fit_result *res)
 {
-	const struct glint_fit_opts *o = ob->o;
-	struct glint_lm_result lr;
-	int freev[GLINT_MAX_PARAMS];
-
-	if (o->optimizer == GLINT_OPT_ANNEAL) {
-		/* Annealing over everything, then LM over everything. */
-		int ret = anneal_pass(ob, sl->coarse, sl->ncoarse, res);
-		for (int k = 0; k < ob->m->nparams; k++)
-			freev[k] = 1;
-		if (ret == 0)
-			ret = run_pass(ob, "anneal-polish", sl->coarse,
-				       sl->ncoarse, freev, 0, res, &lr);
-		return ret;
-	}
-	switch (o->method) {
-	case GLINT_FIT_THREE_PASS:
-		return three_pass(ob, sl, res);
-	case GLINT_FIT_NAIVE: {
-		int ret = scan_start(ob, sl->coarse, sl->ncoarse);
-		if (ret < 0)
-			return ret;
-		for (int k = 0; k < ob->m->nparams; k++)
-			freev[k] = 1;
-		return run_pass(ob, "all at once", sl->coarse, sl->ncoarse,
-				freev, 0, res, &lr);
-	}
-	case GLINT_FIT_VARPRO:
-		return varpro_pass(ob, sl, res);
-	}
-	return glint_error_set(EINVAL, "unknown fit method %d", o->method);
+	const struct fit_method *fm = method_of(ob->o);
+	if (!fm)
+		return glint_error_set(EINVAL, "unknown fit method %d",
+				       ob->o->method);
+	return fm->coarse(ob, sl, res);
 }
 
 /*
@@ -1137,7 +1177,7 @@ static int fine_pass(struct objective *ob, const struct selections *sl,
 		if (ret < 0)
 			return ret;
 	}
-	int vp = ob->o->method == GLINT_FIT_VARPRO;
+	int vp = methods[ob->o->method].linear_fine;
 	for (int k = 0; k < model->nparams; k++)
 		freev[k] = vp ? ob->lobe_of[k] < 0 : 1;
 	return run_pass(ob, "fine", sl->all, sl->nall, freev, vp, res, &lr);

@@ -12,8 +12,7 @@
 
 #include "core/error.h"
 #include "core/log.h"
-#include "sim/reference.h"
-#include "sim/sensor.h"
+#include "sim/photo.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -98,47 +97,17 @@ int cmd_demo(int argc, char **argv)
 	snprintf(fit_dir, sizeof(fit_dir), "%s/fit", dir);
 
 	/* The simulated capture. */
-	struct glint_envmap *env;
-	if (glint_envmap_load(job.scene.env_path, job.scene.env_rotation,
-			      job.scene.env_scale, &env) < 0)
-		return cmd_fail("demo");
-	struct glint_image *photo =
-		glint_image_new(job.scene.cam.width, job.scene.cam.height);
-	struct glint_reference_opts ro;
-	glint_reference_default_opts(&ro);
-	ro.spp = model->transparent ? 64 : 4; /* its paths branch at random */
-	ro.nthreads = job.nthreads;
+	struct glint_image *photo = NULL;
+	struct glint_sim_photo_opts so = { .noise = noise,
+					   .nthreads = job.nthreads };
 	glint_log_info("simulating a photo of %s (Table 1) under %s", material,
 		       job.scene.env_path);
 	double t0 = glint_now();
-	ret = photo ? glint_reference_render(&job.scene, env, model, truth, &ro,
-					     photo)
-		    : -ENOMEM;
-	glint_envmap_free(env);
+	ret = glint_sim_photo(&job.scene, model, truth, &so, &photo,
+			      &job.weight);
 	if (ret < 0)
-		goto fail;
+		return cmd_fail("demo");
 	double sim_s = glint_now() - t0;
-	if (noise) {
-		struct glint_sensor s;
-		struct glint_image *dn =
-			glint_image_new(photo->width, photo->height);
-		job.weight = glint_image_new(photo->width, photo->height);
-		glint_sensor_default(&s);
-		/* Expose for the diffuse body: highlights clip. */
-		double mean = 0;
-		for (int i = 0; i < photo->width * photo->height * 3; i++)
-			mean += photo->data[i];
-		mean /= photo->width * photo->height * 3.0;
-		s.exposure_s = glint_sensor_exposure_for(&s, mean, 0.1);
-		ret = dn && job.weight ? glint_sensor_capture(&s, photo, dn)
-				       : -ENOMEM;
-		if (!ret)
-			ret = glint_sensor_to_radiance(&s, dn, photo,
-						       job.weight);
-		glint_image_free(dn);
-		if (ret < 0)
-			goto fail;
-	}
 	ret = glint_image_write(photo_path, photo, NULL);
 	if (ret < 0)
 		goto fail;

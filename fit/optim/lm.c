@@ -158,77 +158,150 @@ static int step_insignificant(const double *a, const int *freev, int n, int m,
 	return 1;
 }
 
-int glint_lm_solve(const struct glint_lm_problem *pr,
-		   const struct glint_lm_opts *o, double *p,
-		   struct glint_lm_result *res)
-{
-	int n = pr->n, m = pr->m, ret = 0;
-	double *r = NULL, *rn = NULL, *jac = NULL, *a = NULL;
+/* One solve's working state. */
+struct lm_state {
+	const struct glint_lm_problem *pr;
+	const struct glint_lm_opts *o;
+	struct glint_lm_result *res;
+	int n, m;
+	double *r, *rn, *jac, *a; /* residuals at p and at the trial q,
+				   * Jacobian, JtJ */
 	double g[GLINT_LM_MAX_N], d[GLINT_LM_MAX_N], q[GLINT_LM_MAX_N];
 	int freev[GLINT_LM_MAX_N];
-	double lambda = 1e-3, nu = 2;
+	double lambda, nu, cost;
+	int small_drops, rejects;
+};
 
-	memset(res, 0, sizeof(*res));
-	if (n < 1 || n > GLINT_LM_MAX_N || m < 1)
-		return glint_error_set(EINVAL,
-				       "least squares with %d parameters and "
-				       "%d residuals: expected 1..%d and >= 1",
-				       n, m, GLINT_LM_MAX_N);
-	r = malloc((size_t)m * sizeof(double));
-	rn = malloc((size_t)m * sizeof(double));
-	jac = malloc((size_t)m * n * sizeof(double));
-	a = malloc((size_t)n * n * sizeof(double));
-	if (!r || !rn || !jac || !a) {
-		ret = glint_error_set(ENOMEM, "out of memory for %d residuals",
-				      m);
-		goto out;
+/* The Jacobian at p and the normal equations (a = JtJ, g = Jt r). */
+static int lm_linearise(struct lm_state *s, const double *p)
+{
+	const struct glint_lm_problem *pr = s->pr;
+	int ret = pr->jacobian ? pr->jacobian(pr->ctx, p, s->r, s->jac)
+			       : fd_jacobian(pr, s->o->fd_step, p, s->r, s->jac,
+					     s->rn, &s->res->evaluations);
+	s->res->jacobians++;
+	if (ret == 0)
+		normal_eq(s->jac, s->r, s->m, s->n, s->a, s->g);
+	return ret;
+}
+
+/* The active set: a parameter on a bound with the gradient pushing out
+ * is held; returns the largest free gradient component. */
+static double lm_free_set(struct lm_state *s, const double *p)
+{
+	const struct glint_lm_problem *pr = s->pr;
+	double pg = 0;
+	for (int j = 0; j < s->n; j++) {
+		int lo = p[j] <= pr->lo[j] && s->g[j] > 0;
+		int hi = p[j] >= pr->hi[j] && s->g[j] < 0;
+		s->freev[j] = !(lo || hi);
+		if (s->freev[j])
+			pg = fmax(pg, fabs(s->g[j]));
 	}
-	for (int j = 0; j < n; j++)
-		p[j] = clampd(p[j], pr->lo[j], pr->hi[j]);
-	ret = pr->residuals(pr->ctx, p, r);
-	res->evaluations++;
-	if (ret < 0)
-		goto out;
-	double cost = half_sq(r, m);
-	res->cost0 = cost;
-	int need_jac = 1, small_drops = 0, rejects = 0;
+	return pg;
+}
+
+/* The drop in cost the (projected) linear model predicts for p -> q. */
+static double lm_predicted_drop(const struct lm_state *s, const double *p)
+{
+	double pred = 0;
+	int n = s->n;
+	for (int j = 0; j < n; j++) {
+		double dj = s->q[j] - p[j];
+		pred -= s->g[j] * dj;
+		for (int k = 0; k < n; k++)
+			pred -= 0.5 * dj * s->a[j * n + k] * (s->q[k] - p[k]);
+	}
+	return pred;
+}
+
+static void lm_take(struct lm_state *s, double *p, double cn)
+{
+	memcpy(p, s->q, (size_t)s->n * sizeof(double));
+	memcpy(s->r, s->rn, (size_t)s->m * sizeof(double));
+	s->cost = cn;
+}
+
+/*
+ * Judge the trial point q (cost cn, predicted drop pred): take it or
+ * raise the damping.  Returns 1 with res->reason when the solve has
+ * converged, 0 to go on; *taken says whether p moved.
+ */
+static int lm_judge(struct lm_state *s, double *p, double cn, double pred,
+		    int *taken)
+{
+	const struct glint_lm_opts *o = s->o;
+	double rho = pred > 0 ? (s->cost - cn) / pred : -1;
+
+	*taken = cn < s->cost;
+	if (*taken && o->se_tol > 0 &&
+	    step_insignificant(s->a, s->freev, s->n, s->m, s->cost, p, s->q,
+			       o->se_tol)) {
+		lm_take(s, p, cn);
+		s->res->reason = "steps below the standard errors";
+		return 1;
+	}
+	if (*taken) {
+		s->rejects = 0;
+		double drop = (s->cost - cn) / fmax(s->cost, 1e-300);
+		lm_take(s, p, cn);
+		double t = 2 * rho - 1;
+		s->lambda *= fmax(1.0 / 3, 1 - t * t * t);
+		s->nu = 2;
+		s->small_drops = drop < o->ftol ? s->small_drops + 1 : 0;
+		if (s->small_drops >= 2) {
+			s->res->reason = "cost no longer drops";
+			return 1;
+		}
+		return 0;
+	}
+	s->lambda *= s->nu;
+	s->nu *= 2;
+	/* Rejected again and again, or damped hard and the linear model
+	 * promises next to nothing: this is the minimum (each rejection
+	 * costs an evaluation). */
+	if (++s->rejects >= 4 || (s->lambda > 1 && pred <= o->ftol * s->cost)) {
+		s->res->reason = "no acceptable step";
+		return 1;
+	}
+	if (s->lambda > 1e16) {
+		s->res->reason = "no descent left";
+		return 1;
+	}
+	return 0;
+}
+
+/* The damped iterations from p; res->reason says how they ended. */
+static int lm_iterate(struct lm_state *s, double *p)
+{
+	const struct glint_lm_problem *pr = s->pr;
+	const struct glint_lm_opts *o = s->o;
+	struct glint_lm_result *res = s->res;
+	int n = s->n, need_jac = 1, ret;
+
 	res->reason = "iteration limit";
 	for (int it = 0; it < o->max_iter; it++) {
 		res->iterations = it + 1;
 		if (need_jac) {
-			ret = pr->jacobian
-				      ? pr->jacobian(pr->ctx, p, r, jac)
-				      : fd_jacobian(pr, o->fd_step, p, r, jac,
-						    rn, &res->evaluations);
-			res->jacobians++;
+			ret = lm_linearise(s, p);
 			if (ret < 0)
-				goto out;
-			normal_eq(jac, r, m, n, a, g);
+				return ret;
 			need_jac = 0;
 		}
-		/* Active set: on a bound with the gradient pushing out. */
-		double pg = 0;
-		for (int j = 0; j < n; j++) {
-			int lo = p[j] <= pr->lo[j] && g[j] > 0;
-			int hi = p[j] >= pr->hi[j] && g[j] < 0;
-			freev[j] = !(lo || hi);
-			if (freev[j])
-				pg = fmax(pg, fabs(g[j]));
-		}
-		if (pg <= o->gtol * fmax(1, cost)) {
+		if (lm_free_set(s, p) <= o->gtol * fmax(1, s->cost)) {
 			res->converged = 1;
 			res->reason = "projected gradient ~ 0";
 			break;
 		}
-		if (damped_step(a, g, freev, n, lambda, d) < 0) {
-			lambda *= nu;
-			nu *= 2;
+		if (damped_step(s->a, s->g, s->freev, n, s->lambda, s->d) < 0) {
+			s->lambda *= s->nu;
+			s->nu *= 2;
 			continue;
 		}
 		double step = 0, size = 0;
 		for (int j = 0; j < n; j++) {
-			q[j] = clampd(p[j] + d[j], pr->lo[j], pr->hi[j]);
-			step = fmax(step, fabs(q[j] - p[j]));
+			s->q[j] = clampd(p[j] + s->d[j], pr->lo[j], pr->hi[j]);
+			step = fmax(step, fabs(s->q[j] - p[j]));
 			size = fmax(size, fabs(p[j]));
 		}
 		if (step <= o->xtol * (size + o->xtol)) {
@@ -236,90 +309,75 @@ int glint_lm_solve(const struct glint_lm_problem *pr,
 			res->reason = "step ~ 0";
 			break;
 		}
-		ret = pr->residuals(pr->ctx, q, rn);
+		ret = pr->residuals(pr->ctx, s->q, s->rn);
 		res->evaluations++;
 		if (ret < 0)
-			goto out;
-		double cn = half_sq(rn, m);
-		/* Predicted drop of the (projected) linear model. */
-		double pred = 0;
-		for (int j = 0; j < n; j++) {
-			double dj = q[j] - p[j];
-			pred -= g[j] * dj;
-			for (int k = 0; k < n; k++)
-				pred -= 0.5 * dj * a[j * n + k] * (q[k] - p[k]);
-		}
-		double rho = pred > 0 ? (cost - cn) / pred : -1;
-		if (cn < cost && o->se_tol > 0 &&
-		    step_insignificant(a, freev, n, m, cost, p, q, o->se_tol)) {
-			memcpy(p, q, (size_t)n * sizeof(double));
-			memcpy(r, rn, (size_t)m * sizeof(double));
-			cost = cn;
-			need_jac = 1;
+			return ret;
+		int taken;
+		double cn = half_sq(s->rn, s->m);
+		if (lm_judge(s, p, cn, lm_predicted_drop(s, p), &taken)) {
 			res->converged = 1;
-			res->reason = "steps below the standard errors";
+			need_jac |= taken;
 			break;
 		}
-		if (cn < cost) {
-			rejects = 0;
-			double drop = (cost - cn) / fmax(cost, 1e-300);
-			memcpy(p, q, (size_t)n * sizeof(double));
-			memcpy(r, rn, (size_t)m * sizeof(double));
-			cost = cn;
-			need_jac = 1;
-			double t = 2 * rho - 1;
-			lambda *= fmax(1.0 / 3, 1 - t * t * t);
-			nu = 2;
-			small_drops = drop < o->ftol ? small_drops + 1 : 0;
-			if (small_drops >= 2) {
-				res->converged = 1;
-				res->reason = "cost no longer drops";
-				break;
-			}
-		} else {
-			lambda *= nu;
-			nu *= 2;
-			/* Rejected again and again, or damped hard and the
-			 * linear model promises next to nothing: this is the
-			 * minimum (each rejection costs an evaluation). */
-			if (++rejects >= 4 ||
-			    (lambda > 1 && pred <= o->ftol * cost)) {
-				res->converged = 1;
-				res->reason = "no acceptable step";
-				break;
-			}
-			if (lambda > 1e16) {
-				res->converged = 1;
-				res->reason = "no descent left";
-				break;
-			}
-		}
+		need_jac |= taken;
 		if (o->progress)
-			o->progress(o->progress_ctx, it + 1, cost, p);
+			o->progress(o->progress_ctx, it + 1, s->cost, p);
 	}
-	res->cost = cost;
-	/* Standard errors from a Jacobian at the final point. */
-	if (need_jac) {
-		ret = pr->jacobian ? pr->jacobian(pr->ctx, p, r, jac)
-				   : fd_jacobian(pr, o->fd_step, p, r, jac, rn,
-						 &res->evaluations);
-		res->jacobians++;
-		if (ret < 0)
-			goto out;
-		normal_eq(jac, r, m, n, a, g);
+	/* Standard errors need a Jacobian at the final point. */
+	return need_jac ? lm_linearise(s, p) : 0;
+}
+
+int glint_lm_solve(const struct glint_lm_problem *pr,
+		   const struct glint_lm_opts *o, double *p,
+		   struct glint_lm_result *res)
+{
+	struct lm_state s = { .pr = pr,
+			      .o = o,
+			      .res = res,
+			      .n = pr->n,
+			      .m = pr->m,
+			      .lambda = 1e-3,
+			      .nu = 2 };
+	int n = pr->n, m = pr->m, ret = 0;
+
+	memset(res, 0, sizeof(*res));
+	if (n < 1 || n > GLINT_LM_MAX_N || m < 1)
+		return glint_error_set(EINVAL,
+				       "least squares with %d parameters and "
+				       "%d residuals: expected 1..%d and >= 1",
+				       n, m, GLINT_LM_MAX_N);
+	s.r = malloc((size_t)m * sizeof(double));
+	s.rn = malloc((size_t)m * sizeof(double));
+	s.jac = malloc((size_t)m * n * sizeof(double));
+	s.a = malloc((size_t)n * n * sizeof(double));
+	if (!s.r || !s.rn || !s.jac || !s.a) {
+		ret = glint_error_set(ENOMEM, "out of memory for %d residuals",
+				      m);
+		goto out;
 	}
+	for (int j = 0; j < n; j++)
+		p[j] = clampd(p[j], pr->lo[j], pr->hi[j]);
+	ret = pr->residuals(pr->ctx, p, s.r);
+	res->evaluations++;
+	if (ret < 0)
+		goto out;
+	s.cost = res->cost0 = half_sq(s.r, m);
+	ret = lm_iterate(&s, p);
+	if (ret < 0)
+		goto out;
+	res->cost = s.cost;
 	for (int j = 0; j < n; j++) {
-		int lo = p[j] <= pr->lo[j] && g[j] >= 0;
-		int hi = p[j] >= pr->hi[j] && g[j] <= 0;
+		int lo = p[j] <= pr->lo[j] && s.g[j] >= 0;
+		int hi = p[j] >= pr->hi[j] && s.g[j] <= 0;
 		res->at_bound[j] = lo || hi;
-		freev[j] = !res->at_bound[j];
+		s.freev[j] = !res->at_bound[j];
 	}
-	standard_errors(a, n, m, cost, freev, res);
-	ret = 0;
+	standard_errors(s.a, n, m, s.cost, s.freev, res);
 out:
-	free(r);
-	free(rn);
-	free(jac);
-	free(a);
+	free(s.r);
+	free(s.rn);
+	free(s.jac);
+	free(s.a);
 	return ret;
 }

@@ -62,15 +62,115 @@ static int load_line(const char *path, const char *where, json_t *o,
 	return 0;
 }
 
-static int load_board(const char *path, struct glint_rig *r)
+/* board.lines: each key a role, each value a chip and line. */
+static int load_lines(const char *path, json_t *lines,
+		      struct glint_board_cfg *c)
+{
+	const char *key;
+	json_t *v;
+
+	json_object_foreach(lines, key, v)
+	{
+		int role = 0;
+		while (role < GLINT_ROLE_COUNT &&
+		       strcmp(key, glint_role_name(role)))
+			role++;
+		if (role == GLINT_ROLE_COUNT)
+			return glint_error_set(EINVAL,
+					       "%s: board.lines.%s: unknown "
+					       "role; expected button, lights, "
+					       "led, turntable_step, "
+					       "turntable_dir, "
+					       "turntable_enable or position",
+					       path, key);
+		char where[64];
+		snprintf(where, sizeof(where), "board.lines.%s", key);
+		int ret = load_line(path, where, v, &c->lines[role]);
+		if (ret)
+			return ret;
+	}
+	return 0;
+}
+
+/* board.turntable: how it turns and where the probe and sample face. */
+static int load_turntable(const char *path, json_t *tt,
+			  struct glint_board_cfg *c)
+{
+	static const char *const keys[] = { "mode",	 "steps_per_turn",
+					    "step_hz",	 "relay_pulse_s",
+					    "probe_deg", "sample_deg",
+					    "settle_s",	 NULL };
+	static const char *const modes[] = { "stepper", "relay", "none", NULL };
+	static const enum glint_turntable_mode mode_of[] = { GLINT_TT_STEPPER,
+							     GLINT_TT_RELAY,
+							     GLINT_TT_NONE };
+	const char *w = "board.turntable", *mode = NULL;
+	double steps = c->steps_per_turn;
+	int ret = glint_json_known_keys(path, w, tt, keys);
+
+	if (!ret)
+		ret = glint_json_string(path, w, tt, "mode", 1, &mode);
+	if (!ret) {
+		int i = 0;
+		while (modes[i] && strcmp(mode, modes[i]))
+			i++;
+		if (modes[i])
+			c->tt_mode = mode_of[i];
+		else
+			ret = glint_error_set(EINVAL,
+					      "%s: board.turntable.mode = "
+					      "\"%s\": expected stepper, relay "
+					      "or none",
+					      path, mode);
+	}
+	if (!ret)
+		ret = glint_json_number(path, w, tt, "steps_per_turn", 0,
+					(struct glint_range){ 1, 1e6, 0, 0 },
+					&steps);
+	c->steps_per_turn = (int)steps;
+	if (!ret)
+		ret = glint_json_number(path, w, tt, "step_hz", 0,
+					(struct glint_range){ 0, 1e5, 1, 0 },
+					&c->step_hz);
+	if (!ret)
+		ret = glint_json_number(path, w, tt, "relay_pulse_s", 0,
+					(struct glint_range){ 0, 10, 1, 0 },
+					&c->relay_pulse_s);
+	if (!ret)
+		ret = glint_json_number(path, w, tt, "probe_deg", 0,
+					(struct glint_range){ -360, 360, 0, 0 },
+					&c->probe_deg);
+	if (!ret)
+		ret = glint_json_number(path, w, tt, "sample_deg", 0,
+					(struct glint_range){ -360, 360, 0, 0 },
+					&c->sample_deg);
+	if (!ret)
+		ret = glint_json_number(path, w, tt, "settle_s", 0,
+					(struct glint_range){ 0, 60, 0, 0 },
+					&c->settle_s);
+	return ret;
+}
+
+/* The keys board may hold: the common ones and those its backend
+ * reads. */
+static int check_board_keys(const char *path, json_t *b, const char *backend)
 {
 	static const char *const common[] = { "backend", "lines", "debounce_ms",
 					      "turntable" };
+	const struct glint_board_ops *ops = glint_board_backend(backend);
 	const char *keys[16];
-	static const char *const tt_keys[] = { "mode",	    "steps_per_turn",
-					       "step_hz",   "relay_pulse_s",
-					       "probe_deg", "sample_deg",
-					       "settle_s",  NULL };
+	int n = 0;
+
+	for (size_t i = 0; i < sizeof(common) / sizeof(*common); i++)
+		keys[n++] = common[i];
+	for (int i = 0; ops && ops->cfg_keys && ops->cfg_keys[i] && n < 15; i++)
+		keys[n++] = ops->cfg_keys[i];
+	keys[n] = NULL;
+	return glint_json_known_keys(path, "board", b, keys);
+}
+
+static int load_board(const char *path, struct glint_rig *r)
+{
 	struct glint_board_cfg *c = &r->board;
 	json_t *b = NULL, *lines = NULL, *tt = NULL;
 	const char *backend = NULL;
@@ -85,20 +185,9 @@ static int load_board(const char *path, struct glint_rig *r)
 	c->backend_opts = b;
 	c->rig_file = r->path;
 	ret = glint_json_string(path, "board", b, "backend", 1, &backend);
-	if (!ret)
-		snprintf(c->backend, sizeof(c->backend), "%s", backend);
 	if (!ret) {
-		/* The common keys and those the named backend reads. */
-		const struct glint_board_ops *ops =
-			glint_board_backend(backend);
-		int n = 0;
-		for (size_t i = 0; i < sizeof(common) / sizeof(*common); i++)
-			keys[n++] = common[i];
-		for (int i = 0;
-		     ops && ops->cfg_keys && ops->cfg_keys[i] && n < 15; i++)
-			keys[n++] = ops->cfg_keys[i];
-		keys[n] = NULL;
-		ret = glint_json_known_keys(path, "board", b, keys);
+		snprintf(c->backend, sizeof(c->backend), "%s", backend);
+		ret = check_board_keys(path, b, backend);
 	}
 	if (!ret)
 		ret = glint_json_number(path, "board", b, "debounce_ms", 0,
@@ -107,88 +196,12 @@ static int load_board(const char *path, struct glint_rig *r)
 	c->debounce_s = ms / 1000;
 	if (!ret)
 		ret = glint_json_object(path, "board", b, "lines", 1, &lines);
-	if (!ret) {
-		const char *key;
-		json_t *v;
-		json_object_foreach(lines, key, v)
-		{
-			int role = 0;
-			while (role < GLINT_ROLE_COUNT &&
-			       strcmp(key, glint_role_name(role)))
-				role++;
-			if (role == GLINT_ROLE_COUNT) {
-				ret = glint_error_set(
-					EINVAL,
-					"%s: board.lines.%s: unknown role; "
-					"expected button, lights, led, "
-					"turntable_step, turntable_dir, "
-					"turntable_enable or position",
-					path, key);
-				break;
-			}
-			char where[64];
-			snprintf(where, sizeof(where), "board.lines.%s", key);
-			ret = load_line(path, where, v, &c->lines[role]);
-			if (ret)
-				break;
-		}
-	}
+	if (!ret)
+		ret = load_lines(path, lines, c);
 	if (!ret)
 		ret = glint_json_object(path, "board", b, "turntable", 0, &tt);
-	if (!ret && tt) {
-		const char *mode = NULL;
-		double steps = c->steps_per_turn;
-		ret = glint_json_known_keys(path, "board.turntable", tt,
-					    tt_keys);
-		if (!ret)
-			ret = glint_json_string(path, "board.turntable", tt,
-						"mode", 1, &mode);
-		if (!ret) {
-			if (!strcmp(mode, "stepper"))
-				c->tt_mode = GLINT_TT_STEPPER;
-			else if (!strcmp(mode, "relay"))
-				c->tt_mode = GLINT_TT_RELAY;
-			else if (!strcmp(mode, "none"))
-				c->tt_mode = GLINT_TT_NONE;
-			else
-				ret = glint_error_set(
-					EINVAL,
-					"%s: board.turntable.mode = \"%s\": "
-					"expected stepper, relay or none",
-					path, mode);
-		}
-		if (!ret)
-			ret = glint_json_number(
-				path, "board.turntable", tt, "steps_per_turn",
-				0, (struct glint_range){ 1, 1e6, 0, 0 },
-				&steps);
-		c->steps_per_turn = (int)steps;
-		if (!ret)
-			ret = glint_json_number(
-				path, "board.turntable", tt, "step_hz", 0,
-				(struct glint_range){ 0, 1e5, 1, 0 },
-				&c->step_hz);
-		if (!ret)
-			ret = glint_json_number(
-				path, "board.turntable", tt, "relay_pulse_s", 0,
-				(struct glint_range){ 0, 10, 1, 0 },
-				&c->relay_pulse_s);
-		if (!ret)
-			ret = glint_json_number(
-				path, "board.turntable", tt, "probe_deg", 0,
-				(struct glint_range){ -360, 360, 0, 0 },
-				&c->probe_deg);
-		if (!ret)
-			ret = glint_json_number(
-				path, "board.turntable", tt, "sample_deg", 0,
-				(struct glint_range){ -360, 360, 0, 0 },
-				&c->sample_deg);
-		if (!ret)
-			ret = glint_json_number(
-				path, "board.turntable", tt, "settle_s", 0,
-				(struct glint_range){ 0, 60, 0, 0 },
-				&c->settle_s);
-	}
+	if (!ret && tt)
+		ret = load_turntable(path, tt, c);
 	if (!ret)
 		ret = glint_board_cfg_check(path, c);
 	return ret;
@@ -237,6 +250,102 @@ static int load_sequence(const char *path, struct glint_rig *r)
 	return 0;
 }
 
+/* bracket: how the exposure bracket is planned. */
+static int load_bracket(const char *path, json_t *br,
+			struct glint_bracket_opts *o)
+{
+	static const char *const keys[] = { "step_ev",	  "max_frames",
+					    "max_time_s", "floor_dn",
+					    "start_s",	  "max_drop",
+					    NULL };
+	int ret = glint_json_known_keys(path, "bracket", br, keys);
+
+	if (!ret)
+		ret = glint_json_number(path, "bracket", br, "step_ev", 0,
+					(struct glint_range){ 0.25, 4, 0, 0 },
+					&o->step_ev);
+	if (!ret)
+		ret = glint_json_int(path, "bracket", br, "max_frames", 0, 1,
+				     GLINT_BRACKET_MAX, &o->max_frames);
+	if (!ret)
+		ret = glint_json_number(path, "bracket", br, "max_time_s", 0,
+					(struct glint_range){ 0, 3600, 0, 1 },
+					&o->max_time_s);
+	if (!ret)
+		ret = glint_json_number(path, "bracket", br, "floor_dn", 0,
+					(struct glint_range){ 0, 1e4, 0, 0 },
+					&o->floor_dn);
+	if (!ret)
+		ret = glint_json_number(path, "bracket", br, "start_s", 0,
+					(struct glint_range){ 0, 60, 0, 0 },
+					&o->start_s);
+	if (!ret)
+		ret = glint_json_int(path, "bracket", br, "max_drop", 0, 0, 64,
+				     &o->max_drop);
+	return ret;
+}
+
+/* sample (the sphere's size) and optics (the camera's intrinsics). */
+static int load_optics(const char *path, json_t *doc,
+		       struct glint_capture_setup *c)
+{
+	static const char *const opt_keys[] = { "focal_px", "principal",
+						"pixel_pitch_um", NULL };
+	static const char *const sample_keys[] = { "diameter_m", NULL };
+	json_t *opt = NULL, *smp = NULL;
+	int ret;
+
+	c->principal[0] = c->principal[1] = -1;
+	c->pitch_um = 1;
+	c->diameter_m = 0.1;
+	ret = glint_json_object(path, "", doc, "sample", 0, &smp);
+	if (!ret && smp)
+		ret = glint_json_known_keys(path, "sample", smp, sample_keys);
+	if (!ret && smp)
+		ret = glint_json_number(path, "sample", smp, "diameter_m", 0,
+					(struct glint_range){ 0, 10, 1, 0 },
+					&c->diameter_m);
+	if (!ret)
+		ret = glint_json_object(path, "", doc, "optics", 0, &opt);
+	if (ret || !opt)
+		return ret;
+	ret = glint_json_known_keys(path, "optics", opt, opt_keys);
+	if (!ret)
+		ret = glint_json_number(path, "optics", opt, "focal_px", 1,
+					(struct glint_range){ 1, 1e6, 0, 0 },
+					&c->focal_px);
+	if (!ret)
+		ret = glint_json_numbers(path, "optics", opt, "principal", 0, 2,
+					 (struct glint_range){ 0, 1e5, 0, 0 },
+					 c->principal);
+	if (!ret)
+		ret = glint_json_number(
+			path, "optics", opt, "pixel_pitch_um", 0,
+			(struct glint_range){ 0, 1000, 1, 0 }, &c->pitch_um);
+	return ret;
+}
+
+/* roi: where the probe and the sample are looked for in the frame. */
+static int load_roi(const char *path, json_t *doc,
+		    struct glint_capture_setup *c)
+{
+	static const char *const keys[] = { "probe", "sample", NULL };
+	json_t *roi = NULL;
+	int ret = glint_json_object(path, "", doc, "roi", 0, &roi);
+
+	if (!ret && roi)
+		ret = glint_json_known_keys(path, "roi", roi, keys);
+	for (int k = 0; k < 2 && !ret && roi; k++) {
+		double v[4] = { 0, 0, 0, 0 };
+		ret = glint_json_numbers(
+			path, "roi", roi, k ? "sample" : "probe", 0, 4,
+			(struct glint_range){ 0, 65536, 0, 0 }, v);
+		c->roi[k] = (struct glint_roi){ (int)v[0], (int)v[1], (int)v[2],
+						(int)v[3] };
+	}
+	return ret;
+}
+
 int glint_rig_load(const char *path, struct glint_rig *r)
 {
 	static const char *const top[] = { "camera", "bracket", "roi",
@@ -244,12 +353,7 @@ int glint_rig_load(const char *path, struct glint_rig *r)
 					   "sample", "board",	"sequence",
 					   NULL };
 	static const char *const cam_keys[] = { "backend", "device", NULL };
-	static const char *const br_keys[] = { "step_ev",    "max_frames",
-					       "max_time_s", "floor_dn",
-					       "start_s",    "max_drop",
-					       NULL };
-	static const char *const roi_keys[] = { "probe", "sample", NULL };
-	json_t *cam, *br = NULL, *roi = NULL;
+	json_t *cam, *br = NULL;
 	int ret;
 
 	memset(r, 0, sizeof(*r));
@@ -275,89 +379,12 @@ int glint_rig_load(const char *path, struct glint_rig *r)
 					&r->output);
 	if (!ret)
 		ret = glint_json_object(path, "", r->doc, "bracket", 0, &br);
-	if (!ret && br) {
-		struct glint_bracket_opts *o = &r->capture.bracket;
-		ret = glint_json_known_keys(path, "bracket", br, br_keys);
-		if (!ret)
-			ret = glint_json_number(
-				path, "bracket", br, "step_ev", 0,
-				(struct glint_range){ 0.25, 4, 0, 0 },
-				&o->step_ev);
-		if (!ret)
-			ret = glint_json_int(path, "bracket", br, "max_frames",
-					     0, 1, GLINT_BRACKET_MAX,
-					     &o->max_frames);
-		if (!ret)
-			ret = glint_json_number(
-				path, "bracket", br, "max_time_s", 0,
-				(struct glint_range){ 0, 3600, 0, 1 },
-				&o->max_time_s);
-		if (!ret)
-			ret = glint_json_number(
-				path, "bracket", br, "floor_dn", 0,
-				(struct glint_range){ 0, 1e4, 0, 0 },
-				&o->floor_dn);
-		if (!ret)
-			ret = glint_json_number(
-				path, "bracket", br, "start_s", 0,
-				(struct glint_range){ 0, 60, 0, 0 },
-				&o->start_s);
-		if (!ret)
-			ret = glint_json_int(path, "bracket", br, "max_drop", 0,
-					     0, 64, &o->max_drop);
-	}
-	if (!ret) {
-		static const char *const opt_keys[] = { "focal_px", "principal",
-							"pixel_pitch_um",
-							NULL };
-		static const char *const sample_keys[] = { "diameter_m", NULL };
-		json_t *opt = NULL, *smp = NULL;
-		r->capture.principal[0] = r->capture.principal[1] = -1;
-		r->capture.pitch_um = 1;
-		r->capture.diameter_m = 0.1;
-		ret = glint_json_object(path, "", r->doc, "sample", 0, &smp);
-		if (!ret && smp)
-			ret = glint_json_known_keys(path, "sample", smp,
-						    sample_keys);
-		if (!ret && smp)
-			ret = glint_json_number(
-				path, "sample", smp, "diameter_m", 0,
-				(struct glint_range){ 0, 10, 1, 0 },
-				&r->capture.diameter_m);
-		if (!ret)
-			ret = glint_json_object(path, "", r->doc, "optics", 0,
-						&opt);
-		if (!ret && opt)
-			ret = glint_json_known_keys(path, "optics", opt,
-						    opt_keys);
-		if (!ret && opt)
-			ret = glint_json_number(
-				path, "optics", opt, "focal_px", 1,
-				(struct glint_range){ 1, 1e6, 0, 0 },
-				&r->capture.focal_px);
-		if (!ret && opt)
-			ret = glint_json_numbers(
-				path, "optics", opt, "principal", 0, 2,
-				(struct glint_range){ 0, 1e5, 0, 0 },
-				r->capture.principal);
-		if (!ret && opt)
-			ret = glint_json_number(
-				path, "optics", opt, "pixel_pitch_um", 0,
-				(struct glint_range){ 0, 1000, 1, 0 },
-				&r->capture.pitch_um);
-	}
+	if (!ret && br)
+		ret = load_bracket(path, br, &r->capture.bracket);
 	if (!ret)
-		ret = glint_json_object(path, "", r->doc, "roi", 0, &roi);
-	if (!ret && roi)
-		ret = glint_json_known_keys(path, "roi", roi, roi_keys);
-	for (int k = 0; k < 2 && !ret && roi; k++) {
-		double v[4] = { 0, 0, 0, 0 };
-		ret = glint_json_numbers(
-			path, "roi", roi, k ? "sample" : "probe", 0, 4,
-			(struct glint_range){ 0, 65536, 0, 0 }, v);
-		r->capture.roi[k] = (struct glint_roi){ (int)v[0], (int)v[1],
-							(int)v[2], (int)v[3] };
-	}
+		ret = load_optics(path, r->doc, &r->capture);
+	if (!ret)
+		ret = load_roi(path, r->doc, &r->capture);
 	if (!ret)
 		ret = load_board(path, r);
 	if (!ret)

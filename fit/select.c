@@ -18,8 +18,9 @@
 struct sel {
 	struct fit_data d;
 	struct glint_shade_cache *cache;
-	double *lobes; /* d.n x 2 lobes x 3 */
-	double x[4];   /* grey: the linear unknowns at the last call */
+	const struct glint_model_ops *cache_model; /* the model of cache */
+	double *lobes;				   /* d.n x 2 lobes x 3 */
+	double x[4]; /* grey: the linear unknowns at the last call */
 	double xse[4];
 };
 
@@ -151,6 +152,98 @@ static void score(struct glint_select_candidate *c, int n)
 	c->aic = l + 2.0 * c->k;
 }
 
+/* Grey specular: LM over roughness and ior from the full fit's, the
+ * albedos solved exactly at each step (into s->x). */
+static int fit_grey(struct sel *s, const struct glint_model_ops *ts,
+		    const struct glint_fit_result *full, int n, double *rv,
+		    struct glint_select_candidate *c)
+{
+	double lo[2] = { ts->params[6].lo, ts->params[7].lo },
+	       hi[2] = { ts->params[6].hi, ts->params[7].hi };
+	double q[2] = { full->p[6], full->p[7] };
+	struct glint_lm_problem pr = { 2,    3 * s->d.n, lo, hi, grey_residuals,
+				       NULL, s };
+	struct glint_lm_opts lo_ = { 0 };
+	struct glint_lm_result lr;
+
+	c->name = "torrance-sparrow, grey specular";
+	c->k = 6;
+	c->model = ts;
+	glint_lm_default_opts(&lo_);
+	lo_.max_iter = 40;
+	int ret = glint_lm_solve(&pr, &lo_, q, &lr);
+	if (ret < 0)
+		return ret;
+	grey_residuals(s, q, rv);
+	c->cost = lr.cost;
+	double s2 = 2 * lr.cost / (n - c->k);
+	for (int u = 0; u < 4; u++)
+		s->xse[u] *= sqrt(s2);
+	for (int k = 0; k < 3; k++) {
+		c->p[k] = s->x[k];
+		c->se[k] = s->xse[k];
+		c->p[3 + k] = s->x[3];
+		c->se[3 + k] = s->xse[3];
+	}
+	c->p[6] = q[0];
+	c->p[7] = q[1];
+	c->se[6] = lr.se[0];
+	c->se[7] = lr.se[1];
+	return 0;
+}
+
+/* A candidate at its own fit, its cost by the same sums as the others'
+ * (its lobes from a cache of its model). */
+static int score_fitted(struct glint_renderer *r, struct sel *s,
+			const struct glint_shade_cache_opts *co,
+			const struct glint_fit_result *fit,
+			struct glint_select_candidate *c)
+{
+	struct glint_shade_cache *cache = s->cache;
+	memcpy(c->p, fit->p, sizeof(c->p));
+	memcpy(c->se, fit->se, sizeof(c->se));
+	if (c->model != s->cache_model) {
+		int ret = glint_shade_cache_new(&r->gb, s->d.pix, s->d.n,
+						r->env, c->model, co, &cache);
+		if (ret < 0)
+			return ret;
+	}
+	glint_shade_cache_lobes(cache, c->p, s->lobes);
+	if (cache != s->cache)
+		glint_shade_cache_free(cache);
+	c->cost = residuals(s, c->p, NULL);
+	return 0;
+}
+
+/* The lowest BIC (and AIC) wins; say why in the full fit's terms. */
+static void choose(struct glint_selection *out, int n)
+{
+	out->chosen = out->chosen_aic = GLINT_SEL_RGB;
+	for (int k = 0; k < GLINT_SEL_N; k++) {
+		score(&out->c[k], n);
+		if (out->c[k].bic < out->c[out->chosen].bic)
+			out->chosen = k;
+		if (out->c[k].aic < out->c[out->chosen_aic].aic)
+			out->chosen_aic = k;
+	}
+	const double *p = out->full.p, *se = out->full.se;
+	double spread = fmax(fabs(p[3] - p[4]),
+			     fmax(fabs(p[4] - p[5]), fabs(p[3] - p[5])));
+	double sse = sqrt(se[3] * se[3] + se[4] * se[4] + se[5] * se[5]);
+	double spec = (p[3] + p[4] + p[5]) / 3;
+	snprintf(out->why, sizeof(out->why),
+		 "lowest BIC: %s (BIC above it: grey specular %+.1f, "
+		 "constant Fresnel %+.1f, RGB %+.1f, lambert %+.1f; n = %d "
+		 "residuals). Full fit: specular channels spread %.4f against "
+		 "standard errors about %.4f; mean specular %.4f +- %.4f",
+		 out->c[out->chosen].name,
+		 out->c[GLINT_SEL_GREY].bic - out->c[out->chosen].bic,
+		 out->c[GLINT_SEL_CONST_FRESNEL].bic - out->c[out->chosen].bic,
+		 out->c[GLINT_SEL_RGB].bic - out->c[out->chosen].bic,
+		 out->c[GLINT_SEL_LAMBERT].bic - out->c[out->chosen].bic, n,
+		 spread, sse, spec, sse / 3);
+}
+
 int glint_select_model(struct glint_renderer *r,
 		       const struct glint_image *photo,
 		       const struct glint_image *weight,
@@ -180,10 +273,11 @@ int glint_select_model(struct glint_renderer *r,
 	};
 	ret = glint_shade_cache_new(&r->gb, s.d.pix, s.d.n, r->env, ts, &co,
 				    &s.cache);
+	s.cache_model = ts;
 	s.lobes = malloc((size_t)s.d.n * 6 * sizeof(double));
 	rv = malloc((size_t)s.d.n * 3 * sizeof(double));
 	if (!ret && (!s.lobes || !rv))
-		ret = -ENOMEM;
+		ret = glint_error_set(ENOMEM, "out of memory");
 	if (ret < 0)
 		goto out;
 	int n = 0;
@@ -191,101 +285,30 @@ int glint_select_model(struct glint_renderer *r,
 		n += s.d.sw[i] > 0;
 	out->n = n;
 
-	/* The full model, and the constant-Fresnel one on its own cache,
-	 * at their fits (costs by the same sums). */
-	struct glint_select_candidate *c = &out->c[GLINT_SEL_RGB];
-	c->name = "torrance-sparrow (RGB specular)";
-	c->k = 8;
-	c->model = ts;
-	memcpy(c->p, out->full.p, sizeof(c->p));
-	memcpy(c->se, out->full.se, sizeof(c->se));
-	glint_shade_cache_lobes(s.cache, c->p, s.lobes);
-	c->cost = residuals(&s, c->p, NULL);
-
-	c = &out->c[GLINT_SEL_LAMBERT];
+	out->c[GLINT_SEL_RGB] = (struct glint_select_candidate){
+		.name = "torrance-sparrow (RGB specular)", .k = 8, .model = ts
+	};
+	ret = score_fitted(r, &s, &co, &out->full, &out->c[GLINT_SEL_RGB]);
+	if (ret < 0)
+		goto out;
+	struct glint_select_candidate *c = &out->c[GLINT_SEL_LAMBERT];
 	c->name = "lambert";
 	c->k = 3;
 	c->model = &glint_model_lambert;
 	c->cost = fit_lambert(&s, c->p, c->se, n);
-
-	/* Grey specular: LM over roughness and ior from the full fit's. */
-	c = &out->c[GLINT_SEL_GREY];
-	c->name = "torrance-sparrow, grey specular";
-	c->k = 6;
-	c->model = ts;
-	{
-		double lo[2] = { ts->params[6].lo, ts->params[7].lo },
-		       hi[2] = { ts->params[6].hi, ts->params[7].hi };
-		double q[2] = { out->full.p[6], out->full.p[7] };
-		struct glint_lm_problem pr = { 2,  3 * s.d.n,	   lo,
-					       hi, grey_residuals, NULL,
-					       &s };
-		struct glint_lm_opts lo_ = { 0 };
-		struct glint_lm_result lr;
-		glint_lm_default_opts(&lo_);
-		lo_.max_iter = 40;
-		ret = glint_lm_solve(&pr, &lo_, q, &lr);
-		if (ret < 0)
-			goto out;
-		grey_residuals(&s, q, rv);
-		c->cost = lr.cost;
-		double s2 = 2 * lr.cost / (n - c->k);
-		for (int u = 0; u < 4; u++)
-			s.xse[u] *= sqrt(s2);
-		for (int k = 0; k < 3; k++) {
-			c->p[k] = s.x[k];
-			c->se[k] = s.xse[k];
-			c->p[3 + k] = s.x[3];
-			c->se[3 + k] = s.xse[3];
-		}
-		c->p[6] = q[0];
-		c->p[7] = q[1];
-		c->se[6] = lr.se[0];
-		c->se[7] = lr.se[1];
-	}
-
-	c = &out->c[GLINT_SEL_CONST_FRESNEL];
-	c->name = "torrance-sparrow, constant Fresnel";
-	c->k = 7;
-	c->model = nf;
-	memcpy(c->p, out->nf.p, sizeof(c->p));
-	memcpy(c->se, out->nf.se, sizeof(c->se));
-	{
-		struct glint_shade_cache *nc;
-		ret = glint_shade_cache_new(&r->gb, s.d.pix, s.d.n, r->env, nf,
-					    &co, &nc);
-		if (ret < 0)
-			goto out;
-		glint_shade_cache_lobes(nc, c->p, s.lobes);
-		glint_shade_cache_free(nc);
-		c->cost = residuals(&s, c->p, NULL);
-	}
-
-	out->chosen = out->chosen_aic = GLINT_SEL_RGB;
-	for (int k = 0; k < GLINT_SEL_N; k++) {
-		score(&out->c[k], n);
-		if (out->c[k].bic < out->c[out->chosen].bic)
-			out->chosen = k;
-		if (out->c[k].aic < out->c[out->chosen_aic].aic)
-			out->chosen_aic = k;
-	}
-	/* Why, in the terms of the full fit's standard errors. */
-	const double *p = out->full.p, *se = out->full.se;
-	double spread = fmax(fabs(p[3] - p[4]),
-			     fmax(fabs(p[4] - p[5]), fabs(p[3] - p[5])));
-	double sse = sqrt(se[3] * se[3] + se[4] * se[4] + se[5] * se[5]);
-	double spec = (p[3] + p[4] + p[5]) / 3;
-	snprintf(out->why, sizeof(out->why),
-		 "lowest BIC: %s (BIC above it: grey specular %+.1f, "
-		 "constant Fresnel %+.1f, RGB %+.1f, lambert %+.1f; n = %d "
-		 "residuals). Full fit: specular channels spread %.4f against "
-		 "standard errors about %.4f; mean specular %.4f +- %.4f",
-		 out->c[out->chosen].name,
-		 out->c[GLINT_SEL_GREY].bic - out->c[out->chosen].bic,
-		 out->c[GLINT_SEL_CONST_FRESNEL].bic - out->c[out->chosen].bic,
-		 out->c[GLINT_SEL_RGB].bic - out->c[out->chosen].bic,
-		 out->c[GLINT_SEL_LAMBERT].bic - out->c[out->chosen].bic, n,
-		 spread, sse, spec, sse / 3);
+	ret = fit_grey(&s, ts, &out->full, n, rv, &out->c[GLINT_SEL_GREY]);
+	if (ret < 0)
+		goto out;
+	out->c[GLINT_SEL_CONST_FRESNEL] = (struct glint_select_candidate){
+		.name = "torrance-sparrow, constant Fresnel",
+		.k = 7,
+		.model = nf
+	};
+	ret = score_fitted(r, &s, &co, &out->nf,
+			   &out->c[GLINT_SEL_CONST_FRESNEL]);
+	if (ret < 0)
+		goto out;
+	choose(out, n);
 	ret = 0;
 out:
 	free(rv);

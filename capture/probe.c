@@ -342,20 +342,50 @@ static int ball_image(const struct ball *b, struct vec3 d, double *x, double *y,
 	return 1;
 }
 
-int glint_probe_unwrap(const struct glint_image *photo,
-		       const struct glint_unwrap_opts *o,
-		       struct glint_image **env, struct glint_image **mask,
-		       struct glint_image **density)
+/* The photo bilinearly at continuous pixel coordinates (px, py). */
+static void photo_bilinear(const struct glint_image *photo, double px,
+			   double py, float rgb[3])
 {
-	struct ball b;
-	struct glint_pinhole cam;
-	int w = o->width, h = o->height, ret;
+	double fx = px - 0.5, fy = py - 0.5;
+	int ix = (int)floor(fx), iy = (int)floor(fy);
+	double tx = fx - ix, ty = fy - iy;
+	int ix1 = ix + 1 < photo->width ? ix + 1 : ix,
+	    iy1 = iy + 1 < photo->height ? iy + 1 : iy;
+	const float *q00 = glint_image_px(photo, ix, iy),
+		    *q10 = glint_image_px(photo, ix1, iy),
+		    *q01 = glint_image_px(photo, ix, iy1),
+		    *q11 = glint_image_px(photo, ix1, iy1);
+	for (int c = 0; c < 3; c++)
+		rgb[c] = (float)((1 - ty) * ((1 - tx) * q00[c] + tx * q10[c]) +
+				 ty * ((1 - tx) * q01[c] + tx * q11[c]));
+}
 
-	*env = NULL;
-	if (mask)
-		*mask = NULL;
-	if (density)
-		*density = NULL;
+/* Photo pixels per steradian around direction d (imaged at px, py): the
+ * image of a small (dth x dth) patch. */
+static double pixel_density(const struct ball *b, struct vec3 d, double px,
+			    double py, double dth)
+{
+	struct vec3 t1 = v3_norm(v3_cross(d, v3(0, 1, 0)));
+	if (v3_len(v3_cross(d, v3(0, 1, 0))) < 1e-6)
+		t1 = v3(1, 0, 0);
+	struct vec3 t2 = v3_cross(d, t1);
+	double ax, ay, bx, by, c1;
+	if (!ball_image(b, v3_norm(v3_add(d, v3_scale(t1, dth))), &ax, &ay,
+			&c1) ||
+	    !ball_image(b, v3_norm(v3_add(d, v3_scale(t2, dth))), &bx, &by,
+			&c1))
+		return 0;
+	return fabs((ax - px) * (by - py) - (ay - py) * (bx - px)) /
+	       (dth * dth);
+}
+
+/* The ball as the photo's pinhole camera sees it (its centre from its
+ * circle, exact for the pinhole). */
+static int ball_setup(const struct glint_image *photo,
+		      const struct glint_unwrap_opts *o, struct ball *b)
+{
+	struct glint_pinhole cam;
+
 	if (!(o->fpx > 0) || !(o->ball_r > 0))
 		return glint_error_set(
 			EINVAL,
@@ -370,21 +400,38 @@ int glint_probe_unwrap(const struct glint_image *photo,
 				       "not inside the %dx%d photo",
 				       o->ball_cx, o->ball_cy, o->ball_r,
 				       photo->width, photo->height);
-	b.fpx = o->fpx;
-	b.cx = o->cx >= 0 ? o->cx : photo->width / 2.0;
-	b.cy = o->cy >= 0 ? o->cy : photo->height / 2.0;
-	b.ortho = o->orthographic;
-	b.bcx = o->ball_cx;
-	b.bcy = o->ball_cy;
-	b.br = o->ball_r;
-	/* The ball's centre from its circle (exact for the pinhole). */
-	ret = glint_pinhole_init(&cam, photo->width, photo->height, o->fpx, 1.0,
-				 0, 0, v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
-	cam.cx = b.cx;
-	cam.cy = b.cy;
+	b->fpx = o->fpx;
+	b->cx = o->cx >= 0 ? o->cx : photo->width / 2.0;
+	b->cy = o->cy >= 0 ? o->cy : photo->height / 2.0;
+	b->ortho = o->orthographic;
+	b->bcx = o->ball_cx;
+	b->bcy = o->ball_cy;
+	b->br = o->ball_r;
+	int ret = glint_pinhole_init(&cam, photo->width, photo->height, o->fpx,
+				     1.0, 0, 0, v3(0, 0, 0), v3(0, 0, -1),
+				     v3(0, 1, 0));
+	cam.cx = b->cx;
+	cam.cy = b->cy;
 	if (ret == 0)
 		ret = glint_pinhole_sphere_from_circle(
-			&cam, o->ball_cx, o->ball_cy, o->ball_r, 1, &b.c);
+			&cam, o->ball_cx, o->ball_cy, o->ball_r, 1, &b->c);
+	return ret;
+}
+
+int glint_probe_unwrap(const struct glint_image *photo,
+		       const struct glint_unwrap_opts *o,
+		       struct glint_image **env, struct glint_image **mask,
+		       struct glint_image **density)
+{
+	struct ball b;
+	int w = o->width, h = o->height;
+
+	*env = NULL;
+	if (mask)
+		*mask = NULL;
+	if (density)
+		*density = NULL;
+	int ret = ball_setup(photo, o, &b);
 	if (ret < 0)
 		return ret;
 	if (w <= 0 || h <= 0) {
@@ -422,23 +469,9 @@ int glint_probe_unwrap(const struct glint_image *photo,
 				pd[0] = pd[1] = pd[2] = 0;
 				continue;
 			}
-			/* Bilinear in the photo (a lat-long lookup's
-			 * clamping does what a flat image needs here). */
 			float rgb[3];
-			double fx = px - 0.5, fy = py - 0.5;
-			int ix = (int)floor(fx), iy = (int)floor(fy);
-			double tx = fx - ix, ty = fy - iy;
-			int ix1 = ix + 1 < photo->width ? ix + 1 : ix,
-			    iy1 = iy + 1 < photo->height ? iy + 1 : iy;
-			const float *q00 = glint_image_px(photo, ix, iy),
-				    *q10 = glint_image_px(photo, ix1, iy),
-				    *q01 = glint_image_px(photo, ix, iy1),
-				    *q11 = glint_image_px(photo, ix1, iy1);
+			photo_bilinear(photo, px, py, rgb);
 			for (int c = 0; c < 3; c++) {
-				rgb[c] = (float)((1 - ty) * ((1 - tx) * q00[c] +
-							     tx * q10[c]) +
-						 ty * ((1 - tx) * q01[c] +
-						       tx * q11[c]));
 				double r =
 					o->reflectivity > 0
 						? o->reflectivity
@@ -449,23 +482,8 @@ int glint_probe_unwrap(const struct glint_image *photo,
 			int reliable =
 				ci > cos_graze && v3_dot(d, to_cam) < cos_cone;
 			pm[0] = pm[1] = pm[2] = (float)reliable;
-			/* Photo pixels per steradian: image of a small
-			 * (dth x dth sin theta) patch around d. */
-			struct vec3 t1 = v3_norm(v3_cross(d, v3(0, 1, 0)));
-			if (v3_len(v3_cross(d, v3(0, 1, 0))) < 1e-6)
-				t1 = v3(1, 0, 0);
-			struct vec3 t2 = v3_cross(d, t1);
-			double ax, ay, bx, by, c1, dens = 0;
-			if (ball_image(&b,
-				       v3_norm(v3_add(d, v3_scale(t1, dth))),
-				       &ax, &ay, &c1) &&
-			    ball_image(&b,
-				       v3_norm(v3_add(d, v3_scale(t2, dth))),
-				       &bx, &by, &c1))
-				dens = fabs((ax - px) * (by - py) -
-					    (ay - py) * (bx - px)) /
-				       (dth * dth);
-			pd[0] = pd[1] = pd[2] = (float)dens;
+			pd[0] = pd[1] = pd[2] =
+				(float)pixel_density(&b, d, px, py, dth);
 		}
 	*env = e;
 	if (mask)

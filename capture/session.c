@@ -5,8 +5,11 @@
 #include "frame_file.h"
 
 #include "core/atomic_file.h"
+#include "core/error.h"
 #include "core/path.h"
 
+#include <dirent.h>
+#include <errno.h>
 #include <fcntl.h>
 #include <jansson.h>
 #include <stdarg.h>
@@ -247,4 +250,71 @@ int glint_session_finish(struct glint_session *s, const struct glint_bracket *b,
 	json_decref(s->doc);
 	free(s);
 	return ret;
+}
+
+static int cmp_path(const void *a, const void *b)
+{
+	return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+static int list_add(char ***list, int *n, const char *path)
+{
+	char **grown = realloc(*list, (size_t)(*n + 1) * sizeof(char *));
+	if (!grown)
+		return glint_error_set(ENOMEM, "out of memory");
+	*list = grown;
+	grown[*n] = strdup(path);
+	if (!grown[*n])
+		return glint_error_set(ENOMEM, "out of memory");
+	(*n)++;
+	return 0;
+}
+
+static int collect(const char *dir, int depth, char ***list, int *n)
+{
+	char path[GLINT_PATH_MAX], sj[GLINT_PATH_MAX];
+	struct dirent *e;
+	struct stat st;
+	int ret = 0;
+	DIR *d = opendir(dir);
+
+	if (!d)
+		return 0; /* no sessions there */
+	while (!ret && (e = readdir(d))) {
+		if (e->d_name[0] == '.' || !strcmp(e->d_name, "queue"))
+			continue;
+		if (glint_path_join(path, sizeof(path), dir, e->d_name) < 0 ||
+		    glint_path_join(sj, sizeof(sj), path, "session.json") < 0)
+			continue; /* too long to be one of ours */
+		if (stat(sj, &st) == 0)
+			ret = list_add(list, n, path);
+		else if (depth == 0 && stat(path, &st) == 0 &&
+			 S_ISDIR(st.st_mode))
+			ret = collect(path, 1, list, n);
+	}
+	closedir(d);
+	return ret;
+}
+
+int glint_session_list(const char *root, char ***list, int *n)
+{
+	*list = NULL;
+	*n = 0;
+	int ret = collect(root, 0, list, n);
+	if (ret < 0) {
+		glint_session_list_free(*list, *n);
+		*list = NULL;
+		*n = 0;
+		return ret;
+	}
+	if (*n > 1)
+		qsort(*list, (size_t)*n, sizeof(char *), cmp_path);
+	return 0;
+}
+
+void glint_session_list_free(char **list, int n)
+{
+	for (int i = 0; i < n; i++)
+		free(list[i]);
+	free(list);
 }

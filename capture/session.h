@@ -67,4 +67,10 @@ struct glint_session_fit {
 };
 int glint_session_fit_inputs(const char *dir, struct glint_session_fit *fs);
 
+/* The sessions (folders holding a session.json) in root and one level
+ * down (the daemon's run folders), sorted: *list holds *n paths; free it
+ * with glint_session_list_free().  A missing root is an empty list. */
+int glint_session_list(const char *root, char ***list, int *n);
+void glint_session_list_free(char **list, int n);
+
 #endif

@@ -15,7 +15,6 @@
 #include "core/error.h"
 #include "core/log.h"
 
-#include <dirent.h>
 #include <signal.h>
 #include <pwd.h>
 #include <stdio.h>
@@ -142,39 +141,6 @@ int cmd_jobs(int argc, char **argv)
 	return GLINT_EXIT_OK;
 }
 
-static int cmp_str(const void *a, const void *b)
-{
-	return strcmp(*(char *const *)a, *(char *const *)b);
-}
-
-/* Sessions under root and one level down (the daemon's run-* folders). */
-static void collect(const char *dir, int depth, char ***list, int *n)
-{
-	DIR *d = opendir(dir);
-	struct dirent *e;
-	char path[4400];
-
-	if (!d)
-		return;
-	while ((e = readdir(d))) {
-		if (e->d_name[0] == '.' || !strcmp(e->d_name, "queue"))
-			continue;
-		snprintf(path, sizeof(path), "%s/%s", dir, e->d_name);
-		struct stat st;
-		char sj[4500];
-		snprintf(sj, sizeof(sj), "%s/session.json", path);
-		if (stat(sj, &st) == 0) {
-			*list = realloc(*list,
-					(size_t)(*n + 1) * sizeof(char *));
-			(*list)[(*n)++] = strdup(path);
-		} else if (depth == 0 && stat(path, &st) == 0 &&
-			   S_ISDIR(st.st_mode)) {
-			collect(path, 1, list, n);
-		}
-	}
-	closedir(d);
-}
-
 int cmd_sessions(int argc, char **argv)
 {
 	struct qopts q;
@@ -185,8 +151,8 @@ int cmd_sessions(int argc, char **argv)
 	if (q.nargs != 0)
 		return cmd_usage_error("sessions", "unexpected argument '%s'",
 				       q.args[0]);
-	collect(q.root, 0, &list, &n);
-	qsort(list, (size_t)n, sizeof(char *), cmp_str);
+	if (glint_session_list(q.root, &list, &n) < 0)
+		return cmd_fail("sessions");
 	json_t *arr = json_array();
 	if (!q.json)
 		printf("%-9s %-6s %-11s %-5s %s\n", "KIND", "FRAMES", "STATUS",
@@ -222,9 +188,8 @@ int cmd_sessions(int argc, char **argv)
 			       fitted ? "yes" : "-", list[i],
 			       err ? "  -- " : "", err ? err : "");
 		json_decref(doc);
-		free(list[i]);
 	}
-	free(list);
+	glint_session_list_free(list, n);
 	if (q.json)
 		cmd_print_json(json_pack("{s:s, s:o}", "root", q.root,
 					 "sessions", arr));

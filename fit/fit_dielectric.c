@@ -247,6 +247,160 @@ static void set_pixels(struct dobj *ob, const int *idx, int n, int32_t *pix)
 	ob->n = n;
 }
 
+/* The global search on the coarse pixels: annealing over ior, the
+ * transmission following from each ior's paths; a pass in res. */
+static int anneal_search(struct dobj *ob, const struct glint_fit_opts *o,
+			 const double *lo, const double *hi, int *coarse,
+			 int ncoarse, int32_t *pix, double *p,
+			 struct glint_fit_result *res)
+{
+	struct glint_anneal_opts ao;
+	struct glint_anneal_result ar;
+	const struct glint_dielectric_cache *bc;
+
+	glint_anneal_default_opts(&ao);
+	ao.seed = o->seed;
+	ao.max_evals = o->anneal_evals;
+	ao.stall_evals = o->anneal_evals / 3;
+	set_pixels(ob, coarse, ncoarse, pix);
+	double ts = glint_now();
+	int e0 = ob->evals;
+	int ret =
+		glint_anneal(1, lo + 3, hi + 3, ior_cost, ob, &ao, p + 3, &ar);
+	if (ret == 0)
+		ret = paths_for(ob, p[3], &bc);
+	if (ret < 0)
+		return ret;
+	best_transmission(ob, bc, p);
+	struct glint_fit_pass *ps = &res->passes[res->npasses++];
+	snprintf(ps->name, sizeof(ps->name), "anneal");
+	ps->pixels = ncoarse;
+	ps->iterations = ar.accepted;
+	ps->evaluations = ob->evals - e0;
+	ps->cost0 = ar.cost0;
+	ps->cost = ar.cost;
+	ps->seconds = glint_now() - ts;
+	glint_log_info("anneal: %d evaluations (%d accepted, %d re-anneals), "
+		       "cost %.4g -> %.4g: %s",
+		       ar.evals, ar.accepted, ar.reanneals, ar.cost0, ar.cost,
+		       ar.reason);
+	return 0;
+}
+
+/*
+ * Shot-noise weights taken from the photo favour pixels that came out dark
+ * by chance (sampling noise, aliasing of the map's sharp detail): the fit
+ * is pulled low (purple quartz under the studio map: transmission.b 0.09
+ * low).  Re-weight by the fitted render at p instead (iteratively
+ * re-weighted least squares).
+ */
+static int reweight_by_render(struct dobj *ob, struct fit_data *d,
+			      const double *p)
+{
+	const struct glint_dielectric_cache *wc;
+	int ret = paths_for(ob, p[3], &wc);
+	if (ret < 0)
+		return ret;
+	glint_dielectric_shade(wc, p, ob->rgb);
+	double mean = 0;
+	int nv = 0;
+	for (int i = 0; i < 3 * d->n; i++)
+		if (d->sw[i] > 0) {
+			mean += fmax(0, ob->rgb[i]);
+			nv++;
+		}
+	mean = nv ? mean / nv : 1;
+	for (int i = 0; i < 3 * d->n; i++)
+		if (d->sw[i] > 0)
+			d->sw[i] = 1 / sqrt(fmax(0, ob->rgb[i]) + 0.1 * mean);
+	return 0;
+}
+
+/* LM over all four parameters on every pixel (re-weighted twice under
+ * Poisson weights), or with eval_p only the cost there; a pass in res. */
+static int lm_stage(struct dobj *ob, struct fit_data *d,
+		    const struct glint_fit_opts *o,
+		    const struct glint_image *weight, double *lo, double *hi,
+		    const double *eval_p, double *p, struct glint_lm_result *lr,
+		    struct glint_fit_result *res)
+{
+	struct glint_lm_problem pr = { 4,	  3 * ob->d->n, lo, hi,
+				       residuals, jacobian,	ob };
+	struct glint_lm_opts lo_;
+	int ret;
+
+	glint_lm_default_opts(&lo_);
+	lo_.max_iter = o->max_iter;
+	if (eval_p) {
+		double c;
+		ret = anneal_cost(ob, p, &c);
+		lr->cost = lr->cost0 = c;
+		for (int k = 0; k < 4; k++)
+			lr->se[k] = NAN;
+		return ret;
+	}
+	double ts = glint_now();
+	int e0 = ob->evals;
+	ret = glint_lm_solve(&pr, &lo_, p, lr);
+	for (int it = 0; it < 2 && ret == 0 && !weight &&
+			 o->weighting == GLINT_WEIGHT_POISSON;
+	     it++) {
+		ret = reweight_by_render(ob, d, p);
+		if (ret == 0)
+			ret = glint_lm_solve(&pr, &lo_, p, lr);
+	}
+	struct glint_fit_pass *ps = &res->passes[res->npasses++];
+	snprintf(ps->name, sizeof(ps->name), "%s",
+		 res->npasses > 1 ? "lm-polish" : "lm");
+	ps->pixels = ob->d->n;
+	ps->iterations = lr->iterations;
+	ps->evaluations = ob->evals - e0;
+	ps->cost0 = lr->cost0;
+	ps->cost = lr->cost;
+	ps->seconds = glint_now() - ts;
+	return ret;
+}
+
+/* The result's parameters and statistics at p. */
+static int statistics(struct dobj *ob, const double *p,
+		      const struct glint_lm_result *lr,
+		      struct glint_fit_result *res)
+{
+	const struct glint_dielectric_cache *c;
+	const struct fit_data *d = ob->d;
+	int ret = paths_for(ob, p[3], &c);
+	if (ret < 0)
+		return ret;
+	glint_dielectric_shade(c, p, ob->rgb);
+	double se = 0, sy = 0, wc = 0;
+	int nv = 0;
+	for (int i = 0; i < 3 * d->n; i++) {
+		if (d->sw[i] <= 0)
+			continue;
+		double e = ob->rgb[i] - d->y[i];
+		se += e * e;
+		wc += 0.5 * e * e * d->sw[i] * d->sw[i];
+		sy += d->y[i];
+		nv++;
+	}
+	for (int k = 0; k < 4; k++) {
+		res->p[k] = p[k];
+		res->se[k] = lr->se[k];
+		res->at_bound[k] = lr->at_bound[k];
+	}
+	res->cost = lr->cost;
+	res->wcost = wc;
+	res->rmse = nv ? sqrt(se / nv) : NAN;
+	res->rel_rmse = nv && sy > 0 ? res->rmse / (sy / nv) : NAN;
+	res->pixels = d->n;
+	res->backdrop_rel_rmse = NAN;
+	fit_data_baselines(d, &res->flat_rel_rmse, &res->noise_rmse);
+	glint_log_info("dielectric fit: %d evaluations, %d path traces, "
+		       "largest dropped branch weight %.2g",
+		       ob->evals, ob->traces, c->dropped);
+	return 0;
+}
+
 int glint_fit_dielectric(struct glint_renderer *r,
 			 const struct glint_model_ops *model,
 			 const struct glint_image *photo,
@@ -256,6 +410,7 @@ int glint_fit_dielectric(struct glint_renderer *r,
 {
 	struct fit_data d = { 0 };
 	struct glint_gbuffer fine = { 0 };
+	struct glint_lm_result lr;
 	struct dobj ob;
 	int interior, ret;
 	int *all = NULL, *coarse = NULL;
@@ -265,6 +420,7 @@ int glint_fit_dielectric(struct glint_renderer *r,
 
 	memset(res, 0, sizeof(*res));
 	memset(&ob, 0, sizeof(ob));
+	memset(&lr, 0, sizeof(lr));
 	res->model = model;
 	ob.gb = &r->gb;
 	if (r->gb.spp < DIELECTRIC_MIN_SPP) {
@@ -309,132 +465,16 @@ int glint_fit_dielectric(struct glint_renderer *r,
 				  : model->params[k].def;
 	}
 	res->setup_seconds = glint_now() - t0;
-
-	struct glint_lm_opts lo_;
-	struct glint_lm_result lr;
-	memset(&lr, 0, sizeof(lr));
-	glint_lm_default_opts(&lo_);
-	lo_.max_iter = o->max_iter;
-	if (!eval_p && o->optimizer != GLINT_OPT_LM) {
-		struct glint_anneal_opts ao;
-		struct glint_anneal_result ar;
-		glint_anneal_default_opts(&ao);
-		ao.seed = o->seed;
-		ao.max_evals = o->anneal_evals;
-		ao.stall_evals = o->anneal_evals / 3;
-		set_pixels(&ob, coarse, ncoarse, pix);
-		double ts = glint_now();
-		int e0 = ob.evals;
-		/* Search ior; transmission follows from each ior's paths. */
-		ret = glint_anneal(1, lo + 3, hi + 3, ior_cost, &ob, &ao, p + 3,
-				   &ar);
-		if (ret < 0)
-			goto out;
-		const struct glint_dielectric_cache *bc;
-		ret = paths_for(&ob, p[3], &bc);
-		if (ret < 0)
-			goto out;
-		best_transmission(&ob, bc, p);
-		struct glint_fit_pass *ps = &res->passes[res->npasses++];
-		snprintf(ps->name, sizeof(ps->name), "anneal");
-		ps->pixels = ncoarse;
-		ps->iterations = ar.accepted;
-		ps->evaluations = ob.evals - e0;
-		ps->cost0 = ar.cost0;
-		ps->cost = ar.cost;
-		ps->seconds = glint_now() - ts;
-		glint_log_info("anneal: %d evaluations (%d accepted, %d "
-			       "re-anneals), cost %.4g -> %.4g: %s",
-			       ar.evals, ar.accepted, ar.reanneals, ar.cost0,
-			       ar.cost, ar.reason);
+	if (!eval_p && o->optimizer != GLINT_OPT_LM)
+		ret = anneal_search(&ob, o, lo, hi, coarse, ncoarse, pix, p,
+				    res);
+	if (ret == 0) {
+		set_pixels(&ob, all, d.n, pix);
+		ret = lm_stage(&ob, &d, o, weight, lo, hi, eval_p, p, &lr, res);
 	}
-	set_pixels(&ob, all, d.n, pix);
-	struct glint_lm_problem pr = { 4,	  3 * d.n,  lo, hi,
-				       residuals, jacobian, &ob };
-	double ts = glint_now();
-	int e0 = ob.evals;
-	if (eval_p) {
-		double c;
-		ret = anneal_cost(&ob, p, &c);
-		lr.cost = lr.cost0 = c;
-		for (int k = 0; k < 4; k++)
-			lr.se[k] = NAN;
-	} else {
-		ret = glint_lm_solve(&pr, &lo_, p, &lr);
-		/* Shot-noise weights taken from the photo favour pixels that
-		 * came out dark by chance (sampling noise, aliasing of the
-		 * map's sharp detail): the fit is pulled low (purple quartz
-		 * under the studio map: transmission.b 0.09 low).  Re-weight
-		 * by the fitted render instead and solve again (iteratively
-		 * re-weighted least squares). */
-		for (int it = 0; it < 2 && ret == 0 && !weight &&
-				 o->weighting == GLINT_WEIGHT_POISSON;
-		     it++) {
-			const struct glint_dielectric_cache *wc;
-			ret = paths_for(&ob, p[3], &wc);
-			if (ret < 0)
-				break;
-			glint_dielectric_shade(wc, p, ob.rgb);
-			double mean = 0;
-			int nv = 0;
-			for (int i = 0; i < 3 * d.n; i++)
-				if (d.sw[i] > 0) {
-					mean += fmax(0, ob.rgb[i]);
-					nv++;
-				}
-			mean = nv ? mean / nv : 1;
-			for (int i = 0; i < 3 * d.n; i++)
-				if (d.sw[i] > 0)
-					d.sw[i] = 1 / sqrt(fmax(0, ob.rgb[i]) +
-							   0.1 * mean);
-			ret = glint_lm_solve(&pr, &lo_, p, &lr);
-		}
-		struct glint_fit_pass *ps = &res->passes[res->npasses++];
-		snprintf(ps->name, sizeof(ps->name), "%s",
-			 res->npasses > 1 ? "lm-polish" : "lm");
-		ps->pixels = d.n;
-		ps->iterations = lr.iterations;
-		ps->evaluations = ob.evals - e0;
-		ps->cost0 = lr.cost0;
-		ps->cost = lr.cost;
-		ps->seconds = glint_now() - ts;
-	}
-	if (ret < 0)
-		goto out;
-	/* Statistics at the result. */
-	const struct glint_dielectric_cache *c;
-	ret = paths_for(&ob, p[3], &c);
-	if (ret < 0)
-		goto out;
-	glint_dielectric_shade(c, p, ob.rgb);
-	double se = 0, sy = 0, wc = 0;
-	int nv = 0;
-	for (int i = 0; i < d.n; i++)
-		for (int ch = 0; ch < 3; ch++) {
-			if (d.sw[3 * i + ch] <= 0)
-				continue;
-			double e = ob.rgb[3 * i + ch] - d.y[3 * i + ch];
-			se += e * e;
-			wc += 0.5 * e * e * d.sw[3 * i + ch] * d.sw[3 * i + ch];
-			sy += d.y[3 * i + ch];
-			nv++;
-		}
-	for (int k = 0; k < 4; k++) {
-		res->p[k] = p[k];
-		res->se[k] = lr.se[k];
-		res->at_bound[k] = lr.at_bound[k];
-	}
-	res->cost = lr.cost;
-	res->wcost = wc;
-	res->rmse = nv ? sqrt(se / nv) : NAN;
-	res->rel_rmse = nv && sy > 0 ? res->rmse / (sy / nv) : NAN;
-	res->pixels = d.n;
-	res->backdrop_rel_rmse = NAN;
-	fit_data_baselines(&d, &res->flat_rel_rmse, &res->noise_rmse);
+	if (ret == 0)
+		ret = statistics(&ob, p, &lr, res);
 	res->seconds = glint_now() - t0;
-	glint_log_info("dielectric fit: %d evaluations, %d path traces, "
-		       "largest dropped branch weight %.2g",
-		       ob.evals, ob.traces, c->dropped);
 out:
 	drop_caches(&ob);
 	free(ob.rgb);

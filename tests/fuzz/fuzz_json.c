@@ -1,14 +1,75 @@
 /* SPDX-License-Identifier: MIT */
 /* glint's JSON files: the same bytes as a scene, a material (or a fit's
- * params.json), and a rig file. */
+ * params.json), a rig file, a capture session's session.json and a queue's
+ * job file. */
+#define _DEFAULT_SOURCE /* mkdtemp */
 #include "fuzz.h"
 
+#include "board/queue.h"
 #include "board/rig.h"
+#include "capture/session.h"
+#include "capture/session_merge.h"
 #include "fit/brdf/model.h"
 #include "fit/scene/scene.h"
 
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+/* A session folder and a queue, made once, removed at exit. */
+static char dir[64], session_json[128], queue[128], job[160];
+
+static void remove_dirs(void)
+{
+	static const char *const states[] = { "pending", "running", "done",
+					      "failed", "cancelled" };
+	char p[192];
+	unlink(session_json);
+	unlink(job);
+	for (int i = 0; i < 5; i++) {
+		snprintf(p, sizeof(p), "%s/%s", queue, states[i]);
+		rmdir(p);
+	}
+	rmdir(queue);
+	rmdir(dir);
+}
+
+static int make_dirs(void)
+{
+	snprintf(dir, sizeof(dir), "%s", "/tmp/glint-fuzz-json.XXXXXX");
+	if (!mkdtemp(dir))
+		return -1;
+	snprintf(session_json, sizeof(session_json), "%s/session.json", dir);
+	snprintf(queue, sizeof(queue), "%s/queue", dir);
+	snprintf(job, sizeof(job), "%s/pending/fuzz-job.json", queue);
+	atexit(remove_dirs);
+	return glint_queue_init(queue);
+}
+
+static void put(const char *path, const uint8_t *data, size_t size)
+{
+	FILE *f = fopen(path, "wb");
+	if (!f)
+		abort();
+	if (size && fwrite(data, 1, size, f) != size)
+		abort();
+	fclose(f);
+}
+
+static int seen(const struct glint_job *j, void *ctx)
+{
+	(void)j;
+	(*(int *)ctx)++;
+	return 0;
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
+	static int ready;
+	if (!ready && make_dirs() < 0)
+		abort();
+	ready = 1;
 	const char *path = fuzz_path(data, size);
 	struct glint_scene scene;
 	glint_scene_load(path, &scene);
@@ -19,5 +80,22 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	struct glint_rig rig;
 	glint_rig_load(path, &rig);
 	glint_rig_free(&rig);
+
+	/* As a session's session.json: what glint fit SESSION and the HDR
+	 * merge read from it. */
+	put(session_json, data, size);
+	struct glint_session_fit fs;
+	glint_session_fit_inputs(dir, &fs);
+	struct glint_noise_model nm;
+	glint_session_noise(dir, &nm);
+	struct glint_frame *frames = NULL;
+	int n = 0;
+	glint_session_load_frames(dir, &frames, &n);
+	glint_frames_free(frames, n); /* the caller's, also on failure */
+
+	/* As a job file waiting in the queue. */
+	put(job, data, size);
+	int jobs = 0;
+	glint_queue_list(queue, seen, &jobs);
 	return 0;
 }

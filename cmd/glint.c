@@ -130,10 +130,8 @@ int main(int argc, char **argv)
 	for (size_t i = 0; i < NCOMMANDS; i++)
 		names[i] = commands[i].name;
 	names[NCOMMANDS] = NULL;
-	const char *near = glint_suggest(argv[1], names);
-	fprintf(stderr,
-		"glint: unknown command '%s'%s%s%s\nTry 'glint --help'.\n",
-		argv[1], near ? " (did you mean '" : "", near ? near : "",
-		near ? "'?)" : "");
+	const char *hint = glint_suggest_hint(argv[1], names);
+	fprintf(stderr, "glint: unknown command '%s'%s\nTry 'glint --help'.\n",
+		argv[1], hint);
 	return GLINT_EXIT_USAGE;
 }

@@ -28,10 +28,8 @@ int cmd_choice_error(const char *arg, const char *const *choices)
 			break;
 		used += (size_t)n;
 	}
-	const char *near = glint_suggest(arg, choices);
-	return glint_error_set(EINVAL, "expected one of %s%s%s%s", list,
-			       near ? " (did you mean '" : "", near ? near : "",
-			       near ? "'?)" : "");
+	const char *hint = glint_suggest_hint(arg, choices);
+	return glint_error_set(EINVAL, "expected one of %s%s", list, hint);
 }
 
 static int apply(const struct cmd_opt *o, const char *arg)

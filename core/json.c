@@ -189,13 +189,11 @@ int glint_json_known_keys(const char *file, const char *where, json_t *obj,
 						sizeof(list) - strlen(list) -
 							1);
 			}
-			const char *near = glint_suggest(key, known);
-			return glint_error_set(
-				EINVAL,
-				"%s: %s: unknown key%s%s%s: "
-				"expected one of %s",
-				file, kp, near ? " (did you mean '" : "",
-				near ? near : "", near ? "'?)" : "", list);
+			const char *hint = glint_suggest_hint(key, known);
+			return glint_error_set(EINVAL,
+					       "%s: %s: unknown key%s: "
+					       "expected one of %s",
+					       file, kp, hint, list);
 		}
 	}
 	return 0;

@@ -2,6 +2,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "suggest.h"
 
+#include <stdio.h>
 #include <string.h>
 
 /* Edit distance of the first 63 bytes of a and b, a swap of two
@@ -46,4 +47,15 @@ const char *glint_suggest(const char *word, const char *const *candidates)
 	 * never "x" -> "json". */
 	int limit = len / 3 > 1 ? len / 3 : 1;
 	return best && bd <= limit && bd < len ? best : NULL;
+}
+
+const char *glint_suggest_hint(const char *word, const char *const *candidates)
+{
+	static _Thread_local char hint[96];
+	const char *near = glint_suggest(word, candidates);
+
+	if (!near)
+		return "";
+	snprintf(hint, sizeof(hint), " (did you mean '%.60s'?)", near);
+	return hint;
 }

@@ -7,4 +7,8 @@
  * otherwise.  For "did you mean" in errors about names. */
 const char *glint_suggest(const char *word, const char *const *candidates);
 
+/* The same as text for an error message: " (did you mean 'NAME'?)", or ""
+ * when nothing is close.  Valid until the thread's next call. */
+const char *glint_suggest_hint(const char *word, const char *const *candidates);
+
 #endif

@@ -30,12 +30,11 @@ int glint_fit_method_parse(const char *s, enum glint_fit_method *m)
 			*m = (enum glint_fit_method)i;
 			return 0;
 		}
-	const char *near = glint_suggest(s, glint_fit_method_names);
+	const char *hint = glint_suggest_hint(s, glint_fit_method_names);
 	return glint_error_set(EINVAL,
 			       "fit method '%s': expected three-pass, naive or "
-			       "varpro%s%s%s",
-			       s, near ? " (did you mean '" : "",
-			       near ? near : "", near ? "'?)" : "");
+			       "varpro%s",
+			       s, hint);
 }
 
 void glint_fit_default_opts(struct glint_fit_opts *o)
@@ -65,11 +64,10 @@ int glint_fit_optimizer_parse(const char *s, enum glint_fit_optimizer *o)
 			*o = (enum glint_fit_optimizer)i;
 			return 0;
 		}
-	const char *near = glint_suggest(s, glint_fit_optimizer_names);
-	return glint_error_set(
-		EINVAL, "optimizer '%s': expected lm, anneal or auto%s%s%s", s,
-		near ? " (did you mean '" : "", near ? near : "",
-		near ? "'?)" : "");
+	const char *hint = glint_suggest_hint(s, glint_fit_optimizer_names);
+	return glint_error_set(EINVAL,
+			       "optimizer '%s': expected lm, anneal or auto%s",
+			       s, hint);
 }
 
 #define MAX_SETS 16

@@ -64,14 +64,12 @@ int glint_material_from_json(const char *file, const char *where, json_t *obj,
 		return ret;
 	m = glint_model_find(name);
 	if (!m) {
-		const char *near = glint_suggest(name, glint_model_list());
+		const char *hint = glint_suggest_hint(name, glint_model_list());
 		return glint_error_set(EINVAL,
 				       "%s: %s%smodel = \"%s\": expected one "
-				       "of %s%s%s%s",
+				       "of %s%s",
 				       file, where, where[0] ? "." : "", name,
-				       glint_model_names(),
-				       near ? " (did you mean '" : "",
-				       near ? near : "", near ? "'?)" : "");
+				       glint_model_names(), hint);
 	}
 	for (int i = 0; i < m->nparams; i++) {
 		const struct glint_param *pi = &m->params[i];

@@ -38,6 +38,7 @@ has_out() { grep -qF -- "$1" "$tmp/out" || { echo "  stdout lacks '$1'" >&2; hea
 last_err_is() { [ "$(tail -1 "$tmp/err")" = "$1" ] || { echo "  last stderr line: $(tail -1 "$tmp/err")" >&2; return 1; }; }
 is_json() { python3 -c 'import json,sys; json.load(open(sys.argv[1]))' "$tmp/out" || { echo "  stdout is not JSON:" >&2; head -5 "$tmp/out" >&2; return 1; }; }
 
+refused=0
 commands=(rig demo fit render convert capture cameras hdr "probe unwrap"
 	"probe convert" "probe register" check-rig sessions jobs "queue add"
 	"queue cancel" "queue run")
@@ -59,11 +60,12 @@ for cmd in "${commands[@]}"; do
 	for opt in --json -q -v --quiet --verbose; do
 		"$glint" "${words[@]}" "$opt" --root "$tmp/nowhere" >"$tmp/out" 2>"$tmp/err" </dev/null
 		if grep -q "unknown option '$opt'" "$tmp/err"; then
-			check "$cmd $opt: accepted" false
+			echo "  $cmd: $opt refused" >&2
+			refused=$((refused + 1))
 		fi
 	done
 done
-check "the common options were accepted everywhere" true
+check "the common options were accepted everywhere" test "$refused" = 0
 
 # Values are checked, with the option and what was expected named.
 check "a number out of range" eval 'g 2 fit a b --samples 0 && has_err "glint fit: --samples '"'"'0'"'"': expected an integer in [1, 4096]"'

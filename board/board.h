@@ -37,7 +37,8 @@ enum glint_role {
 	GLINT_ROLE_COUNT
 };
 
-/* "button", "lights", ... as in rig files; NULL past the end. */
+/* "button", "lights", ... as in rig files (static strings); NULL past
+ * the end. */
 const char *glint_role_name(enum glint_role r);
 int glint_role_is_input(enum glint_role r);
 
@@ -121,10 +122,13 @@ enum glint_led {
 	GLINT_LED_DONE,
 	GLINT_LED_ERROR
 };
+/* "off", "idle", ...: a static string. */
 const char *glint_led_name(enum glint_led l);
 
 struct glint_board;
 
+/* Request the lines cfg names (as `consumer`, shown by gpioinfo): *out
+ * is the caller's, closed with glint_board_close().  cfg is copied. */
 int glint_board_open(const struct glint_board_cfg *cfg, const char *consumer,
 		     struct glint_board **out);
 /* Outputs to their safe states (lights off, stepper disabled, LED off),

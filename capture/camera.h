@@ -105,7 +105,9 @@ struct glint_camera_ops {
 
 struct glint_camera;
 
-/* Open a camera by backend name and device. */
+/* Open a camera by backend name and device: *out is the caller's, closed
+ * with glint_camera_close().  clock (may be NULL: the real one) must
+ * outlive the camera. */
 int glint_camera_open(const char *backend, const char *device,
 		      const struct glint_clock *clock,
 		      struct glint_camera **out);

@@ -76,7 +76,8 @@ int glint_response_robertson(const struct glint_ldr_stack *s, int max_iter,
  * ln E = sum w(z) (ln I(z) - ln t) / sum w(z), per channel, hat weight
  * zero at 255 and at or below floor[c]: clipped and black samples never
  * contribute).  valid is 0 where every frame was clipped or black in a
- * channel.  floor may be NULL (estimated); valid may be NULL.
+ * channel.  floor may be NULL (estimated); valid may be NULL.  *out and
+ * *valid are the caller's, freed with glint_image_free().
  */
 int glint_ldr_merge(const struct glint_ldr_stack *s,
 		    const double response[256][3], const int *floor,

@@ -1,7 +1,10 @@
 /* SPDX-License-Identifier: MIT */
 #include "probe.h"
 
+#include "sphere_detect.h"
+
 #include "core/error.h"
+#include "core/log.h"
 #include "core/formats.h"
 #include "core/path.h"
 #include "fit/scene/pinhole.h"
@@ -526,4 +529,76 @@ int glint_probe_unwrap_write(const struct glint_image *photo,
 	glint_image_free(mask);
 	glint_image_free(dens);
 	return ret;
+}
+
+/* An 8-bit photo is camera-encoded, not radiance: refused, or with
+ * --srgb linearised through the sRGB curve (IEC 61966-2-1). */
+int glint_probe_photo_radiance(const char *path, struct glint_image *img,
+			       int srgb)
+{
+	char ext[16];
+	const char *ldr[] = { "png", "tga", "jpg", "jpeg", "bmp" };
+	int is_ldr = 0;
+
+	glint_path_ext(path, ext, sizeof(ext));
+	for (int i = 0; i < 5; i++)
+		is_ldr |= !strcmp(ext, ldr[i]);
+	if (!is_ldr)
+		return 0;
+	if (!srgb)
+		return glint_error_set(
+			EINVAL,
+			"%s: an 8-bit image holds camera-encoded "
+			"values, not radiance, and unwrapped as "
+			"light it would be wrong: merge a "
+			"bracket to HDR (glint hdr), or give "
+			"--srgb to take it as sRGB-encoded "
+			"(highlights stay clipped)",
+			path);
+	for (size_t i = 0; i < (size_t)img->width * img->height * 3; i++) {
+		float v = img->data[i];
+		img->data[i] = v <= 0.04045f
+				       ? v / 12.92f
+				       : powf((v + 0.055f) / 1.055f, 2.4f);
+	}
+	glint_log_warn("%s: 8-bit, taken as sRGB-encoded: highlights above "
+		       "the white point are clipped, so the map's lights are "
+		       "too dim",
+		       path);
+	return 0;
+}
+
+/* The ball's circle: found in the photo when --ball is not given (the
+ * capture's detector); a given one is checked against it. */
+int glint_probe_find_ball(const struct glint_image *photo, int given,
+			  struct glint_unwrap_opts *o)
+{
+	struct glint_circle c;
+	int ret = glint_sphere_detect(photo, 0, 0, &c);
+
+	if (given) {
+		double d = hypot(c.cx - o->ball_cx, c.cy - o->ball_cy);
+		double dr = fabs(c.r - o->ball_r);
+		if (ret == 0 && (d > 2 || dr > 2))
+			glint_log_warn(
+				"--ball %g,%g,%g disagrees with the ball "
+				"found in the photo, %.1f,%.1f,%.1f "
+				"(centre %.1f px, radius %.1f px "
+				"apart): check it",
+				o->ball_cx, o->ball_cy, o->ball_r, c.cx, c.cy,
+				c.r, d, dr);
+		return 0;
+	}
+	if (ret < 0)
+		return glint_error_prefix(
+			ret, "no ball found (give --ball CX,CY,R)");
+	o->ball_cx = c.cx;
+	o->ball_cy = c.cy;
+	o->ball_r = c.r;
+	glint_log_info("found the ball at %.2f,%.2f, radius %.2f px (%d rim "
+		       "points, %.2f px RMS, %.0f deg of its rim): --ball "
+		       "%.2f,%.2f,%.2f",
+		       c.cx, c.cy, c.r, c.points, c.rms_px, c.arc_deg, c.cx,
+		       c.cy, c.r);
+	return 0;
 }

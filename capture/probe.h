@@ -38,6 +38,7 @@ enum glint_probe_format {
 
 /* "latlong", "angular", "cross", "ball"; -EINVAL naming the choices. */
 int glint_probe_format_parse(const char *name, enum glint_probe_format *f);
+/* The name of f: a static string. */
 const char *glint_probe_format_name(enum glint_probe_format f);
 
 /* The direction seen at continuous pixel (x, y) of a w x h image; 0 when
@@ -55,7 +56,8 @@ void glint_probe_lookup(const struct glint_image *img,
 			enum glint_probe_format f, struct vec3 d, float rgb[3]);
 
 /* Resample src (format `from`) into format `to`, w x h (0: a size with
- * about the source's resolution), 2 x 2 samples per pixel. */
+ * about the source's resolution), 2 x 2 samples per pixel.  *out is the
+ * caller's, freed with glint_image_free(). */
 int glint_probe_convert(const struct glint_image *src,
 			enum glint_probe_format from,
 			enum glint_probe_format to, int w, int h,
@@ -87,7 +89,8 @@ void glint_unwrap_default_opts(struct glint_unwrap_opts *o);
  * reflectance at each point's angle of incidence; mask 1 where reliable
  * (not grazing, not the camera's reflection, inside the photo), else 0;
  * density = photo pixels per steradian (for blending views).  mask and
- * density may be NULL.
+ * density may be NULL; the images are the caller's, freed with
+ * glint_image_free().
  */
 int glint_probe_unwrap(const struct glint_image *photo,
 		       const struct glint_unwrap_opts *o,
@@ -106,5 +109,22 @@ int glint_probe_unwrap_write(const struct glint_image *photo,
 
 /* Fresnel reflectance of a conductor (n, k) at cos(incidence) c. */
 double glint_fresnel_conductor(double n, double k, double c);
+
+/*
+ * A probe photo read from `path` as radiance.  An 8-bit format (png, tga,
+ * jpg, bmp) holds camera-encoded values: refused with advice, or with
+ * srgb linearised in place through the sRGB curve (IEC 61966-2-1) with a
+ * warning that its highlights are clipped.  HDR formats pass unchanged.
+ */
+int glint_probe_photo_radiance(const char *path, struct glint_image *img,
+			       int srgb);
+
+/*
+ * The ball's circle in o->ball_cx, ball_cy, ball_r: found by the sphere
+ * detector (capture/sphere_detect.h) unless `given`; a given circle is
+ * kept, with a warning when the detector finds one more than 2 px away.
+ */
+int glint_probe_find_ball(const struct glint_image *photo, int given,
+			  struct glint_unwrap_opts *o);
 
 #endif

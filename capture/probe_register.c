@@ -4,9 +4,13 @@
 #include "probe.h"
 
 #include "core/error.h"
+#include "core/formats.h"
+#include "core/path.h"
 
+#include <errno.h>
 #include <gsl/gsl_linalg.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -273,4 +277,53 @@ int glint_probe_blend(const struct glint_image *env1,
 		}
 	*out = o;
 	return 0;
+}
+
+/* ENV-mask.png x ENV-density.exr, or NULL when absent. */
+struct glint_image *glint_probe_view_weight(const char *env)
+{
+	char mp[GLINT_PATH_MAX], dp[GLINT_PATH_MAX];
+	struct glint_image *m = NULL, *d = NULL;
+	if (glint_path_sibling(mp, sizeof(mp), env, "-mask.png") < 0 ||
+	    glint_path_sibling(dp, sizeof(dp), env, "-density.exr") < 0 ||
+	    glint_image_read(mp, &m) < 0 || glint_image_read(dp, &d) < 0 ||
+	    m->width != d->width || m->height != d->height) {
+		glint_image_free(m);
+		glint_image_free(d);
+		glint_error_clear();
+		return NULL;
+	}
+	for (size_t i = 0; i < (size_t)m->width * m->height * 3; i++)
+		m->data[i] = (m->data[i] > 0.5f) * d->data[i];
+	glint_image_free(d);
+	return m;
+}
+
+int glint_register_points_file(const char *path, const struct glint_image *e1,
+			       const struct glint_image *e2, struct mat3 *r,
+			       double *rms_deg)
+{
+	struct vec3 a[256], b[256];
+	double x1, y1, x2, y2;
+	int n = 0, ret = 0;
+	FILE *f = fopen(path, "r");
+
+	if (!f)
+		return glint_error_set(errno, "%s: %s", path, strerror(errno));
+	while (n < 256 &&
+	       fscanf(f, " %lf %lf %lf %lf", &x1, &y1, &x2, &y2) == 4) {
+		glint_probe_pixel_dir(GLINT_PROBE_LATLONG, e1->width,
+				      e1->height, x1, y1, &a[n]);
+		glint_probe_pixel_dir(GLINT_PROBE_LATLONG, e2->width,
+				      e2->height, x2, y2, &b[n]);
+		n++;
+	}
+	if (!feof(f))
+		ret = glint_error_set(EINVAL,
+				      "%s: line %d: expected 'x1 y1 x2 y2' "
+				      "(lat-long pixels%s)",
+				      path, n + 1,
+				      n == 256 ? ", at most 256 lines" : "");
+	fclose(f);
+	return ret < 0 ? ret : glint_register_points(a, b, n, r, rms_deg);
 }

@@ -35,7 +35,7 @@ int glint_register_auto(const struct glint_image *env1,
 
 /* Blend: view 2 rotated into view 1's frame, each texel the average of
  * the views weighted by mask x sampling density.  mask/density may be
- * NULL (weight 1). */
+ * NULL (weight 1).  *out is the caller's, freed with glint_image_free(). */
 int glint_probe_blend(const struct glint_image *env1,
 		      const struct glint_image *w1,
 		      const struct glint_image *env2,
@@ -44,5 +44,17 @@ int glint_probe_blend(const struct glint_image *env1,
 
 /* Angle of the rotation a^T b, degrees. */
 double glint_rotation_angle_deg(const struct mat3 *a, const struct mat3 *b);
+
+/* The weight of an unwrapped view: ENV-mask.png x ENV-density.exr
+ * beside env_path (glint_probe_unwrap_write), or NULL when they are absent
+ * or do not match (the error is cleared: the view then weighs 1).  The
+ * caller frees it with glint_image_free(). */
+struct glint_image *glint_probe_view_weight(const char *env_path);
+
+/* glint_register_points() from a file of lines "x1 y1 x2 y2": pixel
+ * positions of one feature in lat-long maps e1 and e2 (at most 256). */
+int glint_register_points_file(const char *path, const struct glint_image *e1,
+			       const struct glint_image *e2, struct mat3 *r,
+			       double *rms_deg);
 
 #endif

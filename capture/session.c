@@ -4,7 +4,10 @@
 
 #include "frame_file.h"
 
+#include "core/atomic_dir.h"
 #include "core/atomic_file.h"
+#include "core/lockfile.h"
+#include "core/log.h"
 #include "core/error.h"
 #include "core/path.h"
 
@@ -317,4 +320,35 @@ void glint_session_list_free(char **list, int n)
 	for (int i = 0; i < n; i++)
 		free(list[i]);
 	free(list);
+}
+
+int glint_session_fit_open(const char *dir, int wait,
+			   struct glint_session_fit *fs, int *lock)
+{
+	char path[GLINT_PATH_MAX];
+	int ret = glint_session_fit_inputs(dir, fs);
+
+	if (ret == 0)
+		ret = glint_path_join(path, sizeof(path), dir,
+				      GLINT_SESSION_FIT_LOCK);
+	if (ret < 0)
+		return ret;
+	ret = glint_lockfile_acquire(path, "glint fit", 0, lock);
+	if (ret == -EBUSY && wait) {
+		glint_log_info("%s", glint_error_msg());
+		glint_log_info("waiting for it to finish");
+		ret = glint_lockfile_acquire(path, "glint fit", 1, lock);
+	} else if (ret == -EBUSY) {
+		glint_error_prefix(ret,
+				   "%s is being fitted (use --wait to wait "
+				   "for it)",
+				   dir);
+	}
+	if (ret < 0)
+		return ret;
+	/* We hold the lock: what a killed fit left is ours to clean. */
+	if (glint_atomic_dir_sweep(fs->out) > 0)
+		glint_log_info("%s: cleaned up after an interrupted fit",
+			       fs->out);
+	return 0;
 }

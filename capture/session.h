@@ -36,11 +36,12 @@
 struct glint_session;
 
 /* Create the directory and its first session.json ("incomplete").  rig
- * may be NULL. */
+ * may be NULL.  *out is the caller's until glint_session_finish(). */
 int glint_session_create(const char *root, const char *kind,
 			 const char *rig_json,
 			 const struct glint_camera_info *cam,
 			 struct glint_session **out);
+/* The session's folder: valid until glint_session_finish(s). */
 const char *glint_session_dir(const struct glint_session *s);
 
 /* Write frame `index` and add it to session.json. */
@@ -66,6 +67,16 @@ struct glint_session_fit {
 	char weights[GLINT_PATH_MAX], out[GLINT_PATH_MAX];
 };
 int glint_session_fit_inputs(const char *dir, struct glint_session_fit *fs);
+
+/*
+ * glint_session_fit_inputs(), then take the session's fit lock (one fit
+ * per session at a time): with `wait`, block until another fit is done;
+ * without it, fail with -EBUSY saying the session is being fitted.  Once
+ * the lock is held, what a killed fit left in the result folder is swept.
+ * *lock is the caller's: release it with glint_lockfile_release().
+ */
+int glint_session_fit_open(const char *dir, int wait,
+			   struct glint_session_fit *fs, int *lock);
 
 /* The sessions (folders holding a session.json) in root and one level
  * down (the daemon's run folders), sorted: *list holds *n paths; free it

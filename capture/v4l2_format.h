@@ -36,9 +36,10 @@ struct glint_v4l2_format {
 	int rank;
 };
 
-/* The entry for a fourcc, or NULL when glint does not read it. */
+/* The entry for a fourcc (static: never freed), or NULL when glint does
+ * not read it. */
 const struct glint_v4l2_format *glint_v4l2_format_find(uint32_t fourcc);
-/* The entry for a name such as "SRGGB12P", or NULL. */
+/* The entry for a name such as "SRGGB12P" (static), or NULL. */
 const struct glint_v4l2_format *glint_v4l2_format_by_name(const char *name);
 
 /* Bytes one row needs at least (before driver padding). */

@@ -52,7 +52,7 @@ void cmd_hdr_help(void);
 void cmd_cameras_help(void);
 
 /* The rig file to use: `config`, or the simulated rig (data/rig-sim.json)
- * when it is NULL; into buf. */
+ * when it is NULL; written into buf (n bytes), which is returned. */
 const char *cmd_rig_config(char *buf, size_t n, const char *config);
 
 /* Report the current error (human or JSON) and return GLINT_EXIT_FAIL. */

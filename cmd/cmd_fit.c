@@ -5,8 +5,6 @@
 #include "capture/session.h"
 #include "fit/job.h"
 
-#include "core/atomic_dir.h"
-#include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/formats.h"
 #include "core/json.h"
@@ -21,7 +19,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 void cmd_fit_help(void)
@@ -210,43 +207,6 @@ void cmd_print_params(const json_t *doc, const double *truth)
 		printf("  note: %s\n", json_string_value(p));
 }
 
-/* A sample's capture session, as glint fit SESSION uses it. */
-static int fit_session_open(const char *dir, int wait,
-			    struct glint_session_fit *fs, int *lock)
-{
-	char path[GLINT_PATH_MAX];
-	int ret = glint_session_fit_inputs(dir, fs);
-
-	if (ret < 0)
-		return ret;
-	ret = glint_path_join(path, sizeof(path), dir, GLINT_SESSION_FIT_LOCK);
-	if (ret < 0)
-		return ret;
-	if (wait) {
-		ret = glint_lockfile_acquire(path, "glint fit", 0, lock);
-		if (ret == -EBUSY) {
-			glint_log_info("%s", glint_error_msg());
-			glint_log_info("waiting for it to finish");
-			ret = glint_lockfile_acquire(path, "glint fit", 1,
-						     lock);
-		}
-	} else {
-		ret = glint_lockfile_acquire(path, "glint fit", 0, lock);
-		if (ret == -EBUSY)
-			glint_error_prefix(ret,
-					   "%s is being fitted (use --wait to "
-					   "wait for it)",
-					   dir);
-	}
-	if (ret < 0)
-		return ret;
-	/* We hold the lock: what a killed fit left is ours to clean. */
-	if (glint_atomic_dir_sweep(fs->out) > 0)
-		glint_log_info("%s: cleaned up after an interrupted fit",
-			       fs->out);
-	return 0;
-}
-
 static int parse_model(const char *arg, void *dest)
 {
 	const struct glint_model_ops **m = dest;
@@ -331,7 +291,7 @@ int cmd_fit(int argc, char **argv)
 	struct glint_session_fit fs;
 	int lock = -1, ret;
 	if (a.argc == 1) {
-		ret = fit_session_open(a.argv[0], wait, &fs, &lock);
+		ret = glint_session_fit_open(a.argv[0], wait, &fs, &lock);
 		if (ret < 0)
 			return cmd_fail("fit");
 		job.scene_path = fs.scene;
@@ -351,16 +311,11 @@ int cmd_fit(int argc, char **argv)
 	if (!job.out_dir)
 		job.out_dir = "fit-out";
 	json_t *doc = NULL;
-	ret = glint_scene_load(job.scene_path, &job.scene);
-	if (!ret)
-		ret = glint_image_read(job.photo_path, &job.photo);
-	if (!ret && weights)
-		ret = glint_image_read(weights, &job.weight);
 	job.opts.progress = cmd_fit_progress;
+	ret = glint_fit_job_load(&job, weights);
 	if (!ret)
 		ret = glint_fit_job_run(&job, &doc);
-	glint_image_free(job.photo);
-	glint_image_free(job.weight);
+	glint_fit_job_unload(&job);
 	glint_lockfile_release(lock);
 	if (ret < 0)
 		return cmd_fail("fit");

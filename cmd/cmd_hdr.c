@@ -9,10 +9,8 @@
 
 #include "capture/frame_file.h"
 #include "capture/hdr_linear.h"
-#include "capture/hdr_response.h"
+#include "capture/hdr_files.h"
 #include "capture/session_merge.h"
-#include "core/formats.h"
-#include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/json.h"
 #include "core/log.h"
@@ -72,140 +70,32 @@ void cmd_hdr_help(void)
 	       "error), 1 bad input,\n2 bad command line.\n");
 }
 
-/* "32", "1/1024", "0.5" */
-static int parse_time(const char *s, double *t)
-{
-	char *end;
-	double a = strtod(s, &end);
-	if (*end == '/') {
-		double b = strtod(end + 1, &end);
-		a = b != 0 ? a / b : NAN;
-	}
-	while (*end == ' ' || *end == '\r' || *end == '\n')
-		end++;
-	if (*end || !(a > 0) || !isfinite(a))
-		return -1;
-	*t = a;
-	return 0;
-}
-
-static int read_times(const char *list, const char *file, int n, double *t)
-{
-	char buf[8192];
-	int k = 0;
-	if (file) {
-		FILE *f = fopen(file, "r");
-		if (!f)
-			return glint_error_set(errno, "%s: %s", file,
-					       strerror(errno));
-		while (k <= n && fgets(buf, sizeof(buf), f)) {
-			if (buf[0] == '\n' || buf[0] == '#')
-				continue;
-			if (k == n || parse_time(buf, &t[k]) < 0) {
-				fclose(f);
-				return glint_error_set(EINVAL,
-						       "%s: line %d: '%.40s': "
-						       "expected %d positive "
-						       "times (seconds, 1/N "
-						       "allowed)",
-						       file, k + 1, buf, n);
-			}
-			k++;
-		}
-		fclose(f);
-	} else {
-		snprintf(buf, sizeof(buf), "%s", list);
-		for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok;
-		     tok = strtok_r(NULL, ",", &save)) {
-			if (k == n || parse_time(tok, &t[k]) < 0)
-				return glint_error_set(
-					EINVAL,
-					"--times: '%s': expected "
-					"%d positive times",
-					tok, n);
-			k++;
-		}
-	}
-	if (k != n)
-		return glint_error_set(EINVAL,
-				       "%s: %d exposure times for %d images",
-				       file ? file : "--times", k, n);
-	return 0;
-}
-
 static int ldr_main(char **files, int n, const char *times,
 		    const char *times_file, const char *method, const char *out,
 		    int json)
 {
-	uint8_t **img = calloc((size_t)n, sizeof(*img));
+	struct glint_ldr_merge_info info;
 	double *t = calloc((size_t)n, sizeof(double));
-	double resp[256][3];
-	struct glint_image *rad = NULL, *valid = NULL;
-	int w = 0, h = 0, iters = 0, ret;
+	int ret = t ? 0 : glint_error_set(ENOMEM, "out of memory");
 
-	ret = img && t ? 0 : glint_error_set(ENOMEM, "out of memory");
 	if (ret == 0)
-		ret = read_times(times, times_file, n, t);
-	for (int i = 0; i < n && ret == 0; i++) {
-		int wi, hi;
-		ret = glint_png_read_rgb8(files[i], &wi, &hi, &img[i]);
-		if (ret == 0 && i && (wi != w || hi != h))
-			ret = glint_error_set(EINVAL,
-					      "%s is %dx%d, %s %dx%d: the "
-					      "photos must match",
-					      files[i], wi, hi, files[0], w, h);
-		w = wi;
-		h = hi;
-	}
-	struct glint_ldr_stack s = { n, w, h, (const uint8_t *const *)img, t };
+		ret = glint_exposure_times_read(times, times_file, n, t);
 	if (ret == 0)
-		ret = glint_ldr_check_order(&s, (const char *const *)files);
-	if (ret == 0 && !strcmp(method, "debevec")) {
-		struct glint_debevec_opts o;
-		glint_debevec_default_opts(&o);
-		ret = glint_response_debevec(&s, &o, resp);
-	} else if (ret == 0) {
-		ret = glint_response_robertson(&s, 30, 0.01, resp, &iters);
-	}
-	if (ret == 0)
-		ret = glint_ldr_merge(&s, resp, NULL, &rad, &valid);
-	if (ret == 0 && mkdir(out, 0777) < 0 && errno != EEXIST)
-		ret = glint_error_set(errno, "%s: %s", out, strerror(errno));
-	char path[4200];
-	const char *names[] = { "hdr.exr", "mask.png", "hdr.png" };
-	struct glint_image *imgs[] = { rad, valid, rad };
-	for (int i = 0; i < 3 && ret == 0; i++) {
-		struct glint_write_opts wo = { 0, 0, i == 2 };
-		snprintf(path, sizeof(path), "%s/%s", out, names[i]);
-		ret = glint_image_write(path, imgs[i], &wo);
-	}
-	if (ret == 0) {
-		char csv[256 * 64];
-		size_t k = 0;
-		for (int z = 0; z < 256; z++)
-			k += (size_t)snprintf(csv + k, sizeof(csv) - k,
-					      "%.8g,%.8g,%.8g\n", resp[z][0],
-					      resp[z][1], resp[z][2]);
-		snprintf(path, sizeof(path), "%s/response.csv", out);
-		ret = glint_atomic_write_file(path, csv, k);
-	}
-	if (ret == 0) {
-		glint_log_info("%d photos (%s response%s) -> %s/hdr.exr "
-			       "(%dx%d), response.csv",
-			       n, method, iters ? ", iterated" : "", out, w, h);
-		if (json)
-			cmd_print_json(json_pack("{s:s, s:i, s:s, s:i, s:i}",
-						 "output", out, "photos", n,
-						 "response", method, "width", w,
-						 "height", h));
-	}
-	for (int i = 0; img && i < n; i++)
-		free(img[i]);
-	free(img);
+		ret = glint_ldr_merge_files((const char *const *)files, n, t,
+					    method, out, &info);
 	free(t);
-	glint_image_free(rad);
-	glint_image_free(valid);
-	return ret < 0 ? cmd_fail("hdr") : GLINT_EXIT_OK;
+	if (ret < 0)
+		return cmd_fail("hdr");
+	glint_log_info("%d photos (%s response%s) -> %s/hdr.exr (%dx%d), "
+		       "response.csv",
+		       n, method, info.iterations ? ", iterated" : "", out,
+		       info.width, info.height);
+	if (json)
+		cmd_print_json(json_pack("{s:s, s:i, s:s, s:i, s:i}", "output",
+					 out, "photos", n, "response", method,
+					 "width", info.width, "height",
+					 info.height));
+	return GLINT_EXIT_OK;
 }
 
 int cmd_hdr(int argc, char **argv)
@@ -251,7 +141,6 @@ int cmd_hdr(int argc, char **argv)
 						  "hdr.png" };
 	int n = 0, width = 0, height = 0;
 	long valid_px = 0;
-	char path[4200];
 	struct stat st;
 	glint_noise_default(&nm);
 	/* One argument that is not a file: a session (or an error naming
@@ -269,10 +158,7 @@ int cmd_hdr(int argc, char **argv)
 			return cmd_usage_error("hdr",
 					       "frame files need -o DIR");
 		n = argc;
-		frames = calloc((size_t)n, sizeof(*frames));
-		ret = frames ? 0 : glint_error_set(ENOMEM, "out of memory");
-		for (int i = 0; i < n && ret == 0; i++)
-			ret = glint_frame_read(argv[i], &frames[i], NULL);
+		ret = glint_frames_read((const char *const *)argv, n, &frames);
 	}
 	if (!isnan(cpe))
 		nm.dn_per_electron = cpe;
@@ -285,31 +171,9 @@ int cmd_hdr(int argc, char **argv)
 					    &rep, &width, &height, &valid_px,
 					    NULL);
 	json_t *res = NULL;
-	if (ret == 0) {
-		json_t *pairs = json_array();
-		for (int i = 0; i < rep.pairs; i++)
-			json_array_append_new(
-				pairs, json_pack("{s:i, s:I, s:f}", "pair", i,
-						 "compared",
-						 (json_int_t)rep.compared[i],
-						 "disagree_fraction",
-						 rep.disagree[i]));
-		res = json_pack(
-			"{s:s, s:i, s:i, s:i, s:I, s:I, s:I, s:b, s:o, "
-			"s:{s:f, s:f, s:f}}",
-			"output", out, "frames", n, "width", width, "height",
-			height, "valid_pixels", (json_int_t)valid_px,
-			"clipped_sites", (json_int_t)rep.invalid_sites,
-			"dark_sites", (json_int_t)rep.dark_sites, "moved",
-			rep.moved, "motion", pairs, "noise_model",
-			"dn_per_electron", nm.dn_per_electron, "read_noise_e",
-			nm.read_noise_e, "saturation_dn", nm.saturation_dn);
-		char *text = json_dumps(res, JSON_INDENT(2));
-		snprintf(path, sizeof(path), "%s/hdr.json", out);
-		ret = text ? glint_atomic_write_file(path, text, strlen(text))
-			   : glint_error_set(ENOMEM, "out of memory");
-		free(text);
-	}
+	if (ret == 0)
+		ret = glint_hdr_report_write(out, n, width, height, valid_px,
+					     &rep, &nm, &res);
 	if (ret == 0) {
 		if (rep.moved)
 			glint_log_warn("frames of the bracket "

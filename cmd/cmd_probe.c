@@ -9,7 +9,6 @@
 
 #include "capture/probe.h"
 #include "capture/probe_register.h"
-#include "capture/sphere_detect.h"
 #include "core/error.h"
 #include "core/log.h"
 
@@ -101,77 +100,6 @@ static int parse_numbers(const char *arg, void *dest)
 	return 0;
 }
 
-/* An 8-bit photo is camera-encoded, not radiance: refused, or with
- * --srgb linearised through the sRGB curve (IEC 61966-2-1). */
-static int radiance_of(const char *path, struct glint_image *img, int srgb)
-{
-	char ext[16];
-	const char *ldr[] = { "png", "tga", "jpg", "jpeg", "bmp" };
-	int is_ldr = 0;
-
-	glint_path_ext(path, ext, sizeof(ext));
-	for (int i = 0; i < 5; i++)
-		is_ldr |= !strcmp(ext, ldr[i]);
-	if (!is_ldr)
-		return 0;
-	if (!srgb)
-		return glint_error_set(
-			EINVAL,
-			"%s: an 8-bit image holds camera-encoded "
-			"values, not radiance, and unwrapped as "
-			"light it would be wrong: merge a "
-			"bracket to HDR (glint hdr), or give "
-			"--srgb to take it as sRGB-encoded "
-			"(highlights stay clipped)",
-			path);
-	for (size_t i = 0; i < (size_t)img->width * img->height * 3; i++) {
-		float v = img->data[i];
-		img->data[i] = v <= 0.04045f
-				       ? v / 12.92f
-				       : powf((v + 0.055f) / 1.055f, 2.4f);
-	}
-	glint_log_warn("%s: 8-bit, taken as sRGB-encoded: highlights above "
-		       "the white point are clipped, so the map's lights are "
-		       "too dim",
-		       path);
-	return 0;
-}
-
-/* The ball's circle: found in the photo when --ball is not given (the
- * capture's detector); a given one is checked against it. */
-static int find_ball(const struct glint_image *photo, int given,
-		     struct glint_unwrap_opts *o)
-{
-	struct glint_circle c;
-	int ret = glint_sphere_detect(photo, 0, 0, &c);
-
-	if (given) {
-		double d = hypot(c.cx - o->ball_cx, c.cy - o->ball_cy);
-		double dr = fabs(c.r - o->ball_r);
-		if (ret == 0 && (d > 2 || dr > 2))
-			glint_log_warn(
-				"--ball %g,%g,%g disagrees with the ball "
-				"found in the photo, %.1f,%.1f,%.1f "
-				"(centre %.1f px, radius %.1f px "
-				"apart): check it",
-				o->ball_cx, o->ball_cy, o->ball_r, c.cx, c.cy,
-				c.r, d, dr);
-		return 0;
-	}
-	if (ret < 0)
-		return glint_error_prefix(
-			ret, "no ball found (give --ball CX,CY,R)");
-	o->ball_cx = c.cx;
-	o->ball_cy = c.cy;
-	o->ball_r = c.r;
-	glint_log_info("found the ball at %.2f,%.2f, radius %.2f px (%d rim "
-		       "points, %.2f px RMS, %.0f deg of its rim): --ball "
-		       "%.2f,%.2f,%.2f",
-		       c.cx, c.cy, c.r, c.points, c.rms_px, c.arc_deg, c.cx,
-		       c.cy, c.r);
-	return 0;
-}
-
 static int unwrap_main(int argc, char **argv)
 {
 	struct glint_unwrap_opts o;
@@ -225,28 +153,22 @@ static int unwrap_main(int argc, char **argv)
 		return cmd_usage_error("probe", "unwrap: expected PHOTO and -o "
 						"ENV.exr");
 	if (!(o.fpx > 0))
-		return cmd_usage_error("probe", "unwrap: "
-						"--focal-px is "
+		return cmd_usage_error("probe", "unwrap: --focal-px is "
 						"required");
 	struct glint_image *photo = NULL;
 	int w, h;
 	int ret = glint_image_read(argv[0], &photo);
 	if (ret == 0)
-		ret = radiance_of(argv[0], photo, srgb);
+		ret = glint_probe_photo_radiance(argv[0], photo, srgb);
 	if (ret == 0)
-		ret = find_ball(photo, have_ball, &o);
+		ret = glint_probe_find_ball(photo, have_ball, &o);
 	if (ret == 0)
 		ret = glint_probe_unwrap_write(photo, &o, out, &w, &h);
 	if (ret == 0)
-		glint_log_info("%s -> %s "
-			       "(%dx%d), mask "
-			       "and density "
-			       "beside it",
+		glint_log_info("%s -> %s (%dx%d), mask and density beside it",
 			       argv[0], out, w, h);
 	glint_image_free(photo);
-	return ret < 0 ? cmd_fail("prob"
-				  "e")
-		       : GLINT_EXIT_OK;
+	return ret < 0 ? cmd_fail("probe") : GLINT_EXIT_OK;
 }
 
 static int convert_main(int argc, char **argv)
@@ -293,26 +215,6 @@ static int convert_main(int argc, char **argv)
 	return ret < 0 ? cmd_fail("probe") : GLINT_EXIT_OK;
 }
 
-/* ENV-mask.png x ENV-density.exr, or NULL when absent. */
-static struct glint_image *view_weight(const char *env)
-{
-	char mp[GLINT_PATH_MAX], dp[GLINT_PATH_MAX];
-	struct glint_image *m = NULL, *d = NULL;
-	if (glint_path_sibling(mp, sizeof(mp), env, "-mask.png") < 0 ||
-	    glint_path_sibling(dp, sizeof(dp), env, "-density.exr") < 0 ||
-	    glint_image_read(mp, &m) < 0 || glint_image_read(dp, &d) < 0 ||
-	    m->width != d->width || m->height != d->height) {
-		glint_image_free(m);
-		glint_image_free(d);
-		glint_error_clear();
-		return NULL;
-	}
-	for (size_t i = 0; i < (size_t)m->width * m->height * 3; i++)
-		m->data[i] = (m->data[i] > 0.5f) * d->data[i];
-	glint_image_free(d);
-	return m;
-}
-
 static int register_main(int argc, char **argv)
 {
 	const char *out = NULL, *points = NULL;
@@ -340,33 +242,10 @@ static int register_main(int argc, char **argv)
 	int ret = glint_image_read(argv[0], &e1);
 	if (ret == 0)
 		ret = glint_image_read(argv[1], &e2);
-	w1 = ret == 0 ? view_weight(argv[0]) : NULL;
-	w2 = ret == 0 ? view_weight(argv[1]) : NULL;
+	w1 = ret == 0 ? glint_probe_view_weight(argv[0]) : NULL;
+	w2 = ret == 0 ? glint_probe_view_weight(argv[1]) : NULL;
 	if (ret == 0 && points) {
-		FILE *f = fopen(points, "r");
-		struct vec3 a[256], b[256];
-		int n = 0;
-		double x1, y1, x2, y2;
-		if (!f)
-			ret = glint_error_set(errno, "%s: %s", points,
-					      strerror(errno));
-		while (ret == 0 && n < 256 &&
-		       fscanf(f, " %lf %lf %lf %lf", &x1, &y1, &x2, &y2) == 4) {
-			glint_probe_pixel_dir(GLINT_PROBE_LATLONG, e1->width,
-					      e1->height, x1, y1, &a[n]);
-			glint_probe_pixel_dir(GLINT_PROBE_LATLONG, e2->width,
-					      e2->height, x2, y2, &b[n]);
-			n++;
-		}
-		if (f && ret == 0 && !feof(f))
-			ret = glint_error_set(EINVAL,
-					      "%s: line %d: expected 'x1 y1 x2 "
-					      "y2' (lat-long pixels)",
-					      points, n + 1);
-		if (f)
-			fclose(f);
-		if (ret == 0)
-			ret = glint_register_points(a, b, n, &r, &quality);
+		ret = glint_register_points_file(points, e1, e2, &r, &quality);
 	} else if (ret == 0) {
 		struct mat3 guess = m3_rotation_xyz_deg(0, yaw, 0);
 		ret = glint_register_auto(e1, w1, e2, w2, &guess, &r, &quality);

@@ -14,6 +14,8 @@
 extern "C" {
 #endif
 
+/* The C++ library's reader for what OpenEXRCore cannot decode (DWAA,
+ * DWAB); *out as glint_exr_read(). */
 int glint_exr_read_cxx(const char *path, struct glint_image **out);
 
 #ifdef __cplusplus

@@ -12,7 +12,9 @@
 
 #include <stdint.h>
 
-/* OpenEXR through the OpenEXRCore C API; RGB or Y channels, any of half,
+/* Readers store a new image in *out: the caller's (glint_image_free()).
+ *
+ * OpenEXR through the OpenEXRCore C API; RGB or Y channels, any of half,
  * float or uint; scanline or tiled (level 0); DWAA/DWAB fall back to the
  * C++ library (exr_cxx.cpp). */
 int glint_exr_read(const char *path, struct glint_image **out);

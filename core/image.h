@@ -6,6 +6,12 @@
  * The one image type: linear, scene-referred float RGB, interleaved,
  * row-major, row 0 at the top.  Pixel (x, y) covers [x, x+1) x [y, y+1) in
  * image coordinates; its centre is (x + 0.5, y + 0.5).
+ *
+ * Ownership, for every function in glint: an image returned, or stored
+ * through a `struct glint_image **` out-parameter, is the caller's and is
+ * freed with glint_image_free() (which takes NULL); on failure nothing is
+ * stored and nothing is to be freed.  Images passed as `const` are
+ * borrowed for the call only.
  */
 
 #include <stddef.h>
@@ -23,6 +29,7 @@ struct glint_image {
  */
 struct glint_image *glint_image_new(int width, int height);
 void glint_image_free(struct glint_image *img);
+/* A copy (the caller's), or NULL when out of memory. */
 struct glint_image *glint_image_dup(const struct glint_image *img);
 /* Box-average by an integer factor f (width / f x height / f, the
  * remainder rows and columns dropped); NULL if out of memory. */

@@ -37,6 +37,7 @@ enum glint_fit_method {
 	GLINT_FIT_VARPRO,
 };
 
+/* "three-pass", ...: static strings. */
 const char *glint_fit_method_name(enum glint_fit_method m);
 int glint_fit_method_parse(const char *s, enum glint_fit_method *m);
 

@@ -255,6 +255,25 @@ static int check_outputs(const struct glint_fit_job *job)
 	return ret;
 }
 
+int glint_fit_job_load(struct glint_fit_job *job, const char *weights_path)
+{
+	int ret = glint_scene_load(job->scene_path, &job->scene);
+
+	job->photo = job->weight = NULL;
+	if (ret == 0)
+		ret = glint_image_read(job->photo_path, &job->photo);
+	if (ret == 0 && weights_path)
+		ret = glint_image_read(weights_path, &job->weight);
+	return ret;
+}
+
+void glint_fit_job_unload(struct glint_fit_job *job)
+{
+	glint_image_free(job->photo);
+	glint_image_free(job->weight);
+	job->photo = job->weight = NULL;
+}
+
 int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 {
 	struct glint_renderer r;

@@ -40,6 +40,15 @@ struct glint_fit_job {
 };
 
 /*
+ * Read the job's inputs: the scene from scene_path, the photo from
+ * photo_path and, when weights_path is not NULL, the per-pixel weights.
+ * The images are the job's until glint_fit_job_unload(), which is safe
+ * after a failed load too.
+ */
+int glint_fit_job_load(struct glint_fit_job *job, const char *weights_path);
+void glint_fit_job_unload(struct glint_fit_job *job);
+
+/*
  * Trace, fit, render the result and write out_dir/{params.json,
  * render.exr, compare.png} as one atomic folder.  Before any work, an
  * out_dir (or its ".refused" sibling) that holds anything but a previous

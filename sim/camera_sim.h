@@ -13,7 +13,8 @@ extern const struct glint_camera_ops glint_camera_sim_ops;
 
 /* The test card it photographs: `decades` decades of radiance left to
  * right up to 100 (R 0.8, G 1, B 0.6 of that), and a disk of 500 at
- * (0.7 w, 0.5 h), radius 0.1 w.  Ground truth for HDR tests. */
+ * (0.7 w, 0.5 h), radius 0.1 w.  Ground truth for HDR tests.  The caller's
+ * (glint_image_free()); NULL when out of memory. */
 struct glint_image *glint_sim_test_card(int w, int h, double decades);
 
 /* The sim rig's world: the Venice map shipped with glint turned about +Y

@@ -83,11 +83,11 @@ extern const struct glint_model_ops glint_model_dielectric;
 /* Cosine-weighted direction about +z from two uniforms; returns its pdf. */
 double glint_sample_cosine(const double u[2], struct vec3 *wi);
 
-/* Model by name, or NULL. */
+/* Model by name (a static table entry, never freed), or NULL. */
 const struct glint_model_ops *glint_model_find(const char *name);
 /* "lambert, torrance-sparrow" for messages (static storage). */
 const char *glint_model_names(void);
-/* The models' names, NULL-terminated. */
+/* The models' names, NULL-terminated (static). */
 const char *const *glint_model_list(void);
 
 /*
@@ -101,7 +101,8 @@ int glint_material_from_json(const char *file, const char *where, json_t *obj,
 			     double *params);
 /* Read a material file (or a fit's params.json: its "material"), or one
  * entry of a Table-1 style file when `entry` is not NULL (matched against
- * "materials"[].name). */
+ * "materials"[].name).  *model is static; params holds
+ * GLINT_MAX_PARAMS values. */
 int glint_material_load(const char *path, const char *entry,
 			const struct glint_model_ops **model, double *params);
 /* The material as JSON (same shape as read). Caller json_decref()s. */

@@ -47,7 +47,8 @@ struct glint_shade_cache_opts {
 /*
  * Build a cache for pixels pix[0..n) (indices y * width + x of gb) that
  * are wholly covered by the sample.  The env map and model must outlive
- * the cache.
+ * the cache; gb and pix are copied from.  *out is the caller's, freed with
+ * glint_shade_cache_free().
  */
 int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 			  int n, const struct glint_envmap *env,

@@ -22,6 +22,8 @@ enum glint_sphere_kind {
 	GLINT_SPHERE_POINT, /* RTC_GEOMETRY_TYPE_SPHERE_POINT */
 };
 
+/* An empty Embree scene on its own device: *out is the caller's, freed
+ * with glint_tracer_free(). */
 int glint_tracer_new(struct glint_tracer **out);
 void glint_tracer_free(struct glint_tracer *t);
 int glint_tracer_add_sphere(struct glint_tracer *t, struct vec3 centre,

@@ -115,6 +115,10 @@ void glint_env_query(const struct glint_envmap *env,
 		     const struct glint_env_hot *hot, struct vec3 d,
 		     double rgb[3], double *pdf_smooth, int *is_hot);
 
+/* The map's hot texels: those whose share of the map's sampling
+ * distribution is at least tau of the largest share (none when that is
+ * more than max_texels: no compact peak), q x q points each.  *out is the
+ * caller's, freed with glint_env_hot_free(); env must outlive it. */
 int glint_env_hot_new(const struct glint_envmap *env, double tau,
 		      int max_texels, int q, struct glint_env_hot **out);
 void glint_env_hot_free(struct glint_env_hot *hot);

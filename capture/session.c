@@ -352,3 +352,39 @@ int glint_session_fit_open(const char *dir, int wait,
 			       fs->out);
 	return 0;
 }
+
+void glint_session_summarize(const char *dir, struct glint_session_summary *s)
+{
+	char path[GLINT_PATH_MAX];
+	struct stat st;
+	json_t *doc = NULL;
+
+	memset(s, 0, sizeof(*s));
+	if (glint_path_join(path, sizeof(path), dir, GLINT_SESSION_JSON) == 0)
+		doc = json_load_file(path, 0, NULL);
+	const char *kind = json_string_value(json_object_get(doc, "kind"));
+	const char *status = json_string_value(json_object_get(doc, "status"));
+	const char *err = json_string_value(json_object_get(doc, "error"));
+	glint_text(s->kind, sizeof(s->kind), "%s", kind ? kind : "?");
+	glint_text(s->status, sizeof(s->status), "%s",
+		   status ? status : "unreadable");
+	glint_text(s->error, sizeof(s->error), "%s", err ? err : "");
+	s->frames = (int)json_array_size(json_object_get(doc, "frames"));
+	json_decref(doc);
+	glint_error_clear();
+	s->fitted = glint_path_join(path, sizeof(path), dir,
+				    GLINT_SESSION_FIT "/params.json") == 0 &&
+		    stat(path, &st) == 0;
+}
+
+json_t *glint_session_fit_params(const char *dir)
+{
+	char path[GLINT_PATH_MAX];
+
+	if (glint_path_join(path, sizeof(path), dir,
+			    GLINT_SESSION_FIT "/params.json") < 0) {
+		glint_error_clear();
+		return NULL;
+	}
+	return json_load_file(path, 0, NULL);
+}

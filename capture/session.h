@@ -22,6 +22,8 @@
 #include "core/error.h"
 #include "core/path.h"
 
+#include <jansson.h>
+
 /* The files of a session folder: the one place their names are spelt. */
 #define GLINT_SESSION_JSON	     "session.json"
 #define GLINT_SESSION_RIG	     "rig.json"
@@ -83,5 +85,20 @@ int glint_session_fit_open(const char *dir, int wait,
  * with glint_session_list_free().  A missing root is an empty list. */
 int glint_session_list(const char *root, char ***list, int *n);
 void glint_session_list_free(char **list, int n);
+
+/* What `glint sessions` shows of a session folder: kind, status ("?"
+ * and "unreadable" when its session.json cannot be read), frame count,
+ * whether it holds a fit result, and the error it ended with ("" when
+ * none).  Never fails: an unreadable session is a row that says so. */
+struct glint_session_summary {
+	char kind[16], status[16];
+	int frames, fitted;
+	char error[256];
+};
+void glint_session_summarize(const char *dir, struct glint_session_summary *s);
+
+/* The params.json of the session's fit result, or NULL when there is
+ * none (or it cannot be read); the caller json_decref()s it. */
+json_t *glint_session_fit_params(const char *dir);
 
 #endif

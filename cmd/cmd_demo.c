@@ -55,7 +55,8 @@ void cmd_demo_help(void)
 int cmd_demo(int argc, char **argv)
 {
 	const char *material = "yellow-plastic", *dir = "demo-out";
-	char scene_path[4096], table[4096], photo_path[4200], fit_dir[4200];
+	char scene_path[GLINT_PATH_MAX], table[GLINT_PATH_MAX];
+	char photo_path[GLINT_PATH_MAX], fit_dir[GLINT_PATH_MAX];
 	struct glint_fit_job job = { 0 };
 	const struct glint_model_ops *model;
 	double truth[GLINT_MAX_PARAMS];
@@ -80,11 +81,14 @@ int cmd_demo(int argc, char **argv)
 	if (a.argc != 0)
 		return cmd_usage_error("demo", "unexpected argument '%s'",
 				       a.argv[0]);
-	snprintf(scene_path, sizeof(scene_path), "%s/demo-scene.json",
-		 glint_data_dir());
-	snprintf(table, sizeof(table), "%s/paper-table1.json",
-		 glint_data_dir());
-	if (glint_scene_load(scene_path, &job.scene) < 0 ||
+	if (glint_path_join(scene_path, sizeof(scene_path), glint_data_dir(),
+			    "demo-scene.json") < 0 ||
+	    glint_path_join(table, sizeof(table), glint_data_dir(),
+			    "paper-table1.json") < 0 ||
+	    glint_path_join(photo_path, sizeof(photo_path), dir, "photo.exr") <
+		    0 ||
+	    glint_path_join(fit_dir, sizeof(fit_dir), dir, "fit") < 0 ||
+	    glint_scene_load(scene_path, &job.scene) < 0 ||
 	    glint_material_load(table, material, &model, truth) < 0)
 		return cmd_fail("demo");
 	job.model = model; /* the demo fits the material's own model */
@@ -93,8 +97,6 @@ int cmd_demo(int argc, char **argv)
 				strerror(errno));
 		return cmd_fail("demo");
 	}
-	snprintf(photo_path, sizeof(photo_path), "%s/photo.exr", dir);
-	snprintf(fit_dir, sizeof(fit_dir), "%s/fit", dir);
 
 	/* The simulated capture. */
 	struct glint_image *photo = NULL;

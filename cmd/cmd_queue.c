@@ -158,36 +158,21 @@ int cmd_sessions(int argc, char **argv)
 		printf("%-9s %-6s %-11s %-5s %s\n", "KIND", "FRAMES", "STATUS",
 		       "FIT", "SESSION");
 	for (int i = 0; i < n; i++) {
-		char path[4500];
-		struct stat st;
-		snprintf(path, sizeof(path), "%s/session.json", list[i]);
-		json_t *doc = json_load_file(path, 0, NULL);
-		const char *kind =
-			json_string_value(json_object_get(doc, "kind"));
-		const char *status =
-			json_string_value(json_object_get(doc, "status"));
-		int frames =
-			(int)json_array_size(json_object_get(doc, "frames"));
-		snprintf(path, sizeof(path), "%s/fit/params.json", list[i]);
-		int fitted = stat(path, &st) == 0;
-		const char *err =
-			json_string_value(json_object_get(doc, "error"));
+		struct glint_session_summary ss;
+		glint_session_summarize(list[i], &ss);
 		if (q.json)
 			json_array_append_new(
 				arr, json_pack("{s:s, s:s, s:s, s:i, s:b, "
 					       "s:s*}",
 					       "session", list[i], "kind",
-					       kind ? kind : "?", "status",
-					       status ? status : "unreadable",
-					       "frames", frames, "fitted",
-					       fitted, "error", err));
+					       ss.kind, "status", ss.status,
+					       "frames", ss.frames, "fitted",
+					       ss.fitted, "error",
+					       ss.error[0] ? ss.error : NULL));
 		else
-			printf("%-9s %6d %-11s %-5s %s%s%s\n",
-			       kind ? kind : "?", frames,
-			       status ? status : "unreadable",
-			       fitted ? "yes" : "-", list[i],
-			       err ? "  -- " : "", err ? err : "");
-		json_decref(doc);
+			printf("%-9s %6d %-11s %-5s %s%s%s\n", ss.kind,
+			       ss.frames, ss.status, ss.fitted ? "yes" : "-",
+			       list[i], ss.error[0] ? "  -- " : "", ss.error);
 	}
 	glint_session_list_free(list, n);
 	if (q.json)

@@ -18,6 +18,7 @@
 #include "board/board.h"
 #include "board/queue.h"
 #include "capture/camera.h"
+#include "capture/session.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "core/path.h"
@@ -104,9 +105,7 @@ static pid_t start_worker(const char *root, void *ctx)
 
 static void print_result(const struct glint_rig_run *ro, int json)
 {
-	char path[4300];
-	snprintf(path, sizeof(path), "%s/fit/params.json", ro->sample);
-	json_t *doc = json_load_file(path, 0, NULL);
+	json_t *doc = glint_session_fit_params(ro->sample);
 	if (json) {
 		cmd_print_json(json_pack("{s:s, s:s, s:s, s:s, s:o*}", "run",
 					 ro->dir, "probe", ro->probe, "sample",

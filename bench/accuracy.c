@@ -185,6 +185,9 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 		struct glint_fit_result ev;
 		glint_fit_default_opts(&o);
 		o.mc_draws = 0;
+		if (getenv("ACCURACY_SAMPLES"))
+			o.light_samples = o.lobe_samples =
+				atoi(getenv("ACCURACY_SAMPLES"));
 		double bias = NAN;
 		if (glint_fit_evaluate(&r, m, a, NULL, &o, truth, &ev) == 0)
 			bias = ev.rmse / noise;

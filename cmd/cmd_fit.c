@@ -339,6 +339,10 @@ int cmd_fit(int argc, char **argv)
 	printf("  verdict: %s\n",
 	       json_string_value(json_object_get(
 		       json_object_get(doc, "acceptance"), "verdict")));
+	const char *mv = json_string_value(
+		json_object_get(json_object_get(doc, "misfit"), "verdict"));
+	if (mv)
+		printf("  residual: %s\n", mv);
 	printf("results: %s/params.json, render.exr, compare.png\n",
 	       job.out_dir);
 	json_decref(doc);

@@ -9,6 +9,7 @@
 #include "job.h"
 
 #include "ladder.h"
+#include "misfit.h"
 #include "select.h"
 #include "fit/render/compare.h"
 #include "core/atomic_dir.h"
@@ -328,6 +329,12 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 		json_object_set(doc, "fidelity", fidelity);
 	if (selection)
 		json_object_set(doc, "model_selection", selection);
+	struct glint_misfit mf;
+	if (glint_misfit_analyse(&r.gb, r.env, job->photo, img, job->weight,
+				 cov, &mf) == 0)
+		json_object_set_new(doc, "misfit", glint_misfit_json(&mf));
+	else
+		glint_error_clear();
 	/* A fit is taken as a measurement by a stated rule; a refused one
 	 * leaves its evidence beside the output, which stays as it was. */
 	struct glint_fit_verdict v;

@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# params.json's "misfit" (fit/misfit.h): the residual binned by the angle
+# from the view direction and from the mirror direction of the map's
+# brightest light.  The true model on a reference-renderer photo leaves no
+# structure; a Lambert fit of the same glossy sphere must be called
+# structured, in both angles, in params.json and in the text output.
+# usage: test_misfit.sh GLINT DATA_DIR
+set -u
+glint=$1
+data=$2
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+cd "$tmp" || exit 1
+fails=0
+check() {
+	local what=$1
+	shift
+	if "$@"; then echo "ok   $what"; else echo "FAIL $what"; fails=$((fails + 1)); fi
+}
+check "demo (yellow plastic, reference renderer)" bash -c "'$glint' demo -o d -q >/dev/null 2>d.err"
+check "the true model leaves no structure" python3 -c "
+import json
+m = json.load(open('d/fit/params.json'))['misfit']
+print('  ', m['verdict'])
+assert not m['structured'], m['verdict']
+bands = m['by_view_angle']
+assert len(bands) == 9 and bands[0]['deg'] == [0, 10] and bands[-1]['deg'] == [80, 90]
+n = sum(b['pixels'] for b in bands)
+assert n == sum(b['pixels'] for b in m['by_mirror_angle']) and n > 10000, n
+# every band with pixels is within 5 standard errors of zero
+for b in bands + m['by_mirror_angle']:
+    if b['pixels'] >= 20:
+        assert abs(b['mean_residual']) <= 5 * b['standard_error'], b
+"
+check "a Lambert fit of the glossy sphere" bash -c "'$glint' fit '$data/demo-scene.json' d/photo.exr --model lambert --accept-rmse 10 -o lam >lam.txt 2>lam.err"
+check "... is called structured in both angles" python3 -c "
+import json
+m = json.load(open('lam/params.json'))['misfit']
+print('  ', m['verdict'])
+assert m['structured']
+assert 'view direction' in m['verdict'] and 'mirror direction' in m['verdict']
+worst = max(abs(b['mean_residual']) / b['standard_error'] for b in m['by_view_angle'] if b['pixels'] >= 20)
+assert worst > 5, worst
+"
+check "... and the text output says so" grep -q '^  residual: structured residual' lam.txt
+[ "$fails" -eq 0 ] || { echo "$fails check(s) failed"; exit 1; }

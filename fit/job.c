@@ -207,8 +207,31 @@ static json_t *params_doc(const struct glint_fit_job *job,
  * atomic folder (the old one stays whole on failure). */
 static int write_results(const struct glint_fit_job *job, const char *dir,
 			 const json_t *doc, const struct glint_image *img,
-			 const struct glint_image *cov)
+			 const struct glint_image *cov,
+			 const struct glint_misfit *mf)
 {
+	double ve[GLINT_MISFIT_BANDS + 1], me[GLINT_MISFIT_BANDS + 1];
+	double mean[2][GLINT_MISFIT_BANDS], se[2][GLINT_MISFIT_BANDS];
+	long px[2][GLINT_MISFIT_BANDS];
+	struct glint_compare_plot plots[2] = {
+		{ "VIEW ANGLE", GLINT_MISFIT_BANDS, ve, mean[0], se[0], px[0] },
+		{ "MIRROR ANGLE", GLINT_MISFIT_BANDS, me, mean[1], se[1],
+		  px[1] },
+	};
+	for (int k = 0; mf && k < GLINT_MISFIT_BANDS; k++) {
+		const struct glint_misfit_band *b[2] = { &mf->view[k],
+							 &mf->mirror[k] };
+		for (int a = 0; a < 2; a++) {
+			mean[a][k] = b[a]->mean;
+			se[a][k] = b[a]->se;
+			px[a][k] = b[a]->n;
+		}
+		ve[k] = b[0]->lo_deg;
+		me[k] = b[1]->lo_deg;
+		ve[k + 1] = b[0]->hi_deg;
+		me[k + 1] = b[1]->hi_deg;
+	}
+
 	struct glint_atomic_dir ad;
 	char path[GLINT_PATH_MAX];
 	int ret = glint_atomic_dir_open(&ad, dir);
@@ -228,10 +251,10 @@ static int write_results(const struct glint_fit_job *job, const char *dir,
 							      sizeof(path)),
 					img, NULL);
 	if (!ret)
-		ret = glint_compare_png(
+		ret = glint_compare_png_plots(
 			glint_atomic_dir_file(&ad, "compare.png", path,
 					      sizeof(path)),
-			job->photo, img, cov, NULL);
+			job->photo, img, cov, plots, mf ? 2 : 0, NULL);
 	if (!ret)
 		ret = glint_atomic_dir_commit(&ad);
 	else
@@ -329,12 +352,14 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 		json_object_set(doc, "fidelity", fidelity);
 	if (selection)
 		json_object_set(doc, "model_selection", selection);
-	struct glint_misfit mf;
+	struct glint_misfit mf, *have_mf = NULL;
 	if (glint_misfit_analyse(&r.gb, r.env, job->photo, img, job->weight,
-				 cov, &mf) == 0)
+				 cov, &mf) == 0) {
 		json_object_set_new(doc, "misfit", glint_misfit_json(&mf));
-	else
+		have_mf = &mf;
+	} else {
 		glint_error_clear();
+	}
 	/* A fit is taken as a measurement by a stated rule; a refused one
 	 * leaves its evidence beside the output, which stays as it was. */
 	struct glint_fit_verdict v;
@@ -347,7 +372,7 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 		ret = glint_path_fmt(dir, sizeof(dir), "%s.refused",
 				     job->out_dir);
 		if (!ret)
-			ret = write_results(job, dir, doc, img, cov);
+			ret = write_results(job, dir, doc, img, cov, have_mf);
 		if (!ret)
 			ret = glint_error_set(EINVAL,
 					      "%s: fit refused: %s (the fit's "
@@ -355,7 +380,7 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 					      job->photo_path, v.verdict, dir);
 		goto out;
 	}
-	ret = write_results(job, job->out_dir, doc, img, cov);
+	ret = write_results(job, job->out_dir, doc, img, cov, have_mf);
 	if (ret < 0)
 		goto out;
 	json_object_set_new(doc, "output", json_string(job->out_dir));

@@ -37,6 +37,14 @@ static const struct {
 	{ 'E', { 0x1F, 0x10, 0x10, 0x1E, 0x10, 0x10, 0x1F } },
 	{ 'N', { 0x11, 0x11, 0x19, 0x15, 0x13, 0x11, 0x11 } },
 	{ 'D', { 0x1C, 0x12, 0x11, 0x11, 0x11, 0x12, 0x1C } },
+	{ 'V', { 0x11, 0x11, 0x11, 0x11, 0x11, 0x0A, 0x04 } },
+	{ 'I', { 0x0E, 0x04, 0x04, 0x04, 0x04, 0x04, 0x0E } },
+	{ 'W', { 0x11, 0x11, 0x11, 0x15, 0x15, 0x15, 0x0A } },
+	{ 'A', { 0x0E, 0x11, 0x11, 0x1F, 0x11, 0x11, 0x11 } },
+	{ 'G', { 0x0E, 0x11, 0x10, 0x17, 0x11, 0x11, 0x0F } },
+	{ 'L', { 0x10, 0x10, 0x10, 0x10, 0x10, 0x10, 0x1F } },
+	{ 'M', { 0x11, 0x1B, 0x15, 0x15, 0x11, 0x11, 0x11 } },
+	{ 'S', { 0x0F, 0x10, 0x10, 0x0E, 0x01, 0x01, 0x1E } },
 };
 
 struct canvas {
@@ -98,13 +106,71 @@ static int cmp_d(const void *a, const void *b)
 	return (x > y) - (x < y);
 }
 
+static void fill(struct canvas *cv, int x0, int y0, int x1, int y1,
+		 const uint8_t rgb[3])
+{
+	for (int y = y0; y <= y1; y++)
+		for (int x = x0; x <= x1; x++)
+			put(cv, x, y, rgb);
+}
+
+/* One residual plot in the box (x0, y0, pw x ph). */
+static void plot(struct canvas *cv, int x0, int y0, int pw, int ph, int s,
+		 const struct glint_compare_plot *p)
+{
+	static const uint8_t axis[3] = { 150, 150, 150 };
+	static const uint8_t ink[3] = { 20, 20, 20 };
+	static const uint8_t red[3] = { 178, 24, 43 };
+	int top = 10 * s + 4, bottom = 10 * s + 4;
+	int gy0 = y0 + top, gh = ph - top - bottom, zero = gy0 + gh / 2;
+	double ymax = 0;
+	char buf[32];
+
+	for (int k = 0; k < p->n; k++)
+		if (p->pixels[k] >= 20 && isfinite(p->mean[k]) &&
+		    isfinite(p->se[k]))
+			ymax = fmax(ymax, fabs(p->mean[k]) + 2 * p->se[k]);
+	if (!(ymax > 0))
+		ymax = 1e-6;
+	text(cv, x0, y0, s, p->title);
+	snprintf(buf, sizeof(buf), "+%.2g", ymax);
+	text(cv, x0 + pw - (int)strlen(buf) * 6 * s, y0, s, buf);
+	fill(cv, x0, zero, x0 + pw - 1, zero, axis);
+	fill(cv, x0, gy0, x0, gy0 + gh, axis);
+	for (int k = 0; k < p->n; k++) {
+		int bx = x0 + (int)((k + 0.5) * pw / p->n);
+		snprintf(buf, sizeof(buf), "%g", p->edges[k]);
+		text(cv, x0 + k * pw / p->n + 2, gy0 + gh + 4, 1, buf);
+		if (p->pixels[k] < 20 || !isfinite(p->mean[k]) ||
+		    !isfinite(p->se[k]))
+			continue;
+		const uint8_t *c = fabs(p->mean[k]) > 5 * p->se[k] ? red : ink;
+		double f = gh / 2.0 / ymax;
+		int ym = zero - (int)lrint(p->mean[k] * f);
+		int e = (int)lrint(2 * p->se[k] * f);
+		fill(cv, bx, ym - e, bx, ym + e, c);
+		fill(cv, bx - 2 * s, ym - 1 - s, bx + 2 * s, ym + 1 + s, c);
+	}
+}
+
 int glint_compare_png(const char *path, const struct glint_image *photo,
 		      const struct glint_image *render,
 		      const struct glint_image *mask, double *scale_out)
 {
+	return glint_compare_png_plots(path, photo, render, mask, NULL, 0,
+				       scale_out);
+}
+
+int glint_compare_png_plots(const char *path, const struct glint_image *photo,
+			    const struct glint_image *render,
+			    const struct glint_image *mask,
+			    const struct glint_compare_plot *plots, int nplots,
+			    double *scale_out)
+{
 	int w = photo->width, h = photo->height, gap = 6, s = w >= 256 ? 2 : 1;
 	int top = 10 * s + 6, bar = 12, bottom = bar + 12 * s + 10;
-	struct canvas cv = { 3 * w + 2 * gap, top + h + bottom, NULL };
+	int ph = nplots ? (h / 2 > 120 ? h / 2 : 120) : 0;
+	struct canvas cv = { 3 * w + 2 * gap, top + h + bottom + ph, NULL };
 	size_t n = (size_t)w * h;
 	double *err = malloc(n * sizeof(double)),
 	       *mag = malloc(n * sizeof(double));
@@ -172,6 +238,11 @@ int glint_compare_png(const char *path, const struct glint_image *photo,
 	text(&cv, bx, by + bar + 3, s, lo);
 	text(&cv, bx + w / 2 - 3 * s, by + bar + 3, s, "0");
 	text(&cv, bx + w - (int)strlen(hi) * 6 * s, by + bar + 3, s, hi);
+	for (int k = 0; k < nplots; k++) {
+		int pw = (cv.w - (nplots + 1) * 3 * gap) / nplots;
+		plot(&cv, 3 * gap + k * (pw + 3 * gap), top + h + bottom, pw,
+		     ph - gap, s, &plots[k]);
+	}
 	ret = glint_png_write_rgb8(path, cv.w, cv.h, cv.px);
 	if (scale_out)
 		*scale_out = es;

@@ -12,8 +12,29 @@
  * a scale bar.  mask (may be NULL) marks the pixels on the sphere (> 0);
  * elsewhere the error panel is grey.
  */
+/*
+ * A residual plot under the three panels: bands of some angle, each with
+ * its mean residual and standard error, drawn as a dot with a +-2 standard
+ * error bar (red where the mean is more than 5 standard errors from 0)
+ * about a zero line.  edges has n + 1 values (degrees); bands with fewer
+ * than 20 pixels are not drawn.  title: upper-case letters, digits.
+ */
+struct glint_compare_plot {
+	const char *title;
+	int n;
+	const double *edges, *mean, *se;
+	const long *pixels;
+};
+
 int glint_compare_png(const char *path, const struct glint_image *photo,
 		      const struct glint_image *render,
 		      const struct glint_image *mask, double *scale_out);
+
+/* The same with nplots residual plots (may be 0) side by side below. */
+int glint_compare_png_plots(const char *path, const struct glint_image *photo,
+			    const struct glint_image *render,
+			    const struct glint_image *mask,
+			    const struct glint_compare_plot *plots, int nplots,
+			    double *scale_out);
 
 #endif

@@ -1,4 +1,5 @@
 /* SPDX-License-Identifier: MIT */
+#define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
 #include "options.h"
 #include "fit/render/render_job.h"
@@ -8,10 +9,12 @@
 #include "core/log.h"
 #include "fit/render/render.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 void cmd_render_help(void)
 {
@@ -30,6 +33,16 @@ void cmd_render_help(void)
 	       "Table-1 style file\n"
 	       "  --paper NAME        a material of the paper's Table 1 (e.g. "
 	       "satin-paint, copper)\n"
+	       "      --env MAP       relight: this environment map instead "
+	       "of the scene's\n"
+	       "                      (lat-long .exr/.hdr/.pfm; a path from "
+	       "the current folder)\n"
+	       "      --env-rotation X,Y,Z  the map's rotation, degrees about "
+	       "X, Y, Z\n"
+	       "                      (default: the scene's; 0,0,0 with "
+	       "--env)\n"
+	       "      --env-scale S   radiance multiplier (default: the "
+	       "scene's; 1 with --env)\n"
 	       "  -o, --output FILE   HDR output (.exr, .hdr, .pfm); default "
 	       "render.exr\n"
 	       "      --png FILE      8-bit sRGB preview (tone map: see "
@@ -54,6 +67,54 @@ void cmd_render_help(void)
 	       "line.\n");
 }
 
+struct rotation {
+	int given;
+	double deg[3];
+};
+
+/* "X,Y,Z" in degrees. */
+static int parse_rotation(const char *arg, void *dest)
+{
+	struct rotation *r = dest;
+	char *end;
+	const char *p = arg;
+
+	for (int k = 0; k < 3; k++) {
+		r->deg[k] = strtod(p, &end);
+		if (end == p || !isfinite(r->deg[k]) || fabs(r->deg[k]) > 360 ||
+		    *end != (k < 2 ? ',' : '\0'))
+			return glint_error_set(EINVAL,
+					       "expected X,Y,Z in degrees "
+					       "(each within +-360), e.g. "
+					       "0,90,0");
+		p = end + 1;
+	}
+	r->given = 1;
+	return 0;
+}
+
+/* --env and its rotation and scale replace the scene's environment. */
+static int relight(struct glint_scene *sc, const char *env,
+		   const struct rotation *rot, double scale)
+{
+	if (env) {
+		if (access(env, R_OK) < 0)
+			return glint_error_set(errno, "--env: %s: %s", env,
+					       strerror(errno));
+		if (strlen(env) >= sizeof(sc->env_path))
+			return glint_error_set(ENAMETOOLONG,
+					       "--env: path too long");
+		memcpy(sc->env_path, env, strlen(env) + 1);
+		memset(sc->env_rotation, 0, sizeof(sc->env_rotation));
+		sc->env_scale = 1;
+	}
+	if (rot->given)
+		memcpy(sc->env_rotation, rot->deg, sizeof(rot->deg));
+	if (!isnan(scale))
+		sc->env_scale = scale;
+	return 0;
+}
+
 int cmd_render(int argc, char **argv)
 {
 	struct glint_render_job job = { .out_exr = "render.exr",
@@ -61,11 +122,17 @@ int cmd_render(int argc, char **argv)
 					.exposure = NAN };
 	const char *material = NULL, *entry = NULL, *paper = NULL;
 	int spp = 0, ls = -1, bs = -1, nobg = 0;
+	const char *env = NULL;
+	struct rotation rot = { 0 };
+	double env_scale = NAN;
 	char paper_path[4096];
 	const struct cmd_opt opts[] = {
 		CMD_STRING("material", 'm', &material),
 		CMD_STRING("entry", 0, &entry),
 		CMD_STRING("paper", 0, &paper),
+		CMD_STRING("env", 0, &env),
+		CMD_CALL("env-rotation", &rot, parse_rotation),
+		CMD_REAL("env-scale", &env_scale, 1e-12, 1e12),
 		CMD_STRING("output", 'o', &job.out_exr),
 		CMD_STRING("png", 0, &job.out_png),
 		CMD_REAL("exposure", &job.exposure, -64, 64),
@@ -94,7 +161,8 @@ int cmd_render(int argc, char **argv)
 						 "--material and --paper");
 	if (entry && !material)
 		return cmd_usage_error("render", "--entry needs --material");
-	if (glint_scene_load(a.argv[0], &job.scene) < 0)
+	if (glint_scene_load(a.argv[0], &job.scene) < 0 ||
+	    relight(&job.scene, env, &rot, env_scale) < 0)
 		return cmd_fail("render");
 	if (paper) {
 		snprintf(paper_path, sizeof(paper_path), "%s/paper-table1.json",

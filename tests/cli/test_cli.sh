@@ -68,6 +68,29 @@ assert r['output'].endswith('r.exr') and r['width']==64 and r['material']['model
 check "render wrote a PNG" python3 -c "
 import sys; b=open('$tmp/r.png','rb').read(8); assert b==b'\x89PNG\r\n\x1a\n', b"
 check "render output converts back" run 0 "" convert "$tmp/r.exr" "$tmp/r.pfm"
+# Relighting without a scene file: --env with the scene's own map and
+# rotation is the scene's render, bit for bit; another rotation, another
+# map or a scale is not; a missing map names --env.
+check "render --env (the scene's own map and rotation)" run 0 "" render "$tmp/scene.json" --paper copper -o "$tmp/e1.exr" --env "$tmp/env.exr" --env-rotation 0,90,0
+check "... equals the scene's render" cmp -s "$tmp/r.exr" "$tmp/e1.exr"
+check "render --env-rotation 0,0,0" run 0 "" render "$tmp/scene.json" --paper copper -o "$tmp/e2.exr" --env-rotation 0,0,0
+check "... relights it" bash -c "! cmp -s '$tmp/r.exr' '$tmp/e2.exr'"
+check "render --env with another map" run 0 "" render "$tmp/scene.json" --paper copper -o "$tmp/e4.exr" --env "$data/env/venice_sunset_1k.hdr" --json
+check "... says which map in --json" python3 -c "
+import json; r=json.load(open('$tmp/out')); assert r['environment'].endswith('venice_sunset_1k.hdr'), r"
+check "... relights it" bash -c "! cmp -s '$tmp/r.exr' '$tmp/e4.exr'"
+check "render --env-scale 2 doubles the light" bash -c "'$glint' render '$tmp/scene.json' --paper copper -o '$tmp/s1.pfm' --no-background -q && '$glint' render '$tmp/scene.json' --paper copper -o '$tmp/s2.pfm' --no-background --env-scale 2 -q && python3 -c \"
+import struct
+def rd(p):
+    b = open(p, 'rb').read()
+    parts = b.split(b'\\n', 3)
+    return struct.unpack('<%df' % ((len(parts[3])) // 4), parts[3])
+a, b = rd('$tmp/s1.pfm'), rd('$tmp/s2.pfm')
+sa, sb = sum(a), sum(b)
+assert sa > 0 and abs(sb / sa - 2) < 1e-4, (sa, sb)
+\""
+check "render --env of a missing map: exit 1 naming --env" run 1 "--env: $tmp/nope.hdr" render "$tmp/scene.json" --paper copper -o "$tmp/x.exr" --env "$tmp/nope.hdr"
+check "render --env-rotation 0,90: exit 2" run 2 "expected X,Y,Z" render "$tmp/scene.json" --paper copper --env-rotation 0,90
 
 # Bad inputs: exit 1, one message naming what was wrong, no output.
 check "missing scene file" run 1 "nope.json" render "$tmp/nope.json" --paper copper -o "$tmp/x.exr"

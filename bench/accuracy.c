@@ -25,7 +25,8 @@
  * Writes bench-out/accuracy.csv; prints a line per case and a table per
  * map.  For studies: ACCURACY_ONLY=MATERIAL, ACCURACY_SAMPLES=N (the
  * fit's light and lobe samples per set), ACCURACY_REF_SAMPLES=N and
- * ACCURACY_REF_SPP=N (the reference photos').
+ * ACCURACY_REF_SPP=N (the reference photos'), ACCURACY_SPP=N (the fitter's
+ * primary samples per pixel).
  */
 #define _DEFAULT_SOURCE
 #include "bench.h"
@@ -159,6 +160,8 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 
 	memset(t, 0, sizeof(*t));
 	bench_scene(&sc, 256, map);
+	if (getenv("ACCURACY_SPP"))
+		sc.spp = atoi(getenv("ACCURACY_SPP"));
 	if (glint_renderer_init(&r, &sc, 0, NULL) < 0) {
 		fprintf(stderr, "%s: %s\n", map, glint_error_msg());
 		return;

@@ -5,6 +5,10 @@
 // throughput, and accuracy against the published radiance map (up to
 // scale); plus glint's raw (linear) merge throughput on a simulated
 // bracket.  usage: bench/hdr [ROUNDS]   (default 5)
+// glint's C headers include core/atomic.h, which in C++ brings <atomic>:
+// a template library that must not be included with C linkage.
+#include <atomic>
+
 extern "C" {
 #include "cmd/backends.h"
 #include "capture/bracket.h"

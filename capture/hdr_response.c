@@ -2,11 +2,13 @@
 #include "hdr_response.h"
 
 #include "core/error.h"
+#include "core/parallel.h"
 
 #include <gsl/gsl_linalg.h>
 #include <gsl/gsl_matrix.h>
 #include <gsl/gsl_vector.h>
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -29,11 +31,6 @@ static double hat(int floor, int z)
 	return z < mid ? z - floor : 256.0 - z;
 }
 
-static int cmp_u8(const void *a, const void *b)
-{
-	return (int)*(const uint8_t *)a - (int)*(const uint8_t *)b;
-}
-
 void glint_ldr_floor(const struct glint_ldr_stack *s, int floor[3])
 {
 	int k = 0;
@@ -41,19 +38,20 @@ void glint_ldr_floor(const struct glint_ldr_stack *s, int floor[3])
 	for (int i = 1; i < s->n; i++)
 		if (s->times[i] < s->times[k])
 			k = i;
-	uint8_t *v = malloc(np);
+	/* The 5th percentile of each channel, from a histogram of codes: the
+	 * value at index np / 20 of the sorted samples. */
+	size_t hist[3][256] = { { 0 } };
+	for (size_t p = 0; p < np; p++)
+		for (int c = 0; c < 3; c++)
+			hist[c][s->rgb[k][3 * p + c]]++;
 	for (int c = 0; c < 3; c++) {
-		if (!v) {
-			floor[c] = 0;
-			continue;
-		}
-		for (size_t p = 0; p < np; p++)
-			v[p] = s->rgb[k][3 * p + c];
-		qsort(v, np, 1, cmp_u8);
-		int f = v[np / 20] + 3;
+		size_t cum = 0;
+		int z = 0;
+		while (z < 255 && (cum += hist[c][z]) <= np / 20)
+			z++;
+		int f = z + 3;
 		floor[c] = f > 127 ? 127 : f;
 	}
-	free(v);
 }
 
 int glint_ldr_check_order(const struct glint_ldr_stack *s,
@@ -321,6 +319,74 @@ int glint_response_robertson(const struct glint_ldr_stack *s, int max_iter,
 	return 0;
 }
 
+struct merge_job {
+	const struct glint_ldr_stack *s;
+	const double (*response)[3];
+	const double (*w)[3];
+	/* per frame i, code z, channel c: w(z) (ln I(z) - ln t_i), the
+	 * frame's term of the weighted sum, made once */
+	const double (*term)[256][3];
+	struct glint_image *img, *m;
+	atomic_long bad; /* pixel-channels without information */
+};
+
+/* A pixel-channel no frame informs: a bound from the extreme code. */
+static float merge_bound(const struct merge_job *job, size_t p, int c)
+{
+	const struct glint_ldr_stack *s = job->s;
+	int zmin = 255, zmax = 0;
+
+	for (int i = 0; i < s->n; i++) {
+		int z = s->rgb[i][3 * p + c];
+		zmin = z < zmin ? z : zmin;
+		zmax = z > zmax ? z : zmax;
+	}
+	double t = s->times[0];
+	for (int i = 1; i < s->n; i++)
+		t = zmin >= 255 ? fmin(t, s->times[i]) : fmax(t, s->times[i]);
+	/* Clipped everywhere: a lower bound; black everywhere: an upper
+	 * one. */
+	return (float)(job->response[zmin >= 255 ? 255 : zmax][c] / t);
+}
+
+/* One pixel: per channel the weighted mean of ln E; returns how many
+ * channels had no information. */
+static int merge_pixel(const struct merge_job *job, size_t p)
+{
+	const struct glint_ldr_stack *s = job->s;
+	double num[3] = { 0, 0, 0 }, den[3] = { 0, 0, 0 };
+	int bad = 0;
+
+	for (int i = 0; i < s->n; i++) {
+		const uint8_t *z = s->rgb[i] + 3 * p;
+		for (int c = 0; c < 3; c++) {
+			num[c] += job->term[i][z[c]][c];
+			den[c] += job->w[z[c]][c];
+		}
+	}
+	for (int c = 0; c < 3; c++) {
+		int ok = den[c] > 0;
+		job->img->data[3 * p + c] = ok ? (float)exp(num[c] / den[c])
+					       : merge_bound(job, p, c);
+		if (job->m)
+			job->m->data[3 * p + c] = (float)ok;
+		bad += !ok;
+	}
+	return bad;
+}
+
+static void merge_rows(void *ctx, int y0, int y1, int thread)
+{
+	struct merge_job *job = ctx;
+	size_t w = (size_t)job->s->width;
+	long bad = 0;
+
+	for (size_t p = (size_t)y0 * w; p < (size_t)y1 * w; p++)
+		bad += merge_pixel(job, p);
+	(void)thread;
+	atomic_fetch_add(&job->bad, bad);
+}
+
 int glint_ldr_merge(const struct glint_ldr_stack *s,
 		    const double response[256][3], const int *floor_in,
 		    struct glint_image **out, struct glint_image **valid)
@@ -364,13 +430,6 @@ int glint_ldr_merge(const struct glint_ldr_stack *s,
 	}
 	size_t np = (size_t)s->width * s->height;
 	long bad = 0;
-	/* w ln I per code, and ln t per frame, once. */
-	double wl[256][3], lnt[256];
-	for (int z = 0; z < 256; z++)
-		for (int c = 0; c < 3; c++)
-			wl[z][c] = w[z][c] * lnr[z][c];
-	for (int i = 0; i < s->n && i < 256; i++)
-		lnt[i] = log(s->times[i]);
 	if (s->n > 256) {
 		glint_image_free(img);
 		glint_image_free(m);
@@ -379,38 +438,29 @@ int glint_ldr_merge(const struct glint_ldr_stack *s,
 				       "256)",
 				       s->n);
 	}
-	for (size_t p = 0; p < np; p++)
-		for (int c = 0; c < 3; c++) {
-			double num = 0, den = 0;
-			int zmin = 255, zmax = 0;
-			for (int i = 0; i < s->n; i++) {
-				int z = s->rgb[i][3 * p + c];
-				num += wl[z][c] - w[z][c] * lnt[i];
-				den += w[z][c];
-				zmin = z < zmin ? z : zmin;
-				zmax = z > zmax ? z : zmax;
-			}
-			double v;
-			int ok = den > 0;
-			if (ok) {
-				v = exp(num / den);
-			} else if (zmin >= 255) {
-				/* Clipped everywhere: a lower bound. */
-				double tmin = s->times[0];
-				for (int i = 1; i < s->n; i++)
-					tmin = fmin(tmin, s->times[i]);
-				v = response[255][c] / tmin;
-			} else {
-				double tmax = s->times[0];
-				for (int i = 1; i < s->n; i++)
-					tmax = fmax(tmax, s->times[i]);
-				v = response[zmax][c] / tmax;
-			}
-			img->data[3 * p + c] = (float)v;
-			if (m)
-				m->data[3 * p + c] = (float)ok;
-			bad += !ok;
-		}
+	double(*term)[256][3] = malloc((size_t)s->n * sizeof(*term));
+	if (!term) {
+		glint_image_free(img);
+		glint_image_free(m);
+		return glint_error_set(ENOMEM, "merge: out of memory");
+	}
+	for (int i = 0; i < s->n; i++) {
+		double lnt = log(s->times[i]);
+		for (int z = 0; z < 256; z++)
+			for (int c = 0; c < 3; c++)
+				term[i][z][c] =
+					w[z][c] * lnr[z][c] - w[z][c] * lnt;
+	}
+	struct merge_job job = { s,
+				 response,
+				 (const double(*)[3])w,
+				 (const double(*)[256][3])term,
+				 img,
+				 m,
+				 0 };
+	glint_parallel_for(s->height, 8, 0, merge_rows, &job);
+	free(term);
+	bad = atomic_load(&job.bad);
 	if (bad == (long)(np * 3)) {
 		glint_image_free(img);
 		glint_image_free(m);

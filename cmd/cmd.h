@@ -65,6 +65,8 @@ void cmd_print_json(json_t *obj);
 /* Print a fit's parameters (value, standard error; truth and error when
  * truth is not NULL) as a table on stdout. */
 void cmd_print_params(const json_t *doc, const double *truth);
+/* The fit's acceptance verdict and its misfit verdict, one line each. */
+void cmd_print_verdicts(const json_t *doc);
 
 /* A fit's progress on a terminal (struct glint_fit_opts.progress). */
 void cmd_fit_progress(void *ctx, const char *pass, int iter, double cost);

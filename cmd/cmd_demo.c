@@ -145,6 +145,7 @@ int cmd_demo(int argc, char **argv)
 		       json_real_value(json_object_get(doc, "seconds")),
 		       json_real_value(json_object_get(doc, "relative_rmse")));
 		cmd_print_params(doc, truth);
+		cmd_print_verdicts(doc);
 		printf("  photo:   %s\n  results: %s/params.json, render.exr, "
 		       "compare.png\n",
 		       photo_path, fit_dir);

@@ -207,6 +207,19 @@ void cmd_print_params(const json_t *doc, const double *truth)
 		printf("  note: %s\n", json_string_value(p));
 }
 
+void cmd_print_verdicts(const json_t *doc)
+{
+	const char *av = json_string_value(
+		json_object_get(json_object_get(doc, "acceptance"), "verdict"));
+	const char *mv = json_string_value(
+		json_object_get(json_object_get(doc, "misfit"), "verdict"));
+
+	if (av)
+		printf("  verdict: %s\n", av);
+	if (mv)
+		printf("  residual: %s\n", mv);
+}
+
 static int parse_model(const char *arg, void *dest)
 {
 	const struct glint_model_ops **m = dest;
@@ -336,13 +349,7 @@ int cmd_fit(int argc, char **argv)
 	       json_real_value(json_object_get(doc, "relative_rmse")),
 	       (int)json_integer_value(json_object_get(doc, "pixels")));
 	cmd_print_params(doc, NULL);
-	printf("  verdict: %s\n",
-	       json_string_value(json_object_get(
-		       json_object_get(doc, "acceptance"), "verdict")));
-	const char *mv = json_string_value(
-		json_object_get(json_object_get(doc, "misfit"), "verdict"));
-	if (mv)
-		printf("  residual: %s\n", mv);
+	cmd_print_verdicts(doc);
 	printf("results: %s/params.json, render.exr, compare.png\n",
 	       job.out_dir);
 	json_decref(doc);

@@ -119,6 +119,7 @@ static void print_result(const struct glint_rig_run *ro, int json)
 		printf("  fit (job %s): relative RMSE %.4f\n", ro->job,
 		       json_real_value(json_object_get(doc, "relative_rmse")));
 		cmd_print_params(doc, NULL);
+		cmd_print_verdicts(doc);
 		printf("  results: %s/fit/params.json, render.exr, "
 		       "compare.png\n",
 		       ro->sample);

@@ -179,13 +179,16 @@ int glint_misfit_analyse(const struct glint_gbuffer *gb,
 		return glint_error_set(EINVAL, "misfit: images of different "
 					       "sizes");
 	m->weighted = weight != NULL;
-	for (size_t i = 0; i < (size_t)w * h; i++)
-		if (cov->data[3 * i] >= 0.999f) {
-			level += (photo->data[3 * i] + photo->data[3 * i + 1] +
-				  photo->data[3 * i + 2]) /
-				 3;
+	/* The photo's mean on the sphere, over its valid (finite) values:
+	 * invalid pixels carry NaN and weight 0. */
+	for (size_t i = 0; i < (size_t)w * h; i++) {
+		const float *ph = photo->data + 3 * i;
+		double v = (ph[0] + ph[1] + ph[2]) / 3.0;
+		if (cov->data[3 * i] >= 0.999f && isfinite(v)) {
+			level += v;
 			np++;
 		}
+	}
 	if (!np || !(level > 0))
 		return glint_error_set(EINVAL, "misfit: no lit pixel wholly "
 					       "on the sphere");

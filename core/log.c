@@ -7,6 +7,7 @@
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -43,19 +44,66 @@ double glint_now(void)
 static void log_v(const char *level, const char *fmt, va_list ap)
 	GLINT_PRINTF(2, 0);
 
+/* Wall-clock time as RFC 3339 UTC with milliseconds. */
+static void utc_now(char *buf, size_t n)
+{
+	struct timespec ts;
+	struct tm tm;
+
+	clock_gettime(CLOCK_REALTIME, &ts);
+	gmtime_r(&ts.tv_sec, &tm);
+	size_t k = strftime(buf, n, "%Y-%m-%dT%H:%M:%S", &tm);
+	snprintf(buf + k, n - k, ".%03ldZ", ts.tv_nsec / 1000000);
+}
+
+/*
+ * Is stderr the systemd journal?  systemd sets JOURNAL_STREAM to the
+ * "device:inode" of the stream it connects a service's output to
+ * (systemd.exec(5)); then each line's priority goes in front of it as
+ * "<N>", which journald reads (sd-daemon(3)).  Checked once.
+ */
+static int to_journal(void)
+{
+	static int known = -1;
+
+	if (known < 0) {
+		const char *js = getenv("JOURNAL_STREAM");
+		unsigned long long dev, ino;
+		struct stat st;
+		known = js && sscanf(js, "%llu:%llu", &dev, &ino) == 2 &&
+			fstat(STDERR_FILENO, &st) == 0 &&
+			(unsigned long long)st.st_dev == dev &&
+			(unsigned long long)st.st_ino == ino;
+	}
+	return known;
+}
+
+/* The syslog priority of a level: err 3, warning 4, info 6, debug 7. */
+static int priority(const char *level)
+{
+	return level[0] == 'e'	 ? 3
+	       : level[0] == 'w' ? 4
+	       : level[0] == 'd' ? 7
+				 : 6;
+}
+
 static void log_v(const char *level, const char *fmt, va_list ap)
 {
-	char msg[2048];
+	char msg[2048], now[40], prio[8] = "";
 
 	vsnprintf(msg, sizeof(msg), fmt, ap);
+	if (to_journal())
+		snprintf(prio, sizeof(prio), "<%d>", priority(level));
 	if (log_mode == GLINT_LOG_JSON) {
-		json_t *o = json_pack("{s:s,s:s}", "level", level, "msg", msg);
+		utc_now(now, sizeof(now));
+		json_t *o = json_pack("{s:s,s:s,s:s}", "time", now, "level",
+				      level, "msg", msg);
 		char *s = json_dumps(o, JSON_COMPACT);
-		fprintf(stderr, "%s\n", s);
+		fprintf(stderr, "%s%s\n", prio, s);
 		free(s);
 		json_decref(o);
 	} else {
-		fprintf(stderr, "glint: %s%s\n",
+		fprintf(stderr, "%sglint: %s%s\n", prio,
 			level[0] == 'e'	  ? "error: "
 			: level[0] == 'w' ? "warning: "
 			: level[0] == 'd' ? "debug: "

@@ -5,7 +5,10 @@
 /*
  * Logs and progress on stderr.  Human mode: plain lines, and a live progress
  * bar only when stderr is a terminal.  JSON mode: one JSON object per line
- * ({"level":..,"msg":..}), no progress bar; for scripts.  Quiet: errors only.
+ * ({"time": RFC 3339 UTC, "level":.., "msg":..}), no progress bar; for
+ * scripts.  Quiet: errors only.  When stderr is the systemd journal
+ * (JOURNAL_STREAM names it), every line starts with its syslog priority,
+ * "<3>" error, "<4>" warning, "<6>" info, "<7>" debug, for journald.
  */
 
 #include "error.h"

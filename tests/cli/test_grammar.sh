@@ -91,6 +91,25 @@ check "jobs --json" eval 'g 0 jobs --json --root "$tmp" && is_json'
 check "sessions --json" eval 'g 0 sessions --json --root "$tmp" && is_json'
 check "check-rig --json" eval 'g 0 check-rig --json --config "$data/rig-sim.json" && is_json'
 check "a failure under --json: the error as a JSON line" eval 'g 1 convert "$tmp/missing.exr" "$tmp/g.pfm" --json && python3 -c "import json,sys; d=json.loads(open(sys.argv[1]).read().splitlines()[-1]); sys.exit(d[\"level\"] != \"error\")" "$tmp/err"'
+check "JSON log lines carry an RFC 3339 UTC time" eval 'g 1 convert "$tmp/missing.exr" "$tmp/g.pfm" --json && python3 -c "
+import json, re, sys
+for line in open(sys.argv[1]).read().splitlines():
+    d = json.loads(line)
+    assert re.fullmatch(r\"\\d{4}-\\d\\d-\\d\\dT\\d\\d:\\d\\d:\\d\\d\\.\\d{3}Z\", d[\"time\"]), d
+" "$tmp/err"'
+
+# Under systemd, stderr is the journal: JOURNAL_STREAM names it by
+# device:inode, and each line carries its syslog priority for journald.
+journal() { # stderr file, then glint's arguments
+	local f=$1
+	shift
+	: >"$f"
+	JOURNAL_STREAM=$(stat -c '%d:%i' "$f") "$glint" "$@" 2>>"$f" >/dev/null </dev/null
+}
+check "journal: an error line starts with <3>" eval 'journal "$tmp/j1" convert "$tmp/missing.exr" "$tmp/g.pfm"; head -1 "$tmp/j1" | grep -q "^<3>glint: error: "'
+check "journal: an info line with <6>, a debug line with <7>" eval 'journal "$tmp/j2" convert "$data/env/venice_sunset_1k.hdr" "$tmp/f.pfm" -v && grep -q "^<6>glint: .*venice_sunset_1k.hdr ->" "$tmp/j2" && grep -q "^<7>glint: debug: " "$tmp/j2"'
+check "journal: JSON lines too" eval 'journal "$tmp/j3" convert "$tmp/missing.exr" "$tmp/g.pfm" --json; grep -q "^<3>{" "$tmp/j3"'
+check "another stream named: no prefix" eval ': >"$tmp/j4"; JOURNAL_STREAM=$(stat -c "%d:%i" "$tmp/j1") "$glint" convert "$tmp/missing.exr" "$tmp/g.pfm" 2>"$tmp/j4"; head -1 "$tmp/j4" | grep -q "^glint: error: "'
 
 echo "$((checks - fails)) passed, $fails failed"
 [ "$fails" = 0 ]

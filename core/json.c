@@ -198,3 +198,8 @@ int glint_json_known_keys(const char *file, const char *where, json_t *obj,
 	}
 	return 0;
 }
+
+json_t *glint_json_real_or_null(double v)
+{
+	return isfinite(v) ? json_real(v) : json_null();
+}

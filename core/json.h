@@ -44,4 +44,8 @@ int glint_json_object(const char *file, const char *where, json_t *obj,
 int glint_json_known_keys(const char *file, const char *where, json_t *obj,
 			  const char *const *known);
 
+/* A number for a document: JSON null when it is not finite (NaN,
+ * infinity), which JSON cannot hold.  A new reference. */
+json_t *glint_json_real_or_null(double v);
+
 #endif

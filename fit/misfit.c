@@ -2,6 +2,7 @@
 #include "misfit.h"
 
 #include "core/error.h"
+#include "core/json.h"
 
 #include <errno.h>
 #include <math.h>
@@ -31,9 +32,7 @@ static struct vec3 brightest(const struct glint_envmap *env)
 		double dom = sin(M_PI * (j + 0.5) / img->height);
 		for (int i = 0; i < img->width; i++) {
 			const float *p = glint_image_px(img, i, j);
-			double y = (0.2126 * p[0] + 0.7152 * p[1] +
-				    0.0722 * p[2]) *
-				   dom;
+			double y = rgb_luminance(p[0], p[1], p[2]) * dom;
 			if (y > best) {
 				best = y;
 				bi = i;
@@ -245,24 +244,20 @@ int glint_misfit_analyse(const struct glint_gbuffer *gb,
 	return 0;
 }
 
-static json_t *real_or_null(double x)
-{
-	return isfinite(x) ? json_real(x) : json_null();
-}
-
 static json_t *bands_json(const struct glint_misfit_band *b)
 {
 	json_t *arr = json_array();
 
 	for (int k = 0; k < GLINT_MISFIT_BANDS; k++)
 		json_array_append_new(
-			arr,
-			json_pack("{s:[f,f], s:I, s:o, s:o, s:o}", "deg",
-				  b[k].lo_deg, b[k].hi_deg, "pixels",
-				  (json_int_t)b[k].n, "mean_residual",
-				  real_or_null(b[k].mean), "standard_error",
-				  real_or_null(b[k].se), "chi2_per_value",
-				  real_or_null(b[k].chi2)));
+			arr, json_pack("{s:[f,f], s:I, s:o, s:o, s:o}", "deg",
+				       b[k].lo_deg, b[k].hi_deg, "pixels",
+				       (json_int_t)b[k].n, "mean_residual",
+				       glint_json_real_or_null(b[k].mean),
+				       "standard_error",
+				       glint_json_real_or_null(b[k].se),
+				       "chi2_per_value",
+				       glint_json_real_or_null(b[k].chi2)));
 	return arr;
 }
 
@@ -274,7 +269,8 @@ json_t *glint_misfit_json(const struct glint_misfit *m)
 		m->weighted ? "render - photo, in noise standard deviations"
 			    : "render - photo, over the photo's mean on the "
 			      "sphere",
-		"chi2_per_value", real_or_null(m->chi2), "light_direction",
-		m->light[0], m->light[1], m->light[2], "by_view_angle",
-		bands_json(m->view), "by_mirror_angle", bands_json(m->mirror));
+		"chi2_per_value", glint_json_real_or_null(m->chi2),
+		"light_direction", m->light[0], m->light[1], m->light[2],
+		"by_view_angle", bands_json(m->view), "by_mirror_angle",
+		bands_json(m->mirror));
 }

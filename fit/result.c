@@ -5,6 +5,8 @@
 
 #include "fit/brdf/microfacet.h"
 
+#include "core/json.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -28,11 +30,6 @@ static int param_index(const struct glint_model_ops *m, const char *name)
 	return -1;
 }
 
-static json_t *real_or_null(double v)
-{
-	return isfinite(v) ? json_real(v) : json_null();
-}
-
 /* The roughness a pixel resolves on a sphere R pixels in radius: the
  * normal turns by 1 / R radians from one pixel to the next. */
 static double footprint(const struct glint_fit_result *r)
@@ -48,10 +45,10 @@ json_t *glint_fit_params_json(const struct glint_fit_result *r)
 
 	for (int k = 0; k < m->nparams; k++) {
 		const struct glint_param *pi = &m->params[k];
-		json_t *o = json_pack("{s:s,s:f,s:o,s:b,s:[f,f]}", "name",
-				      pi->name, "value", r->p[k], "stderr",
-				      real_or_null(r->se[k]), "at_bound",
-				      r->at_bound[k], "bounds", pi->lo, pi->hi);
+		json_t *o = json_pack(
+			"{s:s,s:f,s:o,s:b,s:[f,f]}", "name", pi->name, "value",
+			r->p[k], "stderr", glint_json_real_or_null(r->se[k]),
+			"at_bound", r->at_bound[k], "bounds", pi->lo, pi->hi);
 		if (r->unc.n) {
 			json_object_set_new(
 				o, "interval",
@@ -91,7 +88,8 @@ static json_t *matrix_json(const double *a, int n)
 	for (int i = 0; i < n; i++) {
 		json_t *row = json_array();
 		for (int j = 0; j < n; j++)
-			json_array_append_new(row, real_or_null(a[i * n + j]));
+			json_array_append_new(
+				row, glint_json_real_or_null(a[i * n + j]));
 		json_array_append_new(rows, row);
 	}
 	return rows;
@@ -143,9 +141,10 @@ static void specular_fresnel(const struct glint_fit_result *r, json_t *find,
 		       se = glint_uncertainty_delta(&r->unc, g);
 		char name[48];
 		snprintf(name, sizeof(name), "%s x F0(ior)", ch[c]);
-		json_array_append_new(
-			comb, json_pack("{s:s,s:f,s:o}", "name", name, "value",
-					v, "stderr", real_or_null(se)));
+		json_array_append_new(comb,
+				      json_pack("{s:s,s:f,s:o}", "name", name,
+						"value", v, "stderr",
+						glint_json_real_or_null(se)));
 		if (len < (int)sizeof(msg))
 			len += snprintf(msg + len, sizeof(msg) - (size_t)len,
 					" %s%.4f +- %.4f", c ? ", " : "", v,
@@ -195,7 +194,8 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 		json_array_append_new(find, json_string(msg));
 	}
 	for (int k = 0; k < n; k++) {
-		json_array_append_new(tb, real_or_null(u->se_textbook[k]));
+		json_array_append_new(
+			tb, glint_json_real_or_null(u->se_textbook[k]));
 		json_array_append_new(sys, json_real(u->sys[k]));
 		if (undetermined(r, k) &&
 		    strcmp(m->params[k].name, "ior") != 0) {
@@ -302,12 +302,13 @@ int glint_fit_judge(const struct glint_fit_result *r, double accept_rmse,
 json_t *glint_fit_verdict_json(const struct glint_fit_result *r,
 			       const struct glint_fit_verdict *v)
 {
-	return json_pack("{s:b,s:s,s:s,s:o,s:o,s:o,s:o,s:o,s:o}", "accepted",
-			 v->accepted, "rule", v->rule, "verdict", v->verdict,
-			 "relative_rmse", real_or_null(r->rel_rmse), "limit",
-			 real_or_null(v->limit), "backdrop_relative_rmse",
-			 real_or_null(r->backdrop_rel_rmse),
-			 "flat_relative_rmse", real_or_null(r->flat_rel_rmse),
-			 "noise_rmse", real_or_null(r->noise_rmse),
-			 "residual_over_noise", real_or_null(v->ratio));
+	return json_pack(
+		"{s:b,s:s,s:s,s:o,s:o,s:o,s:o,s:o,s:o}", "accepted",
+		v->accepted, "rule", v->rule, "verdict", v->verdict,
+		"relative_rmse", glint_json_real_or_null(r->rel_rmse), "limit",
+		glint_json_real_or_null(v->limit), "backdrop_relative_rmse",
+		glint_json_real_or_null(r->backdrop_rel_rmse),
+		"flat_relative_rmse", glint_json_real_or_null(r->flat_rel_rmse),
+		"noise_rmse", glint_json_real_or_null(r->noise_rmse),
+		"residual_over_noise", glint_json_real_or_null(v->ratio));
 }

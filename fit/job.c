@@ -69,36 +69,32 @@ static int pick_model(struct glint_renderer *r, const struct glint_fit_job *job,
  */
 static int select_model(struct glint_renderer *r,
 			const struct glint_fit_job *job,
-			const struct glint_fit_opts *o,
+			const struct glint_fit_opts *o, int richer,
 			const struct glint_model_ops **model,
 			struct glint_fit_result *res, json_t **why)
 {
 	struct glint_selection *sel = calloc(1, sizeof(*sel));
-	int ret = sel ? glint_select_model(r, job->photo, job->weight, o, sel)
+	int ret = sel ? glint_select_model(r, job->photo, job->weight, o,
+					   richer, sel)
 		      : -ENOMEM;
 	if (ret < 0) {
 		free(sel);
 		return glint_error_prefix(ret, "--select-model");
 	}
 	const struct glint_select_candidate *c = &sel->c[sel->chosen];
-	switch (sel->chosen) {
-	case GLINT_SEL_LAMBERT:
+	if (sel->has_fit[sel->chosen]) {
+		*res = sel->fit[sel->chosen];
+	} else if (sel->chosen == GLINT_SEL_LAMBERT) {
 		ret = glint_fit(r, &glint_model_lambert, job->photo,
 				job->weight, o, res);
-		break;
-	case GLINT_SEL_CONST_FRESNEL:
-		*res = sel->nf;
-		break;
-	default:
-		*res = sel->full;
-		if (sel->chosen != GLINT_SEL_RGB) {
-			/* The reduced model's values and standard errors
-			 * (select.c); the full fit's intervals and
-			 * covariance do not apply to them. */
-			memcpy(res->p, c->p, sizeof(res->p));
-			memcpy(res->se, c->se, sizeof(res->se));
-			res->unc.n = 0;
-		}
+	} else {
+		/* Grey: the reduced model's values and standard errors
+		 * (select.c); the full fit's intervals and covariance do
+		 * not apply to them. */
+		*res = sel->fit[GLINT_SEL_RGB];
+		memcpy(res->p, c->p, sizeof(res->p));
+		memcpy(res->se, c->se, sizeof(res->se));
+		res->unc.n = 0;
 	}
 	*model = c->model;
 	res->model = c->model;
@@ -126,7 +122,7 @@ static int run_fit(struct glint_renderer *r, const struct glint_fit_job *job,
 			return ret;
 	}
 	if (job->select && !(*model)->transparent)
-		return select_model(r, job, o, model, res, selection);
+		return select_model(r, job, o, 1, model, res, selection);
 	if (job->ladder > 0 && !(*model)->transparent) {
 		struct glint_ladder_result *lr = calloc(1, sizeof(*lr));
 		ret = lr ? glint_ladder_run(&job->scene, *model, job->photo,
@@ -150,7 +146,7 @@ static int run_fit(struct glint_renderer *r, const struct glint_fit_job *job,
 	glint_log_info("the photo does not determine every parameter of %s: "
 		       "choosing the model by BIC (--select-model)",
 		       (*model)->name);
-	return select_model(r, job, o, model, res, selection);
+	return select_model(r, job, o, 0, model, res, selection);
 }
 
 /* params.json for a fit (without the model choice, selection, fidelity

@@ -19,20 +19,34 @@ struct sel {
 	struct fit_data d;
 	struct glint_shade_cache *cache;
 	const struct glint_model_ops *cache_model; /* the model of cache */
-	double *lobes;				   /* d.n x 2 lobes x 3 */
-	double x[4]; /* grey: the linear unknowns at the last call */
+	double *lobes; /* d.n x nlobes x 3 (up to 3 lobes) */
+	double x[4];   /* grey: the linear unknowns at the last call */
 	double xse[4];
 };
 
-/* Weighted residuals sw (y - sum albedo_j A_j) for albedos alb[j*3 + c]. */
-static double residuals(const struct sel *s, const double *alb, double *r)
+static const char *const short_name[GLINT_SEL_N] = {
+	[GLINT_SEL_RGB] = "RGB",
+	[GLINT_SEL_GREY] = "grey specular",
+	[GLINT_SEL_CONST_FRESNEL] = "constant Fresnel",
+	[GLINT_SEL_LAMBERT] = "lambert",
+	[GLINT_SEL_GGX] = "ggx",
+	[GLINT_SEL_OREN_NAYAR] = "oren-nayar",
+	[GLINT_SEL_TWO_LOBE] = "two-lobe",
+};
+
+/* Weighted residuals sw (y - sum albedo_j A_j) of model m's lobes in
+ * s->lobes, the albedos at p[m->lobe_param[j]]. */
+static double residuals(const struct sel *s, const struct glint_model_ops *m,
+			const double *p, double *r)
 {
+	int nj = m->nlobes;
 	double cost = 0;
 	for (int i = 0; i < s->d.n; i++)
 		for (int c = 0; c < 3; c++) {
-			const double *a = s->lobes + (size_t)i * 6;
-			double v = s->d.y[i * 3 + c] - alb[c] * a[c] -
-				   alb[3 + c] * a[3 + c];
+			const double *a = s->lobes + (size_t)i * nj * 3;
+			double v = s->d.y[i * 3 + c];
+			for (int j = 0; j < nj; j++)
+				v -= p[m->lobe_param[j] + c] * a[j * 3 + c];
 			double e = s->d.sw[i * 3 + c] * v;
 			if (r)
 				r[i * 3 + c] = e;
@@ -107,7 +121,7 @@ static double fit_lambert(struct sel *s, double *alb, double *se, int nres)
 		alb[c] = M[c] > 0 ? fmin(1, fmax(0, b[c] / M[c])) : 0;
 		alb[3 + c] = 0;
 	}
-	double cost = residuals(s, alb, NULL);
+	double cost = residuals(s, &glint_model_torrance_sparrow, alb, NULL);
 	for (int c = 0; c < 3; c++)
 		se[c] = alb[c] > 0 && alb[c] < 1
 				? sqrt(2 * cost / (nres - 3) / M[c])
@@ -141,7 +155,7 @@ static int grey_residuals(void *ctx, const double *q, double *r)
 		alb[c] = s->x[c];
 		alb[3 + c] = s->x[3];
 	}
-	residuals(s, alb, r);
+	residuals(s, &glint_model_torrance_sparrow, alb, r);
 	return 0;
 }
 
@@ -168,6 +182,7 @@ static int fit_grey(struct sel *s, const struct glint_model_ops *ts,
 
 	c->name = "torrance-sparrow, grey specular";
 	c->k = 6;
+	c->scored = 1;
 	c->model = ts;
 	glint_lm_default_opts(&lo_);
 	lo_.max_iter = 40;
@@ -211,7 +226,8 @@ static int score_fitted(struct glint_renderer *r, struct sel *s,
 	glint_shade_cache_lobes(cache, c->p, s->lobes);
 	if (cache != s->cache)
 		glint_shade_cache_free(cache);
-	c->cost = residuals(s, c->p, NULL);
+	c->cost = residuals(s, c->model, c->p, NULL);
+	c->scored = 1;
 	return 0;
 }
 
@@ -220,49 +236,97 @@ static void choose(struct glint_selection *out, int n)
 {
 	out->chosen = out->chosen_aic = GLINT_SEL_RGB;
 	for (int k = 0; k < GLINT_SEL_N; k++) {
+		if (!out->c[k].scored)
+			continue;
 		score(&out->c[k], n);
 		if (out->c[k].bic < out->c[out->chosen].bic)
 			out->chosen = k;
 		if (out->c[k].aic < out->c[out->chosen_aic].aic)
 			out->chosen_aic = k;
 	}
-	const double *p = out->full.p, *se = out->full.se;
+	const double *p = out->fit[GLINT_SEL_RGB].p,
+		     *se = out->fit[GLINT_SEL_RGB].se;
 	double spread = fmax(fabs(p[3] - p[4]),
 			     fmax(fabs(p[4] - p[5]), fabs(p[3] - p[5])));
 	double sse = sqrt(se[3] * se[3] + se[4] * se[4] + se[5] * se[5]);
 	double spec = (p[3] + p[4] + p[5]) / 3;
+	char above[384] = "";
+	size_t len = 0;
+	for (int k = 0; k < GLINT_SEL_N && len < sizeof(above); k++)
+		if (out->c[k].scored && k != out->chosen)
+			len += snprintf(
+				above + len, sizeof(above) - len, "%s%s %+.1f",
+				len ? ", " : "", short_name[k],
+				out->c[k].bic - out->c[out->chosen].bic);
 	snprintf(out->why, sizeof(out->why),
-		 "lowest BIC: %s (BIC above it: grey specular %+.1f, "
-		 "constant Fresnel %+.1f, RGB %+.1f, lambert %+.1f; n = %d "
-		 "residuals). Full fit: specular channels spread %.4f against "
-		 "standard errors about %.4f; mean specular %.4f +- %.4f",
-		 out->c[out->chosen].name,
-		 out->c[GLINT_SEL_GREY].bic - out->c[out->chosen].bic,
-		 out->c[GLINT_SEL_CONST_FRESNEL].bic - out->c[out->chosen].bic,
-		 out->c[GLINT_SEL_RGB].bic - out->c[out->chosen].bic,
-		 out->c[GLINT_SEL_LAMBERT].bic - out->c[out->chosen].bic, n,
-		 spread, sse, spec, sse / 3);
+		 "lowest BIC: %s (BIC above it: %s; n = %d residuals). Full "
+		 "fit: specular channels spread %.4f against standard errors "
+		 "about %.4f; mean specular %.4f +- %.4f",
+		 out->c[out->chosen].name, above, n, spread, sse, spec,
+		 sse / 3);
+}
+
+/* A candidate with a fit of its own: fit it, then score it. */
+static int fit_and_score(struct glint_renderer *r, struct sel *s,
+			 const struct glint_shade_cache_opts *co,
+			 const struct glint_image *photo,
+			 const struct glint_image *weight,
+			 const struct glint_fit_opts *o,
+			 struct glint_selection *out, int k)
+{
+	struct glint_select_candidate *c = &out->c[k];
+	struct glint_fit_opts oo = *o;
+	/* The richer models by variable projection (their albedos solved
+	 * exactly at every step): the three-pass method's pass holding the
+	 * diffuse fixed loses a broad second lobe to it (two-lobe nickel:
+	 * roughness2 ran to its bound, cost 35188 against 24970). */
+	if (k > GLINT_SEL_LAMBERT)
+		oo.method = GLINT_FIT_VARPRO;
+	int ret = glint_fit(r, c->model, photo, weight, &oo, &out->fit[k]);
+
+	if (ret < 0)
+		return glint_error_prefix(ret, "fitting %s", c->model->name);
+	out->has_fit[k] = 1;
+	return score_fitted(r, s, co, &out->fit[k], c);
 }
 
 int glint_select_model(struct glint_renderer *r,
 		       const struct glint_image *photo,
 		       const struct glint_image *weight,
-		       const struct glint_fit_opts *o,
+		       const struct glint_fit_opts *o, int richer,
 		       struct glint_selection *out)
 {
-	const struct glint_model_ops *ts = &glint_model_torrance_sparrow,
-				     *nf = &glint_model_ts_constant_fresnel;
+	const struct glint_model_ops *ts = &glint_model_torrance_sparrow;
 	struct sel s = { 0 };
 	int interior, ret;
 	double *rv = NULL;
+	static const struct {
+		int k, n;
+		const char *name;
+		const struct glint_model_ops *m;
+	} fitted[] = {
+		{ GLINT_SEL_RGB, 8, "torrance-sparrow (RGB specular)",
+		  &glint_model_torrance_sparrow },
+		{ GLINT_SEL_CONST_FRESNEL, 7,
+		  "torrance-sparrow, constant Fresnel",
+		  &glint_model_ts_constant_fresnel },
+		{ GLINT_SEL_GGX, 8, "ggx (Trowbridge-Reitz lobe)",
+		  &glint_model_ggx },
+		{ GLINT_SEL_OREN_NAYAR, 9,
+		  "oren-nayar (rough diffuse, Beckmann lobe)",
+		  &glint_model_oren_nayar },
+		{ GLINT_SEL_TWO_LOBE, 12, "two-lobe (two Beckmann lobes)",
+		  &glint_model_two_lobe },
+	};
 
 	memset(out, 0, sizeof(*out));
-	ret = glint_fit(r, ts, photo, weight, o, &out->full);
-	if (!ret)
-		ret = glint_fit(r, nf, photo, weight, o, &out->nf);
-	if (!ret)
-		ret = fit_data_prepare(&r->gb, photo, weight, o, &s.d,
-				       &interior);
+	for (size_t f = 0; f < sizeof(fitted) / sizeof(fitted[0]); f++)
+		out->c[fitted[f].k] = (struct glint_select_candidate){
+			.name = fitted[f].name,
+			.k = fitted[f].n,
+			.model = fitted[f].m,
+		};
+	ret = fit_data_prepare(&r->gb, photo, weight, o, &s.d, &interior);
 	if (ret < 0)
 		return ret;
 	struct glint_shade_cache_opts co = {
@@ -274,7 +338,7 @@ int glint_select_model(struct glint_renderer *r,
 	ret = glint_shade_cache_new(&r->gb, s.d.pix, s.d.n, r->env, ts, &co,
 				    &s.cache);
 	s.cache_model = ts;
-	s.lobes = malloc((size_t)s.d.n * 6 * sizeof(double));
+	s.lobes = malloc((size_t)s.d.n * 9 * sizeof(double));
 	rv = malloc((size_t)s.d.n * 3 * sizeof(double));
 	if (!ret && (!s.lobes || !rv))
 		ret = glint_error_set(ENOMEM, "out of memory");
@@ -285,10 +349,9 @@ int glint_select_model(struct glint_renderer *r,
 		n += s.d.sw[i] > 0;
 	out->n = n;
 
-	out->c[GLINT_SEL_RGB] = (struct glint_select_candidate){
-		.name = "torrance-sparrow (RGB specular)", .k = 8, .model = ts
-	};
-	ret = score_fitted(r, &s, &co, &out->full, &out->c[GLINT_SEL_RGB]);
+	/* RGB first: grey starts from it, and lambert and grey use the
+	 * torrance-sparrow lobes it leaves in s.lobes. */
+	ret = fit_and_score(r, &s, &co, photo, weight, o, out, GLINT_SEL_RGB);
 	if (ret < 0)
 		goto out;
 	struct glint_select_candidate *c = &out->c[GLINT_SEL_LAMBERT];
@@ -296,16 +359,14 @@ int glint_select_model(struct glint_renderer *r,
 	c->k = 3;
 	c->model = &glint_model_lambert;
 	c->cost = fit_lambert(&s, c->p, c->se, n);
-	ret = fit_grey(&s, ts, &out->full, n, rv, &out->c[GLINT_SEL_GREY]);
-	if (ret < 0)
-		goto out;
-	out->c[GLINT_SEL_CONST_FRESNEL] = (struct glint_select_candidate){
-		.name = "torrance-sparrow, constant Fresnel",
-		.k = 7,
-		.model = nf
-	};
-	ret = score_fitted(r, &s, &co, &out->nf,
-			   &out->c[GLINT_SEL_CONST_FRESNEL]);
+	c->scored = 1;
+	ret = fit_grey(&s, ts, &out->fit[GLINT_SEL_RGB], n, rv,
+		       &out->c[GLINT_SEL_GREY]);
+	for (int k = GLINT_SEL_CONST_FRESNEL; k < GLINT_SEL_N && !ret; k++)
+		if (k == GLINT_SEL_CONST_FRESNEL ||
+		    (richer && k > GLINT_SEL_LAMBERT))
+			ret = fit_and_score(r, &s, &co, photo, weight, o, out,
+					    k);
 	if (ret < 0)
 		goto out;
 	choose(out, n);
@@ -323,6 +384,8 @@ json_t *glint_selection_to_json(const struct glint_selection *s)
 	json_t *cands = json_array();
 	for (int k = 0; k < GLINT_SEL_N; k++) {
 		const struct glint_select_candidate *c = &s->c[k];
+		if (!c->scored)
+			continue;
 		json_t *ps = json_object();
 		for (int j = 0; j < c->model->nparams; j++)
 			json_object_set_new(

@@ -1,6 +1,8 @@
 /* SPDX-License-Identifier: MIT */
 #include "microfacet.h"
 
+#include "model.h"
+
 #include "core/vec.h"
 
 #include <math.h>
@@ -34,4 +36,155 @@ double glint_vcavity_g(double nh, double no, double ni, double oh)
 		return 0;
 	double g = fmin(2 * nh * no / oh, 2 * nh * ni / oh);
 	return g < 1 ? (g > 0 ? g : 0) : 1;
+}
+
+double glint_ggx_d(double cos_h, double a)
+{
+	if (!(cos_h > 0))
+		return 0;
+	double c2 = cos_h * cos_h, a2 = a * a;
+	double t = a2 * c2 + (1 - c2); /* cos^2 (a^2 + tan^2) */
+	return a2 / (M_PI * t * t);
+}
+
+double glint_ggx_lambda(double cos_v, double a)
+{
+	if (!(cos_v > 0))
+		return INFINITY;
+	double c2 = cos_v * cos_v;
+	double a2t2 = a * a * (1 - c2) / c2;
+	/* (sqrt(1 + x) - 1) / 2 without cancellation for small x. */
+	return a2t2 / (2 * (sqrt(1 + a2t2) + 1));
+}
+
+double glint_ggx_g2(double no, double ni, double a)
+{
+	if (!(no > 0 && ni > 0))
+		return 0;
+	return 1 / (1 + glint_ggx_lambda(no, a) + glint_ggx_lambda(ni, a));
+}
+
+double glint_oren_nayar(double sigma, struct vec3 wo, struct vec3 wi)
+{
+	if (!(wo.z > 0 && wi.z > 0))
+		return 0;
+	double s2 = sigma * sigma;
+	double A = 1 - s2 / (2 * (s2 + 0.33)), B = 0.45 * s2 / (s2 + 0.09);
+	double so = sqrt(fmax(0, 1 - wo.z * wo.z));
+	double si = sqrt(fmax(0, 1 - wi.z * wi.z));
+	double cphi = 0;
+	if (so > 1e-9 && si > 1e-9)
+		cphi = fmax(0, (wo.x * wi.x + wo.y * wi.y) / (so * si));
+	/* sin(alpha) tan(beta): alpha the larger polar angle, beta the
+	 * smaller (the larger cosine). */
+	double sa, tb;
+	if (wi.z < wo.z) {
+		sa = si;
+		tb = so / wo.z;
+	} else {
+		sa = so;
+		tb = si / wi.z;
+	}
+	return (A + B * cphi * sa * tb) / M_PI;
+}
+
+double glint_fresnel_or_one(double c, double ior)
+{
+	return ior > 0 ? glint_fresnel_dielectric(c, ior) : 1;
+}
+
+double glint_beckmann_lobe(double m, double ior, struct vec3 wo, struct vec3 wi)
+{
+	if (!(wo.z > 0 && wi.z > 0))
+		return 0;
+	struct vec3 h = v3_norm(v3_add(wo, wi));
+	double oh = v3_dot(wo, h);
+	return glint_beckmann_d(h.z, m) * glint_vcavity_g(h.z, wo.z, wi.z, oh) *
+	       glint_fresnel_or_one(oh, ior) / (4 * wi.z * wo.z);
+}
+
+/* The pdf of reflecting wo about a normal drawn with density d(h) cos(h). */
+static double reflected_pdf(double d_h, struct vec3 h, struct vec3 wo)
+{
+	double oh = v3_dot(wo, h);
+	return oh > 0 ? d_h * h.z / (4 * oh) : 0;
+}
+
+double glint_beckmann_pdf(double m, struct vec3 wo, struct vec3 wi)
+{
+	struct vec3 h = v3_norm(v3_add(wo, wi));
+	return reflected_pdf(glint_beckmann_d(h.z, m), h, wo);
+}
+
+/* wo reflected about the normal at polar tan^2 tan2 and azimuth 2 pi u. */
+static void reflect_about(double tan2, double u, struct vec3 wo,
+			  struct vec3 *wi)
+{
+	double ch = 1 / sqrt(1 + tan2), sh = sqrt(fmax(0, 1 - ch * ch));
+	double phi = 2 * M_PI * u;
+	struct vec3 h = v3(sh * cos(phi), sh * sin(phi), ch);
+	double oh = v3_dot(wo, h);
+
+	*wi = v3_sub(v3_scale(h, 2 * oh), wo);
+}
+
+void glint_beckmann_sample(double m, struct vec3 wo, const double u[2],
+			   struct vec3 *wi)
+{
+	reflect_about(-m * m * log(1 - u[0]), u[1], wo, wi);
+}
+
+double glint_ggx_lobe(double a, double ior, struct vec3 wo, struct vec3 wi)
+{
+	if (!(wo.z > 0 && wi.z > 0))
+		return 0;
+	struct vec3 h = v3_norm(v3_add(wo, wi));
+	double oh = v3_dot(wo, h);
+	return glint_ggx_d(h.z, a) * glint_ggx_g2(wo.z, wi.z, a) *
+	       glint_fresnel_or_one(oh, ior) / (4 * wi.z * wo.z);
+}
+
+double glint_ggx_pdf(double a, struct vec3 wo, struct vec3 wi)
+{
+	struct vec3 h = v3_norm(v3_add(wo, wi));
+	return reflected_pdf(glint_ggx_d(h.z, a), h, wo);
+}
+
+void glint_ggx_sample(double a, struct vec3 wo, const double u[2],
+		      struct vec3 *wi)
+{
+	/* The inverse of the D cos marginal in tan^2: a^2 u / (1 - u). */
+	reflect_about(a * a * u[0] / (1 - u[0]), u[1], wo, wi);
+}
+
+double glint_lobe_shape_pdf(enum glint_lobe_shape s, double w, struct vec3 wo,
+			    struct vec3 wi)
+{
+	if (!(wo.z > 0 && wi.z > 0))
+		return 0;
+	switch (s) {
+	case GLINT_LOBE_BECKMANN:
+		return glint_beckmann_pdf(w, wo, wi);
+	case GLINT_LOBE_GGX:
+		return glint_ggx_pdf(w, wo, wi);
+	default:
+		return wi.z / M_PI;
+	}
+}
+
+double glint_lobe_shape_sample(enum glint_lobe_shape s, double w,
+			       struct vec3 wo, const double u[2],
+			       struct vec3 *wi)
+{
+	if (!(wo.z > 0))
+		return 0;
+	if (s == GLINT_LOBE_BECKMANN)
+		glint_beckmann_sample(w, wo, u, wi);
+	else if (s == GLINT_LOBE_GGX)
+		glint_ggx_sample(w, wo, u, wi);
+	else
+		glint_sample_cosine(u, wi);
+	if (!(wi->z > 0))
+		return 0;
+	return glint_lobe_shape_pdf(s, w, wo, *wi);
 }

@@ -2,7 +2,9 @@
 #ifndef GLINT_FIT_BRDF_MICROFACET_H
 #define GLINT_FIT_BRDF_MICROFACET_H
 
-/* Pieces of the Torrance-Sparrow model, exposed for tests. */
+/* Pieces of the microfacet and rough-diffuse models, exposed for tests. */
+
+#include "core/vec.h"
 
 /*
  * Beckmann distribution of microfacet normals with RMS slope m:
@@ -23,5 +25,73 @@ double glint_fresnel_dielectric(double c, double n);
  * G = min(1, 2 (n.h)(n.o) / (o.h), 2 (n.h)(n.i) / (o.h)).
  */
 double glint_vcavity_g(double nh, double no, double ni, double oh);
+
+/* F at cosine c for index ior, or 1 when ior <= 0 (constant Fresnel). */
+double glint_fresnel_or_one(double c, double ior);
+
+/*
+ * A microfacet lobe without its albedo, D G F / (4 (n.i)(n.o)), 0 below
+ * the surface; ior <= 0 for F = 1.  Beckmann D with RMS slope m and the
+ * V-cavity G (Torrance-Sparrow), or GGX D with width a and its
+ * height-correlated Smith G.
+ */
+double glint_beckmann_lobe(double m, double ior, struct vec3 wo,
+			   struct vec3 wi);
+double glint_ggx_lobe(double a, double ior, struct vec3 wo, struct vec3 wi);
+
+/*
+ * Reflect wo about a microfacet normal drawn with density D(h) cos(h) from
+ * two uniforms (smooth in the roughness for fixed u: common random numbers
+ * for the fitter); wi may come out below the surface.  The _pdf functions
+ * give its solid-angle density at wi, D(h) (n.h) / (4 (o.h)).
+ */
+void glint_beckmann_sample(double m, struct vec3 wo, const double u[2],
+			   struct vec3 *wi);
+double glint_beckmann_pdf(double m, struct vec3 wo, struct vec3 wi);
+void glint_ggx_sample(double a, struct vec3 wo, const double u[2],
+		      struct vec3 *wi);
+double glint_ggx_pdf(double a, struct vec3 wo, struct vec3 wi);
+
+/*
+ * How a lobe is sampled: cosine-weighted (diffuse lobes), or by reflecting
+ * about a Beckmann or GGX normal of width w (above).  _sample returns the
+ * pdf at the direction drawn, 0 when it falls below the surface; both are
+ * 0 for wo below it.  The pdf_lobe/sample_lobe of the models.
+ */
+enum glint_lobe_shape {
+	GLINT_LOBE_COSINE,
+	GLINT_LOBE_BECKMANN,
+	GLINT_LOBE_GGX,
+};
+double glint_lobe_shape_pdf(enum glint_lobe_shape s, double w, struct vec3 wo,
+			    struct vec3 wi);
+double glint_lobe_shape_sample(enum glint_lobe_shape s, double w,
+			       struct vec3 wo, const double u[2],
+			       struct vec3 *wi);
+
+/*
+ * Trowbridge-Reitz (GGX) distribution with width a (Walter et al. 2007):
+ * D(h) = a^2 / (pi cos^4(t) (a^2 + tan^2(t))^2); its integral of D cos
+ * over the hemisphere is 1.  The slopes have no finite variance: a is a
+ * width, not an RMS slope (Beckmann's m and a agree near the peak).
+ */
+double glint_ggx_d(double cos_h, double a);
+
+/* Smith's Lambda for GGX, (sqrt(1 + a^2 tan^2(t_v)) - 1) / 2. */
+double glint_ggx_lambda(double cos_v, double a);
+
+/* Height-correlated Smith masking-shadowing, 1 / (1 + L(o) + L(i))
+ * (Heitz 2014, eq. 99). */
+double glint_ggx_g2(double no, double ni, double a);
+
+/*
+ * The Oren-Nayar (1994) qualitative rough-diffuse factor, per unit albedo:
+ * (A + B max(0, cos(phi_i - phi_o)) sin(alpha) tan(beta)) / pi with
+ * A = 1 - s^2 / (2 (s^2 + 0.33)), B = 0.45 s^2 / (s^2 + 0.09),
+ * alpha = max(theta_i, theta_o), beta = min(...), s = sigma the standard
+ * deviation of the facets' slope angle in radians.  sigma = 0 is Lambert.
+ * wo, wi in the shading frame; 0 below the surface.
+ */
+double glint_oren_nayar(double sigma, struct vec3 wo, struct vec3 wi);
 
 #endif

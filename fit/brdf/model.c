@@ -5,6 +5,7 @@
 #include "core/json.h"
 #include "core/suggest.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -13,6 +14,9 @@ static const struct glint_model_ops *const registry[] = {
 	&glint_model_torrance_sparrow,
 	&glint_model_ts_constant_fresnel,
 	&glint_model_dielectric,
+	&glint_model_ggx,
+	&glint_model_oren_nayar,
+	&glint_model_two_lobe,
 };
 
 #define NMODELS (sizeof(registry) / sizeof(registry[0]))
@@ -170,4 +174,71 @@ json_t *glint_material_to_json(const struct glint_model_ops *model,
 		json_array_append_new(a, json_real(params[i]));
 	}
 	return o;
+}
+
+void glint_lobes_eval(const struct glint_model_ops *m, const double *p,
+		      struct vec3 wo, struct vec3 wi, double f[3])
+{
+	double b[GLINT_MAX_PARAMS];
+
+	f[0] = f[1] = f[2] = 0;
+	if (!(wo.z > 0 && wi.z > 0))
+		return;
+	m->eval_lobes(p, wo, wi, b);
+	for (int j = 0; j < m->nlobes; j++)
+		for (int c = 0; c < 3; c++)
+			f[c] += p[m->lobe_param[j] + c] * b[j];
+}
+
+/* Lobe j's share of the samples: w[j] / sum w, at least 5 % for every
+ * lobe with weight (none is starved), all alike when no lobe has any. */
+static void lobe_probs(int n, const double *w, double *prob)
+{
+	double total = 0, floored = 0;
+	int used = 0;
+
+	for (int j = 0; j < n; j++)
+		if (w[j] > 0) {
+			total += w[j];
+			used++;
+		}
+	for (int j = 0; j < n; j++) {
+		prob[j] = !used	     ? 1.0 / n
+			  : w[j] > 0 ? fmax(w[j] / total, 0.05)
+				     : 0;
+		floored += prob[j];
+	}
+	for (int j = 0; j < n; j++)
+		prob[j] /= floored;
+}
+
+double glint_lobes_pdf(const struct glint_model_ops *m, const double *p,
+		       const double *w, struct vec3 wo, struct vec3 wi)
+{
+	double prob[GLINT_MAX_PARAMS], pdf = 0;
+
+	if (!(wo.z > 0 && wi.z > 0))
+		return 0;
+	lobe_probs(m->nlobes, w, prob);
+	for (int j = 0; j < m->nlobes; j++)
+		if (prob[j] > 0)
+			pdf += prob[j] * m->pdf_lobe(p, j, wo, wi);
+	return pdf;
+}
+
+double glint_lobes_sample(const struct glint_model_ops *m, const double *p,
+			  const double *w, struct vec3 wo, const double u[3],
+			  struct vec3 *wi)
+{
+	double prob[GLINT_MAX_PARAMS], acc = 0;
+	int j = 0;
+
+	if (!(wo.z > 0))
+		return 0;
+	lobe_probs(m->nlobes, w, prob);
+	while (j < m->nlobes - 1 && u[0] >= acc + prob[j])
+		acc += prob[j++];
+	if (m->sample_lobe(p, j, wo, u + 1, wi) <= 0 || !(wi->z > 0))
+		return 0;
+	return glint_lobes_pdf(m, p, w, wo, *wi);
 }

@@ -27,22 +27,10 @@ static const struct glint_param ts_params[] = {
 	{ "ior", "ior", -1, 1, 5, 1.5 },
 };
 
-/* F, or 1 for the constant-Fresnel variant (ior passed as 0). */
-static double fresnel(double c, double ior)
-{
-	return ior > 0 ? glint_fresnel_dielectric(c, ior) : 1;
-}
-
 /* The specular lobe without its albedo: D G F / (4 cos_i cos_o). */
 static double ts_spec(const double *p, struct vec3 wo, struct vec3 wi)
 {
-	if (!(wo.z > 0 && wi.z > 0))
-		return 0;
-	struct vec3 h = v3_norm(v3_add(wo, wi));
-	double oh = v3_dot(wo, h);
-	return glint_beckmann_d(h.z, p[ROUGH]) *
-	       glint_vcavity_g(h.z, wo.z, wi.z, oh) * fresnel(oh, p[IOR]) /
-	       (4 * wi.z * wo.z);
+	return glint_beckmann_lobe(p[ROUGH], p[IOR], wo, wi);
 }
 
 static void ts_eval(const double *p, struct vec3 wo, struct vec3 wi,
@@ -63,7 +51,7 @@ static double spec_prob(const double *p, struct vec3 wo)
 {
 	double d = rgb_luminance(p[KD], p[KD + 1], p[KD + 2]);
 	double s = rgb_luminance(p[KS], p[KS + 1], p[KS + 2]) *
-		   fresnel(wo.z, p[IOR]);
+		   glint_fresnel_or_one(wo.z, p[IOR]);
 
 	if (s <= 0)
 		return d > 0 ? 0 : 0.5;
@@ -73,36 +61,13 @@ static double spec_prob(const double *p, struct vec3 wo)
 	return ps < 0.05 ? 0.05 : ps > 0.95 ? 0.95 : ps;
 }
 
-static double spec_pdf(const double *p, struct vec3 wo, struct vec3 wi)
-{
-	struct vec3 h = v3_norm(v3_add(wo, wi));
-	double oh = v3_dot(wo, h);
-
-	if (!(oh > 0))
-		return 0;
-	return glint_beckmann_d(h.z, p[ROUGH]) * h.z / (4 * oh);
-}
-
 static double ts_pdf(const double *p, struct vec3 wo, struct vec3 wi)
 {
 	if (!(wo.z > 0 && wi.z > 0))
 		return 0;
 	double ps = spec_prob(p, wo);
-	return ps * spec_pdf(p, wo, wi) + (1 - ps) * wi.z / M_PI;
-}
-
-/* Reflect wo about a Beckmann normal drawn with density D(h) cos(h);
- * smooth in m for fixed u (common random numbers for the fitter). */
-static void sample_beckmann(double m, struct vec3 wo, const double u[2],
-			    struct vec3 *wi)
-{
-	double tan2 = -m * m * log(1 - u[0]);
-	double ch = 1 / sqrt(1 + tan2), sh = sqrt(fmax(0, 1 - ch * ch));
-	double phi = 2 * M_PI * u[1];
-	struct vec3 h = v3(sh * cos(phi), sh * sin(phi), ch);
-	double oh = v3_dot(wo, h);
-
-	*wi = v3_sub(v3_scale(h, 2 * oh), wo);
+	return ps * glint_beckmann_pdf(p[ROUGH], wo, wi) +
+	       (1 - ps) * wi.z / M_PI;
 }
 
 static double ts_sample(const double *p, struct vec3 wo, const double u[3],
@@ -111,7 +76,7 @@ static double ts_sample(const double *p, struct vec3 wo, const double u[3],
 	if (!(wo.z > 0))
 		return 0;
 	if (u[0] < spec_prob(p, wo))
-		sample_beckmann(p[ROUGH], wo, u + 1, wi);
+		glint_beckmann_sample(p[ROUGH], wo, u + 1, wi);
 	else
 		glint_sample_cosine(u + 1, wi);
 	if (!(wi->z > 0))
@@ -131,23 +96,16 @@ static void ts_lobes(const double *p, struct vec3 wo, struct vec3 wi, double *b)
 static double ts_pdf_lobe(const double *p, int j, struct vec3 wo,
 			  struct vec3 wi)
 {
-	if (!(wo.z > 0 && wi.z > 0))
-		return 0;
-	return j == 0 ? wi.z / M_PI : spec_pdf(p, wo, wi);
+	return glint_lobe_shape_pdf(j ? GLINT_LOBE_BECKMANN : GLINT_LOBE_COSINE,
+				    p[ROUGH], wo, wi);
 }
 
 static double ts_sample_lobe(const double *p, int j, struct vec3 wo,
 			     const double u[2], struct vec3 *wi)
 {
-	if (!(wo.z > 0))
-		return 0;
-	if (j == 0)
-		glint_sample_cosine(u, wi);
-	else
-		sample_beckmann(p[ROUGH], wo, u, wi);
-	if (!(wi->z > 0))
-		return 0;
-	return ts_pdf_lobe(p, j, wo, *wi);
+	return glint_lobe_shape_sample(j ? GLINT_LOBE_BECKMANN
+					 : GLINT_LOBE_COSINE,
+				       p[ROUGH], wo, u, wi);
 }
 
 /* Beckmann D falls below 1e-12 of its peak where tan^2(t_h) > 27.6 m^2;

@@ -147,13 +147,33 @@ check "fit wrote params.json, render.exr, compare.png" test -s "$tmp/fit1/params
 check "render the fitted material from params.json" run 0 "" render "$tmp/fscene.json" --material "$tmp/fit1/params.json" -o "$tmp/refit.exr" -q
 check "... wrote it" test -s "$tmp/refit.exr"
 cp -r "$tmp/fit1" "$tmp/fit1.keep"
+# The richer models: a material file of each renders; one is fitted.
+cat >"$tmp/on.json" <<JSON
+{"model": "oren-nayar", "diffuse": [0.3, 0.3, 0.3], "specular": [0.2, 0.2, 0.2],
+ "roughness": 0.2, "ior": 1.5, "diffuse_roughness": 0.6}
+JSON
+echo '{"model": "ggx", "diffuse": [0.3, 0.2, 0.1], "roughness": 0.1}' >"$tmp/ggx.json"
+echo '{"model": "two-lobe", "specular2": [0.1, 0.1, 0.1], "roughness2": 0.4}' >"$tmp/two.json"
+check "render a ggx material" run 0 "" render "$tmp/fscene.json" --material "$tmp/ggx.json" -o "$tmp/ggx.exr" -q
+check "render a two-lobe material" run 0 "" render "$tmp/fscene.json" --material "$tmp/two.json" -o "$tmp/two.exr" -q
+check "render an oren-nayar material" run 0 "" render "$tmp/fscene.json" --material "$tmp/on.json" -o "$tmp/on.exr" -q
+check "fit --model oren-nayar" run 0 "" fit "$tmp/fscene.json" "$tmp/on.exr" -o "$tmp/fiton" --model oren-nayar --json -q
+check "... its parameters and conventions in params.json" python3 -c "
+import json; r=json.load(open('$tmp/out'))
+assert r['model']=='oren-nayar' and 'Oren-Nayar' in r['conventions'], r['model']
+names=[p['name'] for p in r['parameters']]
+assert names[-1]=='diffuse_roughness' and len(names)==9, names
+assert abs(r['material']['diffuse'][0]-0.3)<0.03, r['material']
+assert abs(r['material']['diffuse_roughness']-0.6)<0.15, r['material']"
+check "a material key of another model is refused" run 1 "roughness2" render "$tmp/fscene.json" --material <(echo '{"model": "ggx", "roughness2": 0.3}') -o "$tmp/x.exr"
 check "fit --select-model" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fitsel" --select-model --json -q
 check "--select-model reports every candidate with AIC, BIC, errors" python3 -c "
 import json; r=json.load(open('$tmp/out'))['model_selection']
 names=[c['name'] for c in r['candidates']]
-assert len(names)==4 and r['chosen'] in names and 'BIC' in r['why'], r
+assert len(names)==7 and r['chosen'] in names and 'BIC' in r['why'], r
+assert [c['model'] for c in r['candidates']][4:]==['ggx','oren-nayar','two-lobe'], r
 for c in r['candidates']:
-    assert c['bic']==c['bic'] and c['aic']==c['aic'] and c['k'] in (3,6,7,8), c
+    assert c['bic']==c['bic'] and c['aic']==c['aic'] and c['k'] in (3,6,7,8,9,12), c
     assert all('stderr' in v for v in c['parameters'].values()), c"
 check "fit --ladder-knobs env,samples" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fitlad" --ladder-knobs env,samples --json -q
 check "--ladder reports each knob's levels, choice and why" python3 -c "

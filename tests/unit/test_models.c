@@ -95,10 +95,11 @@ static double pdf_integral(const struct glint_model_ops *m, const double *p,
 	return sum;
 }
 
-static void test_ts_pdf_and_sampling(void)
+/* sample() draws from pdf() (chi-square over 20 x 16 bins of cos and
+ * phi), pdf() integrates to the accepted fraction, and sample() returns
+ * pdf()'s value. */
+static void check_sampling(const struct glint_model_ops *m, const double *p)
 {
-	const struct glint_model_ops *m = &glint_model_torrance_sparrow;
-	double p[8] = { 0.3, 0.2, 0.1, 0.5, 0.5, 0.5, 0.2, 1.5 };
 	double angles[3] = { 0, 30, 60 };
 
 	for (int k = 0; k < 3; k++) {
@@ -160,12 +161,72 @@ static void test_ts_pdf_and_sampling(void)
 		CHECK(integral <= 1 + 2e-3 &&
 			      fabs(integral - (1 - (double)rejected / ns)) <
 				      5e-3,
-		      "theta_o %g: pdf integral %g, accepted fraction %g",
-		      angles[k], integral, 1 - (double)rejected / ns);
-		CHECK(mismatch == 0, "%d sample pdfs differ from pdf()",
-		      mismatch);
-		CHECK(pv > 1e-3, "theta_o %g: chi-square p = %g (dof %d)",
-		      angles[k], pv, dof);
+		      "%s, theta_o %g: pdf integral %g, accepted fraction %g",
+		      m->name, angles[k], integral, 1 - (double)rejected / ns);
+		CHECK(mismatch == 0, "%s: %d sample pdfs differ from pdf()",
+		      m->name, mismatch);
+		CHECK(pv > 1e-3, "%s, theta_o %g: chi-square p = %g (dof %d)",
+		      m->name, angles[k], pv, dof);
+	}
+}
+
+/* Every BRDF model, at parameters that give each lobe weight. */
+static const struct {
+	const struct glint_model_ops *m;
+	double p[GLINT_MAX_PARAMS];
+} sampled[] = {
+	{ &glint_model_lambert, { 0.3, 0.2, 0.1 } },
+	{ &glint_model_torrance_sparrow,
+	  { 0.3, 0.2, 0.1, 0.5, 0.5, 0.5, 0.2, 1.5 } },
+	{ &glint_model_ts_constant_fresnel,
+	  { 0.3, 0.2, 0.1, 0.05, 0.05, 0.05, 0.1 } },
+	{ &glint_model_ggx, { 0.3, 0.2, 0.1, 0.5, 0.5, 0.5, 0.2, 1.5 } },
+	{ &glint_model_oren_nayar,
+	  { 0.3, 0.2, 0.1, 0.5, 0.5, 0.5, 0.2, 1.5, 0.6 } },
+	{ &glint_model_two_lobe,
+	  { 0.3, 0.2, 0.1, 0.5, 0.5, 0.5, 0.12, 1.5, 0.3, 0.3, 0.3, 0.4 } },
+};
+#define NSAMPLED (int)(sizeof(sampled) / sizeof(sampled[0]))
+
+static void test_pdf_and_sampling(void)
+{
+	for (int k = 0; k < NSAMPLED; k++)
+		check_sampling(sampled[k].m, sampled[k].p);
+}
+
+static struct vec3 random_dir(uint64_t s, int k)
+{
+	double z = glint_u01(glint_hash3(s, k, 11));
+	double ph = 2 * M_PI * glint_u01(glint_hash3(s, k, 12));
+	double r = sqrt(fmax(0, 1 - z * z));
+	return v3(r * cos(ph), r * sin(ph), z);
+}
+
+/* f(o, i) = f(i, o), and f is the sum of albedo_j times lobe j. */
+static void test_reciprocity_and_lobes(void)
+{
+	for (int k = 0; k < NSAMPLED; k++) {
+		const struct glint_model_ops *m = sampled[k].m;
+		const double *p = sampled[k].p;
+		int asym = 0, unlike = 0;
+		for (int s = 0; s < 5000; s++) {
+			struct vec3 o = random_dir(s, 1), i = random_dir(s, 2);
+			double f[3], g[3], b[GLINT_MAX_PARAMS];
+			m->eval(p, o, i, f);
+			m->eval(p, i, o, g);
+			m->eval_lobes(p, o, i, b);
+			for (int c = 0; c < 3; c++) {
+				double sum = 0;
+				for (int j = 0; j < m->nlobes; j++)
+					sum += p[m->lobe_param[j] + c] * b[j];
+				asym += fabs(f[c] - g[c]) > 1e-9 * f[c];
+				unlike += fabs(f[c] - sum) > 1e-12 * f[c];
+			}
+		}
+		CHECK(asym == 0, "%s: %d values with f(o, i) != f(i, o)",
+		      m->name, asym);
+		CHECK(unlike == 0, "%s: %d values differ from the lobes' sum",
+		      m->name, unlike);
 	}
 }
 
@@ -240,6 +301,198 @@ static void test_ts_energy(void)
 	fprintf(stderr, "  largest specular albedo seen: %.4f\n", worst);
 }
 
+/* GGX: D cos integrates to 1 (tan substitution: the tail is long). */
+static void test_ggx_normalised(void)
+{
+	double as[4] = { 0.01, 0.05, 0.2, 0.6 };
+	for (int k = 0; k < 4; k++) {
+		/* th = atan(a x), x in [0, inf) as x = v / (1 - v). */
+		int n = 400000;
+		double sum = 0, a = as[k];
+		for (int j = 0; j < n; j++) {
+			double v = (j + 0.5) / n, x = v / (1 - v);
+			double dx = 1 / ((1 - v) * (1 - v)) / n;
+			double th = atan(a * x), dth = a / (1 + a * a * x * x);
+			sum += glint_ggx_d(cos(th), a) * cos(th) * sin(th) *
+			       dth * dx;
+		}
+		sum *= 2 * M_PI;
+		CHECK_NEAR(sum, 1.0, 1e-4, "integral of GGX D cos");
+	}
+}
+
+/*
+ * Smith masking is the one that conserves projected area: for every view
+ * o, integral of G1(o) max(0, o.h) D(h) dh = cos(theta_o) (Heitz 2014,
+ * eq. 8), G1 = 1 / (1 + Lambda(o)).  Midpoint rule over (theta_h, phi_h).
+ */
+static void test_ggx_smith_projected_area(void)
+{
+	double as[3] = { 0.1, 0.3, 0.8 }, ths[4] = { 0, 30, 60, 80 };
+	for (int k = 0; k < 3; k++)
+		for (int t = 0; t < 4; t++) {
+			double a = as[k];
+			struct vec3 o = dir_at(ths[t]);
+			int nt = 4000, np = 256;
+			double sum = 0;
+			for (int j = 0; j < nt; j++) {
+				double th = (j + 0.5) * (M_PI / 2) / nt;
+				double ct = cos(th), st = sin(th);
+				for (int i = 0; i < np; i++) {
+					double ph = (i + 0.5) * 2 * M_PI / np;
+					struct vec3 h = v3(st * cos(ph),
+							   st * sin(ph), ct);
+					sum += fmax(0, v3_dot(o, h)) *
+					       glint_ggx_d(ct, a) * st;
+				}
+			}
+			sum *= (M_PI / 2 / nt) * (2 * M_PI / np);
+			double g1 = 1 / (1 + glint_ggx_lambda(o.z, a));
+			char what[80];
+			snprintf(what, sizeof(what),
+				 "G1 x projected area = cos, a %g, theta %g", a,
+				 ths[t]);
+			CHECK_NEAR(g1 * sum, o.z, 2e-3 * o.z + 1e-4, what);
+		}
+}
+
+/* Oren-Nayar: Lambert at sigma 0; viewed head-on, its albedo is A. */
+static void test_oren_nayar(void)
+{
+	const struct glint_model_ops *m = &glint_model_oren_nayar;
+	double sig[4] = { 0, 0.2, 0.5, 1.0 };
+	for (int k = 0; k < 4; k++) {
+		double s2 = sig[k] * sig[k], A = 1 - s2 / (2 * (s2 + 0.33));
+		double p[9] = { 1, 1, 1, 0, 0, 0, 0.1, 1.5, sig[k] };
+		double a[3], worst = 0;
+		albedo_quadrature(m, p, dir_at(0), a);
+		CHECK_NEAR(a[0], A, 2e-3, "albedo at normal view = A");
+		for (int t = 0; t <= 85; t += 5) {
+			albedo_quadrature(m, p, dir_at(t), a);
+			worst = fmax(worst, a[0]);
+		}
+		/* The qualitative model is not energy conserving at
+		 * grazing view; it stays within 3 % of it here. */
+		CHECK(worst <= 1.03, "sigma %g: albedo %g > 1.03", sig[k],
+		      worst);
+		fprintf(stderr,
+			"  oren-nayar sigma %.1f: largest albedo %.4f\n",
+			sig[k], worst);
+	}
+	/* sigma 0 with a specular lobe is torrance-sparrow exactly. */
+	double q[9] = { 0.3, 0.2, 0.1, 0.5, 0.4, 0.3, 0.2, 1.5, 0 };
+	int bad = 0;
+	for (int s = 0; s < 2000; s++) {
+		struct vec3 o = random_dir(s, 3), i = random_dir(s, 4);
+		double f[3], g[3];
+		m->eval(q, o, i, f);
+		glint_model_torrance_sparrow.eval(q, o, i, g);
+		for (int c = 0; c < 3; c++)
+			bad += fabs(f[c] - g[c]) > 1e-12 * g[c];
+	}
+	CHECK(bad == 0, "%d values differ from torrance-sparrow's", bad);
+	/* Rough diffuse is flatter: brighter back toward the light than
+	 * Lambert, darker across it. */
+	double r[9] = { 1, 1, 1, 0, 0, 0, 0.1, 1.5, 0.5 }, back[3], across[3];
+	m->eval(r, dir_at(60), dir_at(60), back);
+	m->eval(r, dir_at(60), v3(-sin(M_PI / 3), 0, 0.5), across);
+	CHECK(back[0] > 1 / M_PI && across[0] < 1 / M_PI,
+	      "retro %g, forward %g against Lambert %g", back[0], across[0],
+	      1 / M_PI);
+}
+
+/* The white furnace for the new lobes: never more than 1. */
+static void test_new_models_energy(void)
+{
+	double rough[3] = { 0.05, 0.2, 0.6 };
+	double worst = 0;
+	for (int r = 0; r < 3; r++)
+		for (int t = 0; t <= 85; t += 17) {
+			double g[8] = { 0, 0, 0, 1, 1, 1, rough[r], 5 };
+			double h[8] = { 0.5, 0.5, 0.5,	    0.5,
+					0.5, 0.5, rough[r], 5 };
+			double two[12] = { 0.4,	     0.4, 0.4, 0.3, 0.3, 0.3,
+					   rough[r], 5,	  0.3, 0.3, 0.3, 0.5 };
+			double a[3];
+			albedo_quadrature(&glint_model_ggx, g, dir_at(t), a);
+			worst = fmax(worst, a[0]);
+			CHECK(a[0] <= 1.0, "ggx: albedo %g (a %g, theta %d)",
+			      a[0], rough[r], t);
+			albedo_quadrature(&glint_model_ggx, h, dir_at(t), a);
+			CHECK(a[0] <= 1.0, "ggx kd=ks=0.5: albedo %g", a[0]);
+			albedo_quadrature(&glint_model_two_lobe, two, dir_at(t),
+					  a);
+			CHECK(a[0] <= 1.0, "two-lobe: albedo %g (theta %d)",
+			      a[0], t);
+		}
+	fprintf(stderr, "  largest GGX specular albedo seen: %.4f\n", worst);
+	/* With F = 1 (ior 5 is near it) and a smooth lobe nearly all the
+	 * light comes back: the lobe is normalised. */
+	double s[8] = { 0, 0, 0, 1, 1, 1, 0.05, 5 }, a[3];
+	albedo_quadrature(&glint_model_ggx, s, dir_at(20), a);
+	double F = glint_fresnel_dielectric(cos(20 * M_PI / 180), 5);
+	CHECK(a[0] > 0.97 * F && a[0] <= 1.0 * F + 0.01,
+	      "smooth GGX albedo %g against F %g", a[0], F);
+}
+
+/* A two-lobe surface with no second lobe is torrance-sparrow. */
+static void test_two_lobe(void)
+{
+	double q[12] = { 0.3, 0.2, 0.1, 0.5, 0.4, 0.3, 0.2, 1.5, 0, 0, 0, 0.5 };
+	double r[12] = { 0, 0, 0, 0, 0, 0, 0.7, 1.5, 0.5, 0.4, 0.3, 0.2 };
+	int bad = 0, swapped = 0;
+	for (int s = 0; s < 2000; s++) {
+		struct vec3 o = random_dir(s, 5), i = random_dir(s, 6);
+		double f[3], g[3], t[8] = { 0, 0, 0, 0.5, 0.4, 0.3, 0.2, 1.5 };
+		glint_model_two_lobe.eval(q, o, i, f);
+		glint_model_torrance_sparrow.eval(q, o, i, g);
+		for (int c = 0; c < 3; c++)
+			bad += fabs(f[c] - g[c]) > 1e-12 * g[c];
+		/* The lobes are interchangeable: lobe 2 alone is lobe 1. */
+		glint_model_two_lobe.eval(r, o, i, f);
+		glint_model_torrance_sparrow.eval(t, o, i, g);
+		for (int c = 0; c < 3; c++)
+			swapped += fabs(f[c] - g[c]) > 1e-12 * g[c];
+	}
+	CHECK(bad == 0, "%d values differ from torrance-sparrow's", bad);
+	CHECK(swapped == 0, "%d second-lobe values differ", swapped);
+}
+
+/* The new models' own keys read and write back; unknown keys refused. */
+static void test_new_models_json(void)
+{
+	const struct glint_model_ops *m;
+	double p[GLINT_MAX_PARAMS];
+	json_error_t e;
+	json_t *o = json_loads("{\"model\": \"two-lobe\", \"specular2\":"
+			       " [0.1, 0.2, 0.3], \"roughness2\": 0.4}",
+			       0, &e);
+	CHECK(glint_material_from_json("m.json", "", o, &m, p) == 0, "%s",
+	      glint_error_msg());
+	CHECK(m == &glint_model_two_lobe && p[9] == 0.2 && p[11] == 0.4 &&
+		      p[6] == 0.075,
+	      "values %g %g %g", p[9], p[11], p[6]);
+	json_t *back = glint_material_to_json(m, p);
+	CHECK(json_array_size(json_object_get(back, "specular2")) == 3 &&
+		      json_real_value(json_object_get(back, "roughness2")) ==
+			      0.4,
+	      "to_json lost the second lobe");
+	json_decref(back);
+	json_decref(o);
+	o = json_loads("{\"model\": \"oren-nayar\", \"diffuse_roughness\":"
+		       " 1.5}",
+		       0, &e);
+	CHECK(glint_material_from_json("m.json", "", o, &m, p) < 0,
+	      "sigma 1.5 accepted");
+	CHECK_MSG(glint_error_msg(), "diffuse_roughness");
+	json_decref(o);
+	o = json_loads("{\"model\": \"ggx\", \"diffuse_roughness\": 0.2}", 0,
+		       &e);
+	CHECK(glint_material_from_json("m.json", "", o, &m, p) < 0,
+	      "ggx took diffuse_roughness");
+	json_decref(o);
+}
+
 static void test_material_json(void)
 {
 	const struct glint_model_ops *m;
@@ -304,10 +557,17 @@ int main(void)
 	RUN(test_beckmann_normalised);
 	RUN(test_fresnel);
 	RUN(test_vcavity);
-	RUN(test_ts_pdf_and_sampling);
+	RUN(test_pdf_and_sampling);
+	RUN(test_reciprocity_and_lobes);
 	RUN(test_lambert);
 	RUN(test_constant_fresnel);
 	RUN(test_ts_energy);
+	RUN(test_ggx_normalised);
+	RUN(test_ggx_smith_projected_area);
+	RUN(test_oren_nayar);
+	RUN(test_new_models_energy);
+	RUN(test_two_lobe);
+	RUN(test_new_models_json);
 	RUN(test_material_json);
 	RUN(test_paper_table);
 	return test_result();

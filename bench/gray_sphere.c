@@ -1,0 +1,321 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * Real photographs glint did not make: the UW photometric-stereo matte gray
+ * sphere (../shared/data/spheres/uw_psm/gray/), 8-bit TGA, 512 x 340, each
+ * lit by one distant point light of known direction (lights.txt).  Each
+ * photo is fitted alone with Lambert, Oren-Nayar and Torrance-Sparrow and
+ * the per-light answers are compared against their reported intervals.
+ *
+ *   bench/gray_sphere [--response srgb|gamma:G] [--max-pixels N] [LIGHT...]
+ *
+ * The set-up, stated:
+ *   - response: the 8-bit codes are linearised through the sRGB curve
+ *     (IEC 61966-2-1) unless --response gamma:G (code^G); 255 is clipped
+ *     (weight 0), 0 is kept;
+ *   - noise: each code is uncertain by its quantisation step (variance
+ *     1/12 code^2) plus one code of read noise, carried through the
+ *     response's slope into a per-pixel weight;
+ *   - geometry: the sphere's circle from gray.mask.tga (centroid, radius
+ *     from the area); an almost orthographic camera (focal length 20 000 px:
+ *     the dataset gives none) with the sphere at the distance that makes its
+ *     radius match; lights.txt directions in camera coordinates, x right,
+ *     y up, z toward the camera;
+ *   - light: a disc of 0.5 degrees radius in a 2048 x 1024 lat-long map
+ *     whose irradiance at normal incidence is pi, so a Lambertian sphere of
+ *     albedo a shows a n.l: the albedos are in the photo's units (the
+ *     light's strength is not known).
+ * Prints one row per light and model, then the spread of each parameter
+ * across lights against the median reported standard error.
+ */
+#include "core/error.h"
+#include "core/formats.h"
+#include "core/image.h"
+#include "core/log.h"
+#include "fit/fit.h"
+#include "fit/render/render.h"
+#include "fit/scene/envmap.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define DIR	GLINT_SHARED_DATA "/spheres/uw_psm"
+#define NLIGHTS 12
+
+static double response_gamma; /* 0: sRGB */
+
+static double linear(double code)
+{
+	if (response_gamma > 0)
+		return pow(code, response_gamma);
+	return code <= 0.04045 ? code / 12.92
+			       : pow((code + 0.055) / 1.055, 2.4);
+}
+
+/* d linear / d code, numerically. */
+static double slope(double code)
+{
+	double h = 1e-4;
+	return (linear(fmin(1, code + h)) - linear(fmax(0, code - h))) /
+	       (fmin(1, code + h) - fmax(0, code - h));
+}
+
+static int read_lights(struct vec3 *l)
+{
+	FILE *f = fopen(DIR "/lights.txt", "r");
+	int n = 0;
+
+	if (!f)
+		return glint_error_set(errno, "%s/lights.txt: cannot open",
+				       DIR);
+	if (fscanf(f, "%d", &n) != 1 || n != NLIGHTS)
+		n = -1;
+	for (int i = 0; i < NLIGHTS && n > 0; i++)
+		if (fscanf(f, "%lf %lf %lf", &l[i].x, &l[i].y, &l[i].z) != 3)
+			n = -1;
+	fclose(f);
+	return n < 0 ? glint_error_set(EINVAL, "lights.txt: expected 12 "
+					       "directions")
+		     : 0;
+}
+
+/* The mask's circle: centroid and the radius of a disc of its area. */
+static int mask_circle(double *cx, double *cy, double *r)
+{
+	struct glint_image *m;
+	int ret = glint_ldr_read_image(DIR "/gray/gray.mask.tga", &m);
+	double n = 0, sx = 0, sy = 0;
+
+	if (ret < 0)
+		return ret;
+	for (int y = 0; y < m->height; y++)
+		for (int x = 0; x < m->width; x++)
+			if (m->data[((size_t)y * m->width + x) * 3] > 0.5f) {
+				n++;
+				sx += x + 0.5;
+				sy += y + 0.5;
+			}
+	glint_image_free(m);
+	if (n < 100)
+		return glint_error_set(EINVAL, "gray.mask.tga: no sphere");
+	*cx = sx / n;
+	*cy = sy / n;
+	*r = sqrt(n / M_PI);
+	return 0;
+}
+
+/* A lat-long map, black but for a disc about d with irradiance pi. */
+static struct glint_image *light_map(struct vec3 d)
+{
+	const int w = 2048, h = 1024;
+	const double radius = 0.5 * M_PI / 180;
+	struct glint_image *img = glint_image_new(w, h);
+	double solid = 0, cosr = cos(radius);
+
+	if (!img)
+		return NULL;
+	for (int pass = 0; pass < 2; pass++)
+		for (int j = 0; j < h; j++)
+			for (int i = 0; i < w; i++) {
+				struct vec3 t = glint_envmap_uv_to_dir(
+					(i + 0.5) / w, (j + 0.5) / h);
+				if (v3_dot(t, d) < cosr)
+					continue;
+				double dw = (2 * M_PI / w) * (M_PI / h) *
+					    sin((j + 0.5) * M_PI / h);
+				float *px = img->data + ((size_t)j * w + i) * 3;
+				if (pass == 0)
+					solid += dw * v3_dot(t, d);
+				else
+					px[0] = px[1] = px[2] =
+						(float)(M_PI / solid);
+			}
+	return img;
+}
+
+struct row {
+	double p[GLINT_MAX_PARAMS], se[GLINT_MAX_PARAMS];
+	double rel_rmse, bic;
+};
+
+static int fit_light(int li, struct vec3 ldir, double cx, double cy, double rpx,
+		     int max_pixels, const struct glint_model_ops **models,
+		     int nmodels, struct row *rows)
+{
+	char path[512];
+	struct glint_image *photo = NULL, *weight = NULL, *map;
+	struct glint_envmap *env = NULL;
+	struct glint_scene sc;
+	struct glint_renderer r;
+	int ret;
+
+	snprintf(path, sizeof(path), DIR "/gray/gray.%d.tga", li);
+	ret = glint_ldr_read_image(path, &photo);
+	if (ret < 0)
+		return ret;
+	weight = glint_image_new(photo->width, photo->height);
+	if (!weight) {
+		glint_image_free(photo);
+		return -ENOMEM;
+	}
+	for (size_t k = 0; k < (size_t)photo->width * photo->height * 3; k++) {
+		double c = photo->data[k];
+		double sd = slope(c) * sqrt(1.0 / 12 + 1) / 255;
+		photo->data[k] = (float)linear(c);
+		weight->data[k] = c >= 1 ? 0 : (float)(1 / (sd * sd));
+	}
+	glint_scene_defaults(&sc);
+	double fpx = 20000, pitch = 1e-5, R = 0.05;
+	glint_pinhole_init(&sc.cam, photo->width, photo->height, fpx * pitch,
+			   pitch, 0, 0, v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
+	ret = glint_pinhole_sphere_from_circle(&sc.cam, cx, cy, rpx, R,
+					       &sc.sphere_centre);
+	sc.sphere_radius = R;
+	sc.env_scale = 1;
+	map = ret < 0 ? NULL : light_map(ldir);
+	if (!ret && !map)
+		ret = -ENOMEM;
+	const char *dump = getenv("GRAY_SPHERE_DUMP");
+	if (!ret && dump) {
+		/* The inputs as files for glint fit: photo, weights, map. */
+		char f[600];
+		snprintf(f, sizeof(f), "%s/photo%d.exr", dump, li);
+		ret = glint_image_write(f, photo, NULL);
+		snprintf(f, sizeof(f), "%s/weight%d.exr", dump, li);
+		if (!ret)
+			ret = glint_image_write(f, weight, NULL);
+		snprintf(f, sizeof(f), "%s/light%d.exr", dump, li);
+		if (!ret)
+			ret = glint_image_write(f, map, NULL);
+		printf("dumped light %d: circle_px %.2f %.2f %.2f, focal "
+		       "%g px\n",
+		       li, cx, cy, rpx, fpx);
+	}
+	if (!ret)
+		ret = glint_envmap_new(map, sc.env_rotation, 1, "point light",
+				       &env);
+	if (!ret)
+		ret = glint_renderer_init_env(&r, &sc, env, 0, NULL);
+	int inited = !ret;
+	for (int m = 0; m < nmodels && !ret; m++) {
+		struct glint_fit_opts o;
+		struct glint_fit_result res;
+		glint_fit_default_opts(&o);
+		o.max_pixels = max_pixels;
+		ret = glint_fit(&r, models[m], photo, weight, &o, &res);
+		if (ret < 0)
+			break;
+		memcpy(rows[m].p, res.p, sizeof(res.p));
+		memcpy(rows[m].se, res.se, sizeof(res.se));
+		rows[m].rel_rmse = res.rel_rmse;
+		double n = 3.0 * res.pixels;
+		rows[m].bic =
+			n * log(2 * res.cost / n) + models[m]->nparams * log(n);
+	}
+	if (inited)
+		glint_renderer_release(&r);
+	glint_image_free(photo);
+	glint_image_free(weight);
+	return ret;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+	double x = *(const double *)a, y = *(const double *)b;
+	return (x > y) - (x < y);
+}
+
+int main(int argc, char **argv)
+{
+	const struct glint_model_ops *models[] = {
+		&glint_model_lambert, &glint_model_oren_nayar,
+		&glint_model_torrance_sparrow
+	};
+	enum { NM = 3 };
+	struct vec3 lights[NLIGHTS];
+	static struct row rows[NLIGHTS][NM];
+	int use[NLIGHTS], nuse = 0, max_pixels = 4096;
+	double cx, cy, rpx;
+
+	for (int i = 0; i < NLIGHTS; i++)
+		use[i] = 0;
+	for (int a = 1; a < argc; a++) {
+		if (!strcmp(argv[a], "--response") && a + 1 < argc) {
+			a++;
+			if (!strncmp(argv[a], "gamma:", 6))
+				response_gamma = atof(argv[a] + 6);
+		} else if (!strcmp(argv[a], "--max-pixels") && a + 1 < argc) {
+			max_pixels = atoi(argv[++a]);
+		} else {
+			int k = atoi(argv[a]);
+			if (k >= 0 && k < NLIGHTS)
+				use[k] = 1, nuse++;
+		}
+	}
+	if (!nuse)
+		for (int i = 0; i < NLIGHTS; i++)
+			use[i] = 1;
+	glint_log_set_mode(GLINT_LOG_QUIET);
+	if (read_lights(lights) < 0 || mask_circle(&cx, &cy, &rpx) < 0) {
+		fprintf(stderr, "gray_sphere: %s\n", glint_error_msg());
+		return 1;
+	}
+	printf("gray sphere: circle (%.1f, %.1f) r %.1f px; response %s\n", cx,
+	       cy, rpx, response_gamma > 0 ? "gamma" : "sRGB");
+	if (response_gamma > 0)
+		printf("  gamma %.3f\n", response_gamma);
+	printf("light  angle  model              rel.RMSE        BIC   "
+	       "parameters (value +- standard error)\n");
+	for (int i = 0; i < NLIGHTS; i++) {
+		if (!use[i])
+			continue;
+		if (fit_light(i, lights[i], cx, cy, rpx, max_pixels, models, NM,
+			      rows[i]) < 0) {
+			fprintf(stderr, "gray_sphere: light %d: %s\n", i,
+				glint_error_msg());
+			return 1;
+		}
+		for (int m = 0; m < NM; m++) {
+			printf("%5d  %5.1f  %-17s  %8.4f  %9.1f  ", i,
+			       acos(lights[i].z) * 180 / M_PI, models[m]->name,
+			       rows[i][m].rel_rmse, rows[i][m].bic);
+			for (int k = 0; k < models[m]->nparams; k++)
+				if (k != 1 && k != 2 && k != 4 && k != 5)
+					printf(" %s %.4f+-%.4f",
+					       models[m]->params[k].name,
+					       rows[i][m].p[k],
+					       rows[i][m].se[k]);
+			printf("\n");
+		}
+		fflush(stdout);
+	}
+	/* Across lights: each parameter's spread against its errors. */
+	printf("\nacross %d lights: parameter, mean, standard deviation, "
+	       "median standard error, ratio\n",
+	       nuse);
+	for (int m = 0; m < NM; m++)
+		for (int k = 0; k < models[m]->nparams; k++) {
+			if (k == 1 || k == 2 || k == 4 || k == 5)
+				continue;
+			double v[NLIGHTS], s[NLIGHTS], mean = 0, var = 0;
+			int n = 0;
+			for (int i = 0; i < NLIGHTS; i++)
+				if (use[i]) {
+					v[n] = rows[i][m].p[k];
+					s[n++] = rows[i][m].se[k];
+					mean += rows[i][m].p[k];
+				}
+			mean /= n;
+			for (int j = 0; j < n; j++)
+				var += (v[j] - mean) * (v[j] - mean);
+			double sd = n > 1 ? sqrt(var / (n - 1)) : 0;
+			qsort(s, n, sizeof(double), cmp_double);
+			double med = s[n / 2];
+			printf("  %-17s %-18s %8.4f %8.4f %8.4f %7.1f\n",
+			       models[m]->name, models[m]->params[k].name, mean,
+			       sd, med, med > 0 ? sd / med : 0);
+		}
+	return 0;
+}

@@ -256,7 +256,7 @@ int main(int argc, char **argv)
 	}
 	if (!nuse)
 		for (int i = 0; i < NLIGHTS; i++)
-			use[i] = 1;
+			use[i] = 1, nuse++;
 	glint_log_set_mode(GLINT_LOG_QUIET);
 	if (read_lights(lights) < 0 || mask_circle(&cx, &cy, &rpx) < 0) {
 		fprintf(stderr, "gray_sphere: %s\n", glint_error_msg());

@@ -31,6 +31,8 @@ int cmd_demo(int argc, char **argv);
 void cmd_demo_help(void);
 int cmd_fit(int argc, char **argv);
 void cmd_fit_help(void);
+int cmd_export(int argc, char **argv);
+void cmd_export_help(void);
 int cmd_convert(int argc, char **argv);
 void cmd_convert_help(void);
 int cmd_capture(int argc, char **argv);

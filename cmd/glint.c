@@ -26,6 +26,8 @@ static const struct glint_cmd commands[] = {
 	  cmd_fit_help },
 	{ "render", "render a sphere of a material under an environment map",
 	  cmd_render, cmd_render_help },
+	{ "export", "a fitted material in a renderer's model (glTF)",
+	  cmd_export, cmd_export_help },
 	{ "convert", "convert an image between EXR, HDR, PFM (and PNG out)",
 	  cmd_convert, cmd_convert_help },
 	{ "capture", "capture an exposure bracket of the probe or the sample",

@@ -5,6 +5,7 @@
 set -u
 glint=$1
 data=$2
+here=$(cd "$(dirname "$0")" && pwd)
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fails=0 checks=0
@@ -147,6 +148,18 @@ check "fit wrote params.json, render.exr, compare.png" test -s "$tmp/fit1/params
 check "render the fitted material from params.json" run 0 "" render "$tmp/fscene.json" --material "$tmp/fit1/params.json" -o "$tmp/refit.exr" -q
 check "... wrote it" test -s "$tmp/refit.exr"
 cp -r "$tmp/fit1" "$tmp/fit1.keep"
+# Export: glTF refitted to the fitted BRDF, checked by an independent
+# evaluation of both models from their published equations.
+check "export the fit to glTF" run 0 "relative RMS difference" export "$tmp/fit1/params.json" --to gltf -o "$tmp/m.gltf"
+check "... the glTF BRDF matches glint's within the stated residual" python3 "$here/check_gltf.py" "$tmp/fit1/params.json" "$tmp/m.gltf"
+check "export refuses to replace a file" run 1 "exists: refusing to replace it" export "$tmp/fit1/params.json" --to gltf -o "$tmp/m.gltf"
+check "export --force replaces it" run 0 "" export "$tmp/fit1/params.json" --to gltf -o "$tmp/m.gltf" --force --json
+check "export --json states the residual" python3 -c "
+import json; r=json.load(open('$tmp/out')); assert r['format']=='gltf' and 0<=r['refit_relative_rms']<0.3, r"
+check "export without --to: exit 2" run 2 "--to FORMAT is required" export "$tmp/fit1/params.json" -o "$tmp/x.gltf"
+check "export --to an unknown format: exit 2" run 2 "gltf" export "$tmp/fit1/params.json" --to usd -o "$tmp/x.gltf"
+check "export of a transparent sphere is refused" run 1 "no glTF export yet" export "$data/paper-table1.json" --entry blue-quartz --to gltf -o "$tmp/x.gltf"
+check "... writing nothing" test ! -e "$tmp/x.gltf"
 # The richer models: a material file of each renders; one is fitted.
 cat >"$tmp/on.json" <<JSON
 {"model": "oren-nayar", "diffuse": [0.3, 0.3, 0.3], "specular": [0.2, 0.2, 0.2],

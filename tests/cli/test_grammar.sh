@@ -39,7 +39,7 @@ last_err_is() { [ "$(tail -1 "$tmp/err")" = "$1" ] || { echo "  last stderr line
 is_json() { python3 -c 'import json,sys; json.load(open(sys.argv[1]))' "$tmp/out" || { echo "  stdout is not JSON:" >&2; head -5 "$tmp/out" >&2; return 1; }; }
 
 refused=0
-commands=(rig demo fit render convert capture cameras hdr "probe unwrap"
+commands=(rig demo fit render export convert capture cameras hdr "probe unwrap"
 	"probe convert" "probe register" check-rig sessions jobs "queue add"
 	"queue cancel" "queue run")
 for cmd in "${commands[@]}"; do

@@ -293,7 +293,8 @@ int main(int argc, char **argv)
 	}
 	/* Across lights: each parameter's spread against its errors. */
 	printf("\nacross %d lights: parameter, mean, standard deviation, "
-	       "median standard error, ratio\n",
+	       "median standard error, ratio; combined (inverse-variance) "
+	       "+- error\n",
 	       nuse);
 	for (int m = 0; m < NM; m++)
 		for (int k = 0; k < models[m]->nparams; k++) {
@@ -311,11 +312,29 @@ int main(int argc, char **argv)
 			for (int j = 0; j < n; j++)
 				var += (v[j] - mean) * (v[j] - mean);
 			double sd = n > 1 ? sqrt(var / (n - 1)) : 0;
+			/* The lights combined: inverse-variance mean, its
+			 * error, and chi2/dof of their agreement (the error
+			 * inflated by its root when above 1: Birge). */
+			double sw = 0, swx = 0, chi2 = 0;
+			for (int j = 0; j < n; j++)
+				if (isfinite(s[j]) && s[j] > 0) {
+					sw += 1 / (s[j] * s[j]);
+					swx += v[j] / (s[j] * s[j]);
+				}
+			double cm = sw > 0 ? swx / sw : NAN;
+			for (int j = 0; j < n; j++)
+				if (isfinite(s[j]) && s[j] > 0)
+					chi2 += (v[j] - cm) * (v[j] - cm) /
+						(s[j] * s[j]);
+			double cdof = n > 1 ? chi2 / (n - 1) : NAN;
+			double cse = sw > 0 ? sqrt(1 / sw) * fmax(1, sqrt(cdof))
+					    : NAN;
 			qsort(s, n, sizeof(double), cmp_double);
 			double med = s[n / 2];
-			printf("  %-17s %-18s %8.4f %8.4f %8.4f %7.1f\n",
+			printf("  %-17s %-18s %8.4f %8.4f %8.4f %7.1f   %8.4f "
+			       "+- %.4f (chi2/dof %.2f)\n",
 			       models[m]->name, models[m]->params[k].name, mean,
-			       sd, med, med > 0 ? sd / med : 0);
+			       sd, med, med > 0 ? sd / med : 0, cm, cse, cdof);
 		}
 	return 0;
 }

@@ -177,22 +177,6 @@ static int fit_light(int li, struct vec3 ldir, double cx, double cy, double rpx,
 	map = ret < 0 ? NULL : light_map(ldir);
 	if (!ret && !map)
 		ret = -ENOMEM;
-	const char *dump = getenv("GRAY_SPHERE_DUMP");
-	if (!ret && dump) {
-		/* The inputs as files for glint fit: photo, weights, map. */
-		char f[600];
-		snprintf(f, sizeof(f), "%s/photo%d.exr", dump, li);
-		ret = glint_image_write(f, photo, NULL);
-		snprintf(f, sizeof(f), "%s/weight%d.exr", dump, li);
-		if (!ret)
-			ret = glint_image_write(f, weight, NULL);
-		snprintf(f, sizeof(f), "%s/light%d.exr", dump, li);
-		if (!ret)
-			ret = glint_image_write(f, map, NULL);
-		printf("dumped light %d: circle_px %.2f %.2f %.2f, focal "
-		       "%g px\n",
-		       li, cx, cy, rpx, fpx);
-	}
 	if (!ret)
 		ret = glint_envmap_new(map, sc.env_rotation, 1, "point light",
 				       &env);

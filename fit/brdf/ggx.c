@@ -41,29 +41,18 @@ static void ggx_eval(const double *p, struct vec3 wo, struct vec3 wi,
 	glint_lobes_eval(&glint_model_ggx, p, wo, wi, f);
 }
 
-/* Sample each lobe by its albedo's luminance, the specular's at F(o.n). */
-static void ggx_weights(const double *p, struct vec3 wo, double w[2])
-{
-	w[0] = rgb_luminance(p[KD], p[KD + 1], p[KD + 2]);
-	w[1] = rgb_luminance(p[KS], p[KS + 1], p[KS + 2]) *
-	       glint_fresnel_or_one(wo.z, p[IOR]);
-}
-
 static double ggx_pdf(const double *p, struct vec3 wo, struct vec3 wi)
 {
-	double w[2];
-
-	ggx_weights(p, wo, w);
-	return glint_lobes_pdf(&glint_model_ggx, p, w, wo, wi);
+	return glint_lobes_pdf(&glint_model_ggx, p,
+			       glint_fresnel_or_one(wo.z, p[IOR]), wo, wi);
 }
 
 static double ggx_sample(const double *p, struct vec3 wo, const double u[3],
 			 struct vec3 *wi)
 {
-	double w[2];
-
-	ggx_weights(p, wo, w);
-	return glint_lobes_sample(&glint_model_ggx, p, w, wo, u, wi);
+	return glint_lobes_sample(&glint_model_ggx, p,
+				  glint_fresnel_or_one(wo.z, p[IOR]), wo, u,
+				  wi);
 }
 
 static double ggx_pdf_lobe(const double *p, int j, struct vec3 wo,

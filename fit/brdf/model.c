@@ -191,12 +191,18 @@ void glint_lobes_eval(const struct glint_model_ops *m, const double *p,
 }
 
 /* Lobe j's share of the samples: w[j] / sum w, at least 5 % for every
- * lobe with weight (none is starved), all alike when no lobe has any. */
-static void lobe_probs(int n, const double *w, double *prob)
+ * lobe with weight (none is starved), all alike when no lobe has any;
+ * w[j] the luminance of lobe j's albedo, times spec_scale past lobe 0. */
+static void lobe_probs(const struct glint_model_ops *m, const double *p,
+		       double spec_scale, double *prob)
 {
-	double total = 0, floored = 0;
-	int used = 0;
+	double w[GLINT_MAX_PARAMS], total = 0, floored = 0;
+	int used = 0, n = m->nlobes;
 
+	for (int j = 0; j < n; j++) {
+		const double *a = p + m->lobe_param[j];
+		w[j] = rgb_luminance(a[0], a[1], a[2]) * (j ? spec_scale : 1);
+	}
 	for (int j = 0; j < n; j++)
 		if (w[j] > 0) {
 			total += w[j];
@@ -213,13 +219,13 @@ static void lobe_probs(int n, const double *w, double *prob)
 }
 
 double glint_lobes_pdf(const struct glint_model_ops *m, const double *p,
-		       const double *w, struct vec3 wo, struct vec3 wi)
+		       double spec_scale, struct vec3 wo, struct vec3 wi)
 {
 	double prob[GLINT_MAX_PARAMS], pdf = 0;
 
 	if (!(wo.z > 0 && wi.z > 0))
 		return 0;
-	lobe_probs(m->nlobes, w, prob);
+	lobe_probs(m, p, spec_scale, prob);
 	for (int j = 0; j < m->nlobes; j++)
 		if (prob[j] > 0)
 			pdf += prob[j] * m->pdf_lobe(p, j, wo, wi);
@@ -227,7 +233,7 @@ double glint_lobes_pdf(const struct glint_model_ops *m, const double *p,
 }
 
 double glint_lobes_sample(const struct glint_model_ops *m, const double *p,
-			  const double *w, struct vec3 wo, const double u[3],
+			  double spec_scale, struct vec3 wo, const double u[3],
 			  struct vec3 *wi)
 {
 	double prob[GLINT_MAX_PARAMS], acc = 0;
@@ -235,10 +241,10 @@ double glint_lobes_sample(const struct glint_model_ops *m, const double *p,
 
 	if (!(wo.z > 0))
 		return 0;
-	lobe_probs(m->nlobes, w, prob);
+	lobe_probs(m, p, spec_scale, prob);
 	while (j < m->nlobes - 1 && u[0] >= acc + prob[j])
 		acc += prob[j++];
 	if (m->sample_lobe(p, j, wo, u + 1, wi) <= 0 || !(wi->z > 0))
 		return 0;
-	return glint_lobes_pdf(m, p, w, wo, *wi);
+	return glint_lobes_pdf(m, p, spec_scale, wo, *wi);
 }

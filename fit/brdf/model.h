@@ -88,17 +88,17 @@ double glint_sample_cosine(const double u[2], struct vec3 *wi);
 
 /*
  * For a linear model (nlobes > 0): f as the sum over lobes of albedo_j b_j;
- * and sampling that picks lobe j with probability w[j] / sum w (the
- * caller's lobe weights, e.g. each lobe's albedo luminance; a lobe with
- * weight gets at least 5 %), then draws from it.  The pdf is the
- * mixture's, sum_j P(j) pdf_lobe_j.
+ * and sampling that picks lobe j in proportion to the luminance of its
+ * albedo, times spec_scale for every lobe past the first (the specular
+ * lobes' F(o.n), or 1; each lobe with weight gets at least 5 %), then
+ * draws from it.  The pdf is the mixture's, sum_j P(j) pdf_lobe_j.
  */
 void glint_lobes_eval(const struct glint_model_ops *m, const double *p,
 		      struct vec3 wo, struct vec3 wi, double f[3]);
 double glint_lobes_pdf(const struct glint_model_ops *m, const double *p,
-		       const double *w, struct vec3 wo, struct vec3 wi);
+		       double spec_scale, struct vec3 wo, struct vec3 wi);
 double glint_lobes_sample(const struct glint_model_ops *m, const double *p,
-			  const double *w, struct vec3 wo, const double u[3],
+			  double spec_scale, struct vec3 wo, const double u[3],
 			  struct vec3 *wi);
 
 /* Model by name (a static table entry, never freed), or NULL. */

@@ -43,28 +43,18 @@ static void on_eval(const double *p, struct vec3 wo, struct vec3 wi,
 	glint_lobes_eval(&glint_model_oren_nayar, p, wo, wi, f);
 }
 
-static void on_weights(const double *p, struct vec3 wo, double w[2])
-{
-	w[0] = rgb_luminance(p[KD], p[KD + 1], p[KD + 2]);
-	w[1] = rgb_luminance(p[KS], p[KS + 1], p[KS + 2]) *
-	       glint_fresnel_or_one(wo.z, p[IOR]);
-}
-
 static double on_pdf(const double *p, struct vec3 wo, struct vec3 wi)
 {
-	double w[2];
-
-	on_weights(p, wo, w);
-	return glint_lobes_pdf(&glint_model_oren_nayar, p, w, wo, wi);
+	return glint_lobes_pdf(&glint_model_oren_nayar, p,
+			       glint_fresnel_or_one(wo.z, p[IOR]), wo, wi);
 }
 
 static double on_sample(const double *p, struct vec3 wo, const double u[3],
 			struct vec3 *wi)
 {
-	double w[2];
-
-	on_weights(p, wo, w);
-	return glint_lobes_sample(&glint_model_oren_nayar, p, w, wo, u, wi);
+	return glint_lobes_sample(&glint_model_oren_nayar, p,
+				  glint_fresnel_or_one(wo.z, p[IOR]), wo, u,
+				  wi);
 }
 
 /* The rough-diffuse lobe is sampled by cosine: it stays within a factor

@@ -47,30 +47,18 @@ static void two_eval(const double *p, struct vec3 wo, struct vec3 wi,
 	glint_lobes_eval(&glint_model_two_lobe, p, wo, wi, f);
 }
 
-static void two_weights(const double *p, struct vec3 wo, double w[3])
-{
-	double F = glint_fresnel_or_one(wo.z, p[IOR]);
-
-	w[0] = rgb_luminance(p[KD], p[KD + 1], p[KD + 2]);
-	w[1] = rgb_luminance(p[KS], p[KS + 1], p[KS + 2]) * F;
-	w[2] = rgb_luminance(p[KS2], p[KS2 + 1], p[KS2 + 2]) * F;
-}
-
 static double two_pdf(const double *p, struct vec3 wo, struct vec3 wi)
 {
-	double w[3];
-
-	two_weights(p, wo, w);
-	return glint_lobes_pdf(&glint_model_two_lobe, p, w, wo, wi);
+	return glint_lobes_pdf(&glint_model_two_lobe, p,
+			       glint_fresnel_or_one(wo.z, p[IOR]), wo, wi);
 }
 
 static double two_sample(const double *p, struct vec3 wo, const double u[3],
 			 struct vec3 *wi)
 {
-	double w[3];
-
-	two_weights(p, wo, w);
-	return glint_lobes_sample(&glint_model_two_lobe, p, w, wo, u, wi);
+	return glint_lobes_sample(&glint_model_two_lobe, p,
+				  glint_fresnel_or_one(wo.z, p[IOR]), wo, u,
+				  wi);
 }
 
 static double lobe_m(const double *p, int j)

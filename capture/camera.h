@@ -34,7 +34,7 @@ struct glint_fake_clock {
 };
 struct glint_clock glint_clock_fake(struct glint_fake_clock *fc);
 
-#define GLINT_CAMERA_MAX_FORMATS 16
+#define GLINT_CAMERA_MAX_FORMATS 128 /* vivid offers over 80 */
 
 struct glint_camera_info {
 	char backend[16];

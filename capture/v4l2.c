@@ -72,7 +72,7 @@ struct v4l2_cam {
 	int have_black_opt;
 	/* formats */
 	int nfmt;
-	uint32_t fourccs[32];
+	uint32_t fourccs[GLINT_CAMERA_MAX_FORMATS];
 	const struct glint_v4l2_format *fmt;
 	int width, height;
 	size_t stride, sizeimage;
@@ -235,7 +235,9 @@ static int choose_format(struct v4l2_cam *c)
 	const struct glint_v4l2_format *best = NULL;
 
 	c->nfmt = 0;
-	for (uint32_t i = 0; i < 64; i++) {
+	/* Every format, however many: vivid lists its raw Bayer ones after
+	 * the 64th.  The bound only stops a driver that never says EINVAL. */
+	for (uint32_t i = 0; i < 4096; i++) {
 		memset(&d, 0, sizeof(d));
 		d.index = i;
 		d.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
@@ -244,7 +246,7 @@ static int choose_format(struct v4l2_cam *c)
 				break;
 			return ioctl_error(c, "VIDIOC_ENUM_FMT");
 		}
-		if (c->nfmt < 32)
+		if (c->nfmt < GLINT_CAMERA_MAX_FORMATS)
 			c->fourccs[c->nfmt++] = d.pixelformat;
 		const struct glint_v4l2_format *f =
 			glint_v4l2_format_find(d.pixelformat);
@@ -735,6 +737,10 @@ static int v4l2_grab(void *priv, struct glint_frame *f)
 	if (ret < 0)
 		glint_error_prefix(ret, "camera %s, frame %u", c->path,
 				   b.sequence);
+	/* What the frame was, kept before the buffer goes back: VIDIOC_QBUF
+	 * writes the queued buffer's state into b (vb2 zeroes its sequence
+	 * number; vivid showed every frame as number 0). */
+	const struct v4l2_buffer got = b;
 	if (xioctl(c->fd, VIDIOC_QBUF, &b) < 0 && ret == 0)
 		ret = ioctl_error(c, "VIDIOC_QBUF");
 	if (ret < 0) {
@@ -744,12 +750,12 @@ static int v4l2_grab(void *priv, struct glint_frame *f)
 	glint_v4l2_frame_describe(c->fmt, c->width, c->height, f);
 	/* Buffer timestamps are CLOCK_MONOTONIC: start of exposure or end
 	 * of frame, as the flags say. */
-	double ts = (double)b.timestamp.tv_sec + 1e-6 * b.timestamp.tv_usec;
-	int soe = (b.flags & V4L2_BUF_FLAG_TSTAMP_SRC_MASK) ==
+	double ts = (double)got.timestamp.tv_sec + 1e-6 * got.timestamp.tv_usec;
+	int soe = (got.flags & V4L2_BUF_FLAG_TSTAMP_SRC_MASK) ==
 		  V4L2_BUF_FLAG_TSTAMP_SRC_SOE;
-	label_frame(c, b.sequence, soe, ts, &f->exposure_s, &f->gain);
+	label_frame(c, got.sequence, soe, ts, &f->exposure_s, &f->gain);
 	f->black_level = c->black;
-	f->sequence = b.sequence;
+	f->sequence = got.sequence;
 	f->t_start = soe ? ts : ts - f->exposure_s;
 	f->t_end = soe ? ts + f->exposure_s : ts;
 	return 0;

@@ -790,6 +790,13 @@ static int handle_ioctl(struct fake *f, unsigned long req, void *arg)
 		    f->state[b->index] != B_CLIENT)
 			return fail(EINVAL);
 		f->state[b->index] = B_QUEUED;
+		/* As vb2 does: the queued buffer's state is written back,
+		 * its sequence number 0 (a client reading the frame's number
+		 * after giving the buffer back gets 0, as on vivid). */
+		f->meta[b->index].sequence = 0;
+		f->meta[b->index].flags &= V4L2_BUF_FLAG_TIMESTAMP_MASK |
+					   V4L2_BUF_FLAG_TSTAMP_SRC_MASK;
+		fill_buf(f, (int)b->index, b);
 		if (f->paused) { /* the next frame starts now */
 			f->paused = 0;
 			double t = (now_real() - f->t0_real) / f->timescale;

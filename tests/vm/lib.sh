@@ -1,0 +1,67 @@
+# Shared by the tests that run inside the test VM (scripts/vm run): checks
+# counted as in the other shell tests, and the kernel's virtual devices
+# loaded and configured.  Source it after tests/wait.sh.
+
+fails=0 checks=0
+check() { # WHAT COMMAND...: run COMMAND, count it, say ok or FAIL
+	local what=$1
+	shift
+	checks=$((checks + 1))
+	if "$@"; then
+		echo "ok   $what"
+	else
+		echo "FAIL $what"
+		fails=$((fails + 1))
+	fi
+}
+
+finish() {
+	echo "$((checks - fails)) of $checks checks passed"
+	[ "$fails" = 0 ]
+}
+
+in_vm() { # the modules scripts/vm built are only there inside its VM
+	[ -n "${GLINT_VM_MODULES:-}" ] && [ -d "$GLINT_VM_MODULES" ]
+}
+
+# load_module NAME: a module from Debian's kernel, or one scripts/vm built
+# (with the Debian modules it depends on).
+load_module() {
+	local ko=$GLINT_VM_MODULES/$1.ko
+	if [ -f "$ko" ]; then
+		local deps
+		deps=$(modinfo -F depends "$ko" | tr , ' ')
+		[ -z "$deps" ] || modprobe -a $deps || return 1
+		grep -q "^${1//-/_} " /proc/modules || insmod "$ko"
+	else
+		modprobe "$1"
+	fi
+}
+
+# gpio_sim_chip NAME LABEL NUM_LINES [OFFSET=LINE_NAME...]: a live gpio-sim
+# chip; prints its gpiochipN.
+gpio_sim_chip() {
+	local name=$1 label=$2 n=$3
+	shift 3
+	load_module configfs || return 1
+	grep -qs ' /sys/kernel/config ' /proc/mounts ||
+		mount -t configfs none /sys/kernel/config || return 1
+	load_module gpio-sim || return 1
+	local dev=/sys/kernel/config/gpio-sim/$name
+	mkdir "$dev" "$dev/bank0" || return 1
+	echo "$label" >"$dev/bank0/label"
+	echo "$n" >"$dev/bank0/num_lines"
+	local kv
+	for kv in "$@"; do
+		mkdir "$dev/bank0/line${kv%%=*}"
+		echo "${kv#*=}" >"$dev/bank0/line${kv%%=*}/name"
+	done
+	echo 1 >"$dev/live" || return 1
+	cat "$dev/bank0/chip_name"
+}
+
+# gpio_sim_dir NAME: the sysfs directory of its chip's sim_gpioN attributes
+gpio_sim_dir() {
+	local dev=/sys/kernel/config/gpio-sim/$1
+	echo "/sys/devices/platform/$(cat "$dev/dev_name")/$(cat "$dev/bank0/chip_name")"
+}

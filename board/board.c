@@ -327,6 +327,22 @@ int glint_board_has(const struct glint_board *b, enum glint_role r)
 	return b && b->cfg.lines[r].used;
 }
 
+void glint_board_locate(const struct glint_board *b, enum glint_role r,
+			char *buf, size_t n)
+{
+	const struct glint_line_cfg *l = &b->cfg.lines[r];
+
+	if (b->ops->locate) {
+		pthread_mutex_lock((pthread_mutex_t *)&b->lock);
+		b->ops->locate(b->priv, r, buf, n);
+		pthread_mutex_unlock((pthread_mutex_t *)&b->lock);
+	} else if (l->name[0]) {
+		snprintf(buf, n, "%s line \"%s\"", l->chip, l->name);
+	} else {
+		snprintf(buf, n, "%s line %d", l->chip, l->offset);
+	}
+}
+
 int glint_board_led(struct glint_board *b, enum glint_led pattern)
 {
 	if (!b->led_running)

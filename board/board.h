@@ -99,6 +99,9 @@ struct glint_board_ops {
 	/* Next edge on an input within timeout_s: 1 with *e, 0 on timeout. */
 	int (*wait_edge)(void *priv, enum glint_role r, double timeout_s,
 			 struct glint_edge *e);
+	/* Optional: where a requested line was found, for the record (e.g.
+	 * `gpiochip0 (glint-rig) line 22 "lights"`). */
+	void (*locate)(void *priv, enum glint_role r, char *buf, size_t n);
 };
 
 /* The real backend (libgpiod v1), when built; the simulated board is
@@ -140,6 +143,10 @@ void glint_board_close(struct glint_board *b);
 int glint_board_wait_press(struct glint_board *b, double timeout_s,
 			   atomic_int *cancel);
 int glint_board_has(const struct glint_board *b, enum glint_role r);
+/* Where a configured line is on the hardware (the backend's words, or the
+ * rig file's chip and line where the backend has none). */
+void glint_board_locate(const struct glint_board *b, enum glint_role r,
+			char *buf, size_t n);
 int glint_board_lights(struct glint_board *b, int on);
 int glint_board_led(struct glint_board *b, enum glint_led pattern);
 /* Turn the turntable to the probe (which = 0) or sample (1) position.

@@ -225,6 +225,8 @@ static int gpiod_wait_edge(void *priv, enum glint_role r, double timeout_s,
 	struct timespec ts = { (time_t)timeout_s,
 			       (long)((timeout_s - floor(timeout_s)) * 1e9) };
 	int ret = gpiod_line_event_wait(b->lines[r], &ts);
+	if (ret < 0 && errno == EINTR)
+		return 0; /* a signal: the caller looks at its cancel flag */
 	if (ret < 0)
 		return line_error(b, r, "wait for an edge");
 	if (ret == 0)
@@ -236,6 +238,22 @@ static int gpiod_wait_edge(void *priv, enum glint_role r, double timeout_s,
 	return 1;
 }
 
+static void gpiod_locate(void *priv, enum glint_role r, char *buf, size_t n)
+{
+	struct gpiod_board *b = priv;
+	struct gpiod_line *l = b->lines[r];
+	struct gpiod_chip *c = l ? gpiod_line_get_chip(l) : NULL;
+	const char *name = l ? gpiod_line_name(l) : NULL;
+
+	if (!c) {
+		snprintf(buf, n, "not found");
+		return;
+	}
+	snprintf(buf, n, "%s (%s) line %u%s%s%s", gpiod_chip_name(c),
+		 gpiod_chip_label(c), gpiod_line_offset(l), name ? " \"" : "",
+		 name ? name : "", name ? "\"" : "");
+}
+
 const struct glint_board_ops glint_board_gpiod_ops = {
 	.name = "gpiod",
 	.open = gpiod_open_board,
@@ -243,4 +261,5 @@ const struct glint_board_ops glint_board_gpiod_ops = {
 	.set = gpiod_set,
 	.get = gpiod_get,
 	.wait_edge = gpiod_wait_edge,
+	.locate = gpiod_locate,
 };

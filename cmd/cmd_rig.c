@@ -208,6 +208,7 @@ int cmd_check_rig(int argc, char **argv)
 	cmd_rig_config(path, sizeof(path), config);
 	struct glint_rig rig;
 	struct glint_board *board = NULL;
+	json_t *lines = NULL; /* role -> where the board found it */
 	ret = glint_rig_load(path, &rig);
 	if (ret == 0)
 		ret = glint_rig_check_camera(&rig);
@@ -215,8 +216,22 @@ int cmd_check_rig(int argc, char **argv)
 		ret = glint_board_open(&rig.board, "glint check-rig", &board);
 		if (ret == 0) {
 			int n = 0;
-			for (int r = 0; r < GLINT_ROLE_COUNT; r++)
-				n += rig.board.lines[r].used;
+			lines = json_object();
+			for (int r = 0; r < GLINT_ROLE_COUNT; r++) {
+				char where[160];
+				if (!rig.board.lines[r].used)
+					continue;
+				n++;
+				glint_board_locate(board, r, where,
+						   sizeof(where));
+				glint_log_info("  %s: %s%s", glint_role_name(r),
+					       where,
+					       rig.board.lines[r].active_low
+						       ? ", active low"
+						       : "");
+				json_object_set_new(lines, glint_role_name(r),
+						    json_string(where));
+			}
 			glint_log_info(
 				"board (%s): %d line(s) present and free",
 				rig.board.backend, n);
@@ -224,11 +239,17 @@ int cmd_check_rig(int argc, char **argv)
 		glint_board_close(board);
 	}
 	glint_rig_free(&rig);
-	if (ret < 0)
+	if (ret < 0) {
+		json_decref(lines);
 		return cmd_fail("check-rig");
+	}
 	if (json)
-		cmd_print_json(json_pack("{s:s, s:b}", "rig", path, "ok", 1));
+		cmd_print_json(json_pack("{s:s, s:b, s:o}", "rig", path, "ok",
+					 1, "lines",
+					 lines ? lines : json_object()));
 	else
 		printf("%s: ok\n", path);
+	if (!json)
+		json_decref(lines);
 	return GLINT_EXIT_OK;
 }

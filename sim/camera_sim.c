@@ -16,7 +16,13 @@
  * yellow-plastic; rig: what the sim board put in view, sim/world.h),
  * decades (the test card's dynamic range, default 6, plus
  * its bright disk), timescale (real seconds per simulated second, default
- * 1: tests and demos run a 2 s exposure in 20 ms with 0.01).
+ * 1: tests and demos run a 2 s exposure in 20 ms with 0.01), world
+ * (scene=rig only: a file that says what is in view instead of the sim
+ * board, for a rig whose board is real hardware: "LIGHTS DEGREES", the
+ * lights 0 or 1 and the turntable's angle, 0 the probe and 180 the
+ * sample; the file is read before each frame and replaced whole by its
+ * writer; while it is missing the lab is dark).  It must come last: the
+ * path runs to the end of the string.
  */
 #include "camera_sim.h"
 #include "probe_sim.h"
@@ -42,6 +48,7 @@ struct sim_cam {
 	/* scene=rig: what the board's world shows (sim/world.h) */
 	struct glint_image *probe_img, *sample_img, *dark_img;
 	char material[48]; /* the sample's Table-1 name */
+	char world[256];   /* scene=rig: what is in view, from this file */
 	struct glint_sensor sensor;
 	struct glint_image *radiance;
 	int width, height, latency, manual;
@@ -100,6 +107,17 @@ static int parse_device(const char *dev, struct sim_cam *s)
 			if (*p == ',')
 				p++;
 			continue;
+		}
+		if (!strncmp(p, "world=", 6)) {
+			if (!p[6] || strlen(p + 6) >= sizeof(s->world))
+				return glint_error_set(
+					EINVAL,
+					"sim camera device '%s': world: "
+					"expected a file's path (the last "
+					"option)",
+					dev);
+			snprintf(s->world, sizeof(s->world), "%s", p + 6);
+			break;
 		}
 		if (sscanf(p, "%31[a-z]=%lf%n", key, &v, &n) != 2)
 			return glint_error_set(EINVAL,
@@ -412,10 +430,36 @@ static void sim_close(void *priv)
 
 /* scene=rig: the radiance of what is in view, dimmed with the lights
  * off. */
+/* world=PATH: "LIGHTS DEGREES" as a board outside this process left them;
+ * a view only within a degree of the probe (0) or the sample (180). */
+static void world_from_file(const char *path, struct glint_sim_world *w)
+{
+	FILE *f = fopen(path, "r");
+	int lights = 0;
+	double deg = -1;
+
+	w->lights = 0;
+	w->view = GLINT_SIM_VIEW_NONE;
+	if (!f)
+		return;
+	if (fscanf(f, "%d %lf", &lights, &deg) == 2) {
+		double a = fabs(remainder(deg, 360.0));
+		w->lights = lights != 0;
+		w->turntable_deg = deg;
+		w->view = a < 1	    ? GLINT_SIM_VIEW_PROBE
+			  : a > 179 ? GLINT_SIM_VIEW_SAMPLE
+				    : GLINT_SIM_VIEW_NONE;
+	}
+	fclose(f);
+}
+
 static void rig_view(struct sim_cam *s)
 {
 	struct glint_sim_world w;
-	glint_sim_world_get(&w);
+	if (s->world[0])
+		world_from_file(s->world, &w);
+	else
+		glint_sim_world_get(&w);
 	const struct glint_image *src =
 		w.view == GLINT_SIM_VIEW_PROBE	  ? s->probe_img
 		: w.view == GLINT_SIM_VIEW_SAMPLE ? s->sample_img

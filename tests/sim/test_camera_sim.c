@@ -11,6 +11,9 @@
 #include "capture/camera.h"
 #include "core/error.h"
 
+#include <stdio.h>
+#include <unistd.h>
+
 static void test_describe(void)
 {
 	struct glint_fake_clock fc = { 0 };
@@ -109,11 +112,79 @@ static void test_refusals(void)
 	CHECK_MSG(glint_error_msg(), "option widht=3");
 }
 
+/* Mean signal above black of a noise-free 10 ms frame. */
+static double mean_signal(struct glint_camera *cam)
+{
+	struct glint_frame f;
+	double sum = 0;
+	if (glint_camera_capture(cam, 0.01, 1, 5, &f, NULL) < 0)
+		return -1;
+	for (int i = 0; i < f.width * f.height; i++)
+		sum += f.data[i] - f.black_level;
+	sum /= f.width * f.height;
+	glint_frame_release(&f);
+	return sum;
+}
+
+static void write_world(const char *path, const char *text)
+{
+	FILE *fp = fopen(path, "w");
+	CHECK(fp != NULL, "%s", path);
+	if (fp) {
+		fputs(text, fp);
+		fclose(fp);
+	}
+}
+
+/* scene=rig with world=FILE: the view follows the file (a real board's
+ * lines, as tests/vm/sample_lines.py writes them), read at each frame. */
+static void test_world_file(void)
+{
+	struct glint_fake_clock fc = { 0 };
+	struct glint_clock clk = glint_clock_fake(&fc);
+	struct glint_camera *cam;
+	char path[64], dev[160];
+	snprintf(path, sizeof(path), "/tmp/glint-world-%d", (int)getpid());
+	snprintf(dev, sizeof(dev),
+		 "sim:width=40,height=30,scene=rig,noise=0,world=%s", path);
+	remove(path);
+	CHECK(glint_camera_open("sim", dev, &clk, &cam) == 0, "%s",
+	      glint_error_msg());
+	if (!cam)
+		return;
+	double missing = mean_signal(cam);
+	write_world(path, "1 0\n");
+	double probe = mean_signal(cam);
+	write_world(path, "1 180.0\n");
+	double sample = mean_signal(cam);
+	write_world(path, "0 180\n");
+	double sample_dark = mean_signal(cam);
+	write_world(path, "1 90\n");
+	double between = mean_signal(cam);
+	printf("world file: missing %.2f, probe %.2f, sample %.2f, sample "
+	       "lights off %.3f, turned 90 deg %.2f DN\n",
+	       missing, probe, sample, sample_dark, between);
+	CHECK(probe > 20 && sample > 20, "nothing in view: %g %g", probe,
+	      sample);
+	CHECK(fabs(probe - sample) > 0.05 * probe,
+	      "probe and sample look the same");
+	CHECK(sample_dark < 0.01 * sample, "lights off: %g of %g", sample_dark,
+	      sample);
+	CHECK(missing < 0.01 * probe, "no file should be a dark lab");
+	CHECK(between < 0.5 * sample, "turned away: %g", between);
+	glint_camera_close(cam);
+	remove(path);
+	CHECK(glint_camera_open("sim", "sim:scene=rig,world=", &clk, &cam) < 0,
+	      "an empty world path accepted");
+	CHECK_MSG(glint_error_msg(), "world");
+}
+
 int main(void)
 {
 	glint_backends_register();
 	RUN(test_describe);
 	RUN(test_applied_exposure);
 	RUN(test_refusals);
+	RUN(test_world_file);
 	return test_result();
 }

@@ -284,6 +284,8 @@ int lc_configure_impl(LcCam *c)
 void set_controls(LcCam *c, Request *r)
 {
 	ControlList &cl = r->controls();
+	if (!c->have_exposure)
+		return; // frames as the camera makes them (vimc: no controls)
 	cl.set(controls::AeEnable, false);
 	cl.set(controls::ExposureTime, c->want_us);
 	if (c->info.gain_max > c->info.gain_min)
@@ -354,6 +356,8 @@ static int lc_describe(void *priv, struct glint_camera_info *info)
 	return 0;
 }
 
+static int start_streaming(LcCam *c);
+
 static int lc_set_exposure(void *priv, double *exposure_s, double *gain)
 {
 	LcCam *c = static_cast<LcCam *>(priv);
@@ -366,9 +370,17 @@ static int lc_set_exposure(void *priv, double *exposure_s, double *gain)
 	c->want_gain = (float)*gain;
 	*exposure_s = c->want_us * 1e-6; // the sensor may round further:
 	*gain = c->want_gain;		 // its metadata will say
+	return start_streaming(c);
+}
+
+// Start the camera with every request queued (with the wanted exposure
+// when the camera has the control).
+static int start_streaming(LcCam *c)
+{
 	if (!c->started) {
 		ControlList start(controls::controls);
-		start.set(controls::AeEnable, false);
+		if (c->have_exposure)
+			start.set(controls::AeEnable, false);
 		if (c->camera->start(&start) < 0)
 			return glint_error_set(EIO,
 					       "libcamera: camera %s did "
@@ -390,9 +402,13 @@ static int lc_grab(void *priv, struct glint_frame *f)
 {
 	LcCam *c = static_cast<LcCam *>(priv);
 	std::memset(f, 0, sizeof(*f));
-	if (!c->started) {
+	if (!c->started && c->have_exposure) {
 		double e = c->info.exposure_min_s * 100, g = 1;
 		int ret = lc_set_exposure(priv, &e, &g);
+		if (ret < 0)
+			return ret;
+	} else if (!c->started) {
+		int ret = start_streaming(c);
 		if (ret < 0)
 			return ret;
 	}

@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "core/path.h"
+#include "fit/export.h"
 
 #include <jansson.h>
 
@@ -69,6 +70,13 @@ void cmd_print_json(json_t *obj);
 void cmd_print_params(const json_t *doc, const double *truth);
 /* The fit's acceptance verdict and its misfit verdict, one line each. */
 void cmd_print_verdicts(const json_t *doc);
+
+/* Refit (model, p) in `format` and write it to out (refused when it
+ * exists, unless force); the result as JSON, or NULL with the error set. */
+json_t *cmd_export_write(enum glint_export_format format,
+			 const struct glint_model_ops *model, const double *p,
+			 const char *source, const char *name, const char *out,
+			 int force);
 
 /* A fit's progress on a terminal (struct glint_fit_opts.progress). */
 void cmd_fit_progress(void *ctx, const char *pass, int iter, double cost);

@@ -16,7 +16,7 @@
 
 void cmd_export_help(void)
 {
-	printf("usage: glint export MATERIAL.json --to gltf -o OUT.gltf "
+	printf("usage: glint export MATERIAL.json --to FORMAT -o OUT "
 	       "[--name N] [--force]\n"
 	       "\n"
 	       "Write a fitted material (a fit's params.json, or a material "
@@ -26,11 +26,18 @@ void cmd_export_help(void)
 	       "fit's relative RMS difference of reflected radiance is "
 	       "printed\nand stored with the export (docs/export.md).\n"
 	       "\n"
-	       "  --to FORMAT       gltf: a glTF 2.0 file holding the "
+	       "  --to FORMAT       gltf: a glTF 2.0 file (.gltf) holding the "
 	       "material\n"
 	       "                    (pbrMetallicRoughness, metallic 0, "
 	       "KHR_materials_ior,\n"
 	       "                    KHR_materials_specular)\n"
+	       "                    mitsuba: a Mitsuba 3 scene file (.xml) "
+	       "holding one\n"
+	       "                    BSDF (blendbsdf of diffuse and "
+	       "roughconductor)\n"
+	       "                    pbrt: a pbrt-v4 file (.pbrt) of named "
+	       "materials (mix of\n"
+	       "                    diffuse and conductor) to Include\n"
 	       "  -o, --output OUT  the file to write (refused if it exists, "
 	       "unless --force)\n"
 	       "  --entry NAME      pick NAME from a Table-1 style file\n"
@@ -40,16 +47,53 @@ void cmd_export_help(void)
 	       "  --json            print the result as JSON\n");
 }
 
-static const char *const formats[] = { "gltf", NULL };
+json_t *cmd_export_write(enum glint_export_format format,
+			 const struct glint_model_ops *model, const double *p,
+			 const char *source, const char *name, const char *out,
+			 int force)
+{
+	struct stat st;
+	if (!force && lstat(out, &st) == 0) {
+		glint_error_set(EEXIST,
+				"%s exists: refusing to replace it (--force "
+				"to)",
+				out);
+		return NULL;
+	}
+	struct glint_export e;
+	if (glint_export_refit(format, model, p, &e) < 0)
+		return NULL;
+	char *text = glint_export_text(&e, name, source, model);
+	if (!text) {
+		glint_error_set(ENOMEM, "out of memory");
+		return NULL;
+	}
+	int ret = glint_atomic_write_file(out, text, strlen(text));
+	free(text);
+	if (ret < 0)
+		return NULL;
+	glint_log_info("%s (%s) -> %s: %s refitted to glint's BRDF, "
+		       "relative RMS difference %.3f",
+		       source, model->name, out,
+		       glint_export_format_names[format], e.residual);
+	return json_pack("{s:s, s:s, s:s, s:f, s:o}", "output", out, "format",
+			 glint_export_format_names[format], "model",
+			 model->name, "refit_relative_rms", e.residual,
+			 glint_export_format_names[format],
+			 glint_export_params_json(&e));
+}
 
 int cmd_export(int argc, char **argv)
 {
 	const char *out = NULL, *name = NULL, *entry = NULL;
 	int to = -1, force = 0;
 	const struct cmd_opt opts[] = {
-		CMD_CHOICE("to", &to, formats), CMD_STRING("output", 'o', &out),
-		CMD_STRING("entry", 0, &entry), CMD_STRING("name", 0, &name),
-		CMD_FLAG("force", 0, &force),	{ 0 },
+		CMD_CHOICE("to", &to, glint_export_format_names),
+		CMD_STRING("output", 'o', &out),
+		CMD_STRING("entry", 0, &entry),
+		CMD_STRING("name", 0, &name),
+		CMD_FLAG("force", 0, &force),
+		{ 0 },
 	};
 	struct cmd_args a;
 	int r = cmd_options_parse("export", cmd_export_help, opts, argc, argv,
@@ -60,60 +104,34 @@ int cmd_export(int argc, char **argv)
 		return cmd_usage_error("export", "expected one MATERIAL.json");
 	if (to < 0)
 		return cmd_usage_error("export", "--to FORMAT is required "
-						 "(gltf)");
+						 "(gltf, mitsuba, pbrt)");
 	if (!out)
 		return cmd_usage_error("export", "-o OUT is required");
-	struct stat st;
-	if (!force && lstat(out, &st) == 0) {
-		glint_error_set(EEXIST,
-				"%s exists: refusing to replace it (--force "
-				"to)",
-				out);
-		return cmd_fail("export");
-	}
 
 	const struct glint_model_ops *model;
 	double p[GLINT_MAX_PARAMS];
-	struct glint_gltf_material g;
-	double residual;
-	if (glint_material_load(a.argv[0], entry, &model, p) < 0 ||
-	    glint_gltf_refit(model, p, &g, &residual) < 0)
+	if (glint_material_load(a.argv[0], entry, &model, p) < 0)
 		return cmd_fail("export");
 	if (!name) {
 		const char *s = strrchr(a.argv[0], '/');
 		name = entry ? entry : s ? s + 1 : a.argv[0];
 	}
-	json_t *doc = glint_gltf_document(&g, name, a.argv[0], model, residual);
-	char *text = doc ? json_dumps(doc, JSON_INDENT(2)) : NULL;
-	json_decref(doc);
-	if (!text) {
-		glint_error_set(ENOMEM, "out of memory");
-		return cmd_fail("export");
-	}
-	int ret = glint_atomic_write_file(out, text, strlen(text));
-	free(text);
-	if (ret < 0)
+	json_t *res = cmd_export_write((enum glint_export_format)to, model, p,
+				       a.argv[0], name, out, force);
+	if (!res)
 		return cmd_fail("export");
 	if (a.json) {
-		cmd_print_json(json_pack(
-			"{s:s, s:s, s:s, s:s, s:f, s:{s:[f,f,f], s:f, s:f, "
-			"s:f, s:[f,f,f]}}",
-			"input", a.argv[0], "output", out, "format", "gltf",
-			"model", model->name, "refit_relative_rms", residual,
-			"gltf", "base_color", g.base[0], g.base[1], g.base[2],
-			"roughness", g.roughness, "ior", g.ior, "specular",
-			g.specular, "specular_color", g.specular_color[0],
-			g.specular_color[1], g.specular_color[2]));
-	} else {
-		glint_log_info("%s (%s) -> %s: glTF refitted to glint's BRDF, "
-			       "relative RMS difference %.3f",
-			       a.argv[0], model->name, out, residual);
-		printf("gltf: base colour %.4f %.4f %.4f, roughness %.4f, "
-		       "ior %.3f, specular %.4f, specular colour %.4f %.4f "
-		       "%.4f; refit relative RMS %.4f\n",
-		       g.base[0], g.base[1], g.base[2], g.roughness, g.ior,
-		       g.specular, g.specular_color[0], g.specular_color[1],
-		       g.specular_color[2], residual);
+		json_object_set_new(res, "input", json_string(a.argv[0]));
+		cmd_print_json(res);
+		return GLINT_EXIT_OK;
 	}
+	char *params =
+		json_dumps(json_object_get(res, glint_export_format_names[to]),
+			   JSON_COMPACT);
+	printf("%s: %s; refit relative RMS %.4f\n",
+	       glint_export_format_names[to], params ? params : "",
+	       json_real_value(json_object_get(res, "refit_relative_rms")));
+	free(params);
+	json_decref(res);
 	return GLINT_EXIT_OK;
 }

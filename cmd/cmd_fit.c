@@ -138,6 +138,14 @@ void cmd_fit_help(void)
 	       "glint did not write\n"
 	       "                        (without it such a folder is refused "
 	       "before any work)\n"
+	       "  --export F[,F...]     also write the material for a "
+	       "renderer into OUT:\n"
+	       "                        material.gltf (gltf), material.xml "
+	       "(mitsuba),\n"
+	       "                        material.pbrt (pbrt); refitted as "
+	       "by glint export,\n"
+	       "                        residuals in params.json's "
+	       "\"exports\"\n"
 	       "  --max-iter N          LM iterations per pass (default 60)\n"
 	       "  --threads N           worker threads (default: all CPUs)\n"
 	       "  --wait                SESSION: wait for a running fit of "
@@ -245,6 +253,11 @@ static int parse_model(const char *arg, void *dest)
 	return cmd_choice_error(arg, all);
 }
 
+static int parse_exports(const char *arg, void *dest)
+{
+	return glint_export_formats_parse(arg, dest);
+}
+
 static int parse_knobs(const char *arg, void *dest)
 {
 	return glint_ladder_knobs_parse(arg, dest);
@@ -275,6 +288,7 @@ int cmd_fit(int argc, char **argv)
 		CMD_REAL("level", &job.opts.level, 0.51, 0.999),
 		CMD_REAL("accept-rmse", &job.accept_rmse, 1e-9, 1e9),
 		CMD_FLAG("force", 0, &job.force),
+		CMD_CALL("export", &job.exports, parse_exports),
 		CMD_INT("max-iter", &job.opts.max_iter, 1, 10000),
 		CMD_INT("threads", &job.nthreads, 0, 256),
 		CMD_FLAG("wait", 0, &wait),
@@ -360,6 +374,24 @@ int cmd_fit(int argc, char **argv)
 	cmd_print_verdicts(doc);
 	printf("results: %s/params.json, render.exr, compare.png\n",
 	       job.out_dir);
+	size_t k;
+	json_t *e;
+	json_array_foreach(json_object_get(doc, "exports"), k, e)
+	{
+		const char *file =
+			json_string_value(json_object_get(e, "file"));
+		if (file)
+			printf("export: %s/%s (%s), refit relative RMS "
+			       "%.4f\n",
+			       job.out_dir, file,
+			       json_string_value(json_object_get(e, "format")),
+			       json_real_value(json_object_get(
+				       e, "refit_relative_rms")));
+		else
+			printf("export: no %s: %s\n",
+			       json_string_value(json_object_get(e, "format")),
+			       json_string_value(json_object_get(e, "error")));
+	}
 	json_decref(doc);
 	return GLINT_EXIT_OK;
 }

@@ -1,13 +1,17 @@
 /* SPDX-License-Identifier: MIT */
 /* The fitted material refitted in a renderer's model (export.h). */
+#define _GNU_SOURCE /* asprintf */
 #include "export.h"
 
+#include "fit/brdf/microfacet.h"
 #include "fit/optim/lm.h"
 #include "fit/render/sampling.h"
 
 #include "core/error.h"
+#include "core/suggest.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -15,7 +19,45 @@
 #define NWI  512
 #define NDIR (NWO * NWI)
 
-enum { B0 = 0, ROUGH = 3, SPEC = 4, SC0 = 5, NX = 8 };
+const char *const glint_export_format_names[] = { "gltf", "mitsuba", "pbrt",
+						  NULL };
+
+int glint_export_formats_parse(const char *list, unsigned *formats)
+{
+	unsigned set = 0;
+	const char *t = list;
+
+	for (;;) {
+		size_t n = strcspn(t, ",");
+		int k = 0;
+		while (glint_export_format_names[k] &&
+		       (strlen(glint_export_format_names[k]) != n ||
+			strncmp(glint_export_format_names[k], t, n)))
+			k++;
+		if (!glint_export_format_names[k]) {
+			char word[64];
+			snprintf(word, sizeof(word), "%.*s", (int)n, t);
+			return glint_error_set(
+				EINVAL,
+				"unknown export format '%s': expected gltf, "
+				"mitsuba or pbrt, comma-separated%s",
+				word,
+				glint_suggest_hint(word,
+						   glint_export_format_names));
+		}
+		set |= 1u << k;
+		if (!t[n])
+			break;
+		t += n + 1;
+	}
+	*formats = set;
+	return 0;
+}
+
+/* Parameter layouts (export.h). */
+enum { G_BASE = 0, G_ROUGH = 3, G_SPEC = 4, G_SCOL = 5, G_NX = 8 };
+enum { M_KD = 0, M_ALPHA = 3, M_KS = 4, M_NX = 7 };
+enum { P_R = 0, P_AMOUNT = 3, P_ALPHA = 4, P_ETA = 5, P_NX = 8 };
 
 static double schlick_f0(double ior)
 {
@@ -23,7 +65,7 @@ static double schlick_f0(double ior)
 	return r * r;
 }
 
-/* Separable Smith visibility of the glTF specification (see export.h). */
+/* glTF: separable Smith visibility of the specification. */
 static double gltf_v(double nl, double nv, double a2)
 {
 	nl = fabs(nl);
@@ -32,24 +74,101 @@ static double gltf_v(double nl, double nv, double a2)
 		    (nv + sqrt(a2 + (1 - a2) * nv * nv)));
 }
 
-void glint_gltf_brdf(const struct glint_gltf_material *g, struct vec3 wo,
-		     struct vec3 wi, double f[3])
+static void gltf_brdf(const double *x, double ior, struct vec3 wo,
+		      struct vec3 wi, struct vec3 h, double f[3])
+{
+	double a = x[G_ROUGH] * x[G_ROUGH], a2 = a * a;
+	double t = h.z * h.z * (a2 - 1) + 1;
+	double dv = a2 / (M_PI * t * t) * gltf_v(wi.z, wo.z, a2);
+	double w5 = pow(1 - fabs(v3_dot(wo, h)), 5);
+	double f0 = schlick_f0(ior), s = x[G_SPEC];
+
+	for (int c = 0; c < 3; c++) {
+		double c0 = fmin(f0 * x[G_SCOL + c], 1) * s;
+		double F = c0 + (s - c0) * w5;
+		f[c] = (1 - F) * x[G_BASE + c] / M_PI + F * dv;
+	}
+}
+
+/* Mitsuba 3's Smith G1 for direction v and microfacet normal h. */
+static double mitsuba_g1(int ggx, double alpha, struct vec3 v, struct vec3 h)
+{
+	if (v3_dot(v, h) * v.z <= 0)
+		return 0;
+	double xy = alpha * alpha * (v.x * v.x + v.y * v.y);
+	if (xy == 0)
+		return 1;
+	double t2 = xy / (v.z * v.z);
+	if (ggx)
+		return 2 / (1 + sqrt(1 + t2));
+	double a = 1 / sqrt(t2);
+	return a >= 1.6 ? 1
+			: (3.535 * a + 2.181 * a * a) /
+				  (1 + 2.276 * a + 2.577 * a * a);
+}
+
+static double mitsuba_d(int ggx, double alpha, double cos_h)
+{
+	double c2 = cos_h * cos_h, a2 = alpha * alpha;
+	if (ggx) {
+		double t = (1 - c2) / a2 + c2;
+		return 1 / (M_PI * a2 * t * t);
+	}
+	return glint_beckmann_d(cos_h, alpha);
+}
+
+static void mitsuba_brdf(const double *x, double ior, int ggx, struct vec3 wo,
+			 struct vec3 wi, struct vec3 h, double f[3])
+{
+	double alpha = x[M_ALPHA];
+	double s = mitsuba_d(ggx, alpha, h.z) * mitsuba_g1(ggx, alpha, wi, h) *
+		   mitsuba_g1(ggx, alpha, wo, h) *
+		   glint_fresnel_dielectric(v3_dot(wi, h), ior) /
+		   (4 * wi.z * wo.z);
+
+	for (int c = 0; c < 3; c++)
+		f[c] = x[M_KD + c] / M_PI + x[M_KS + c] * s;
+}
+
+/* pbrt-v4's conductor is Trowbridge-Reitz with the height-correlated
+ * Smith G: glint's own GGX lobe, with eta per channel. */
+static void pbrt_brdf(const double *x, struct vec3 wo, struct vec3 wi,
+		      double f[3])
+{
+	double a = x[P_AMOUNT];
+
+	for (int c = 0; c < 3; c++)
+		f[c] = (1 - a) * x[P_R + c] / M_PI +
+		       a * glint_ggx_lobe(x[P_ALPHA], x[P_ETA + c], wo, wi);
+}
+
+static void target_brdf(enum glint_export_format format, const double *x,
+			double ior, int ggx, struct vec3 wo, struct vec3 wi,
+			double f[3])
 {
 	f[0] = f[1] = f[2] = 0;
 	if (!(wo.z > 0 && wi.z > 0))
 		return;
 	struct vec3 h = v3_norm(v3_add(wo, wi));
-	double a = g->roughness * g->roughness, a2 = a * a;
-	double t = h.z * h.z * (a2 - 1) + 1;
-	double dv = a2 / (M_PI * t * t) * gltf_v(wi.z, wo.z, a2);
-	double w5 = pow(1 - fabs(v3_dot(wo, h)), 5);
-	double f0 = schlick_f0(g->ior);
-
-	for (int c = 0; c < 3; c++) {
-		double c0 = fmin(f0 * g->specular_color[c], 1) * g->specular;
-		double F = c0 + (g->specular - c0) * w5;
-		f[c] = (1 - F) * g->base[c] / M_PI + F * dv;
+	switch (format) {
+	case GLINT_EXPORT_GLTF:
+		gltf_brdf(x, ior, wo, wi, h, f);
+		break;
+	case GLINT_EXPORT_MITSUBA:
+		mitsuba_brdf(x, ior, ggx, wo, wi, h, f);
+		break;
+	case GLINT_EXPORT_PBRT:
+		pbrt_brdf(x, wo, wi, f);
+		break;
+	default:
+		break;
 	}
+}
+
+void glint_export_brdf(const struct glint_export *e, struct vec3 wo,
+		       struct vec3 wi, double f[3])
+{
+	target_brdf(e->format, e->x, e->ior, e->ggx, wo, wi, f);
 }
 
 /* The direction set and glint's BRDF on it. */
@@ -58,7 +177,7 @@ struct dirs {
 	double w[NDIR];	    /* cos(theta_i) / sqrt(pdf N) */
 	double f[NDIR * 3]; /* glint's f */
 	double norm;	    /* sqrt(sum (f w)^2) */
-	double ior;
+	struct glint_export e;
 };
 
 static void dirs_build(const struct glint_model_ops *m, const double *p,
@@ -91,25 +210,13 @@ static void dirs_build(const struct glint_model_ops *m, const double *p,
 	d->norm = sqrt(sum);
 }
 
-static void x_to_gltf(const double *x, double ior,
-		      struct glint_gltf_material *g)
-{
-	for (int c = 0; c < 3; c++) {
-		g->base[c] = x[B0 + c];
-		g->specular_color[c] = x[SC0 + c];
-	}
-	g->roughness = x[ROUGH];
-	g->specular = x[SPEC];
-	g->ior = ior;
-}
-
-static double residuals_of(const struct dirs *d,
-			   const struct glint_gltf_material *g, double *r)
+static double residuals_of(const struct dirs *d, const double *x, double *r)
 {
 	double sum = 0;
 	for (int i = 0; i < NDIR; i++) {
 		double f[3];
-		glint_gltf_brdf(g, d->wo[i], d->wi[i], f);
+		target_brdf(d->e.format, x, d->e.ior, d->e.ggx, d->wo[i],
+			    d->wi[i], f);
 		for (int c = 0; c < 3; c++) {
 			double e = (f[c] - d->f[3 * i + c]) * d->w[i];
 			if (r)
@@ -122,11 +229,7 @@ static double residuals_of(const struct dirs *d,
 
 static int lm_residuals(void *ctx, const double *x, double *r)
 {
-	const struct dirs *d = ctx;
-	struct glint_gltf_material g;
-
-	x_to_gltf(x, d->ior, &g);
-	residuals_of(d, &g, r);
+	residuals_of(ctx, x, r);
 	return 0;
 }
 
@@ -139,98 +242,325 @@ static double model_ior(const struct glint_model_ops *m, const double *p)
 	return 1.5;
 }
 
-int glint_gltf_refit(const struct glint_model_ops *model, const double *p,
-		     struct glint_gltf_material *g, double *residual)
+static void set(double *x, double *lo, double *hi, int k, double v, double l,
+		double h)
 {
-	if (model->transparent || !model->eval)
-		return glint_error_set(EINVAL,
-				       "%s: a transparent sphere has no glTF "
-				       "export yet (opaque models only)",
-				       model->name);
+	x[k] = fmin(h, fmax(l, v));
+	lo[k] = l;
+	hi[k] = h;
+}
+
+/*
+ * The start and bounds: glint's albedos, the lobe's width (GGX's a is
+ * near Beckmann's m for the same highlight; glTF's roughness is its
+ * square root), the specular weights from glint's.
+ */
+static int start(const struct glint_model_ops *model, const double *p,
+		 const struct glint_export *e, double *x, double *lo,
+		 double *hi)
+{
+	double kd[3], ks[3], ksm = 0;
+	double w =
+		model->roughness_param >= 0 ? p[model->roughness_param] : 0.1;
+	int has_spec = model->nlobes > 1;
+	for (int c = 0; c < 3; c++) {
+		kd[c] = p[model->lobe_param[0] + c];
+		ks[c] = has_spec ? p[model->lobe_param[1] + c] : 0;
+		ksm += ks[c] / 3;
+	}
+	switch (e->format) {
+	case GLINT_EXPORT_GLTF:
+		for (int c = 0; c < 3; c++) {
+			set(x, lo, hi, G_BASE + c, kd[c], 0, 1);
+			set(x, lo, hi, G_SCOL + c, ksm > 0 ? ks[c] / ksm : 1, 0,
+			    1 / schlick_f0(fmax(e->ior, 1.01)));
+		}
+		set(x, lo, hi, G_ROUGH, sqrt(w), 0.02, 1);
+		set(x, lo, hi, G_SPEC, ksm, 0, 1);
+		return G_NX;
+	case GLINT_EXPORT_MITSUBA:
+		for (int c = 0; c < 3; c++) {
+			set(x, lo, hi, M_KD + c, kd[c], 0, 1);
+			set(x, lo, hi, M_KS + c, ks[c], 0, 2);
+		}
+		set(x, lo, hi, M_ALPHA, w, 1e-3, 1);
+		return M_NX;
+	case GLINT_EXPORT_PBRT: {
+		double a = fmin(0.95, fmax(0.05, ksm));
+		for (int c = 0; c < 3; c++) {
+			set(x, lo, hi, P_R + c, kd[c] / (1 - a), 0, 1);
+			set(x, lo, hi, P_ETA + c, e->ior, 1.01, 10);
+		}
+		set(x, lo, hi, P_AMOUNT, a, 0, 1);
+		/* pbrt-v4 treats alpha below 1e-3 as a mirror. */
+		set(x, lo, hi, P_ALPHA, w, 2e-3, 1);
+		return P_NX;
+	}
+	default:
+		return glint_error_set(EINVAL, "unknown export format %d",
+				       (int)e->format);
+	}
+}
+
+int glint_export_refit(enum glint_export_format format,
+		       const struct glint_model_ops *model, const double *p,
+		       struct glint_export *e)
+{
+	if (model->transparent || !model->eval || model->nlobes < 1)
+		return glint_error_set(
+			EINVAL,
+			"%s: a transparent sphere has no %s "
+			"export yet (opaque models only)",
+			model->name,
+			(unsigned)format < GLINT_EXPORT_NFORMATS
+				? glint_export_format_names[format]
+				: "?");
+	memset(e, 0, sizeof(*e));
+	e->format = format;
+	e->ior = model_ior(model, p);
+	e->ggx = model->name && strstr(model->name, "ggx") != NULL;
+
+	double lo[GLINT_EXPORT_MAX_X], hi[GLINT_EXPORT_MAX_X];
+	int nx = start(model, p, e, e->x, lo, hi);
+	if (nx < 0)
+		return nx;
 	struct dirs *d = malloc(sizeof(*d));
 	if (!d)
 		return glint_error_set(ENOMEM, "out of memory");
+	d->e = *e;
 	dirs_build(model, p, d);
-	d->ior = model_ior(model, p);
 
-	/* Start: glint's albedos (specular x F(ior) is f0 x specular_color
-	 * x specular with specular_color 1), GGX's a from the lobe width. */
-	double x[NX], lo[NX], hi[NX];
-	double ks = 0, rough = model->roughness_param >= 0
-				       ? p[model->roughness_param]
-				       : 0.5;
-	int has_spec = model->nlobes > 1;
-	for (int c = 0; c < 3; c++)
-		ks += has_spec ? p[model->lobe_param[1] + c] / 3 : 0;
-	for (int c = 0; c < 3; c++) {
-		x[B0 + c] = p[model->lobe_param[0] + c];
-		x[SC0 + c] = ks > 0 ? p[model->lobe_param[1] + c] / ks : 1;
-		lo[B0 + c] = 0;
-		hi[B0 + c] = 1;
-		lo[SC0 + c] = 0;
-		hi[SC0 + c] = 1 / schlick_f0(fmax(d->ior, 1.01));
-	}
-	x[ROUGH] = fmin(1, fmax(0.02, sqrt(rough)));
-	lo[ROUGH] = 0.02;
-	hi[ROUGH] = 1;
-	x[SPEC] = ks;
-	lo[SPEC] = 0;
-	hi[SPEC] = 1;
-
-	struct glint_lm_problem pr = { NX,	     3 * NDIR, lo, hi,
+	struct glint_lm_problem pr = { nx,	     3 * NDIR, lo, hi,
 				       lm_residuals, NULL,     d };
-	struct glint_lm_opts lo_;
+	struct glint_lm_opts o;
 	struct glint_lm_result lr;
-	glint_lm_default_opts(&lo_);
-	lo_.max_iter = 200;
-	int ret = glint_lm_solve(&pr, &lo_, x, &lr);
+	glint_lm_default_opts(&o);
+	o.max_iter = 200;
+	int ret = glint_lm_solve(&pr, &o, e->x, &lr);
 	if (ret >= 0) {
-		x_to_gltf(x, d->ior, g);
-		*residual = residuals_of(d, g, NULL);
+		e->residual = residuals_of(d, e->x, NULL);
 		ret = 0;
 	}
 	free(d);
 	return ret;
 }
 
-double glint_gltf_residual(const struct glint_model_ops *model, const double *p,
-			   const struct glint_gltf_material *g)
+double glint_export_residual(const struct glint_model_ops *model,
+			     const double *p, const struct glint_export *e)
 {
 	struct dirs *d = malloc(sizeof(*d));
 	double r = NAN;
 
 	if (d) {
+		d->e = *e;
 		dirs_build(model, p, d);
-		r = residuals_of(d, g, NULL);
+		r = residuals_of(d, e->x, NULL);
 		free(d);
 	}
 	return r;
 }
 
-json_t *glint_gltf_document(const struct glint_gltf_material *g,
-			    const char *name, const char *source,
-			    const struct glint_model_ops *model,
-			    double residual)
+const char *glint_export_extension(enum glint_export_format format)
 {
-	json_t *glint = json_pack(
-		"{s:s, s:s, s:f, s:s}", "source", source, "model", model->name,
-		"refit_relative_rms", residual, "note",
-		"glTF's model refitted to glint's BRDF by least squares over "
-		"8 view angles x 512 incident directions; refit_relative_rms "
-		"is the relative RMS difference of reflected radiance there "
-		"(glint docs/export.md)");
+	static const char *const ext[] = { ".gltf", ".xml", ".pbrt" };
+	return (unsigned)format < GLINT_EXPORT_NFORMATS ? ext[format] : "";
+}
+
+static const char note[] =
+	"the target's model refitted to glint's BRDF by least squares over 8 "
+	"view angles x 512 incident directions; refit_relative_rms is the "
+	"relative RMS difference of reflected radiance there (glint "
+	"docs/export.md)";
+
+static json_t *gltf_document(const struct glint_export *e, const char *name,
+			     const char *source,
+			     const struct glint_model_ops *model)
+{
+	const double *x = e->x;
+	json_t *glint = json_pack("{s:s, s:s, s:f, s:s}", "source", source,
+				  "model", model->name, "refit_relative_rms",
+				  e->residual, "note", note);
 	json_t *mat = json_pack(
 		"{s:s, s:{s:[f,f,f,f], s:f, s:f}, s:{s:{s:f}, s:{s:f, "
 		"s:[f,f,f]}}, s:{s:o}}",
 		"name", name, "pbrMetallicRoughness", "baseColorFactor",
-		g->base[0], g->base[1], g->base[2], 1.0, "metallicFactor", 0.0,
-		"roughnessFactor", g->roughness, "extensions",
-		"KHR_materials_ior", "ior", g->ior, "KHR_materials_specular",
-		"specularFactor", g->specular, "specularColorFactor",
-		g->specular_color[0], g->specular_color[1],
-		g->specular_color[2], "extras", "glint", glint);
+		x[G_BASE], x[G_BASE + 1], x[G_BASE + 2], 1.0, "metallicFactor",
+		0.0, "roughnessFactor", x[G_ROUGH], "extensions",
+		"KHR_materials_ior", "ior", e->ior, "KHR_materials_specular",
+		"specularFactor", x[G_SPEC], "specularColorFactor", x[G_SCOL],
+		x[G_SCOL + 1], x[G_SCOL + 2], "extras", "glint", glint);
 	return json_pack("{s:{s:s, s:s}, s:[s, s], s:[o]}", "asset", "version",
 			 "2.0", "generator", "glint export", "extensionsUsed",
 			 "KHR_materials_ior", "KHR_materials_specular",
 			 "materials", mat);
+}
+
+/*
+ * Mitsuba's blend weight w and the nested reflectances kd / (1 - w) and
+ * ks / w.  When max kd + max ks <= 1 every value fits in [0, 1]; else the
+ * diffuse one is kept within it and the specular one exceeds 1 (written
+ * as an unbounded srgb texture).
+ */
+static double mitsuba_split(const struct glint_export *e, double kd[3],
+			    double ks[3])
+{
+	double md = 0, ms = 0, w;
+	for (int c = 0; c < 3; c++) {
+		md = fmax(md, e->x[M_KD + c]);
+		ms = fmax(ms, e->x[M_KS + c]);
+	}
+	if (md + ms <= 0)
+		w = 0.5;
+	else if (md + ms <= 1)
+		w = ms / (md + ms);
+	else
+		w = 1 - md;
+	w = fmin(0.999, fmax(0.001, w));
+	for (int c = 0; c < 3; c++) {
+		kd[c] = e->x[M_KD + c] / (1 - w);
+		ks[c] = e->x[M_KS + c] / w;
+	}
+	return w;
+}
+
+static char *mitsuba_text(const struct glint_export *e, const char *name,
+			  const char *source,
+			  const struct glint_model_ops *model)
+{
+	double kd[3], ks[3], w = mitsuba_split(e, kd, ks);
+	int unbounded = ks[0] > 1 || ks[1] > 1 || ks[2] > 1;
+	char *s = NULL;
+
+	if (asprintf(&s,
+		     "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n"
+		     "<!-- glint export of %s (%s) for Mitsuba 3.\n"
+		     "     refit_relative_rms %.4f: %s.\n"
+		     "     Use: <include filename=\"this file\"/>, then "
+		     "<ref id=\"%s\"/> in a shape. -->\n"
+		     "<scene version=\"3.0.0\">\n"
+		     "    <bsdf type=\"blendbsdf\" id=\"%s\">\n"
+		     "        <float name=\"weight\" value=\"%.6g\"/>\n"
+		     "        <bsdf type=\"diffuse\">\n"
+		     "            <rgb name=\"reflectance\" "
+		     "value=\"%.6g, %.6g, %.6g\"/>\n"
+		     "        </bsdf>\n"
+		     "        <bsdf type=\"roughconductor\">\n"
+		     "            <string name=\"distribution\" "
+		     "value=\"%s\"/>\n"
+		     "            <float name=\"alpha\" value=\"%.6g\"/>\n"
+		     "            <float name=\"eta\" value=\"%.6g\"/>\n"
+		     "            <float name=\"k\" value=\"0\"/>\n"
+		     "            <texture type=\"srgb\" "
+		     "name=\"specular_reflectance\">\n"
+		     "                <rgb name=\"color\" "
+		     "value=\"%.6g, %.6g, %.6g\"/>\n"
+		     "%s"
+		     "            </texture>\n"
+		     "        </bsdf>\n"
+		     "    </bsdf>\n"
+		     "</scene>\n",
+		     source, model->name, e->residual, note, name, name, w,
+		     kd[0], kd[1], kd[2], e->ggx ? "ggx" : "beckmann",
+		     e->x[M_ALPHA], e->ior, ks[0], ks[1], ks[2],
+		     unbounded ? "                <boolean name=\"unbounded\" "
+				 "value=\"true\"/>\n"
+			       : "") < 0)
+		return NULL;
+	return s;
+}
+
+static char *pbrt_text(const struct glint_export *e, const char *name,
+		       const char *source, const struct glint_model_ops *model)
+{
+	const double *x = e->x;
+	char *s = NULL;
+
+	if (asprintf(&s,
+		     "# glint export of %s (%s) for pbrt-v4.\n"
+		     "# refit_relative_rms %.4f: %s.\n"
+		     "# Use after WorldBegin: Include \"this file\", then "
+		     "NamedMaterial \"%s\".\n"
+		     "MakeNamedMaterial \"%s.diffuse\"\n"
+		     "    \"string type\" \"diffuse\"\n"
+		     "    \"rgb reflectance\" [ %.6g %.6g %.6g ]\n"
+		     "MakeNamedMaterial \"%s.specular\"\n"
+		     "    \"string type\" \"conductor\"\n"
+		     "    \"float roughness\" %.6g\n"
+		     "    \"bool remaproughness\" false\n"
+		     "    \"rgb eta\" [ %.6g %.6g %.6g ]\n"
+		     "    \"rgb k\" [ 0 0 0 ]\n"
+		     "MakeNamedMaterial \"%s\"\n"
+		     "    \"string type\" \"mix\"\n"
+		     "    \"string materials\" [ \"%s.diffuse\" "
+		     "\"%s.specular\" ]\n"
+		     "    \"float amount\" %.6g\n",
+		     source, model->name, e->residual, note, name, name, x[P_R],
+		     x[P_R + 1], x[P_R + 2], name, x[P_ALPHA], x[P_ETA],
+		     x[P_ETA + 1], x[P_ETA + 2], name, name, name,
+		     x[P_AMOUNT]) < 0)
+		return NULL;
+	return s;
+}
+
+char *glint_export_text(const struct glint_export *e, const char *name,
+			const char *source, const struct glint_model_ops *model)
+{
+	char *safe = strdup(name && *name ? name : "material");
+	char *text = NULL;
+
+	if (!safe)
+		return NULL;
+	for (char *c = safe; *c; c++)
+		if (!((*c >= 'a' && *c <= 'z') || (*c >= 'A' && *c <= 'Z') ||
+		      (*c >= '0' && *c <= '9') || *c == '-' || *c == '_' ||
+		      *c == '.'))
+			*c = '_';
+	switch (e->format) {
+	case GLINT_EXPORT_GLTF: {
+		json_t *doc = gltf_document(e, safe, source, model);
+		text = doc ? json_dumps(doc, JSON_INDENT(2)) : NULL;
+		json_decref(doc);
+		break;
+	}
+	case GLINT_EXPORT_MITSUBA:
+		text = mitsuba_text(e, safe, source, model);
+		break;
+	case GLINT_EXPORT_PBRT:
+		text = pbrt_text(e, safe, source, model);
+		break;
+	default:
+		break;
+	}
+	free(safe);
+	return text;
+}
+
+json_t *glint_export_params_json(const struct glint_export *e)
+{
+	const double *x = e->x;
+
+	switch (e->format) {
+	case GLINT_EXPORT_GLTF:
+		return json_pack("{s:[f,f,f], s:f, s:f, s:f, s:[f,f,f]}",
+				 "base_color", x[G_BASE], x[G_BASE + 1],
+				 x[G_BASE + 2], "roughness", x[G_ROUGH], "ior",
+				 e->ior, "specular", x[G_SPEC],
+				 "specular_color", x[G_SCOL], x[G_SCOL + 1],
+				 x[G_SCOL + 2]);
+	case GLINT_EXPORT_MITSUBA: {
+		double kd[3], ks[3], w = mitsuba_split(e, kd, ks);
+		return json_pack(
+			"{s:f, s:[f,f,f], s:s, s:f, s:f, s:[f,f,f]}", "weight",
+			w, "reflectance", kd[0], kd[1], kd[2], "distribution",
+			e->ggx ? "ggx" : "beckmann", "alpha", x[M_ALPHA], "eta",
+			e->ior, "specular_reflectance", ks[0], ks[1], ks[2]);
+	}
+	case GLINT_EXPORT_PBRT:
+		return json_pack("{s:[f,f,f], s:f, s:f, s:[f,f,f]}",
+				 "reflectance", x[P_R], x[P_R + 1], x[P_R + 2],
+				 "amount", x[P_AMOUNT], "roughness", x[P_ALPHA],
+				 "eta", x[P_ETA], x[P_ETA + 1], x[P_ETA + 2]);
+	default:
+		return NULL;
+	}
 }

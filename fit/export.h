@@ -4,9 +4,8 @@
 
 /*
  * The fitted material in a renderer's own model.  Target models differ from
- * glint's (glTF: GGX with separable Smith visibility, Schlick Fresnel and a
- * Fresnel-weighted mix with the diffuse; glint: Beckmann or GGX, V-cavity or
- * height-correlated Smith, exact Fresnel, diffuse added), so the target's
+ * glint's (Beckmann or GGX, V-cavity or Smith shadowing, exact or Schlick
+ * Fresnel, a diffuse term added or Fresnel-weighted), so the target's
  * parameters are not copied across: they are fitted, by bounded
  * least squares, to glint's BRDF over a fixed set of directions, and the
  * fit's residual is reported with the export.
@@ -15,56 +14,99 @@
  * incident directions drawn half from glint's own sampler and half
  * cosine-weighted (a defensive mixture: highlights and the rest are both
  * seen).  The residual is the relative RMS difference of reflected
- * radiance under uniform light, sqrt(sum (f_t - f) cos^2 / pdf) over
- * sqrt(sum f cos^2 / pdf) (squares inside).
+ * radiance under uniform light, sqrt(sum (f_t - f)^2 cos^2 / pdf) over
+ * sqrt(sum f^2 cos^2 / pdf).
+ *
+ * The targets, each as its renderer evaluates it (f per steradian, RGB;
+ * F_d(c, n) the exact unpolarised dielectric Fresnel term, which is also
+ * what Mitsuba's and pbrt's conductor Fresnel give with k = 0):
+ *
+ * GLTF: glTF 2.0 metallic-roughness dielectric (metallic 0) with
+ *   KHR_materials_ior and KHR_materials_specular (specification Appendix
+ *   B; the extension's first ratified text).  x = base[3], roughness,
+ *   specular, specular_color[3]:
+ *     a = roughness^2, D = a^2 / (pi ((n.h)^2 (a^2 - 1) + 1)^2)
+ *     V = 1 / ((|n.l| + sqrt(a^2 + (1 - a^2)(n.l)^2))
+ *              (|n.v| + sqrt(a^2 + (1 - a^2)(n.v)^2)))
+ *     f0 = min(((ior - 1)/(ior + 1))^2 specular_color, 1) specular
+ *     F = f0 + (specular - f0)(1 - |v.h|)^5, f = (1 - F) base/pi + F D V
+ *
+ * MITSUBA: Mitsuba 3, a blendbsdf of diffuse and roughconductor (eta =
+ *   ior, k = 0; Beckmann, or GGX for glint's GGX models) with
+ *   specular_reflectance.  x = kd[3], alpha, ks[3] (the blend's weight w
+ *   is chosen when writing: diffuse reflectance kd / (1 - w), specular
+ *   reflectance ks / w):
+ *     f = kd/pi + ks F_d(i.h, ior) D(h) G1(i, h) G1(o, h) / (4 cos_i cos_o)
+ *   Beckmann G1 is Mitsuba's rational approximation, with
+ *   a = 1 / (alpha tan t): 1 if a >= 1.6, else
+ *   (3.535 a + 2.181 a^2) / (1 + 2.276 a + 2.577 a^2); GGX G1 is
+ *   2 / (1 + sqrt(1 + alpha^2 tan^2 t)).
+ *
+ * PBRT: pbrt-v4, a mix material (amount a) of diffuse (reflectance R) and
+ *   conductor (Trowbridge-Reitz roughness alpha with remaproughness false,
+ *   eta per RGB channel, k = 0).  x = R[3], a, alpha, eta[3]:
+ *     f = (1 - a) R/pi + a F_d(|o.h|, eta) D(h) G / (4 cos_i cos_o)
+ *   with Trowbridge-Reitz D and G = 1 / (1 + L(o) + L(i)),
+ *   L = (sqrt(1 + alpha^2 tan^2 t) - 1) / 2.
  */
 
 #include "fit/brdf/model.h"
 
 #include <jansson.h>
 
-/*
- * glTF 2.0 metallic-roughness dielectric (metallic 0) with
- * KHR_materials_ior and KHR_materials_specular, as the specifications
- * state it (glTF 2.0 Appendix B; KHR_materials_specular, first ratified
- * text):
- *   a = roughness^2
- *   D = a^2 / (pi ((n.h)^2 (a^2 - 1) + 1)^2)
- *   V = 1 / ((|n.l| + sqrt(a^2 + (1 - a^2)(n.l)^2))
- *            (|n.v| + sqrt(a^2 + (1 - a^2)(n.v)^2)))
- *   f0 = min(((ior - 1)/(ior + 1))^2 specular_color, 1) specular
- *   F = f0 + (specular - f0)(1 - |v.h|)^5              (per channel)
- *   f = (1 - F) base / pi + F D V
- */
-struct glint_gltf_material {
-	double base[3];
-	double roughness;
-	double ior;
-	double specular;
-	double specular_color[3];
+enum glint_export_format {
+	GLINT_EXPORT_GLTF,
+	GLINT_EXPORT_MITSUBA,
+	GLINT_EXPORT_PBRT,
+	GLINT_EXPORT_NFORMATS
 };
 
-/* The glTF BRDF above, f[3] per steradian; 0 below the surface. */
-void glint_gltf_brdf(const struct glint_gltf_material *g, struct vec3 wo,
-		     struct vec3 wi, double f[3]);
+/* "gltf", "mitsuba", "pbrt", then NULL (the command-line names). */
+extern const char *const glint_export_format_names[];
+
+/* A comma-separated list of those names as a bit set (bit k: format k);
+ * -EINVAL naming a bad name (with the likeliest meant) or an empty list. */
+int glint_export_formats_parse(const char *list, unsigned *formats);
+
+#define GLINT_EXPORT_MAX_X 8
+
+struct glint_export {
+	enum glint_export_format format;
+	double x[GLINT_EXPORT_MAX_X]; /* the target's parameters, above */
+	double ior;		      /* held at the model's own, or 1.5 */
+	int ggx;		      /* MITSUBA: the GGX distribution */
+	double residual;	      /* relative RMS difference, above */
+};
 
 /*
- * Fit g to glint's (model, p): base colour, roughness, specular and
- * specular colour (ior is held at the model's own, or 1.5 for models
- * without one); *residual as above.  Refuses transparent models.
+ * Fit the target's parameters to glint's (model, p), into e (format
+ * set); e->residual as above.  Refuses transparent models.
  */
-int glint_gltf_refit(const struct glint_model_ops *model, const double *p,
-		     struct glint_gltf_material *g, double *residual);
+int glint_export_refit(enum glint_export_format format,
+		       const struct glint_model_ops *model, const double *p,
+		       struct glint_export *e);
 
-/* The relative RMS difference of g from (model, p) over the set above. */
-double glint_gltf_residual(const struct glint_model_ops *model, const double *p,
-			   const struct glint_gltf_material *g);
+/* The target's BRDF with e's parameters, f[3]; 0 below the surface. */
+void glint_export_brdf(const struct glint_export *e, struct vec3 wo,
+		       struct vec3 wi, double f[3]);
 
-/* A glTF 2.0 document holding the one material (named `name`), with the
- * refit's residual and source in its extras.  Caller json_decref()s. */
-json_t *glint_gltf_document(const struct glint_gltf_material *g,
-			    const char *name, const char *source,
-			    const struct glint_model_ops *model,
-			    double residual);
+/* The relative RMS difference of e from (model, p) over the set above. */
+double glint_export_residual(const struct glint_model_ops *model,
+			     const double *p, const struct glint_export *e);
+
+/* The file name extension of a format's files (".gltf", ".xml", ".pbrt"). */
+const char *glint_export_extension(enum glint_export_format format);
+
+/*
+ * The export's file, as text (malloc'd; NULL on allocation failure): the
+ * material named `name` (characters other than letters, digits, '-', '_'
+ * and '.' become '_'), with the refit's residual and its source.
+ */
+char *glint_export_text(const struct glint_export *e, const char *name,
+			const char *source,
+			const struct glint_model_ops *model);
+
+/* The target's parameters by their names in the target, as JSON. */
+json_t *glint_export_params_json(const struct glint_export *e);
 
 #endif

@@ -11,6 +11,7 @@
 #include "ladder.h"
 #include "misfit.h"
 #include "select.h"
+#include "export.h"
 #include "fit/render/compare.h"
 #include "core/atomic_dir.h"
 #include "core/atomic_file.h"
@@ -199,12 +200,27 @@ static json_t *params_doc(const struct glint_fit_job *job,
 	return doc;
 }
 
+/* An export's material name: the output folder's last component. */
+static const char *material_name(const struct glint_fit_job *job, char buf[256])
+{
+	size_t n = strlen(job->out_dir);
+	while (n > 1 && job->out_dir[n - 1] == '/')
+		n--;
+	size_t b = n;
+	while (b > 0 && job->out_dir[b - 1] != '/')
+		b--;
+	snprintf(buf, 256, "%.*s", (int)(n - b), job->out_dir + b);
+	return strcmp(buf, ".") && strcmp(buf, "..") && *buf ? buf : "material";
+}
+
 /* params.json, render.exr and compare.png into job->out_dir, as one
  * atomic folder (the old one stays whole on failure). */
 static int write_results(const struct glint_fit_job *job, const char *dir,
 			 const json_t *doc, const struct glint_image *img,
 			 const struct glint_image *cov,
-			 const struct glint_misfit *mf)
+			 const struct glint_misfit *mf,
+			 const struct glint_export *exports,
+			 const struct glint_model_ops *model)
 {
 	double ve[GLINT_MISFIT_BANDS + 1], me[GLINT_MISFIT_BANDS + 1];
 	double mean[2][GLINT_MISFIT_BANDS], se[2][GLINT_MISFIT_BANDS];
@@ -251,6 +267,25 @@ static int write_results(const struct glint_fit_job *job, const char *dir,
 			glint_atomic_dir_file(&ad, "compare.png", path,
 					      sizeof(path)),
 			job->photo, img, cov, plots, mf ? 2 : 0, NULL);
+	char name_buf[256];
+	for (int k = 0; exports && !ret && k < GLINT_EXPORT_NFORMATS; k++) {
+		const struct glint_export *e = &exports[k];
+		char file[64];
+		if ((int)e->format != k)
+			continue;
+		snprintf(file, sizeof(file), "material%s",
+			 glint_export_extension(e->format));
+		char *mtext = glint_export_text(e, material_name(job, name_buf),
+						"params.json", model);
+		if (!mtext) {
+			ret = glint_error_set(ENOMEM, "out of memory");
+			break;
+		}
+		ret = glint_atomic_write_file(
+			glint_atomic_dir_file(&ad, file, path, sizeof(path)),
+			mtext, strlen(mtext));
+		free(mtext);
+	}
 	if (!ret)
 		ret = glint_atomic_dir_commit(&ad);
 	else
@@ -258,12 +293,50 @@ static int write_results(const struct glint_fit_job *job, const char *dir,
 	return ret;
 }
 
+/* The accepted material in each format of job->exports, into exports[k]
+ * (format k, or GLINT_EXPORT_NFORMATS when it has none); the list for
+ * params.json. */
+static json_t *refit_exports(const struct glint_fit_job *job,
+			     const struct glint_model_ops *model,
+			     const double *p, struct glint_export *exports)
+{
+	json_t *list = json_array();
+	for (int k = 0; k < GLINT_EXPORT_NFORMATS; k++) {
+		exports[k].format = GLINT_EXPORT_NFORMATS;
+		if (!(job->exports & (1u << k)))
+			continue;
+		const char *fmt = glint_export_format_names[k];
+		char file[64];
+		snprintf(file, sizeof(file), "material%s",
+			 glint_export_extension((enum glint_export_format)k));
+		if (glint_export_refit((enum glint_export_format)k, model, p,
+				       &exports[k]) < 0) {
+			glint_log_warn("no %s export: %s", fmt,
+				       glint_error_msg());
+			json_array_append_new(
+				list, json_pack("{s:s, s:s}", "format", fmt,
+						"error", glint_error_msg()));
+			glint_error_clear();
+			exports[k].format = GLINT_EXPORT_NFORMATS;
+			continue;
+		}
+		json_array_append_new(
+			list, json_pack("{s:s, s:s, s:f, s:o}", "format", fmt,
+					"file", file, "refit_relative_rms",
+					exports[k].residual, "parameters",
+					glint_export_params_json(&exports[k])));
+	}
+	return list;
+}
+
 /* The output folder and the refused fit's sibling may be replaced (a
  * previous result, or nothing): checked before any work. */
 static int check_outputs(const struct glint_fit_job *job)
 {
-	static const char *const names[] = { "params.json", "render.exr",
-					     "compare.png", NULL };
+	static const char *const names[] = {
+		"params.json",	"render.exr",	 "compare.png", "material.gltf",
+		"material.xml", "material.pbrt", NULL
+	};
 	char dir[GLINT_PATH_MAX];
 	int ret = glint_atomic_dir_check(job->out_dir, names, job->force);
 
@@ -368,7 +441,8 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 		ret = glint_path_fmt(dir, sizeof(dir), "%s.refused",
 				     job->out_dir);
 		if (!ret)
-			ret = write_results(job, dir, doc, img, cov, have_mf);
+			ret = write_results(job, dir, doc, img, cov, have_mf,
+					    NULL, model);
 		if (!ret)
 			ret = glint_error_set(EINVAL,
 					      "%s: fit refused: %s (the fit's "
@@ -376,7 +450,12 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 					      job->photo_path, v.verdict, dir);
 		goto out;
 	}
-	ret = write_results(job, job->out_dir, doc, img, cov, have_mf);
+	struct glint_export exports[GLINT_EXPORT_NFORMATS];
+	if (job->exports)
+		json_object_set_new(doc, "exports",
+				    refit_exports(job, model, res.p, exports));
+	ret = write_results(job, job->out_dir, doc, img, cov, have_mf,
+			    job->exports ? exports : NULL, model);
 	if (ret < 0)
 		goto out;
 	json_object_set_new(doc, "output", json_string(job->out_dir));

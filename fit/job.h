@@ -37,6 +37,9 @@ struct glint_fit_job {
 	double accept_rmse;
 	/* replace out_dir even when it holds files glint did not write */
 	int force;
+	/* bit k set: write out_dir/material + the extension of export
+	 * format k (fit/export.h) with an accepted result */
+	unsigned exports;
 };
 
 /*
@@ -50,9 +53,11 @@ void glint_fit_job_unload(struct glint_fit_job *job);
 
 /*
  * Trace, fit, render the result and write out_dir/{params.json,
- * render.exr, compare.png} as one atomic folder.  Before any work, an
- * out_dir (or its ".refused" sibling) that holds anything but a previous
- * result is refused unless force, and the current folder always
+ * render.exr, compare.png} (and the material in each format of
+ * job->exports, refitted: params.json's "exports" lists each file with
+ * its refit's residual, or why there is none) as one atomic folder.  Before any
+ * work, an out_dir (or its ".refused" sibling) that holds anything but a
+ * previous result is refused unless force, and the current folder always
  * (glint_atomic_dir_check).  A fit that
  * glint_fit_judge() refuses fails with -EINVAL and the reason; its
  * diagnostics (the same three files, params.json with "accepted": false)

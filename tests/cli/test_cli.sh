@@ -136,7 +136,7 @@ cat >"$tmp/fscene.json" <<JSON
  "render": {"samples_per_pixel": 2, "light_samples": 16, "brdf_samples": 16}}
 JSON
 check "render a photo to fit" run 0 "" render "$tmp/fscene.json" --paper satin-paint -o "$tmp/photo.exr" -q
-check "fit it" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fit1" --json -q
+check "fit it, exporting to every renderer" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fit1" --export gltf,mitsuba,pbrt --json -q
 check "fit --json has values, errors, passes" python3 -c "
 import json; r=json.load(open('$tmp/out'))
 names=[p['name'] for p in r['parameters']]
@@ -145,20 +145,36 @@ assert r['method']['name']=='three-pass' and len(r['passes'])>=3, r['passes']
 assert abs(r['material']['diffuse'][0]-0.124)<0.02, r['material']
 assert all('stderr' in p for p in r['parameters'])"
 check "fit wrote params.json, render.exr, compare.png" test -s "$tmp/fit1/params.json" -a -s "$tmp/fit1/render.exr" -a -s "$tmp/fit1/compare.png"
+check "... and the exports, listed with their residuals" python3 -c "
+import json, os; r=json.load(open('$tmp/fit1/params.json'))
+e={x['format']: x for x in r['exports']}
+assert sorted(e)==['gltf','mitsuba','pbrt'], e
+for f, x in e.items():
+    assert 0 <= x['refit_relative_rms'] < 0.3, x
+    assert os.path.getsize('$tmp/fit1/' + x['file']) > 0, x"
+for f in gltf xml pbrt; do
+	check "... material.$f matches glint's BRDF within its stated residual" python3 "$here/check_export.py" "$tmp/fit1/params.json" "$tmp/fit1/material.$f"
+done
+check "fit --export of an unknown format: exit 2, nothing done" run 2 "did you mean 'mitsuba'" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fitx" --export gltf,mitsuba3
+check "... no folder" test ! -e "$tmp/fitx"
 check "render the fitted material from params.json" run 0 "" render "$tmp/fscene.json" --material "$tmp/fit1/params.json" -o "$tmp/refit.exr" -q
 check "... wrote it" test -s "$tmp/refit.exr"
 cp -r "$tmp/fit1" "$tmp/fit1.keep"
 # Export: glTF refitted to the fitted BRDF, checked by an independent
 # evaluation of both models from their published equations.
 check "export the fit to glTF" run 0 "relative RMS difference" export "$tmp/fit1/params.json" --to gltf -o "$tmp/m.gltf"
-check "... the glTF BRDF matches glint's within the stated residual" python3 "$here/check_gltf.py" "$tmp/fit1/params.json" "$tmp/m.gltf"
+check "... the glTF BRDF matches glint's within the stated residual" python3 "$here/check_export.py" "$tmp/fit1/params.json" "$tmp/m.gltf"
+check "export the fit to Mitsuba 3" run 0 "mitsuba" export "$tmp/fit1/params.json" --to mitsuba -o "$tmp/m.xml"
+check "... Mitsuba's BRDF matches glint's within the stated residual" python3 "$here/check_export.py" "$tmp/fit1/params.json" "$tmp/m.xml"
+check "export the fit to pbrt-v4" run 0 "pbrt" export "$tmp/fit1/params.json" --to pbrt -o "$tmp/m.pbrt"
+check "... pbrt's BRDF matches glint's within the stated residual" python3 "$here/check_export.py" "$tmp/fit1/params.json" "$tmp/m.pbrt"
 check "export refuses to replace a file" run 1 "exists: refusing to replace it" export "$tmp/fit1/params.json" --to gltf -o "$tmp/m.gltf"
 check "export --force replaces it" run 0 "" export "$tmp/fit1/params.json" --to gltf -o "$tmp/m.gltf" --force --json
 check "export --json states the residual" python3 -c "
 import json; r=json.load(open('$tmp/out')); assert r['format']=='gltf' and 0<=r['refit_relative_rms']<0.3, r"
 check "export without --to: exit 2" run 2 "--to FORMAT is required" export "$tmp/fit1/params.json" -o "$tmp/x.gltf"
 check "export --to an unknown format: exit 2" run 2 "gltf" export "$tmp/fit1/params.json" --to usd -o "$tmp/x.gltf"
-check "export of a transparent sphere is refused" run 1 "no glTF export yet" export "$data/paper-table1.json" --entry blue-quartz --to gltf -o "$tmp/x.gltf"
+check "export of a transparent sphere is refused" run 1 "no gltf export yet" export "$data/paper-table1.json" --entry blue-quartz --to gltf -o "$tmp/x.gltf"
 check "... writing nothing" test ! -e "$tmp/x.gltf"
 # The richer models: a material file of each renders; one is fitted.
 cat >"$tmp/on.json" <<JSON

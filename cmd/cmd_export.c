@@ -38,6 +38,13 @@ void cmd_export_help(void)
 	       "                    pbrt: a pbrt-v4 file (.pbrt) of named "
 	       "materials (mix of\n"
 	       "                    diffuse and conductor) to Include\n"
+	       "                    blender: a Python script (.py) that "
+	       "builds a node\n"
+	       "                    material (Diffuse + Fresnel-weighted "
+	       "Beckmann Glossy);\n"
+	       "                    blender -b -P OUT.py -- --render "
+	       "PNG [--env MAP]\n"
+	       "                    renders a preview sphere of it\n"
 	       "  -o, --output OUT  the file to write (refused if it exists, "
 	       "unless --force)\n"
 	       "  --entry NAME      pick NAME from a Table-1 style file\n"
@@ -104,7 +111,8 @@ int cmd_export(int argc, char **argv)
 		return cmd_usage_error("export", "expected one MATERIAL.json");
 	if (to < 0)
 		return cmd_usage_error("export", "--to FORMAT is required "
-						 "(gltf, mitsuba, pbrt)");
+						 "(gltf, mitsuba, pbrt, "
+						 "blender)");
 	if (!out)
 		return cmd_usage_error("export", "-o OUT is required");
 

@@ -20,7 +20,7 @@
 #define NDIR (NWO * NWI)
 
 const char *const glint_export_format_names[] = { "gltf", "mitsuba", "pbrt",
-						  NULL };
+						  "blender", NULL };
 
 int glint_export_formats_parse(const char *list, unsigned *formats)
 {
@@ -40,7 +40,7 @@ int glint_export_formats_parse(const char *list, unsigned *formats)
 			return glint_error_set(
 				EINVAL,
 				"unknown export format '%s': expected gltf, "
-				"mitsuba or pbrt, comma-separated%s",
+				"mitsuba, pbrt or blender, comma-separated%s",
 				word,
 				glint_suggest_hint(word,
 						   glint_export_format_names));
@@ -58,6 +58,7 @@ int glint_export_formats_parse(const char *list, unsigned *formats)
 enum { G_BASE = 0, G_ROUGH = 3, G_SPEC = 4, G_SCOL = 5, G_NX = 8 };
 enum { M_KD = 0, M_ALPHA = 3, M_KS = 4, M_NX = 7 };
 enum { P_R = 0, P_AMOUNT = 3, P_ALPHA = 4, P_ETA = 5, P_NX = 8 };
+enum { B_KD = 0, B_ALPHA = 3, B_KS = 4, B_IOR = 7, B_NX = 8 };
 
 static double schlick_f0(double ior)
 {
@@ -142,6 +143,22 @@ static void pbrt_brdf(const double *x, struct vec3 wo, struct vec3 wi,
 		       a * glint_ggx_lobe(x[P_ALPHA], x[P_ETA + c], wo, wi);
 }
 
+/* Blender's node material: Cycles's Beckmann glossy (its G1 is Mitsuba's
+ * rational approximation; o.h > 0 for every reflection), or its GGX one
+ * with the separable Smith G1, weighed by the Fresnel node's F at the
+ * view direction. */
+static void blender_brdf(const double *x, int ggx, struct vec3 wo,
+			 struct vec3 wi, struct vec3 h, double f[3])
+{
+	double alpha = x[B_ALPHA];
+	double s = mitsuba_d(ggx, alpha, h.z) * mitsuba_g1(ggx, alpha, wi, h) *
+		   mitsuba_g1(ggx, alpha, wo, h) *
+		   glint_fresnel_dielectric(wo.z, x[B_IOR]) / (4 * wi.z * wo.z);
+
+	for (int c = 0; c < 3; c++)
+		f[c] = x[B_KD + c] / M_PI + x[B_KS + c] * s;
+}
+
 static void target_brdf(enum glint_export_format format, const double *x,
 			double ior, int ggx, struct vec3 wo, struct vec3 wi,
 			double f[3])
@@ -159,6 +176,9 @@ static void target_brdf(enum glint_export_format format, const double *x,
 		break;
 	case GLINT_EXPORT_PBRT:
 		pbrt_brdf(x, wo, wi, f);
+		break;
+	case GLINT_EXPORT_BLENDER:
+		blender_brdf(x, ggx, wo, wi, h, f);
 		break;
 	default:
 		break;
@@ -296,6 +316,14 @@ static int start(const struct glint_model_ops *model, const double *p,
 		set(x, lo, hi, P_ALPHA, w, 2e-3, 1);
 		return P_NX;
 	}
+	case GLINT_EXPORT_BLENDER:
+		for (int c = 0; c < 3; c++) {
+			set(x, lo, hi, B_KD + c, kd[c], 0, 1);
+			set(x, lo, hi, B_KS + c, ks[c], 0, 10);
+		}
+		set(x, lo, hi, B_ALPHA, w, 1e-3, 1);
+		set(x, lo, hi, B_IOR, e->ior, 1.01, 10);
+		return B_NX;
 	default:
 		return glint_error_set(EINVAL, "unknown export format %d",
 				       (int)e->format);
@@ -362,7 +390,7 @@ double glint_export_residual(const struct glint_model_ops *model,
 
 const char *glint_export_extension(enum glint_export_format format)
 {
-	static const char *const ext[] = { ".gltf", ".xml", ".pbrt" };
+	static const char *const ext[] = { ".gltf", ".xml", ".pbrt", ".py" };
 	return (unsigned)format < GLINT_EXPORT_NFORMATS ? ext[format] : "";
 }
 
@@ -502,6 +530,166 @@ static char *pbrt_text(const struct glint_export *e, const char *name,
 	return s;
 }
 
+/* The Blender script after its constants (export.h). */
+static const char blender_body[] =
+	"import math\n"
+	"import sys\n"
+	"\n"
+	"import bpy\n"
+	"\n"
+	"\n"
+	"def build_material(name=NAME):\n"
+	"    \"\"\"Create (or rebuild) the material NAME in the open file; "
+	"return it.\"\"\"\n"
+	"    mat = bpy.data.materials.get(name) or "
+	"bpy.data.materials.new(name)\n"
+	"    mat.use_nodes = True\n"
+	"    nodes, links = mat.node_tree.nodes, mat.node_tree.links\n"
+	"    nodes.clear()\n"
+	"    out = nodes.new(\"ShaderNodeOutputMaterial\")\n"
+	"    diffuse = nodes.new(\"ShaderNodeBsdfDiffuse\")\n"
+	"    diffuse.inputs[\"Color\"].default_value = (*DIFFUSE, 1.0)\n"
+	"    diffuse.inputs[\"Roughness\"].default_value = 0.0\n"
+	"    glossy = nodes.new(\"ShaderNodeBsdfGlossy\")\n"
+	"    glossy.distribution = DISTRIBUTION\n"
+	"    glossy.inputs[\"Color\"].default_value = (*SPECULAR, 1.0)\n"
+	"    glossy.inputs[\"Roughness\"].default_value = ROUGHNESS\n"
+	"    black = nodes.new(\"ShaderNodeBsdfDiffuse\")\n"
+	"    black.inputs[\"Color\"].default_value = (0.0, 0.0, 0.0, 1.0)\n"
+	"    fresnel = nodes.new(\"ShaderNodeFresnel\")\n"
+	"    fresnel.inputs[\"IOR\"].default_value = IOR\n"
+	"    mix = nodes.new(\"ShaderNodeMixShader\")\n"
+	"    add = nodes.new(\"ShaderNodeAddShader\")\n"
+	"    links.new(fresnel.outputs[\"Fac\"], mix.inputs[\"Fac\"])\n"
+	"    links.new(black.outputs[\"BSDF\"], mix.inputs[1])\n"
+	"    links.new(glossy.outputs[\"BSDF\"], mix.inputs[2])\n"
+	"    links.new(diffuse.outputs[\"BSDF\"], add.inputs[0])\n"
+	"    links.new(mix.outputs[\"Shader\"], add.inputs[1])\n"
+	"    links.new(add.outputs[\"Shader\"], out.inputs[\"Surface\"])\n"
+	"    for i, n in enumerate((fresnel, black, glossy, diffuse, mix, add, "
+	"out)):\n"
+	"        n.location = (200 * i - 600, 0)\n"
+	"    return mat\n"
+	"\n"
+	"\n"
+	"def preview_scene(mat, env=None, samples=64, size=512):\n"
+	"    \"\"\"An empty scene with a sphere of the material, a camera and "
+	"light:\n"
+	"    the environment map env (equirectangular) or a sun and a grey "
+	"sky.\"\"\"\n"
+	"    scene = bpy.context.scene\n"
+	"    for obj in list(scene.objects):\n"
+	"        bpy.data.objects.remove(obj, do_unlink=True)\n"
+	"    bpy.ops.mesh.primitive_uv_sphere_add(segments=128, "
+	"ring_count=64,\n"
+	"                                         radius=1.0)\n"
+	"    sphere = bpy.context.active_object\n"
+	"    bpy.ops.object.shade_smooth()\n"
+	"    sphere.data.materials.append(mat)\n"
+	"    cam = bpy.data.objects.new(\"camera\", "
+	"bpy.data.cameras.new(\"camera\"))\n"
+	"    cam.location = (0.0, -6.0, 0.0)\n"
+	"    cam.rotation_euler = (math.pi / 2, 0.0, 0.0)\n"
+	"    cam.data.lens = 100\n"
+	"    scene.collection.objects.link(cam)\n"
+	"    scene.camera = cam\n"
+	"    world = bpy.data.worlds.new(\"glint-preview\")\n"
+	"    world.use_nodes = True\n"
+	"    bg = world.node_tree.nodes[\"Background\"]\n"
+	"    if env:\n"
+	"        tex = "
+	"world.node_tree.nodes.new(\"ShaderNodeTexEnvironment\")\n"
+	"        tex.image = bpy.data.images.load(env)\n"
+	"        world.node_tree.links.new(tex.outputs[\"Color\"], "
+	"bg.inputs[\"Color\"])\n"
+	"    else:\n"
+	"        bg.inputs[\"Color\"].default_value = (0.05, 0.05, 0.05, 1.0)\n"
+	"        sun = bpy.data.objects.new(\"sun\", "
+	"bpy.data.lights.new(\"sun\", \"SUN\"))\n"
+	"        sun.data.energy = 3.0\n"
+	"        sun.rotation_euler = (math.radians(40), 0.0, "
+	"math.radians(30))\n"
+	"        scene.collection.objects.link(sun)\n"
+	"    scene.world = world\n"
+	"    scene.render.engine = \"CYCLES\"\n"
+	"    scene.cycles.device = \"CPU\"\n"
+	"    scene.cycles.samples = samples\n"
+	"    # Debian's Blender is built without OpenImageDenoise.\n"
+	"    scene.cycles.use_denoising = False\n"
+	"    for layer in scene.view_layers:\n"
+	"        layer.cycles.use_denoising = False\n"
+	"    scene.render.resolution_x = scene.render.resolution_y = size\n"
+	"    scene.render.resolution_percentage = 100\n"
+	"\n"
+	"\n"
+	"def main(argv):\n"
+	"    import argparse\n"
+	"    ap = argparse.ArgumentParser(\n"
+	"        prog=\"blender --background --python \" + __file__ + \" "
+	"--\",\n"
+	"        description=\"Build the material \" + NAME + \"; optionally "
+	"render a \"\n"
+	"        \"preview sphere or save the .blend file.\")\n"
+	"    ap.add_argument(\"--render\", metavar=\"OUT.png\",\n"
+	"                    help=\"render a sphere of the material (Cycles) "
+	"to OUT\")\n"
+	"    ap.add_argument(\"--env\", metavar=\"MAP\",\n"
+	"                    help=\"light the preview with this environment "
+	"map\")\n"
+	"    ap.add_argument(\"--samples\", type=int, default=64)\n"
+	"    ap.add_argument(\"--size\", type=int, default=512)\n"
+	"    ap.add_argument(\"--save\", metavar=\"OUT.blend\",\n"
+	"                    help=\"save the file with the material (and "
+	"preview)\")\n"
+	"    args = ap.parse_args(argv)\n"
+	"    mat = build_material()\n"
+	"    print(\"glint: material '%s' built\" % mat.name)\n"
+	"    if args.render:\n"
+	"        preview_scene(mat, args.env, args.samples, args.size)\n"
+	"        bpy.context.scene.render.filepath = args.render\n"
+	"        bpy.ops.render.render(write_still=True)\n"
+	"        print(\"glint: rendered\", args.render)\n"
+	"    if args.save:\n"
+	"        bpy.ops.wm.save_as_mainfile(filepath=args.save)\n"
+	"        print(\"glint: saved\", args.save)\n"
+	"\n"
+	"\n"
+	"if __name__ == \"__main__\":\n"
+	"    main(sys.argv[sys.argv.index(\"--\") + 1:] if \"--\" in sys.argv "
+	"else [])\n";
+
+static char *blender_text(const struct glint_export *e, const char *name,
+			  const char *source,
+			  const struct glint_model_ops *model)
+{
+	const double *x = e->x;
+	char *s = NULL;
+
+	if (asprintf(&s,
+		     "# glint export of %s (%s) for Blender 3.x (Cycles; "
+		     "EEVEE approximates it).\n"
+		     "# refit_relative_rms %.4f: %s.\n"
+		     "# Use: blender --background --python THIS.py -- "
+		     "[--render OUT.png] [--env MAP] [--save OUT.blend]\n"
+		     "#   or Blender's Text Editor: open it, Run Script (the "
+		     "material appears in the file).\n"
+		     "NAME = \"%s\"\n"
+		     "DISTRIBUTION = \"%s\"\n"
+		     "DIFFUSE = (%.6g, %.6g, %.6g)\n"
+		     "SPECULAR = (%.6g, %.6g, %.6g)\n"
+		     "# The Glossy BSDF's roughness: alpha = "
+		     "ROUGHNESS ** 2 = %.6g\n"
+		     "ROUGHNESS = %.6g\n"
+		     "IOR = %.6g\n"
+		     "REFIT_RELATIVE_RMS = %.6g\n\n%s",
+		     source, model->name, e->residual, note, name,
+		     e->ggx ? "GGX" : "BECKMANN", x[B_KD], x[B_KD + 1],
+		     x[B_KD + 2], x[B_KS], x[B_KS + 1], x[B_KS + 2], x[B_ALPHA],
+		     sqrt(x[B_ALPHA]), x[B_IOR], e->residual, blender_body) < 0)
+		return NULL;
+	return s;
+}
+
 char *glint_export_text(const struct glint_export *e, const char *name,
 			const char *source, const struct glint_model_ops *model)
 {
@@ -527,6 +715,9 @@ char *glint_export_text(const struct glint_export *e, const char *name,
 		break;
 	case GLINT_EXPORT_PBRT:
 		text = pbrt_text(e, safe, source, model);
+		break;
+	case GLINT_EXPORT_BLENDER:
+		text = blender_text(e, safe, source, model);
 		break;
 	default:
 		break;
@@ -560,6 +751,11 @@ json_t *glint_export_params_json(const struct glint_export *e)
 				 "reflectance", x[P_R], x[P_R + 1], x[P_R + 2],
 				 "amount", x[P_AMOUNT], "roughness", x[P_ALPHA],
 				 "eta", x[P_ETA], x[P_ETA + 1], x[P_ETA + 2]);
+	case GLINT_EXPORT_BLENDER:
+		return json_pack("{s:[f,f,f], s:[f,f,f], s:f, s:f}", "diffuse",
+				 x[B_KD], x[B_KD + 1], x[B_KD + 2], "glossy",
+				 x[B_KS], x[B_KS + 1], x[B_KS + 2], "roughness",
+				 sqrt(x[B_ALPHA]), "fresnel_ior", x[B_IOR]);
 	default:
 		return NULL;
 	}

@@ -48,6 +48,16 @@
  *     f = (1 - a) R/pi + a F_d(|o.h|, eta) D(h) G / (4 cos_i cos_o)
  *   with Trowbridge-Reitz D and G = 1 / (1 + L(o) + L(i)),
  *   L = (sqrt(1 + alpha^2 tan^2 t) - 1) / 2.
+ *
+ * BLENDER: Blender (3.x, Cycles; EEVEE approximates it), a node material:
+ *   Add(Diffuse BSDF (kd, roughness 0), Mix(Fresnel(ior_b), black Diffuse,
+ *   Glossy BSDF (Beckmann, or GGX for glint's GGX models; ks, roughness
+ *   sqrt(alpha)))).  The Fresnel
+ *   node weighs by the view direction, not the half vector.  x = kd[3],
+ *   alpha, ks[3], ior_b:
+ *     f = kd/pi + ks F_d(n.o, ior_b) D(h) G1(i) G1(o) / (4 cos_i cos_o)
+ *   with Beckmann D and Cycles's G1 (the rational approximation above),
+ *   or GGX D and its separable Smith G1.
  */
 
 #include "fit/brdf/model.h"
@@ -58,10 +68,12 @@ enum glint_export_format {
 	GLINT_EXPORT_GLTF,
 	GLINT_EXPORT_MITSUBA,
 	GLINT_EXPORT_PBRT,
+	GLINT_EXPORT_BLENDER,
 	GLINT_EXPORT_NFORMATS
 };
 
-/* "gltf", "mitsuba", "pbrt", then NULL (the command-line names). */
+/* "gltf", "mitsuba", "pbrt", "blender", then NULL (the command-line
+ * names). */
 extern const char *const glint_export_format_names[];
 
 /* A comma-separated list of those names as a bit set (bit k: format k);
@@ -94,7 +106,8 @@ void glint_export_brdf(const struct glint_export *e, struct vec3 wo,
 double glint_export_residual(const struct glint_model_ops *model,
 			     const double *p, const struct glint_export *e);
 
-/* The file name extension of a format's files (".gltf", ".xml", ".pbrt"). */
+/* The file name extension of a format's files (".gltf", ".xml", ".pbrt",
+ * ".py"). */
 const char *glint_export_extension(enum glint_export_format format);
 
 /*

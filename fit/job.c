@@ -333,10 +333,10 @@ static json_t *refit_exports(const struct glint_fit_job *job,
  * previous result, or nothing): checked before any work. */
 static int check_outputs(const struct glint_fit_job *job)
 {
-	static const char *const names[] = {
-		"params.json",	"render.exr",	 "compare.png", "material.gltf",
-		"material.xml", "material.pbrt", NULL
-	};
+	static const char *const names[] = { "params.json",  "render.exr",
+					     "compare.png",  "material.gltf",
+					     "material.xml", "material.pbrt",
+					     "material.py",  NULL };
 	char dir[GLINT_PATH_MAX];
 	int ret = glint_atomic_dir_check(job->out_dir, names, job->force);
 

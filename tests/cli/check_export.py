@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: MIT
 """Check a glint export against glint's material, independently.
 
-  check_export.py MATERIAL.json EXPORT.{gltf,xml,pbrt}
+  check_export.py MATERIAL.json EXPORT.{gltf,xml,pbrt,py}
 
 Every BRDF here is written from its published equations, sharing no code
 with glint:
@@ -19,7 +19,12 @@ with glint:
 - pbrt-v4's mix material (amount a) of diffuse and conductor, read from
   the .pbrt file: (1 - a) R/pi + a F D G / (4 cos cos), with pbrt's
   FrComplex, Trowbridge-Reitz D and the height-correlated G = 1 / (1 +
-  L(o) + L(i)).
+  L(o) + L(i));
+- Blender's node material, its constants read from the .py script: a
+  Lambertian Diffuse BSDF plus Cycles's Beckmann Glossy BSDF (alpha =
+  roughness^2, D G1 G1 / (4 cos cos), Cycles's G1) weighed by the Fresnel
+  node's dielectric F at the view direction (blender_check.py renders it
+  with Blender itself).
 
 The relative RMS difference of reflected radiance under uniform light is
 integrated on a grid of half vectors at glint's 8 view angles and must
@@ -261,6 +266,40 @@ def load_pbrt(path, mat):
                              [0.0] * 3, wo, wi))
 
 
+# Blender -------------------------------------------------------------------
+
+def cycles_g1(alpha, c):
+    inv_a = alpha * math.sqrt(max(0.0, (1 - c * c) / (c * c)))
+    if inv_a < 0.625:
+        return 1.0
+    a = 1 / inv_a
+    return ((2.181 * a + 3.535) * a) / ((2.577 * a + 2.276) * a + 1.0)
+
+
+def load_blender(path, mat):
+    text = open(path).read()
+    const = {}
+    for name in ("DISTRIBUTION", "DIFFUSE", "SPECULAR", "ROUGHNESS", "IOR",
+                 "REFIT_RELATIVE_RMS"):
+        m = re.search(r"^%s = (.*)$" % name, text, re.M)
+        const[name] = json.loads(m.group(1).replace("(", "[").replace(")", "]"))
+    assert "def build_material(" in text and "import bpy" in text
+    kd, ks = const["DIFFUSE"], const["SPECULAR"]
+    alpha, ior = const["ROUGHNESS"] ** 2, const["IOR"]
+
+    kind = const["DISTRIBUTION"].lower()
+
+    def f(wo, wi):
+        h = unit([wo[i] + wi[i] for i in range(3)])
+        d = mitsuba_d(kind, alpha, h)
+        g1 = cycles_g1 if kind == "beckmann" else \
+            (lambda a, c: 2 / (1 + math.sqrt(1 + a * a * (1 / (c * c) - 1))))
+        s = d * g1(alpha, wo[2]) * g1(alpha, wi[2]) / \
+            (4 * wo[2] * wi[2]) * fresnel(wo[2], ior)
+        return [kd[c] / math.pi + ks[c] * s for c in range(3)]
+    return f, const["REFIT_RELATIVE_RMS"], None
+
+
 def rel_rms(mat, exp, nt=100, nphi=120):
     """Over half vectors h (wi = o reflected about h, dwi = 4 (o.h) dwh),
     theta_h = (pi/2) s^2 so the steps are finest at the lobe's peak."""
@@ -296,8 +335,8 @@ def main():
     # The grid resolves lobes of RMS slope 0.02 and up.
     assert mat["roughness"] >= 0.02, mat["roughness"]
     path = sys.argv[2]
-    loader = {"gltf": load_gltf, "xml": load_mitsuba,
-              "pbrt": load_pbrt}[path.rsplit(".", 1)[-1]]
+    loader = {"gltf": load_gltf, "xml": load_mitsuba, "pbrt": load_pbrt,
+              "py": load_blender}[path.rsplit(".", 1)[-1]]
     exp, stated, naive = loader(path, mat)
     got = rel_rms(mat, exp)
     line = f"stated {stated:.4f}, independent {got:.4f}"
@@ -310,4 +349,5 @@ def main():
         assert got < copied, (got, copied)
 
 
-main()
+if __name__ == "__main__":
+    main()

@@ -136,7 +136,7 @@ cat >"$tmp/fscene.json" <<JSON
  "render": {"samples_per_pixel": 2, "light_samples": 16, "brdf_samples": 16}}
 JSON
 check "render a photo to fit" run 0 "" render "$tmp/fscene.json" --paper satin-paint -o "$tmp/photo.exr" -q
-check "fit it, exporting to every renderer" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fit1" --export gltf,mitsuba,pbrt --json -q
+check "fit it, exporting to every renderer" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fit1" --export gltf,mitsuba,pbrt,blender --json -q
 check "fit --json has values, errors, passes" python3 -c "
 import json; r=json.load(open('$tmp/out'))
 names=[p['name'] for p in r['parameters']]
@@ -148,11 +148,11 @@ check "fit wrote params.json, render.exr, compare.png" test -s "$tmp/fit1/params
 check "... and the exports, listed with their residuals" python3 -c "
 import json, os; r=json.load(open('$tmp/fit1/params.json'))
 e={x['format']: x for x in r['exports']}
-assert sorted(e)==['gltf','mitsuba','pbrt'], e
+assert sorted(e)==['blender','gltf','mitsuba','pbrt'], e
 for f, x in e.items():
     assert 0 <= x['refit_relative_rms'] < 0.3, x
     assert os.path.getsize('$tmp/fit1/' + x['file']) > 0, x"
-for f in gltf xml pbrt; do
+for f in gltf xml pbrt py; do
 	check "... material.$f matches glint's BRDF within its stated residual" python3 "$here/check_export.py" "$tmp/fit1/params.json" "$tmp/fit1/material.$f"
 done
 check "fit --export of an unknown format: exit 2, nothing done" run 2 "did you mean 'mitsuba'" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fitx" --export gltf,mitsuba3
@@ -168,6 +168,9 @@ check "export the fit to Mitsuba 3" run 0 "mitsuba" export "$tmp/fit1/params.jso
 check "... Mitsuba's BRDF matches glint's within the stated residual" python3 "$here/check_export.py" "$tmp/fit1/params.json" "$tmp/m.xml"
 check "export the fit to pbrt-v4" run 0 "pbrt" export "$tmp/fit1/params.json" --to pbrt -o "$tmp/m.pbrt"
 check "... pbrt's BRDF matches glint's within the stated residual" python3 "$here/check_export.py" "$tmp/fit1/params.json" "$tmp/m.pbrt"
+check "export the fit to Blender" run 0 "blender" export "$tmp/fit1/params.json" --to blender -o "$tmp/m.py"
+check "... the node material's BRDF matches glint's within the stated residual" python3 "$here/check_export.py" "$tmp/fit1/params.json" "$tmp/m.py"
+check "... the script is valid Python" python3 -m py_compile "$tmp/m.py"
 check "export refuses to replace a file" run 1 "exists: refusing to replace it" export "$tmp/fit1/params.json" --to gltf -o "$tmp/m.gltf"
 check "export --force replaces it" run 0 "" export "$tmp/fit1/params.json" --to gltf -o "$tmp/m.gltf" --force --json
 check "export --json states the residual" python3 -c "

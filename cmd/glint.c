@@ -27,7 +27,7 @@ static const struct glint_cmd commands[] = {
 	{ "render", "render a sphere of a material under an environment map",
 	  cmd_render, cmd_render_help },
 	{ "export",
-	  "a fitted material in a renderer's model (glTF, Mitsuba, pbrt)",
+	  "a fitted material for a renderer (glTF, Mitsuba, pbrt, Blender)",
 	  cmd_export, cmd_export_help },
 	{ "convert", "convert an image between EXR, HDR, PFM (and PNG out)",
 	  cmd_convert, cmd_convert_help },

@@ -2,9 +2,9 @@
 # meson install into a DESTDIR, then the installed glint run from outside
 # the source and build trees: its help, check-rig on the installed sim rig
 # and the demo, with its data found in the installed datadir only.
-#   test_install.sh BUILD_DIR PREFIX DATADIR SYSCONFDIR
+#   test_install.sh BUILD_DIR PREFIX DATADIR SYSCONFDIR MANDIR
 set -uo pipefail
-build=$1 prefix=$2 datadir=$3 sysconfdir=$4
+build=$1 prefix=$2 datadir=$3 sysconfdir=$4 mandir=$5
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
@@ -31,6 +31,24 @@ check "systemd unit installed, pointing at the installed binary" \
 	grep -q "^ExecStart=$prefix/bin/glint rig --config $sysconfdir/glint/rig.json" "$dest$prefix/lib/systemd/system/glint-rig.service"
 check "example rig file installed" test -f "$dest$sysconfdir/glint/rig.example.json"
 check "docs installed" test -f "$dest$prefix/$datadir/doc/glint/rig.md"
+# Man pages: glint(1) and one per command of glint --help's table, each
+# rendering with its NAME line and the command's own options.
+man1=$dest$prefix/$mandir/man1
+manpages() {
+	command -v help2man >/dev/null || { echo "help2man is not installed (scripts/setup installs it)"; return 1; }
+	man -l "$man1/glint.1" | grep -q "glint - measure a material" || return 1
+	local c n=0
+	for c in $("$bin" --help | awk '/^commands:/ {t = 1; next} t && /^  [a-z]/ {print $1}'); do
+		[ -f "$man1/glint-$c.1" ] || { echo "no man page for $c"; return 1; }
+		MANWIDTH=200 man -l "$man1/glint-$c.1" 2>&1 | grep -q "^ *glint-$c - " ||
+			{ echo "glint-$c.1 has no NAME line"; return 1; }
+		n=$((n + 1))
+	done
+	MANWIDTH=200 man -l "$man1/glint-fit.1" | grep -q -- "--export F" || return 1
+	echo "$n command pages"
+	[ "$n" -ge 14 ]
+}
+check "man pages installed: glint(1) and one per command" manpages
 
 cd "$tmp" || exit 1
 # Without the data where it was installed to, the installed binary must

@@ -29,6 +29,7 @@ check "binary installed" test -x "$bin"
 check "data installed" test -f "$data/paper-table1.json" -a -f "$data/env/venice_sunset_1k.hdr" -a -f "$data/rig-sim.json"
 check "systemd unit installed, pointing at the installed binary" \
 	grep -q "^ExecStart=$prefix/bin/glint rig --config $sysconfdir/glint/rig.json" "$dest$prefix/lib/systemd/system/glint-rig.service"
+check "udev rule installed" grep -q 'g:glint:rw' "$dest$prefix/lib/udev/rules.d/70-glint.rules"
 check "example rig file installed" test -f "$dest$sysconfdir/glint/rig.example.json"
 check "docs installed" test -f "$dest$prefix/$datadir/doc/glint/rig.md"
 # Man pages: glint(1) and one per command of glint --help's table, each

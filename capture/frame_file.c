@@ -1,6 +1,8 @@
 /* SPDX-License-Identifier: MIT */
 #include "frame_file.h"
 
+#include "dng.h"
+
 #include "core/formats.h"
 #include "core/error.h"
 
@@ -11,6 +13,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 /* CRC-32 (zlib's) of the samples as the PNG stores them. */
 static uint32_t pixels_crc32(const uint16_t *data, size_t n)
@@ -59,9 +62,17 @@ static void frame_row(void *ctx, int y, uint8_t *row)
 	}
 }
 
+static int has_suffix(const char *s, const char *suffix)
+{
+	size_t n = strlen(s), k = strlen(suffix);
+	return n >= k && !strcasecmp(s + n - k, suffix);
+}
+
 int glint_frame_write(const char *path, const struct glint_frame *f,
 		      const char *meta)
 {
+	if (has_suffix(path, ".dng"))
+		return glint_dng_write(path, f, meta);
 	/* Level 1: raw sensor data barely compresses; time matters more. */
 	struct glint_png_layout l = {
 		16, f->channels == 3 ? 3 : 1, 0, 1, "glint:frame", meta
@@ -100,8 +111,56 @@ static int meta_from_text(const char *path, const char *text,
 	return 0;
 }
 
+/* The checks every frame file gets: pixels against their checksum. */
+static int check_crc(const char *path, const struct glint_frame *f,
+		     json_int_t crc)
+{
+	uint32_t got = pixels_crc32(f->data,
+				    (size_t)f->width * f->height * f->channels);
+	if (crc >= 0 && got != (uint32_t)crc)
+		return glint_error_set(EINVAL,
+				       "%s: the pixels do not match their "
+				       "checksum (CRC-32 %08x, its metadata "
+				       "says %08x): the frame was edited or "
+				       "damaged",
+				       path, got, (uint32_t)crc);
+	return 0;
+}
+
+static int frame_read_dng(const char *path, struct glint_frame *f, int *index)
+{
+	char *meta = NULL, layout[16];
+	int idx = -1, ret = glint_dng_read(path, f, &meta);
+	json_int_t crc = -1;
+
+	if (ret < 0)
+		return ret;
+	snprintf(layout, sizeof(layout), "%s", f->format);
+	ret = meta ? meta_from_text(path, meta, f, &idx, &crc)
+		   : glint_error_set(EINVAL,
+				     "%s: no glint:frame metadata (its "
+				     "ImageDescription): not a frame glint "
+				     "wrote",
+				     path);
+	if (ret == 0 && strcmp(layout, f->format))
+		ret = glint_error_set(EINVAL,
+				      "%s: its DNG tags say %s, its metadata "
+				      "%s",
+				      path, layout, f->format);
+	if (ret == 0)
+		ret = check_crc(path, f, crc);
+	free(meta);
+	if (ret < 0)
+		glint_frame_release(f);
+	else if (index)
+		*index = idx;
+	return ret;
+}
+
 int glint_frame_read(const char *path, struct glint_frame *f, int *index)
 {
+	if (glint_dng_is_tiff(path))
+		return frame_read_dng(path, f, index);
 	int idx = -1;
 	json_int_t crc = -1;
 	FILE *fp = fopen(path, "rb");
@@ -181,14 +240,7 @@ int glint_frame_read(const char *path, struct glint_frame *f, int *index)
 			d[i] = (uint16_t)(row[2 * i] << 8 | row[2 * i + 1]);
 	}
 	png_read_end(png, NULL);
-	uint32_t got = pixels_crc32(f->data, (size_t)f->width * f->height * ch);
-	if (crc >= 0 && got != (uint32_t)crc)
-		ret = glint_error_set(EINVAL,
-				      "%s: the pixels do not match their "
-				      "checksum (CRC-32 %08x, its metadata "
-				      "says %08x): the frame was edited or "
-				      "damaged",
-				      path, got, (uint32_t)crc);
+	ret = check_crc(path, f, crc);
 	if (index)
 		*index = idx;
 out:

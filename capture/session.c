@@ -190,7 +190,7 @@ int glint_session_add_frame(struct glint_session *s,
 
 	if (!meta)
 		return glint_error_set(ENOMEM, "out of memory");
-	snprintf(name, sizeof(name), "frame-%03d.png", index);
+	snprintf(name, sizeof(name), "frame-%03d.dng", index);
 	ret = glint_path_join(path, sizeof(path), s->dir, name);
 	if (ret == 0)
 		ret = glint_frame_write(path, f, meta);

@@ -74,7 +74,7 @@ static int frame_in_place(const char *path, const char *name,
 	if (ret < 0)
 		return ret;
 	double t = json_number_value(json_object_get(listed, "exposure_s"));
-	if (sscanf(name, "frame-%d.png", &named) == 1 && index >= 0 &&
+	if (sscanf(name, "frame-%d.", &named) == 1 && index >= 0 &&
 	    index != named)
 		return glint_error_set(EINVAL,
 				       "%s: holds frame %d of the bracket, "

@@ -23,7 +23,7 @@
 
 void cmd_hdr_help(void)
 {
-	printf("usage: glint hdr (SESSION_DIR | FRAME.png...) [options]\n"
+	printf("usage: glint hdr (SESSION_DIR | FRAME.dng...) [options]\n"
 	       "       glint hdr --times T1,T2,... IMAGE.png... -o DIR "
 	       "[--response M]\n"
 	       "\n"

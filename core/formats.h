@@ -62,7 +62,7 @@ int glint_png_read_rgb8(const char *path, int *w, int *h, uint8_t **px);
  * then says what is wrong). */
 int glint_png_check_chunks(const char *path);
 
-/* Any 8-bit image (PNG, TGA, JPEG, BMP) as RGB bytes, caller frees. */
+/* Any 8-bit image (PNG, TGA, JPEG, BMP, TIFF) as RGB bytes, caller frees. */
 int glint_ldr_read(const char *path, int *w, int *h, uint8_t **rgb);
 /* The same as an image of code / 255 (camera-encoded, not radiance). */
 int glint_ldr_read_image(const char *path, struct glint_image **out);

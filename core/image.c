@@ -4,6 +4,7 @@
 #include "error.h"
 #include "formats.h"
 #include "log.h"
+#include "tiff.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -196,13 +197,15 @@ static int image_read(const char *path, struct glint_image **out)
 		return glint_rgbe_read(path, out);
 	if (!strcmp(ext, "pfm"))
 		return glint_pfm_read(path, out);
+	if (!strcmp(ext, "tif") || !strcmp(ext, "tiff"))
+		return glint_tiff_read(path, out);
 	if (!strcmp(ext, "png") || !strcmp(ext, "tga") || !strcmp(ext, "jpg") ||
 	    !strcmp(ext, "jpeg") || !strcmp(ext, "bmp"))
 		return glint_ldr_read_image(path, out);
 	return glint_error_set(EINVAL,
 			       "%s: unknown image extension '.%s': expected "
-			       ".exr, .hdr, .pic, .pfm (HDR) or .png, .tga, "
-			       ".jpg, .bmp (8-bit)",
+			       ".exr, .hdr, .pic, .pfm, .tif (HDR) or .png, "
+			       ".tga, .jpg, .bmp (8-bit)",
 			       path, ext);
 }
 
@@ -231,12 +234,14 @@ int glint_image_write(const char *path, const struct glint_image *img,
 		return glint_rgbe_write(path, img);
 	if (!strcmp(ext, "pfm"))
 		return glint_pfm_write(path, img);
+	if (!strcmp(ext, "tif") || !strcmp(ext, "tiff"))
+		return glint_tiff_write(path, img);
 	if (!strcmp(ext, "png"))
 		return glint_png_write(
 			path, img, opts->auto_expose ? NAN : opts->exposure);
 	return glint_error_set(EINVAL,
 			       "%s: unknown image extension '.%s': expected "
-			       ".exr, .hdr, .pfm or .png",
+			       ".exr, .hdr, .pfm, .tif or .png",
 			       path, ext);
 }
 

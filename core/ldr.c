@@ -1,11 +1,13 @@
 /* SPDX-License-Identifier: MIT */
 /*
- * 8-bit images (TGA, JPEG, BMP through stb_image; PNG through libpng) for
+ * 8-bit images (TGA, JPEG, BMP through stb_image; PNG through libpng; TIFF
+ * through libtiff) for
  * detection and previews: camera-encoded code values, not radiance.
  */
 #include "error.h"
 #include "formats.h"
 #include "image.h"
+#include "tiff.h"
 
 #include <stb_image.h>
 #include <stdlib.h>
@@ -20,6 +22,8 @@ int glint_ldr_read(const char *path, int *w, int *h, uint8_t **rgb)
 	glint_path_ext(path, ext, sizeof(ext));
 	if (!strcmp(ext, "png"))
 		return glint_png_read_rgb8(path, w, h, rgb);
+	if (!strcmp(ext, "tif") || !strcmp(ext, "tiff"))
+		return glint_tiff_read_rgb8(path, w, h, rgb);
 	/* stb allocates what the header says: check the size first.  Its
 	 * densest formats (run-length TGA: 128 pixels in 2 bytes; JPEG
 	 * blocks of a flat image) stay under 1032 pixels a byte. */

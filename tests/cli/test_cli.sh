@@ -69,6 +69,7 @@ assert r['output'].endswith('r.exr') and r['width']==64 and r['material']['model
 check "render wrote a PNG" python3 -c "
 import sys; b=open('$tmp/r.png','rb').read(8); assert b==b'\x89PNG\r\n\x1a\n', b"
 check "render output converts back" run 0 "" convert "$tmp/r.exr" "$tmp/r.pfm"
+check "... to a float TIFF and back, exactly" bash -c "'$glint' convert '$tmp/r.exr' '$tmp/r.tif' -q && '$glint' convert '$tmp/r.tif' '$tmp/r2.pfm' -q && cmp -s '$tmp/r.pfm' '$tmp/r2.pfm'"
 # Relighting without a scene file: --env with the scene's own map and
 # rotation is the scene's render, bit for bit; another rotation, another
 # map or a scale is not; a missing map names --env.

@@ -79,46 +79,44 @@ check "hdr of the session" run 0 "" hdr "$sess" --json
 check "... writes radiance, variance, weights, mask" \
 	bash -c "cd '$sess' && test -s hdr.exr && test -s variance.exr && test -s weights.exr && test -s mask.png && test -s hdr.json"
 check "... still bracket, all valid" python3 -c "import json,sys; d=json.load(open('$tmp/out')); sys.exit(d['moved'] or d['valid_pixels'] != 96*64)"
-check "hdr of files without -o: exit 2" run 2 "-o DIR" hdr "$sess/frame-000.png"
-cp "$sess/frame-003.png" "$tmp/f3.png"
-head -c 2000 "$sess/frame-004.png" >"$tmp/f4.png"
-check "hdr of a truncated frame: exit 1, named" run 1 "f4.png" hdr "$tmp/f3.png" "$tmp/f4.png" -o "$tmp/hdrx"
+# Raw frames are DNGs that raw tools open: dcraw and LibRaw decode glint's
+# numbers bit for bit, with its exposure time, ISO and CFA pattern.
+check "a DNG frame opens in dcraw and LibRaw, bit for bit" python3 "$(dirname "$checker")/check_raw_tools.py" "$sess/frame-003.dng" "$tmp"
+check "hdr of files without -o: exit 2" run 2 "-o DIR" hdr "$sess/frame-000.dng"
+cp "$sess/frame-003.dng" "$tmp/f3.dng"
+head -c 2000 "$sess/frame-004.dng" >"$tmp/f4.dng"
+check "hdr of a truncated frame: exit 1, named" run 1 "f4.dng" hdr "$tmp/f3.dng" "$tmp/f4.dng" -o "$tmp/hdrx"
 check "... nothing written" test ! -e "$tmp/hdrx/hdr.exr"
 sess2=$(only_session "$tmp/caps2")
 cat >"$tmp/small.json" <<JSON
 {"camera": {"backend": "sim", "device": "sim:width=32,height=32,timescale=0.01"}, "output": "$tmp/small"}
 JSON
 "$glint" capture sample --config "$tmp/small.json" -q
-check "hdr of frames of different sizes: exit 1" run 1 "must match" hdr "$sess/frame-003.png" "$(only_session "$tmp/small")/frame-001.png" -o "$tmp/hdry"
+check "hdr of frames of different sizes: exit 1" run 1 "must match" hdr "$sess/frame-003.dng" "$(only_session "$tmp/small")/frame-001.dng" -o "$tmp/hdry"
 check "hdr of a missing session: exit 1" run 1 "nowhere" hdr "$tmp/nowhere"
 # Bracket integrity (issue 17): a frame copied over another, or one whose
-# pixels were edited (a valid PNG, its metadata kept), is named.
+# pixels were edited (a valid DNG, its metadata kept), is named.
 cp -r "$sess" "$tmp/copied"
-cp "$tmp/copied/frame-007.png" "$tmp/copied/frame-002.png"
+cp "$tmp/copied/frame-007.dng" "$tmp/copied/frame-002.dng"
 check "hdr of a session with a frame copied over another: exit 1, named" \
-	run 1 "frame-002.png: holds frame 7 of the bracket, not frame 2" hdr "$tmp/copied"
+	run 1 "frame-002.dng: holds frame 7 of the bracket, not frame 2" hdr "$tmp/copied"
 cp -r "$sess" "$tmp/edited"
-python3 - "$tmp/edited/frame-004.png" <<'PY'
-import struct, sys, zlib
+python3 - "$tmp/edited/frame-004.dng" <<'PY'
+import struct, sys
 path = sys.argv[1]
-data = open(path, "rb").read()
-pos, chunks = 8, []
-while pos < len(data):
-    n, = struct.unpack(">I", data[pos:pos + 4])
-    chunks.append((data[pos + 4:pos + 8], data[pos + 8:pos + 8 + n]))
-    pos += 12 + n
-raw = bytearray(zlib.decompress(b"".join(d for t, d in chunks if t == b"IDAT")))
-raw[1 + 2 * 40] ^= 0x10  # row 0, one sample: filter byte first
-out = [c for c in chunks if c[0] != b"IDAT"]
-out.insert(len(out) - 1, (b"IDAT", zlib.compress(bytes(raw))))
-with open(path, "wb") as f:
-    f.write(data[:8])
-    for t, d in out:
-        f.write(struct.pack(">I", len(d)) + t + d +
-                struct.pack(">I", zlib.crc32(t + d) & 0xffffffff))
+data = bytearray(open(path, "rb").read())
+assert data[:4] == b"II*\0", data[:4]
+ifd, = struct.unpack("<I", data[4:8])
+n, = struct.unpack("<H", data[ifd:ifd + 2])
+for k in range(n):
+    tag, typ, count, val = struct.unpack("<HHII", data[ifd + 2 + 12 * k:ifd + 14 + 12 * k])
+    if tag == 273:  # StripOffsets: the first strip's
+        first = val if count == 1 else struct.unpack("<I", data[val:val + 4])[0]
+data[first + 2 * 40] ^= 0x10  # row 0, sample 40
+open(path, "wb").write(data)
 PY
 check "hdr of a session with an edited frame: exit 1, named" \
-	run 1 "frame-004.png: the pixels do not match their checksum" hdr "$tmp/edited"
+	run 1 "frame-004.dng: the pixels do not match their checksum" hdr "$tmp/edited"
 
 # A probe capture on the simulated rig: the merged probe.exr, the ball
 # found in it and unwrapped to env.exr, which must match the map it
@@ -151,7 +149,7 @@ cat >"$tmp/slow.json" <<JSON
 JSON
 "$glint" capture sample --config "$tmp/slow.json" -q 2>"$tmp/err" &
 pid=$!
-wait_until 30 exists "$tmp/slow/*/frame-001.png"
+wait_until 30 exists "$tmp/slow/*/frame-001.dng"
 kill -INT $pid
 wait $pid
 st=$?

@@ -148,7 +148,7 @@ check "... outputs safe" final two "lights=0,turntable_enable=0,led=0"
 rig term '{"at_s": 0.2, "hold_s": 0.1}'
 "$glint" rig --config "$tmp/term.json" 2>"$tmp/term.err" &
 pid=$!
-wait_until 30 exists "$tmp/term/run-*/probe-*/frame-001.png"
+wait_until 30 exists "$tmp/term/run-*/probe-*/frame-001.dng"
 kill -TERM $pid
 wait $pid
 st=$?

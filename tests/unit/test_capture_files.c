@@ -38,11 +38,11 @@ static struct glint_frame make_frame(int w, int h, int ch, int bits)
 	return f;
 }
 
-static void roundtrip(int ch, int bits, const char *dir)
+static void roundtrip(int ch, int bits, const char *ext, const char *dir)
 {
 	char path[512];
 	struct glint_frame f = make_frame(37, 23, ch, bits), g;
-	snprintf(path, sizeof(path), "%s/f%d.png", dir, ch);
+	snprintf(path, sizeof(path), "%s/f%d%s", dir, ch, ext);
 	char *meta = glint_frame_metadata_json(&f, 3);
 	CHECK(glint_frame_write(path, &f, meta) == 0, "%s", glint_error_msg());
 	free(meta);
@@ -63,17 +63,54 @@ static void roundtrip(int ch, int bits, const char *dir)
 	glint_frame_release(&g);
 }
 
+static void half(const char *dir, const char *ext);
+
 static void test_frames(const char *dir)
 {
-	roundtrip(1, 12, dir);
-	roundtrip(3, 8, dir);
-	roundtrip(1, 16, dir);
+	/* DNG, as sessions write them, and PNG, as older ones did. */
+	for (int k = 0; k < 2; k++) {
+		const char *ext = k ? ".png" : ".dng";
+		roundtrip(1, 12, ext, dir);
+		roundtrip(3, 8, ext, dir);
+		roundtrip(1, 16, ext, dir);
+		half(dir, ext);
+	}
+	/* Not a PNG. */
+	char dst[512];
+	struct glint_frame g;
+	snprintf(dst, sizeof(dst), "%s/text.png", dir);
+	FILE *out = fopen(dst, "wb");
+	fputs("hello\n", out);
+	fclose(out);
+	CHECK(glint_frame_read(dst, &g, NULL) < 0, "a text file was read");
+	CHECK_MSG(glint_error_msg(), "text.png");
+	/* A TIFF that is not a glint frame: an 8-bit greyscale one. */
+	snprintf(dst, sizeof(dst), "%s/grey.dng", dir);
+	out = fopen(dst, "wb");
+	static const unsigned char tiff[] = {
+		'I', 'I', 42, 0, 8, 0, 0, 0,		 /* header, IFD at 8 */
+		4,   0,					 /* 4 entries */
+		0,   1,	  3,  0, 1, 0, 0, 0, 1, 0, 0, 0, /* width 1 */
+		1,   1,	  3,  0, 1, 0, 0, 0, 1, 0, 0, 0, /* height 1 */
+		2,   1,	  3,  0, 1, 0, 0, 0, 8, 0, 0, 0, /* 8 bits */
+		17,  1,	  4,  0, 1, 0, 0, 0, 0, 0, 0, 0, /* strip at 0 */
+		0,   0,	  0,  0
+	};
+	fwrite(tiff, 1, sizeof(tiff), out);
+	fclose(out);
+	CHECK(glint_frame_read(dst, &g, NULL) < 0 && g.data == NULL,
+	      "an 8-bit TIFF was read as a frame");
+	CHECK_MSG(glint_error_msg(), "grey.dng");
+	CHECK_MSG(glint_error_msg(), "expected a 16-bit");
+}
 
-	/* Truncated: half the file. */
+/* A frame file cut to half its length is refused, naming it. */
+static void half(const char *dir, const char *ext)
+{
 	char src[512], dst[512];
 	struct glint_frame g;
-	snprintf(src, sizeof(src), "%s/f1.png", dir);
-	snprintf(dst, sizeof(dst), "%s/half.png", dir);
+	snprintf(src, sizeof(src), "%s/f1%s", dir, ext);
+	snprintf(dst, sizeof(dst), "%s/half%s", dir, ext);
 	FILE *in = fopen(src, "rb"), *out = fopen(dst, "wb");
 	fseek(in, 0, SEEK_END);
 	long n = ftell(in);
@@ -85,14 +122,7 @@ static void test_frames(const char *dir)
 	fclose(out);
 	CHECK(glint_frame_read(dst, &g, NULL) < 0 && g.data == NULL,
 	      "a truncated frame was read");
-	CHECK_MSG(glint_error_msg(), "half.png");
-	/* Not a PNG. */
-	snprintf(dst, sizeof(dst), "%s/text.png", dir);
-	out = fopen(dst, "wb");
-	fputs("hello\n", out);
-	fclose(out);
-	CHECK(glint_frame_read(dst, &g, NULL) < 0, "a text file was read");
-	CHECK_MSG(glint_error_msg(), "text.png");
+	CHECK_MSG(glint_error_msg(), "half");
 	free(buf);
 }
 
@@ -149,7 +179,7 @@ static void test_session(const char *dir)
 	json_decref(doc);
 	struct glint_frame g;
 	char p[4200];
-	snprintf(p, sizeof(p), "%s/frame-001.png", sdir);
+	snprintf(p, sizeof(p), "%s/frame-001.dng", sdir);
 	CHECK(glint_frame_read(p, &g, NULL) == 0 &&
 		      g.exposure_s == f.exposure_s,
 	      "frame 1 not kept: %s", glint_error_msg());

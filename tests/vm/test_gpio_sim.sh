@@ -188,7 +188,7 @@ start_sampler "$tmp/term.lines" "$tmp/term.world"
 pid=$!
 wait_until 300 ready "$tmp/term.err"
 press
-check "rig: capturing after the press" wait_until 120 exists "$tmp/term/run-*/probe-*/frame-001.png"
+check "rig: capturing after the press" wait_until 120 exists "$tmp/term/run-*/probe-*/frame-001.dng"
 kill -TERM $pid
 wait $pid
 st=$?

@@ -8,6 +8,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/exif.h"
 #include "core/formats.h"
 #include "core/path.h"
 
@@ -92,12 +93,28 @@ int glint_exposure_times_read(const char *list, const char *file, int n,
 	return ret;
 }
 
+int glint_exposure_times_exif(const char *const *files, int n, double *t)
+{
+	for (int i = 0; i < n; i++) {
+		int ret = glint_exif_exposure_time(files[i], &t[i]);
+		if (ret < 0) {
+			char why[512];
+			snprintf(why, sizeof(why), "%s", glint_error_msg());
+			return glint_error_set(-ret,
+					       "%s: give the exposure times "
+					       "with --times or --times-file",
+					       why);
+		}
+	}
+	return 0;
+}
+
 static int read_stack(const char *const *files, int n, uint8_t **img, int *w,
 		      int *h)
 {
 	for (int i = 0; i < n; i++) {
 		int wi, hi;
-		int ret = glint_png_read_rgb8(files[i], &wi, &hi, &img[i]);
+		int ret = glint_ldr_read(files[i], &wi, &hi, &img[i]);
 		if (ret < 0)
 			return ret;
 		if (i && (wi != *w || hi != *h))

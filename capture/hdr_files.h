@@ -22,6 +22,10 @@
 int glint_exposure_times_read(const char *list, const char *file, int n,
 			      double *t);
 
+/* The same from each photo's EXIF ExposureTime (JPEG and TIFF,
+ * core/exif.h); an error names the first photo without one. */
+int glint_exposure_times_exif(const char *const *files, int n, double *t);
+
 struct glint_ldr_merge_info {
 	int width, height;
 	int iterations; /* Robertson's; 0 for Debevec */

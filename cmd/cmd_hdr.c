@@ -26,6 +26,8 @@ void cmd_hdr_help(void)
 	printf("usage: glint hdr (SESSION_DIR | FRAME.dng...) [options]\n"
 	       "       glint hdr --times T1,T2,... IMAGE.png... -o DIR "
 	       "[--response M]\n"
+	       "       glint hdr PHOTO.jpg|PHOTO.tif... -o DIR (times from "
+	       "EXIF)\n"
 	       "\n"
 	       "Merge a bracket of raw frames (a capture session, or frame "
 	       "files written by\nglint capture) into linear radiance with "
@@ -44,7 +46,8 @@ void cmd_hdr_help(void)
 	       "  hdr.json       what the merge saw (frames, clipped and dark "
 	       "pixels, motion)\n"
 	       "\n"
-	       "\n8-bit photos (any camera) with --times or --times-file: the "
+	       "\n8-bit photos (any camera) with --times or --times-file, or "
+	       "JPEG and TIFF\nphotos with their exposure times in EXIF: the "
 	       "camera's response\nis recovered (--response robertson, the "
 	       "default, or debevec), written to\nresponse.csv, and the "
 	       "photos merged; codes at the black floor and at 255 get\nno "
@@ -77,24 +80,38 @@ static int ldr_main(char **files, int n, const char *times,
 	struct glint_ldr_merge_info info;
 	double *t = calloc((size_t)n, sizeof(double));
 	int ret = t ? 0 : glint_error_set(ENOMEM, "out of memory");
+	const char *source = times_file ? "--times-file"
+			     : times	? "--times"
+					: "EXIF";
 
-	if (ret == 0)
+	if (ret == 0 && (times || times_file))
 		ret = glint_exposure_times_read(times, times_file, n, t);
+	else if (ret == 0)
+		ret = glint_exposure_times_exif((const char *const *)files, n,
+						t);
 	if (ret == 0)
 		ret = glint_ldr_merge_files((const char *const *)files, n, t,
 					    method, out, &info);
+	json_t *tj = json_array();
+	for (int i = 0; ret == 0 && i < n; i++)
+		json_array_append_new(tj, json_real(t[i]));
 	free(t);
-	if (ret < 0)
+	if (ret < 0) {
+		json_decref(tj);
 		return cmd_fail("hdr");
-	glint_log_info("%d photos (%s response%s) -> %s/hdr.exr (%dx%d), "
-		       "response.csv",
-		       n, method, info.iterations ? ", iterated" : "", out,
-		       info.width, info.height);
+	}
+	glint_log_info("%d photos (%s response%s, times from %s) -> "
+		       "%s/hdr.exr (%dx%d), response.csv",
+		       n, method, info.iterations ? ", iterated" : "", source,
+		       out, info.width, info.height);
 	if (json)
-		cmd_print_json(json_pack("{s:s, s:i, s:s, s:i, s:i}", "output",
-					 out, "photos", n, "response", method,
-					 "width", info.width, "height",
-					 info.height));
+		cmd_print_json(json_pack("{s:s, s:i, s:s, s:i, s:i, s:o, s:s}",
+					 "output", out, "photos", n, "response",
+					 method, "width", info.width, "height",
+					 info.height, "exposure_times_s", tj,
+					 "times_from", source));
+	else
+		json_decref(tj);
 	return GLINT_EXIT_OK;
 }
 
@@ -125,7 +142,13 @@ int cmd_hdr(int argc, char **argv)
 	if (argc < 1)
 		return cmd_usage_error("hdr", "expected a session folder or "
 					      "frame files");
-	if (times || times_file) {
+	/* 8-bit photos: with their times given, or JPEG and TIFF photos
+	 * with their times in EXIF. */
+	char ext[16];
+	glint_path_ext(argv[0], ext, sizeof(ext));
+	int exif = !strcmp(ext, "jpg") || !strcmp(ext, "jpeg") ||
+		   !strcmp(ext, "tif") || !strcmp(ext, "tiff");
+	if (times || times_file || exif) {
 		if (!out)
 			return cmd_usage_error("hdr",
 					       "8-bit photos need -o DIR");

@@ -35,6 +35,20 @@ check "a duplicated frame: exit 1, named" run 1 "are the same image" hdr --times
 check "equal times: exit 1" run 1 "must differ" hdr --times 1,1 "${photos[0]}" "${photos[1]}" -o "$tmp/x"
 check "a bad time: exit 1" run 1 "'-2'" hdr --times 1,-2 "${photos[0]}" "${photos[1]}" -o "$tmp/x"
 check "unknown response method: exit 2" run 2 "--response 'fancy': expected one of robertson, debevec" hdr --times 1,2 a.png b.png -o "$tmp/x" --response fancy
+# Exposure times from EXIF: 8-bit TIFF photos written byte by byte with
+# an EXIF directory (make_exif_tiffs.py), merged without --times.
+here=$(cd "$(dirname "$0")" && pwd)
+mkdir -p "$tmp/exif" "$tmp/wrong" "$tmp/none"
+python3 "$here/make_exif_tiffs.py" "$tmp/exif" 4 1 1/4 1/16
+check "TIFF photos merge with their EXIF exposure times" run 0 "" hdr "$tmp"/exif/p*.tif -o "$tmp/e" --json
+check "... the times read are EXIF's" python3 -c "
+import json; d = json.load(open('$tmp/out'))
+assert d['times_from'] == 'EXIF' and d['exposure_times_s'] == [4, 1, 0.25, 0.0625], d"
+python3 "$here/make_exif_tiffs.py" "$tmp/wrong" --exif 1/16 1/4 1 4 --shot 4 1 1/4 1/16
+check "EXIF times that contradict the pixels: exit 1, named" run 1 "p1.tif (0.25 s) is darker than" hdr "$tmp"/wrong/p*.tif -o "$tmp/w"
+python3 "$here/make_exif_tiffs.py" "$tmp/none" --no-exif 1
+check "a photo without EXIF: exit 1, says --times" run 1 "p0.tif: no EXIF directory: give the exposure times with --times" hdr "$tmp/none/p0.tif" "$tmp/exif/p1.tif" -o "$tmp/n"
+check "... --times then merges TIFF photos" run 0 "" hdr --times 1,1/4 "$tmp/none/p0.tif" "$tmp/exif/p2.tif" -o "$tmp/n2"
 head -c 3000 "${photos[3]}" >"$tmp/cut.png"
 check "truncated photo: exit 1, named" run 1 "cut.png" hdr --times 1,2 "${photos[0]}" "$tmp/cut.png" -o "$tmp/x"
 check "nothing written on failure" test ! -e "$tmp/x/hdr.exr"

@@ -3,6 +3,7 @@
 #include "test.h"
 
 #include "core/error.h"
+#include "core/exif.h"
 #include "core/formats.h"
 #include "core/image.h"
 #include "core/path.h"
@@ -14,6 +15,9 @@
 #include <sys/stat.h>
 #include <png.h>
 #include <tiffio.h>
+#include <libexif/exif-data.h>
+
+#include <stb_image_write.h> /* Debian's libstb holds the writer */
 #include <stdint.h>
 
 /* A test card over 7 decades, with exact zeros. */
@@ -326,6 +330,86 @@ static void test_tiff(void)
 	      "a cut TIFF was read");
 	CHECK_MSG(glint_error_msg(), "cut.tif");
 	glint_image_free(a);
+}
+
+/* A JPEG with an EXIF ExposureTime of num/den: stb writes the JPEG,
+ * libexif makes the EXIF block, which goes in as APP1 after SOI. */
+static int write_jpeg_exif(const char *path, unsigned num, unsigned den)
+{
+	uint8_t px[8 * 8 * 3];
+	for (int i = 0; i < (int)sizeof(px); i++)
+		px[i] = (uint8_t)(i * 7);
+	const char *plain = tmp_path("plain.jpg");
+	if (!stbi_write_jpg(plain, 8, 8, 3, px, 90))
+		return -1;
+	FILE *fp = fopen(plain, "rb");
+	uint8_t jpg[65536];
+	size_t n = fread(jpg, 1, sizeof(jpg), fp);
+	fclose(fp);
+
+	ExifData *ed = exif_data_new();
+	exif_data_set_byte_order(ed, EXIF_BYTE_ORDER_INTEL);
+	ExifEntry *e = exif_entry_new();
+	exif_content_add_entry(ed->ifd[EXIF_IFD_EXIF], e);
+	exif_entry_initialize(e, EXIF_TAG_EXPOSURE_TIME);
+	ExifRational r = { num, den };
+	exif_set_rational(e->data, EXIF_BYTE_ORDER_INTEL, r);
+	exif_entry_unref(e);
+	unsigned char *blob = NULL;
+	unsigned len = 0;
+	exif_data_save_data(ed, &blob, &len);
+	exif_data_unref(ed);
+
+	fp = fopen(path, "wb");
+	uint8_t app1[4] = { 0xff, 0xe1, (uint8_t)((len + 2) >> 8),
+			    (uint8_t)((len + 2) & 0xff) };
+	fwrite(jpg, 1, 2, fp); /* SOI */
+	fwrite(app1, 1, 4, fp);
+	fwrite(blob, 1, len, fp);
+	fwrite(jpg + 2, 1, n - 2, fp);
+	fclose(fp);
+	free(blob);
+	return 0;
+}
+
+static void test_exif(void)
+{
+	double t = 0;
+	const char *p = tmp_path("e.jpg");
+	CHECK(write_jpeg_exif(p, 1, 250) == 0, "writing %s", p);
+	CHECK(glint_exif_exposure_time(p, &t) == 0 && t == 1.0 / 250,
+	      "JPEG EXIF ExposureTime 1/250: %g (%s)", t, glint_error_msg());
+	CHECK(glint_exif_exposure_time(tmp_path("plain.jpg"), &t) < 0,
+	      "a JPEG without EXIF gave a time");
+	CHECK_MSG(glint_error_msg(), "plain.jpg: no EXIF data");
+	CHECK(write_jpeg_exif(p, 0, 1) == 0, "writing %s", p);
+	CHECK(glint_exif_exposure_time(p, &t) < 0, "a zero time was taken");
+	CHECK_MSG(glint_error_msg(), "ExposureTime 0 s");
+
+	/* TIFF: an EXIF directory written with libtiff. */
+	const char *q = tmp_path("e.tif");
+	TIFF *tif = TIFFOpen(q, "w");
+	uint8_t row[4 * 3] = { 0 };
+	TIFFSetField(tif, TIFFTAG_IMAGEWIDTH, 4);
+	TIFFSetField(tif, TIFFTAG_IMAGELENGTH, 1);
+	TIFFSetField(tif, TIFFTAG_BITSPERSAMPLE, 8);
+	TIFFSetField(tif, TIFFTAG_SAMPLESPERPIXEL, 3);
+	TIFFSetField(tif, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_RGB);
+	TIFFSetField(tif, TIFFTAG_EXIFIFD, (uint64_t)0);
+	TIFFWriteScanline(tif, row, 0, 0);
+	TIFFWriteDirectory(tif);
+	uint64_t off = 0;
+	TIFFCreateEXIFDirectory(tif);
+	TIFFSetField(tif, EXIFTAG_EXPOSURETIME, 0.5);
+	TIFFWriteCustomDirectory(tif, &off);
+	TIFFSetDirectory(tif, 0);
+	TIFFSetField(tif, TIFFTAG_EXIFIFD, off);
+	TIFFClose(tif);
+	CHECK(glint_exif_exposure_time(q, &t) == 0 && t == 0.5,
+	      "TIFF EXIF ExposureTime 0.5: %g (%s)", t, glint_error_msg());
+	CHECK(glint_exif_exposure_time(tmp_path("c8.tif"), &t) < 0,
+	      "a TIFF without EXIF gave a time");
+	CHECK_MSG(glint_error_msg(), "c8.tif: no EXIF directory");
 }
 
 static void test_png_tonemap(void)
@@ -729,6 +813,7 @@ int main(void)
 	RUN(test_rgbe_roundtrip);
 	RUN(test_pfm_roundtrip);
 	RUN(test_tiff);
+	RUN(test_exif);
 	RUN(test_png_tonemap);
 	RUN(test_bad_exr);
 	RUN(test_bad_rgbe);

@@ -1,0 +1,13 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_CORE_EXIF_H
+#define GLINT_CORE_EXIF_H
+
+/*
+ * A photo's exposure time from its EXIF data: JPEG through libexif (the
+ * APP1 segment), TIFF through libtiff (its EXIF directory).  *t in
+ * seconds; an error names the file and says what is missing (no EXIF,
+ * no ExposureTime, a zero or negative one).
+ */
+int glint_exif_exposure_time(const char *path, double *t);
+
+#endif

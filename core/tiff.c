@@ -14,6 +14,9 @@
 #include <string.h>
 #include <unistd.h>
 
+/* libtiff's message formats (it checks them itself). */
+static int on_error(TIFF *tif, void *user, const char *module, const char *fmt,
+		    va_list ap) GLINT_PRINTF(4, 0);
 static int on_error(TIFF *tif, void *user, const char *module, const char *fmt,
 		    va_list ap)
 {

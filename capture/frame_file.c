@@ -13,7 +13,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 
 /* CRC-32 (zlib's) of the samples as the PNG stores them. */
 static uint32_t pixels_crc32(const uint16_t *data, size_t n)
@@ -62,16 +61,11 @@ static void frame_row(void *ctx, int y, uint8_t *row)
 	}
 }
 
-static int has_suffix(const char *s, const char *suffix)
-{
-	size_t n = strlen(s), k = strlen(suffix);
-	return n >= k && !strcasecmp(s + n - k, suffix);
-}
-
 int glint_frame_write(const char *path, const struct glint_frame *f,
 		      const char *meta)
 {
-	if (has_suffix(path, ".dng"))
+	char ext[16];
+	if (!strcmp(glint_path_ext(path, ext, sizeof(ext)), "dng"))
 		return glint_dng_write(path, f, meta);
 	/* Level 1: raw sensor data barely compresses; time matters more. */
 	struct glint_png_layout l = {

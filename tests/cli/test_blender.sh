@@ -80,4 +80,14 @@ for env in "" "$data/env/venice_sunset_1k.hdr"; do
 		fail "preview render${env:+ under $(basename "$env")}"
 	fi
 done
+# --save never replaces a file.
+echo "a user's file" >"$tmp/mine.blend"
+if blender --background --python "$tmp/satin-paint.py" -- \
+	--save "$tmp/mine.blend" >"$tmp/s.log" 2>&1 ||
+	[ "$(cat "$tmp/mine.blend")" != "a user's file" ]; then
+	tail -5 "$tmp/s.log"
+	fail "--save replaced an existing file"
+else
+	echo "ok   --save refuses an existing file, leaving it as it was"
+fi
 [ "$fails" = 0 ]

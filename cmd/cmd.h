@@ -72,11 +72,12 @@ void cmd_print_params(const json_t *doc, const double *truth);
 void cmd_print_verdicts(const json_t *doc);
 
 /* Refit (model, p) in `format` and write it to out (refused when it
- * exists, unless force); the result as JSON, or NULL with the error set. */
+ * exists, unless force); a transparent model needs the sphere's
+ * diameter_m.  The result as JSON, or NULL with the error set. */
 json_t *cmd_export_write(enum glint_export_format format,
 			 const struct glint_model_ops *model, const double *p,
-			 const char *source, const char *name, const char *out,
-			 int force);
+			 double diameter_m, const char *source,
+			 const char *name, const char *out, int force);
 
 /* A fit's progress on a terminal (struct glint_fit_opts.progress). */
 void cmd_fit_progress(void *ctx, const char *pass, int iter, double cost);

@@ -9,6 +9,7 @@
 #include "core/log.h"
 #include "fit/export.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -30,7 +31,9 @@ void cmd_export_help(void)
 	       "material\n"
 	       "                    (pbrMetallicRoughness, metallic 0, "
 	       "KHR_materials_ior,\n"
-	       "                    KHR_materials_specular)\n"
+	       "                    KHR_materials_specular; a dielectric: "
+	       "KHR_materials_\n"
+	       "                    transmission and KHR_materials_volume)\n"
 	       "                    mitsuba: a Mitsuba 3 scene file (.xml) "
 	       "holding one\n"
 	       "                    BSDF (blendbsdf of diffuse and "
@@ -45,19 +48,27 @@ void cmd_export_help(void)
 	       "                    blender -b -P OUT.py -- --render "
 	       "PNG [--env MAP]\n"
 	       "                    renders a preview sphere of it\n"
+	       "                    materialx: a MaterialX 1.38 document "
+	       "(.mtlx), one\n"
+	       "                    standard_surface and its "
+	       "surfacematerial\n"
 	       "  -o, --output OUT  the file to write (refused if it exists, "
 	       "unless --force)\n"
 	       "  --entry NAME      pick NAME from a Table-1 style file\n"
 	       "  --name N          the material's name (default: the "
 	       "input's file name)\n"
+	       "  --diameter-m D    a transparent sphere's diameter in "
+	       "metres (its absorption\n"
+	       "                    is per diameter; a fit's params.json "
+	       "records it)\n"
 	       "  --force           replace OUT\n"
 	       "  --json            print the result as JSON\n");
 }
 
 json_t *cmd_export_write(enum glint_export_format format,
 			 const struct glint_model_ops *model, const double *p,
-			 const char *source, const char *name, const char *out,
-			 int force)
+			 double diameter_m, const char *source,
+			 const char *name, const char *out, int force)
 {
 	struct stat st;
 	if (!force && lstat(out, &st) == 0) {
@@ -68,7 +79,7 @@ json_t *cmd_export_write(enum glint_export_format format,
 		return NULL;
 	}
 	struct glint_export e;
-	if (glint_export_refit(format, model, p, &e) < 0)
+	if (glint_export_refit(format, model, p, diameter_m, &e) < 0)
 		return NULL;
 	char *text = glint_export_text(&e, name, source, model);
 	if (!text) {
@@ -79,8 +90,11 @@ json_t *cmd_export_write(enum glint_export_format format,
 	free(text);
 	if (ret < 0)
 		return NULL;
-	glint_log_info("%s (%s) -> %s: %s refitted to glint's BRDF, "
-		       "relative RMS difference %.3f",
+	glint_log_info(e.dielectric ? "%s (%s) -> %s: %s, carried across; "
+				      "the interface's Fresnel term differs "
+				      "by a relative RMS %.3f"
+				    : "%s (%s) -> %s: %s refitted to glint's "
+				      "BRDF, relative RMS difference %.3f",
 		       source, model->name, out,
 		       glint_export_format_names[format], e.residual);
 	return json_pack("{s:s, s:s, s:s, s:f, s:o}", "output", out, "format",
@@ -90,16 +104,28 @@ json_t *cmd_export_write(enum glint_export_format format,
 			 glint_export_params_json(&e));
 }
 
+/* The sphere's diameter a fit's params.json records, or NAN. */
+static double recorded_diameter(const char *path)
+{
+	json_t *doc = json_load_file(path, 0, NULL);
+	double d = json_number_value(json_object_get(
+		json_object_get(doc, "inputs"), "sphere_diameter_m"));
+	json_decref(doc);
+	return d > 0 ? d : NAN;
+}
+
 int cmd_export(int argc, char **argv)
 {
 	const char *out = NULL, *name = NULL, *entry = NULL;
 	int to = -1, force = 0;
+	double diameter_m = NAN;
 	const struct cmd_opt opts[] = {
 		CMD_CHOICE("to", &to, glint_export_format_names),
 		CMD_STRING("output", 'o', &out),
 		CMD_STRING("entry", 0, &entry),
 		CMD_STRING("name", 0, &name),
 		CMD_FLAG("force", 0, &force),
+		CMD_REAL("diameter-m", &diameter_m, 1e-6, 1e3),
 		{ 0 },
 	};
 	struct cmd_args a;
@@ -112,7 +138,7 @@ int cmd_export(int argc, char **argv)
 	if (to < 0)
 		return cmd_usage_error("export", "--to FORMAT is required "
 						 "(gltf, mitsuba, pbrt, "
-						 "blender)");
+						 "blender, materialx)");
 	if (!out)
 		return cmd_usage_error("export", "-o OUT is required");
 
@@ -120,12 +146,14 @@ int cmd_export(int argc, char **argv)
 	double p[GLINT_MAX_PARAMS];
 	if (glint_material_load(a.argv[0], entry, &model, p) < 0)
 		return cmd_fail("export");
+	if (isnan(diameter_m))
+		diameter_m = recorded_diameter(a.argv[0]);
 	if (!name) {
 		const char *s = strrchr(a.argv[0], '/');
 		name = entry ? entry : s ? s + 1 : a.argv[0];
 	}
 	json_t *res = cmd_export_write((enum glint_export_format)to, model, p,
-				       a.argv[0], name, out, force);
+				       diameter_m, a.argv[0], name, out, force);
 	if (!res)
 		return cmd_fail("export");
 	if (a.json) {

@@ -58,6 +58,31 @@
  *     f = kd/pi + ks F_d(n.o, ior_b) D(h) G1(i) G1(o) / (4 cos_i cos_o)
  *   with Beckmann D and Cycles's G1 (the rational approximation above),
  *   or GGX D and its separable Smith G1.
+ *
+ * MATERIALX: MaterialX 1.38 standard_surface (base 1, metalness 0, no
+ *   coat, sheen, subsurface or transmission), as MaterialX's reference
+ *   dielectric_bsdf layers it over oren_nayar_diffuse_bsdf.  x =
+ *   base_color[3], diffuse_roughness s, specular_roughness r, specular w,
+ *   specular_color t[3], specular_IOR n:
+ *     a = r^2, F = F_d(v.h, n), G2 height-correlated Smith (GGX)
+ *     E(v) = the GGX lobe's directional albedo with Fresnel
+ *       f0 + (1 - f0)(1 - v.h)^5, f0 = ((n - 1)/(n + 1))^2; Ess(v) the
+ *       same with F = 1 (both integrated numerically here, where
+ *       MaterialX's shaders use its fitted curve)
+ *     c = 1 + F (1 - Ess) / Ess (the multiple-scattering compensation)
+ *     f = w t F D G2 c / (4 cos_i cos_o)
+ *         + (1 - w E c) base_color ON(s) / pi
+ *   with ON(s) the Oren-Nayar factor (fit/brdf/microfacet.h) times pi.
+ *
+ * A transparent (dielectric) sphere is not refitted: every target has a
+ * smooth dielectric interface and a Beer-Lambert interior, so the
+ * transmission per diameter T and the ior carry across exactly given the
+ * sphere's diameter d (absorption sigma = -ln(T) / d).  The residual is
+ * then the relative RMS difference of the interface's reflectance R(cos)
+ * from the exact Fresnel term over a cosine-weighted hemisphere: 0 where
+ * the target uses the exact term (Mitsuba, pbrt, Blender's sharp Glass
+ * BSDF, MaterialX's dielectric_bsdf), Schlick's approximation's error for
+ * glTF.
  */
 
 #include "fit/brdf/model.h"
@@ -69,18 +94,19 @@ enum glint_export_format {
 	GLINT_EXPORT_MITSUBA,
 	GLINT_EXPORT_PBRT,
 	GLINT_EXPORT_BLENDER,
+	GLINT_EXPORT_MATERIALX,
 	GLINT_EXPORT_NFORMATS
 };
 
-/* "gltf", "mitsuba", "pbrt", "blender", then NULL (the command-line
- * names). */
+/* "gltf", "mitsuba", "pbrt", "blender", "materialx", then NULL (the
+ * command-line names). */
 extern const char *const glint_export_format_names[];
 
 /* A comma-separated list of those names as a bit set (bit k: format k);
  * -EINVAL naming a bad name (with the likeliest meant) or an empty list. */
 int glint_export_formats_parse(const char *list, unsigned *formats);
 
-#define GLINT_EXPORT_MAX_X 8
+#define GLINT_EXPORT_MAX_X 10
 
 struct glint_export {
 	enum glint_export_format format;
@@ -88,17 +114,23 @@ struct glint_export {
 	double ior;		      /* held at the model's own, or 1.5 */
 	int ggx;		      /* MITSUBA: the GGX distribution */
 	double residual;	      /* relative RMS difference, above */
+	/* A transparent sphere: x[0..2] its transmission per diameter. */
+	int dielectric;
+	double diameter_m;
 };
 
 /*
  * Fit the target's parameters to glint's (model, p), into e (format
- * set); e->residual as above.  Refuses transparent models.
+ * set); e->residual as above.  A transparent model's parameters carry
+ * across (above) and need the sphere's diameter in metres (diameter_m;
+ * NAN when unknown refuses them).
  */
 int glint_export_refit(enum glint_export_format format,
 		       const struct glint_model_ops *model, const double *p,
-		       struct glint_export *e);
+		       double diameter_m, struct glint_export *e);
 
-/* The target's BRDF with e's parameters, f[3]; 0 below the surface. */
+/* The target's BRDF with e's parameters, f[3]; 0 below the surface (and
+ * for a dielectric). */
 void glint_export_brdf(const struct glint_export *e, struct vec3 wo,
 		       struct vec3 wi, double f[3]);
 
@@ -107,7 +139,7 @@ double glint_export_residual(const struct glint_model_ops *model,
 			     const double *p, const struct glint_export *e);
 
 /* The file name extension of a format's files (".gltf", ".xml", ".pbrt",
- * ".py"). */
+ * ".py", ".mtlx"). */
 const char *glint_export_extension(enum glint_export_format format);
 
 /*

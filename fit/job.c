@@ -159,7 +159,7 @@ static json_t *params_doc(const struct glint_fit_job *job,
 	const struct glint_model_ops *model = res->model;
 	json_t *doc = json_pack(
 		"{s:s,s:s,s:o,s:o,s:{s:s,s:b,s:b,s:f,s:i,s:i},s:f,s:f,s:f,"
-		"s:i,s:i,s:i,s:o,s:f,s:f,s:{s:s,s:s},s:s}",
+		"s:i,s:i,s:i,s:o,s:f,s:f,s:{s:s,s:s,s:f},s:s}",
 		"model", model->name, "conventions", model->conventions,
 		"material", glint_material_to_json(model, res->p), "parameters",
 		glint_fit_params_json(res), "method", "name",
@@ -174,7 +174,8 @@ static json_t *params_doc(const struct glint_fit_job *job,
 		"specular_pixels", res->specular_pixels, "passes",
 		glint_fit_passes_json(res), "seconds", res->seconds,
 		"setup_seconds", res->setup_seconds, "inputs", "scene",
-		job->scene_path, "photo", job->photo_path, "weighting",
+		job->scene_path, "photo", job->photo_path, "sphere_diameter_m",
+		2 * job->scene.sphere_radius, "weighting",
 		job->weight			       ? "weight image"
 		: o->weighting == GLINT_WEIGHT_POISSON ? "poisson"
 						       : "uniform");
@@ -310,6 +311,7 @@ static json_t *refit_exports(const struct glint_fit_job *job,
 		snprintf(file, sizeof(file), "material%s",
 			 glint_export_extension((enum glint_export_format)k));
 		if (glint_export_refit((enum glint_export_format)k, model, p,
+				       2 * job->scene.sphere_radius,
 				       &exports[k]) < 0) {
 			glint_log_warn("no %s export: %s", fmt,
 				       glint_error_msg());
@@ -333,10 +335,11 @@ static json_t *refit_exports(const struct glint_fit_job *job,
  * previous result, or nothing): checked before any work. */
 static int check_outputs(const struct glint_fit_job *job)
 {
-	static const char *const names[] = { "params.json",  "render.exr",
-					     "compare.png",  "material.gltf",
-					     "material.xml", "material.pbrt",
-					     "material.py",  NULL };
+	static const char *const names[] = {
+		"params.json",	 "render.exr",	  "compare.png",
+		"material.gltf", "material.xml",  "material.pbrt",
+		"material.py",	 "material.mtlx", NULL
+	};
 	char dir[GLINT_PATH_MAX];
 	int ret = glint_atomic_dir_check(job->out_dir, names, job->force);
 

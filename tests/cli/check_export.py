@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: MIT
 """Check a glint export against glint's material, independently.
 
-  check_export.py MATERIAL.json EXPORT.{gltf,xml,pbrt,py}
+  check_export.py MATERIAL.json EXPORT.{gltf,xml,pbrt,py,mtlx} [DIAMETER_M]
 
 Every BRDF here is written from its published equations, sharing no code
 with glint:
@@ -24,14 +24,25 @@ with glint:
   Lambertian Diffuse BSDF plus Cycles's Beckmann Glossy BSDF (alpha =
   roughness^2, D G1 G1 / (4 cos cos), Cycles's G1) weighed by the Fresnel
   node's dielectric F at the view direction (blender_check.py renders it
-  with Blender itself).
+  with Blender itself);
+- MaterialX 1.38's standard_surface as its reference dielectric_bsdf
+  layers a GGX lobe (exact Fresnel, height-correlated Smith G2, the
+  multiple-scattering factor 1 + F (1 - Ess)/Ess) over an Oren-Nayar
+  base scaled by 1 - specular E c (E the lobe's directional albedo with
+  Schlick's Fresnel), the albedos integrated here on their own grid.
+
+A dielectric (quartz) material is carried across, not refitted: each
+file's interior must give exp(-sigma D) = T over the sphere's diameter D
+(DIAMETER_M, or a params.json's inputs.sphere_diameter_m), its interface
+the ior, and its stated residual must be Schlick's error (glTF) or 0.
 
 The relative RMS difference of reflected radiance under uniform light is
 integrated on a grid of half vectors at glint's 8 view angles and must
 agree with the residual the export states (within 25 % + 0.01).  For glTF
 and pbrt the refit must also beat copying the numbers across (glTF:
 roughness = sqrt(m), specular colour = the specular albedo; pbrt: alpha =
-m, eta = ior, amount = the mean specular albedo).  Prints the numbers.
+m, eta = ior, amount = the mean specular albedo; MaterialX: roughness =
+sqrt(m), specular colour = the specular albedo, specular 1, the ior).  Prints the numbers.
 """
 import json
 import math
@@ -300,6 +311,186 @@ def load_blender(path, mat):
     return f, const["REFIT_RELATIVE_RMS"], None
 
 
+# MaterialX standard_surface ---------------------------------------------
+
+def mx_g2(nl, nv, a2):
+    """MaterialX's height-correlated Smith G2 for GGX."""
+    return 2 * nl * nv / (nl * math.sqrt(a2 + (1 - a2) * nv * nv) +
+                          nv * math.sqrt(a2 + (1 - a2) * nl * nl))
+
+
+def mx_albedos(nv, alpha, f0, nt=200, nphi=64):
+    """The GGX lobe's directional albedo at view cosine nv, with Schlick's
+    f0 + (1 - f0)(1 - v.h)^5 and with F = 1: the integral of D F G2 (v.h)
+    / nv over half vectors (theta_h = (pi/2) s^2 steps)."""
+    a2 = alpha * alpha
+    wo = (math.sqrt(1 - nv * nv), 0.0, nv)
+    e = ess = 0.0
+    for j in range(nt):
+        sj = (j + 0.5) / nt
+        th = math.pi / 2 * sj * sj
+        dth = math.pi * sj / nt
+        ct, st = math.cos(th), math.sin(th)
+        d = a2 / (math.pi * (ct * ct * (a2 - 1) + 1) ** 2)
+        for k in range(nphi):
+            p = (k + 0.5) / nphi * 2 * math.pi
+            h = (st * math.cos(p), st * math.sin(p), ct)
+            vh = dot(wo, h)
+            lz = 2 * vh * ct - nv
+            if vh <= 0 or lz <= 0:
+                continue
+            w = d * mx_g2(lz, nv, a2) * vh / nv * st * dth * 2 * math.pi / nphi
+            ess += w
+            e += w * (f0 + (1 - f0) * (1 - vh) ** 5)
+    return e, ess
+
+
+def load_materialx(path, mat):
+    root = ET.parse(path).getroot()
+    assert root.tag == "materialx" and root.get("version") == "1.38", root.tag
+    ss = root.find("standard_surface")
+    sm = root.find("surfacematerial")
+    assert sm.find("input").get("nodename") == ss.get("name")
+    assert re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", sm.get("name")), sm.get("name")
+    inp = {}
+    for i in ss.findall("input"):
+        v = [float(x) for x in i.get("value").split(",")]
+        inp[i.get("name")] = v if i.get("type") == "color3" else v[0]
+    for k in ("metalness", "coat", "sheen", "subsurface", "emission",
+              "specular_anisotropy", "thin_film_thickness"):
+        assert inp.get(k, 0) == 0, (k, inp[k])
+    m = re.search(r"refit_relative_rms ([0-9.]+)", open(path).read())
+    stated = float(m.group(1))
+    if mat["model"] == "dielectric":
+        return inp, stated
+    assert inp["base"] == 1 and inp["transmission"] == 0
+    naive = dict(inp, base_color=mat["diffuse"], specular=1.0,
+                 specular_color=[min(1.0, x) for x in mat["specular"]],
+                 specular_roughness=math.sqrt(mat["roughness"]),
+                 specular_IOR=mat["ior"], diffuse_roughness=0.0)
+    return mx_brdf(inp), stated, mx_brdf(naive)
+
+
+def mx_brdf(inp):
+    base, w, tint = inp["base_color"], inp["specular"], inp["specular_color"]
+    alpha = inp["specular_roughness"] ** 2
+    ior, sigma = inp["specular_IOR"], inp["diffuse_roughness"]
+    f0 = ((ior - 1) / (ior + 1)) ** 2
+    cache = {}
+
+    def f(wo, wi):
+        nv, nl = wo[2], wi[2]
+        if nv not in cache:
+            cache[nv] = mx_albedos(nv, alpha, f0)
+        e, ess = cache[nv]
+        h = unit([wo[i] + wi[i] for i in range(3)])
+        a2 = alpha * alpha
+        d = a2 / (math.pi * (h[2] * h[2] * (a2 - 1) + 1) ** 2)
+        F = fresnel(dot(wo, h), ior)
+        comp = 1 + F * (1 - ess) / ess
+        spec = w * F * d * mx_g2(nl, nv, a2) * comp / (4 * nl * nv)
+        s2 = sigma * sigma
+        s = dot(wo, wi) - nl * nv
+        on = 1 - 0.5 * s2 / (s2 + 0.33) + \
+            (0.45 * s2 / (s2 + 0.09) * s / max(nl, nv) if s > 0 else 0)
+        return [tint[c] * spec + (1 - w * e * comp) * base[c] * on / math.pi
+                for c in range(3)]
+    return f
+
+
+# A transparent sphere ------------------------------------------------------
+
+def schlick_rel_rms(ior, n=4000):
+    """Schlick's reflectance against the exact Fresnel term, relative RMS
+    over a cosine-weighted hemisphere (trapezoids in theta)."""
+    f0 = ((ior - 1) / (ior + 1)) ** 2
+    num = den = 0.0
+    for i in range(n + 1):
+        t = math.pi / 2 * i / n
+        w = (0.5 if i in (0, n) else 1.0) * math.sin(t) * math.cos(t)
+        r = fresnel(math.cos(t), ior)
+        rs = f0 + (1 - f0) * (1 - math.cos(t)) ** 5
+        num += w * (rs - r) ** 2
+        den += w * r * r
+    return math.sqrt(num / den)
+
+
+def check_dielectric(mat, path, diameter):
+    """Each target's interior absorbs exp(-sigma D) = T over the diameter
+    D and its interface has the ior; the stated residual is Schlick's
+    error for glTF, 0 for the rest."""
+    T, ior, D = mat["transmission"], mat["ior"], diameter
+    sig = [-math.log(t) / D for t in T]
+    ext = path.rsplit(".", 1)[-1]
+    text = open(path).read()
+    stated = float(re.search(r"refit_relative_rms\"?:? ?([0-9.e-]+)",
+                             text).group(1))
+    want = 0.0
+    if ext == "gltf":
+        m = json.load(open(path))["materials"][0]
+        e = m["extensions"]
+        vol = e["KHR_materials_volume"]
+        got_t = [c ** (D / vol["attenuationDistance"])
+                 for c in vol["attenuationColor"]]
+        assert abs(vol["thicknessFactor"] - D) < 1e-9, vol
+        assert e["KHR_materials_transmission"]["transmissionFactor"] == 1
+        assert m["pbrMetallicRoughness"]["roughnessFactor"] == 0
+        got_ior = e["KHR_materials_ior"]["ior"]
+        stated = m["extras"]["glint"]["refit_relative_rms"]
+        want = schlick_rel_rms(ior)
+    elif ext == "xml":
+        root = ET.parse(path).getroot()
+        b = root.find("bsdf")
+        assert b.get("type") == "dielectric"
+        p = xml_params(b)
+        assert abs(p["ext_ior"] - 1) < 1e-9
+        got_ior = p["int_ior"]
+        med = root.find("medium")
+        assert med.get("type") == "homogeneous"
+        mp = xml_params(med)
+        assert mp["albedo"] == 0
+        got_t = [math.exp(-s * mp.get("scale", 1) * D) for s in mp["sigma_t"]]
+    elif ext == "pbrt":
+        got_ior = float(re.search(r'"float eta" ([0-9.e-]+)', text).group(1))
+        assert '"string type" "dielectric"' in text
+        sa = [float(x) for x in re.search(
+            r'"rgb sigma_a" \[ ([^\]]*) \]', text).group(1).split()]
+        ss = [float(x) for x in re.search(
+            r'"rgb sigma_s" \[ ([^\]]*) \]', text).group(1).split()]
+        sc = float(re.search(r'"float scale" ([0-9.e-]+)', text).group(1))
+        assert ss == [0, 0, 0], ss
+        got_t = [math.exp(-s * sc * D) for s in sa]
+    elif ext == "py":
+        const = {}
+        for name in ("KIND", "IOR", "ABSORPTION_COLOR", "DENSITY",
+                     "DIAMETER"):
+            m = re.search(r"^%s = (.*)$" % name, text, re.M)
+            const[name] = json.loads(m.group(1).replace("(", "[")
+                                     .replace(")", "]"))
+        assert const["KIND"] == "dielectric" and const["DIAMETER"] == D
+        got_ior = const["IOR"]
+        # Cycles: absorption = (1 - Color) * Density.
+        got_t = [math.exp(-(1 - c) * const["DENSITY"] * D)
+                 for c in const["ABSORPTION_COLOR"]]
+    elif ext == "mtlx":
+        inp, stated = load_materialx(path, mat)
+        assert inp["transmission"] == 1 and inp["specular_roughness"] == 0
+        got_ior = inp["specular_IOR"]
+        got_t = [c ** (D / inp["transmission_depth"])
+                 for c in inp["transmission_color"]]
+    else:
+        raise SystemExit("unknown export " + path)
+    print(f"ior {got_ior:.4f} (glint {ior:.4f}); transmission per diameter "
+          + ", ".join(f"{t:.4f}" for t in got_t) + " (glint "
+          + ", ".join(f"{t:.4f}" for t in T) + f"); stated residual "
+          f"{stated:.4f}, independent {want:.4f}")
+    assert abs(got_ior - ior) < 1e-4, (got_ior, ior)
+    for c in range(3):
+        assert abs(got_t[c] - T[c]) < 1e-4 * max(T[c], 1e-3), (got_t, T)
+        assert sig[c] >= 0
+    assert abs(stated - want) <= 0.02 * want + 1e-4, (stated, want)
+
+
 def rel_rms(mat, exp, nt=100, nphi=120):
     """Over half vectors h (wi = o reflected about h, dwi = 4 (o.h) dwh),
     theta_h = (pi/2) s^2 so the steps are finest at the lobe's peak."""
@@ -329,14 +520,20 @@ def rel_rms(mat, exp, nt=100, nphi=120):
 
 
 def main():
-    mat = json.load(open(sys.argv[1]))
-    mat = mat.get("material", mat)  # a fit's params.json, or a material
+    doc = json.load(open(sys.argv[1]))
+    mat = doc.get("material", doc)  # a fit's params.json, or a material
+    if mat["model"] == "dielectric":
+        d = float(sys.argv[3]) if len(sys.argv) > 3 else \
+            doc["inputs"]["sphere_diameter_m"]
+        check_dielectric(mat, sys.argv[2], d)
+        return
     assert mat["model"] == "torrance-sparrow", mat["model"]
     # The grid resolves lobes of RMS slope 0.02 and up.
     assert mat["roughness"] >= 0.02, mat["roughness"]
     path = sys.argv[2]
     loader = {"gltf": load_gltf, "xml": load_mitsuba, "pbrt": load_pbrt,
-              "py": load_blender}[path.rsplit(".", 1)[-1]]
+              "py": load_blender,
+              "mtlx": load_materialx}[path.rsplit(".", 1)[-1]]
     exp, stated, naive = loader(path, mat)
     got = rel_rms(mat, exp)
     line = f"stated {stated:.4f}, independent {got:.4f}"

@@ -7,7 +7,9 @@
 #include "fit/export.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 static void test_formats_parse(void)
 {
@@ -35,8 +37,8 @@ static void test_pbrt_exact(void)
 {
 	const double p[] = { 0.2, 0.3, 0.4, 0.3, 0.3, 0.3, 0.15, 1.6 };
 	struct glint_export e;
-	CHECK(glint_export_refit(GLINT_EXPORT_PBRT, &glint_model_ggx, p, &e) ==
-		      0,
+	CHECK(glint_export_refit(GLINT_EXPORT_PBRT, &glint_model_ggx, p, NAN,
+				 &e) == 0,
 	      "%s", glint_error_msg());
 	CHECK(e.residual < 1e-4, "residual %g", e.residual);
 	CHECK_NEAR(e.x[4], 0.15, 1e-3, "alpha");
@@ -59,7 +61,7 @@ static void test_beckmann_targets(void)
 	struct glint_export e[GLINT_EXPORT_NFORMATS];
 	for (int k = 0; k < GLINT_EXPORT_NFORMATS; k++)
 		CHECK(glint_export_refit((enum glint_export_format)k,
-					 &glint_model_torrance_sparrow, p,
+					 &glint_model_torrance_sparrow, p, NAN,
 					 &e[k]) == 0,
 		      "%s", glint_error_msg());
 	fprintf(stderr, "  residuals: gltf %.4f mitsuba %.4f pbrt %.4f\n",
@@ -90,22 +92,104 @@ static void test_lambert_exact(void)
 	for (int k = 0; k < GLINT_EXPORT_NFORMATS; k++) {
 		struct glint_export e;
 		CHECK(glint_export_refit((enum glint_export_format)k,
-					 &glint_model_lambert, p, &e) == 0,
+					 &glint_model_lambert, p, NAN, &e) == 0,
 		      "%s", glint_error_msg());
 		CHECK(e.residual < 1e-6, "%s: residual %g",
 		      glint_export_format_names[k], e.residual);
 	}
 }
 
-static void test_transparent_refused(void)
+/* A transparent sphere carries across: its absorption per metre from
+ * the transmission per diameter, and only glTF's Schlick Fresnel leaves a
+ * residual. */
+static void test_transparent(void)
 {
-	const double p[] = { 1.5, 0.9, 0.9, 0.9 };
+	const double p[] = { 0.6, 0.7, 0.9, 1.55 };
 	struct glint_export e;
 	CHECK(glint_export_refit(GLINT_EXPORT_MITSUBA, &glint_model_dielectric,
-				 p, &e) == -EINVAL,
-	      "a transparent sphere exported");
-	CHECK_MSG(glint_error_msg(), "no mitsuba export yet");
+				 p, NAN, &e) == -EINVAL,
+	      "a transparent sphere exported without its diameter");
+	CHECK_MSG(glint_error_msg(), "needs the sphere's diameter");
 	glint_error_clear();
+	for (int k = 0; k < GLINT_EXPORT_NFORMATS; k++) {
+		CHECK(glint_export_refit((enum glint_export_format)k,
+					 &glint_model_dielectric, p, 0.05,
+					 &e) == 0,
+		      "%s", glint_error_msg());
+		CHECK(e.dielectric && e.ior == 1.55, "%s: ior %g",
+		      glint_export_format_names[k], e.ior);
+		if (k == GLINT_EXPORT_GLTF)
+			CHECK(e.residual > 0.01 && e.residual < 0.5,
+			      "Schlick's residual %g", e.residual);
+		else
+			CHECK(e.residual == 0, "%s: residual %g",
+			      glint_export_format_names[k], e.residual);
+		CHECK_NEAR(
+			glint_export_residual(&glint_model_dielectric, p, &e),
+			e.residual, 1e-12, "residual restated");
+		json_t *j = glint_export_params_json(&e);
+		json_t *a = json_object_get(j, "absorption_per_m");
+		CHECK_NEAR(json_real_value(json_array_get(a, 0)),
+			   -log(0.6) / 0.05, 1e-9, "sigma_a red");
+		json_decref(j);
+		char *t = glint_export_text(&e, "blue quartz", "params.json",
+					    &glint_model_dielectric);
+		CHECK(t, "no text");
+		static const char *const must[] = {
+			"KHR_materials_volume", "<medium type=\"homogeneous\"",
+			"\"string type\" \"dielectric\"",
+			"ShaderNodeVolumeAbsorption",
+			"name=\"transmission_depth\" type=\"float\" "
+			"value=\"0.05\""
+		};
+		CHECK(t && strstr(t, must[k]), "%s: no '%s' in\n%s",
+		      glint_export_format_names[k], must[k], t ? t : "");
+		free(t);
+	}
+}
+
+/* MaterialX: the layered standard_surface keeps a diffuse under a GGX
+ * lobe close to glint's own (the multiple-scattering compensation and
+ * the albedo-scaled base are what is left); an Oren-Nayar base carries
+ * across; names are MaterialX identifiers. */
+static void test_materialx(void)
+{
+	const double ggx[] = { 0.3, 0.2, 0.1, 0.3, 0.3, 0.3, 0.2, 1.5 };
+	struct glint_export e;
+	CHECK(glint_export_refit(GLINT_EXPORT_MATERIALX, &glint_model_ggx, ggx,
+				 NAN, &e) == 0,
+	      "%s", glint_error_msg());
+	fprintf(stderr, "  materialx residual for ggx: %.4f\n", e.residual);
+	CHECK(e.residual < 0.05, "residual %g", e.residual);
+	CHECK_NEAR(e.x[4] * e.x[4], 0.2, 0.03, "GGX alpha");
+	char *t = glint_export_text(&e, "7-satin.paint", "params.json",
+				    &glint_model_ggx);
+	CHECK(t && strstr(t, "<surfacematerial name=\"m_7_satin_paint\""), "%s",
+	      t ? t : "NULL");
+	free(t);
+
+	double on[GLINT_MAX_PARAMS];
+	for (int k = 0; k < glint_model_oren_nayar.nparams; k++)
+		on[k] = glint_model_oren_nayar.params[k].def;
+	int dr = -1;
+	for (int k = 0; k < glint_model_oren_nayar.nparams; k++)
+		if (!strcmp(glint_model_oren_nayar.params[k].name,
+			    "diffuse_roughness"))
+			dr = k;
+	CHECK(dr >= 0, "no diffuse_roughness");
+	if (dr < 0)
+		return;
+	/* Without a specular lobe the layered base is exactly Oren-Nayar. */
+	on[dr] = 0.4;
+	for (int c = 0; c < 3; c++)
+		on[glint_model_oren_nayar.lobe_param[1] + c] = 0;
+	CHECK(glint_export_refit(GLINT_EXPORT_MATERIALX,
+				 &glint_model_oren_nayar, on, NAN, &e) == 0,
+	      "%s", glint_error_msg());
+	fprintf(stderr, "  materialx residual for oren-nayar: %.4f\n",
+		e.residual);
+	CHECK(e.residual < 1e-4, "residual %g", e.residual);
+	CHECK_NEAR(e.x[3], 0.4, 1e-3, "diffuse_roughness");
 }
 
 /* The files: names made safe, Mitsuba's reflectances within [0, 1] and
@@ -115,7 +199,8 @@ static void test_text(void)
 	const double p[] = { 0.8, 0.8, 0.8, 0.9, 0.9, 0.9, 0.1, 1.5 };
 	struct glint_export e;
 	CHECK(glint_export_refit(GLINT_EXPORT_MITSUBA,
-				 &glint_model_torrance_sparrow, p, &e) == 0,
+				 &glint_model_torrance_sparrow, p, NAN,
+				 &e) == 0,
 	      "%s", glint_error_msg());
 	char *t = glint_export_text(&e, "my <paint>", "params.json",
 				    &glint_model_torrance_sparrow);
@@ -149,7 +234,8 @@ int main(void)
 	RUN(test_pbrt_exact);
 	RUN(test_beckmann_targets);
 	RUN(test_lambert_exact);
-	RUN(test_transparent_refused);
+	RUN(test_transparent);
+	RUN(test_materialx);
 	RUN(test_text);
 	return test_result();
 }

@@ -221,7 +221,7 @@ int main(int argc, char **argv)
 	struct vec3 lights[NLIGHTS];
 	static struct row rows[NLIGHTS][NM];
 	int use[NLIGHTS], nuse = 0, max_pixels = 4096;
-	double cx, cy, rpx;
+	double cx = 0, cy = 0, rpx = 0;
 
 	for (int i = 0; i < NLIGHTS; i++)
 		use[i] = 0;

@@ -332,7 +332,7 @@ static int lm_stage(struct dobj *ob, struct fit_data *d,
 	glint_lm_default_opts(&lo_);
 	lo_.max_iter = o->max_iter;
 	if (eval_p) {
-		double c;
+		double c = NAN;
 		ret = anneal_cost(ob, p, &c);
 		lr->cost = lr->cost0 = c;
 		for (int k = 0; k < 4; k++)

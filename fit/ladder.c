@@ -116,7 +116,7 @@ static int fit_at(struct ladder *l, const struct glint_ladder_setting *s,
 	struct glint_fit_opts o = l->base;
 	struct glint_renderer r;
 	struct glint_envmap *env;
-	const struct glint_image *photo, *weight;
+	const struct glint_image *photo = NULL, *weight = NULL;
 	char what[64];
 	double t0 = glint_now();
 

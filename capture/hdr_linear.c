@@ -2,6 +2,7 @@
 #include "hdr_linear.h"
 
 #include "core/error.h"
+#include "core/parallel.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -78,14 +79,36 @@ static int by_exposure(const void *a, const void *b)
 	return (ex > ey) - (ex < ey);
 }
 
-/* Variance of x = (DN - black) / (t g) when the expected signal is d DN. */
-static double var_x(const struct glint_noise_model *m, double g, double tg,
-		    double d)
+/* What every site needs of one frame, computed once per merge. */
+struct merge_frame {
+	const uint16_t *data;
+	double black, sat, top; /* DN: black level, clipping, full scale */
+	double tg;		/* exposure x gain */
+	double gc;		/* DN per electron at this gain */
+	double floor_var;	/* read noise and quantisation, DN^2 */
+	double inv_tg2;
+};
+
+static void merge_frame_init(struct merge_frame *k, const struct glint_frame *f,
+			     const struct glint_noise_model *m, double top)
 {
-	double gc = g * m->dn_per_electron;
-	double v = gc * fmax(d, 0) +
-		   gc * gc * m->read_noise_e * m->read_noise_e + 1.0 / 12;
-	return v / (tg * tg);
+	k->data = f->data;
+	k->black = f->black_level;
+	k->top = top;
+	k->sat = m->saturation_dn > 0
+			 ? m->saturation_dn
+			 : f->black_level + 0.95 * (top - f->black_level);
+	k->tg = f->exposure_s * f->gain;
+	k->gc = f->gain * m->dn_per_electron;
+	k->floor_var =
+		k->gc * k->gc * m->read_noise_e * m->read_noise_e + 1.0 / 12;
+	k->inv_tg2 = 1 / (k->tg * k->tg);
+}
+
+/* Variance of x = (DN - black) / (t g) when the expected signal is d DN. */
+static double var_x(const struct merge_frame *k, double d)
+{
+	return (k->gc * fmax(d, 0) + k->floor_var) * k->inv_tg2;
 }
 
 /*
@@ -94,9 +117,8 @@ static double var_x(const struct glint_noise_model *m, double g, double tg,
  * from each sample's own value, then from the merged estimate (unbiased
  * weights).  0 when every frame is clipped there.
  */
-static int merge_site(const struct glint_frame *const *f, int n,
-		      const struct glint_noise_model *noise, double top,
-		      size_t s, double *xhat, double *var)
+static int merge_site(const struct merge_frame *f, int n, size_t s,
+		      double *xhat, double *var)
 {
 	double sw = 0, swx = 0;
 
@@ -104,21 +126,14 @@ static int merge_site(const struct glint_frame *const *f, int n,
 	for (int pass = 0; pass < 2; pass++) {
 		sw = swx = 0;
 		for (int i = 0; i < n; i++) {
-			const struct glint_frame *fi = f[i];
-			double sat = noise->saturation_dn > 0
-					     ? noise->saturation_dn
-					     : fi->black_level +
-						       0.95 * (top -
-							       fi->black_level);
-			double dn = fi->data[s];
-			if (dn >= sat)
+			const struct merge_frame *k = &f[i];
+			double dn = k->data[s];
+			if (dn >= k->sat)
 				continue;
-			double tg = fi->exposure_s * fi->gain;
-			double d = dn - fi->black_level;
-			double v = var_x(noise, fi->gain, tg,
-					 pass ? *xhat * tg : d);
+			double d = dn - k->black;
+			double v = var_x(k, pass ? *xhat * k->tg : d);
 			sw += 1 / v;
-			swx += d / tg / v;
+			swx += d / k->tg / v;
 		}
 		if (!(sw > 0))
 			return 0;
@@ -130,26 +145,57 @@ static int merge_site(const struct glint_frame *const *f, int n,
 
 /* Motion check at one site on frames adjacent in exposure: their values
  * per unit exposure must agree within 5 sigma. */
-static void motion_check(const struct glint_frame *const *f, int n,
-			 const struct glint_noise_model *noise, double top,
-			 size_t s, double xhat, struct glint_hdr_report *rep)
+static void motion_check(const struct merge_frame *f, int n, size_t s,
+			 double xhat, struct glint_hdr_report *rep)
 {
 	for (int i = 0; i + 1 < n && i < 32; i++) {
-		const struct glint_frame *a = f[i], *b = f[i + 1];
-		double da = a->data[s] - a->black_level,
-		       db = b->data[s] - b->black_level;
-		double ra = top - a->black_level, rb = top - b->black_level;
+		const struct merge_frame *a = &f[i], *b = &f[i + 1];
+		double da = a->data[s] - a->black, db = b->data[s] - b->black;
+		double ra = a->top - a->black, rb = b->top - b->black;
 		if (da < 0.02 * ra || da > 0.9 * ra || db < 0.02 * rb ||
 		    db > 0.9 * rb)
 			continue;
-		double ta = a->exposure_s * a->gain,
-		       tb = b->exposure_s * b->gain;
-		double v = var_x(noise, a->gain, ta, xhat * ta) +
-			   var_x(noise, b->gain, tb, xhat * tb);
-		double z = (da / ta - db / tb) / sqrt(v);
+		double v = var_x(a, xhat * a->tg) + var_x(b, xhat * b->tg);
+		double z = (da / a->tg - db / b->tg) / sqrt(v);
 		rep->compared[i]++;
 		if (fabs(z) > 5)
 			rep->disagree[i] += 1;
+	}
+}
+
+/* The merge's rows [begin, end) on one thread, its counts into its own
+ * report. */
+struct merge_job {
+	const struct merge_frame *f;
+	int n, width;
+	struct glint_raw_hdr *out;
+	struct glint_hdr_report *part; /* one per thread */
+};
+
+static void merge_rows(void *ctx, int begin, int end, int thread)
+{
+	const struct merge_job *j = ctx;
+	const struct merge_frame *f0 = &j->f[0];
+	struct glint_hdr_report *rep = &j->part[thread];
+	struct glint_raw_hdr *out = j->out;
+
+	for (size_t s = (size_t)begin * j->width; s < (size_t)end * j->width;
+	     s++) {
+		double xhat, var;
+		if (!merge_site(j->f, j->n, s, &xhat, &var)) {
+			/* Clipped in every frame: a lower bound, no weight. */
+			out->x[s] = (float)((f0->top - f0->black) / f0->tg);
+			out->var[s] = 0;
+			out->valid[s] = 0;
+			rep->invalid_sites++;
+			continue;
+		}
+		out->x[s] = (float)xhat;
+		out->var[s] = (float)var;
+		out->valid[s] = 1;
+		if (xhat < 3 * sqrt(var))
+			rep->dark_sites++;
+		motion_check(j->f, j->n, s, xhat, rep);
 	}
 }
 
@@ -158,7 +204,9 @@ int glint_hdr_merge_raw(const struct glint_frame *frames, int n,
 			struct glint_raw_hdr *out, struct glint_hdr_report *rep)
 {
 	const struct glint_frame **f;
-	struct glint_hdr_report local;
+	struct merge_frame *mf;
+	struct glint_hdr_report local, *part;
+	int nthreads = glint_cpu_count();
 	int ret = check_frames(frames, n);
 
 	memset(out, 0, sizeof(*out));
@@ -169,11 +217,15 @@ int glint_hdr_merge_raw(const struct glint_frame *frames, int n,
 		return ret;
 	size_t ns = (size_t)frames[0].width * frames[0].height;
 	f = malloc((size_t)n * sizeof(*f));
+	mf = malloc((size_t)n * sizeof(*mf));
+	part = calloc((size_t)nthreads, sizeof(*part));
 	out->x = malloc(ns * sizeof(float));
 	out->var = malloc(ns * sizeof(float));
 	out->valid = malloc(ns);
-	if (!f || !out->x || !out->var || !out->valid) {
+	if (!f || !mf || !part || !out->x || !out->var || !out->valid) {
 		free(f);
+		free(mf);
+		free(part);
 		glint_raw_hdr_release(out);
 		return glint_error_set(ENOMEM, "HDR merge: out of memory");
 	}
@@ -185,27 +237,22 @@ int glint_hdr_merge_raw(const struct glint_frame *frames, int n,
 	snprintf(out->format, sizeof(out->format), "%s", frames[0].format);
 
 	double top = (1 << frames[0].bit_depth) - 1;
+	for (int i = 0; i < n; i++)
+		merge_frame_init(&mf[i], f[i], noise, top);
 	rep->frames = n;
 	rep->sites = (long)ns;
 	rep->pairs = n - 1 < 32 ? n - 1 : 32;
-	for (size_t s = 0; s < ns; s++) {
-		double xhat, var;
-		if (!merge_site(f, n, noise, top, s, &xhat, &var)) {
-			/* Clipped in every frame: a lower bound, no weight. */
-			const struct glint_frame *fs = f[0];
-			out->x[s] = (float)((top - fs->black_level) /
-					    (fs->exposure_s * fs->gain));
-			out->var[s] = 0;
-			out->valid[s] = 0;
-			rep->invalid_sites++;
-			continue;
+	/* Rows to every thread; each counts into its own report (sums of
+	 * whole numbers: the same totals in any order). */
+	struct merge_job job = { mf, n, frames[0].width, out, part };
+	glint_parallel_for(frames[0].height, 8, nthreads, merge_rows, &job);
+	for (int t = 0; t < nthreads; t++) {
+		rep->invalid_sites += part[t].invalid_sites;
+		rep->dark_sites += part[t].dark_sites;
+		for (int i = 0; i < rep->pairs; i++) {
+			rep->compared[i] += part[t].compared[i];
+			rep->disagree[i] += part[t].disagree[i];
 		}
-		out->x[s] = (float)xhat;
-		out->var[s] = (float)var;
-		out->valid[s] = 1;
-		if (xhat < 3 * sqrt(var))
-			rep->dark_sites++;
-		motion_check(f, n, noise, top, s, xhat, rep);
 	}
 	for (int i = 0; i < rep->pairs; i++) {
 		if (rep->compared[i])
@@ -214,6 +261,8 @@ int glint_hdr_merge_raw(const struct glint_frame *frames, int n,
 			rep->moved = 1;
 	}
 	free(f);
+	free(mf);
+	free(part);
 	if (rep->invalid_sites == rep->sites) {
 		glint_raw_hdr_release(out);
 		return glint_error_set(ERANGE,

@@ -3,34 +3,70 @@
 
 usage: sample_lines.py [--world PATH STEPS_PER_TURN] LOG NAME=SYSFS_VALUE_FILE...
 
-Polls each line's sysfs `value` (what the chip's driver holds: the physical
-level) as fast as it can and writes every change as a JSON line
-{"t": monotonic seconds, "line": NAME, "value": 0|1} to LOG, the first
-reading of each line included. Runs until SIGTERM; the log is flushed on
-every change so a reader sees it while it runs.
+Every value the kernel sets on the named lines comes from its own record,
+the gpio_value trace event (tracefs), so no change is missed however the
+VM's CPUs are scheduled: polling sysfs under TCG on a loaded host missed
+50 ms step pulses. Each line's first level is read from its gpio-sim sysfs
+`value` (the physical level). Every change is written as a JSON line
+{"t": seconds on CLOCK_MONOTONIC (the event's kernel time), "line": NAME,
+"value": 0|1} to LOG, flushed at once so a reader sees it while it runs.
+Runs until SIGTERM.
 
 With --world, it also plays the rig's hardware for the simulated camera:
 the lamps follow the `lights` line and the turntable turns 360/STEPS_PER_TURN
 degrees at each rising edge of `step` (positive with `dir` high), and PATH
 says "LIGHTS DEGREES" (the sim camera's world=PATH), replaced whole at each
-change.
+change. Run it at a real-time priority so that the world is written as soon
+as the kernel has the change (test_gpio_sim.sh).
 """
+import glob
 import json
 import os
+import re
 import signal
 import sys
 import time
 
-stop = False
+TRACE = "/sys/kernel/tracing"
+EVENT = TRACE + "/events/gpio/gpio_value"
+
+
+class Stop(Exception):
+    pass
 
 
 def on_term(*_):
-    global stop
-    stop = True
+    raise Stop()
+
+
+def put(path, text):
+    with open(path, "w") as f:
+        f.write(text)
+
+
+def chip_base(chip_dir):
+    """The global GPIO number of the chip's line 0, which the trace event
+    names lines by: the legacy class device whose parent is the chip's."""
+    parent = os.path.realpath(os.path.join(chip_dir, ".."))
+    for d in glob.glob("/sys/class/gpio/gpiochip*"):
+        if os.path.realpath(os.path.join(d, "device")) == parent:
+            return int(open(os.path.join(d, "base")).read())
+    sys.exit("sample_lines: no /sys/class/gpio entry for %s" % chip_dir)
+
+
+def start_trace():
+    if not os.path.exists(EVENT):
+        os.makedirs(TRACE, exist_ok=True)
+        if os.system("mount -t tracefs nodev " + TRACE) != 0:
+            sys.exit("sample_lines: cannot mount tracefs")
+    put(EVENT + "/enable", "0")
+    put(TRACE + "/trace", "")  # nothing left from an earlier reader
+    put(TRACE + "/trace_clock", "mono")
+    put(EVENT + "/filter", "get == 0")  # values set, not read
+    put(EVENT + "/enable", "1")
 
 
 def main():
-    signal.signal(signal.SIGTERM, on_term)
     args = sys.argv[1:]
     world = None
     if args[0] == "--world":
@@ -41,29 +77,57 @@ def main():
 
     def write_world():
         tmp = world + ".tmp"
-        with open(tmp, "w") as f:
-            f.write("%d %.6f\n" % (state["lights"], state["deg"]))
+        put(tmp, "%d %.6f\n" % (state["lights"], state["deg"]))
         os.replace(tmp, world)
 
-    if world:
-        write_world()
+    def change(name, v, t, last):
+        if v == last.get(name):
+            return
+        prev = last.get(name)
+        last[name] = v
+        log.write(json.dumps({"t": t, "line": name, "value": v}) + "\n")
+        log.flush()
+        if world and name in state:
+            if name == "step" and v == 1 and prev is not None:
+                state["deg"] += (360.0 if state["dir"] else -360.0) / per_turn
+            state[name] = v
+            write_world()
+
+    signal.signal(signal.SIGTERM, on_term)
+    start_trace()
+    by_gpio, last = {}, {}
     lines = []
     for arg in args[1:]:  # in order: list dir before step
         name, path = arg.split("=", 1)
-        lines.append((name, os.open(path, os.O_RDONLY), [None]))
-    while not stop:
-        for name, fd, last in lines:
-            v = int(os.pread(fd, 8, 0).strip())
-            if v != last[0]:
-                prev, last[0] = last[0], v
-                log.write(json.dumps({"t": time.monotonic(), "line": name, "value": v}) + "\n")
-                log.flush()
-                if world and name in state:
-                    if name == "step" and v == 1 and prev is not None:
-                        state["deg"] += (360.0 if state["dir"] else -360.0) / per_turn
-                    state[name] = v
-                    write_world()
-        time.sleep(0.0005)
+        offset = int(re.search(r"sim_gpio(\d+)", path).group(1))
+        chip = os.path.dirname(os.path.dirname(path))
+        by_gpio[chip_base(chip) + offset] = name
+        lines.append((name, path))
+    if world:
+        write_world()
+    # Trace on first, then the levels: a change between the two is seen
+    # twice at worst, and a repeated value is not a change.
+    now = time.monotonic()
+    for name, path in lines:
+        change(name, int(open(path).read().strip()), now, last)
+    event = re.compile(rb"(\d+\.\d+): gpio_value: (\d+) set (\d+)")
+    pipe = os.open(TRACE + "/trace_pipe", os.O_RDONLY)
+    buf = b""
+    try:
+        while True:
+            chunk = os.read(pipe, 65536)
+            if not chunk:
+                continue
+            buf += chunk
+            *done, buf = buf.split(b"\n")
+            for line in done:
+                m = event.search(line)
+                if m and int(m.group(2)) in by_gpio:
+                    change(by_gpio[int(m.group(2))], int(int(m.group(3)) != 0),
+                           float(m.group(1)), last)
+    except Stop:
+        pass
+    put(EVENT + "/enable", "0")
 
 
 main()

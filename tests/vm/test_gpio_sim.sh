@@ -104,8 +104,12 @@ check "... free again once gpioset is gone" \
 	wait_until 10 "$glint" check-rig --config "$tmp/rig.json"
 
 # Outputs read back from the chip while glint drives them.
+# The sampler reads the kernel's own record of every value set (trace
+# events), so it misses no 50 ms step pulse however the VM's vCPUs are
+# scheduled on a loaded host; at a real-time priority it writes the
+# simulated camera's world as soon as the kernel has the change.
 start_sampler() { # LOG WORLD
-	python3 "$here/sample_lines.py" --world "$2" 40 "$1" lights="$sys/sim_gpio22/value" \
+	chrt -f 50 python3 "$here/sample_lines.py" --world "$2" 40 "$1" lights="$sys/sim_gpio22/value" \
 		led="$sys/sim_gpio27/value" dir="$sys/sim_gpio24/value" \
 		step="$sys/sim_gpio23/value" enable="$sys/sim_gpio25/value" &
 	sampler=$!

@@ -18,22 +18,22 @@ void glint_bracket_default_opts(struct glint_bracket_opts *o)
 	o->max_drop = 6;
 }
 
+/* Metering apart: its first guess. */
+#define METER_FIRST_S 0.01
+
 static int cancelled(const struct glint_bracket_opts *o)
 {
 	return o->cancel && *o->cancel;
 }
 
-static int cmp_u16(const void *a, const void *b)
-{
-	return (int)*(const uint16_t *)a - (int)*(const uint16_t *)b;
-}
-
+/* The ROI's saturated samples and its 1st and 99th percentiles above
+ * black, from a histogram of codes: one pass, however large the frame. */
 static void roi_stats(const struct glint_frame *f, const struct glint_roi *roi,
 		      int *saturated, double *p01, double *p99)
 {
 	struct glint_roi r = *roi;
-	uint16_t top = (uint16_t)((1u << f->bit_depth) - 1);
-	int n = 0;
+	unsigned top = (1u << f->bit_depth) - 1;
+	size_t n = 0;
 
 	if (r.x1 <= r.x0 || r.y1 <= r.y0) {
 		r.x0 = r.y0 = 0;
@@ -41,28 +41,48 @@ static void roi_stats(const struct glint_frame *f, const struct glint_roi *roi,
 		r.y1 = f->height;
 	}
 	int ch = f->channels > 0 ? f->channels : 1;
-	uint16_t *v = malloc((size_t)(r.x1 - r.x0) * (r.y1 - r.y0) * ch *
-			     sizeof(uint16_t));
+	size_t *hist = calloc((size_t)top + 1, sizeof(*hist));
 	*saturated = 0;
 	*p01 = 0;
 	if (p99)
 		*p99 = 0;
-	if (!v)
+	if (!hist)
 		return;
-	for (int y = r.y0; y < r.y1; y++)
-		for (int x = r.x0; x < r.x1; x++)
-			for (int c = 0; c < ch; c++) {
-				uint16_t d = f->data[((size_t)y * f->width +
-						      x) * ch +
-						     c];
-				*saturated += d >= top;
-				v[n++] = d;
-			}
-	qsort(v, (size_t)n, sizeof(uint16_t), cmp_u16);
-	*p01 = v[(size_t)(0.01 * (n - 1))] - f->black_level;
-	if (p99)
-		*p99 = v[(size_t)(0.99 * (n - 1))] - f->black_level;
-	free(v);
+	for (int y = r.y0; y < r.y1; y++) {
+		const uint16_t *row =
+			f->data + ((size_t)y * f->width + r.x0) * ch;
+		for (size_t i = 0; i < (size_t)(r.x1 - r.x0) * ch; i++)
+			hist[row[i] > top ? top : row[i]]++;
+	}
+	for (unsigned c = 0; c <= top; c++)
+		n += hist[c];
+	*saturated = (int)hist[top];
+	/* The quantiles of the codes' distribution, each code standing for
+	 * [c - 1/2, c + 1/2) with its samples spread evenly: the k-th sample's
+	 * code alone is biased low by half a code on average, which at the
+	 * few DN of a dark frame overstates the exposure the floor needs. */
+	double q01 = 0.01 * (double)n, q99 = 0.99 * (double)n;
+	size_t seen = 0;
+	int got01 = 0;
+	for (unsigned c = 0; c <= top && n; c++) {
+		if (!hist[c])
+			continue;
+		double before = (double)seen, after = (double)(seen + hist[c]);
+		seen += hist[c];
+		if (!got01 && after >= q01) {
+			*p01 = c - 0.5 + (q01 - before) / (double)hist[c] -
+			       f->black_level;
+			got01 = 1;
+		}
+		if (after >= q99) {
+			if (p99)
+				*p99 = c - 0.5 +
+				       (q99 - before) / (double)hist[c] -
+				       f->black_level;
+			break;
+		}
+	}
+	free(hist);
 }
 
 void glint_frame_roi_stats(const struct glint_frame *f,
@@ -82,7 +102,7 @@ int glint_bracket_meter(struct glint_camera *cam, const struct glint_roi *roi,
 	int sat, ret;
 
 	glint_camera_describe(cam, &in);
-	e = fmin(fmax(0.01, in.exposure_min_s), in.exposure_max_s);
+	e = fmin(fmax(METER_FIRST_S, in.exposure_min_s), in.exposure_max_s);
 	*frames = 0;
 	for (int k = 0; k < 5; k++) {
 		if (cancelled(o))
@@ -133,6 +153,10 @@ struct planner {
 	int low_done, high_done, down_exhausted, up_exhausted;
 	double best_p01, best_eg; /* darkest-pixel level of the most exposed
 				     frame seen, and its exposure x gain */
+	double noise_p01;	  /* the lowest seen (<= 0): the read noise's
+				     1st percentile, where there is no signal */
+	struct glint_frame held;  /* the longest unsaturated frame so far */
+	int has_held;
 };
 
 static int plan_next(void *ctx, double *e, double *g)
@@ -166,9 +190,15 @@ static int plan_next(void *ctx, double *e, double *g)
 	if (p->high_done || p->up_exhausted)
 		return 0;
 	/* Enough requested already, if the sensor is linear?  Predict from
-	 * the most exposed frame whose darkest pixels are measurable. */
-	if (p->best_p01 >= 3) {
-		double need = p->best_eg * p->o->floor_dn / p->best_p01;
+	 * the most exposed frame whose darkest pixels are measurable: their
+	 * 1st percentile is the signal's plus the noise's (negative), so the
+	 * signal grows from that offset, not from zero (from zero, a frame a
+	 * few DN up overstates the need by a third: one long frame too many
+	 * on the test card). */
+	double b = p->noise_p01;
+	if (p->best_p01 - b >= 3) {
+		double need =
+			p->best_eg * (p->o->floor_dn - b) / (p->best_p01 - b);
 		if (p->last_up >= need * 1.05)
 			return 0; /* wait for the frames in flight */
 	}
@@ -193,22 +223,12 @@ static int plan_next(void *ctx, double *e, double *g)
 	return 1;
 }
 
-static int got_frame(void *ctx, struct glint_frame *f)
+/* A frame into the bracket, and to the caller's on_frame. */
+static int keep(struct planner *p, struct glint_frame *f)
 {
-	struct planner *p = ctx;
 	struct glint_bracket *b = p->b;
-	int sat, ret = 0;
-	double p01;
+	int ret = 0;
 
-	glint_frame_roi_stats(f, p->roi, &sat, &p01);
-	if (sat == 0)
-		p->low_done = 1;
-	if (p01 >= p->o->floor_dn)
-		p->high_done = 1;
-	if (f->exposure_s * f->gain > p->best_eg) {
-		p->best_eg = f->exposure_s * f->gain;
-		p->best_p01 = p01;
-	}
 	if (b->n >= GLINT_BRACKET_MAX) {
 		glint_frame_release(f);
 		return 0;
@@ -220,6 +240,57 @@ static int got_frame(void *ctx, struct glint_frame *f)
 			ret = -EIO;
 	}
 	return ret;
+}
+
+static double eg(const struct glint_frame *f)
+{
+	return f->exposure_s * f->gain;
+}
+
+static int got_frame(void *ctx, struct glint_frame *f)
+{
+	struct planner *p = ctx;
+	int sat, ret = 0;
+	double p01;
+
+	glint_frame_roi_stats(f, p->roi, &sat, &p01);
+	if (sat == 0)
+		p->low_done = 1;
+	if (p01 >= p->o->floor_dn)
+		p->high_done = 1;
+	p->noise_p01 = fmin(p->noise_p01, p01);
+	if (eg(f) > p->best_eg) {
+		p->best_eg = eg(f);
+		p->best_p01 = p01;
+	}
+	/* Of the frames with no saturated ROI sample only the longest is
+	 * needed: it holds the brightest pixels unclipped with the most
+	 * signal.  So an unsaturated frame waits here until a longer one
+	 * replaces it or a saturated one shows it is the longest; the ones
+	 * replaced are neither kept nor counted against the frame cap. */
+	if (sat == 0) {
+		if (p->has_held && eg(f) <= eg(&p->held)) {
+			glint_frame_release(f);
+			p->requested--;
+		} else {
+			if (p->has_held) {
+				glint_frame_release(&p->held);
+				p->requested--;
+			}
+			p->held = *f;
+			p->has_held = 1;
+		}
+		return 0;
+	}
+	if (p->has_held) {
+		p->has_held = 0;
+		ret = keep(p, &p->held);
+		if (ret < 0) {
+			glint_frame_release(f);
+			return ret;
+		}
+	}
+	return keep(p, f);
 }
 
 int glint_bracket_capture(struct glint_camera *cam, const struct glint_roi *roi,
@@ -244,20 +315,35 @@ int glint_bracket_capture(struct glint_camera *cam, const struct glint_roi *roi,
 	p.b = b;
 	p.t0 = clock->now(clock->ctx);
 	p.step = exp2(o->step_ev);
-	/* Start at o->start_s or a metered exposure, and extend both ways:
-	 * down from the start, then up from it. */
+	/* Start at o->start_s, or at the shortest exposure, and extend both
+	 * ways: down from the start, then up from it.  From the shortest
+	 * there is only the way up and no metering: each frame is kept and
+	 * the goals end the ladder.  Below the scene's needs it spends a few
+	 * frames of at most the frame period each, where metering apart
+	 * spends frames that each wait out the sensor's latency and are
+	 * thrown away, and a start in the middle pays that latency again
+	 * when it turns from down to up (bench/capture times all three). */
 	double e = o->start_s;
-	if (e <= 0) {
+	if (e <= 0 && o->meter_apart) {
 		ret = glint_bracket_meter(cam, roi, o, &e, &b->metering_frames);
 		if (ret < 0)
 			return ret;
 	}
+	if (e <= 0)
+		e = p.in.exposure_min_s;
 	e = fmin(fmax(e, p.in.exposure_min_s), p.in.exposure_max_s);
 	b->metered_start_s = p.e0 = p.next_down = p.last_up = e;
 	struct glint_stream_cb cb = { plan_next, got_frame, &p };
 	ret = glint_camera_stream(cam, &cb, o->max_drop, NULL);
 	if (ret == 0 && o->cancel && *o->cancel)
 		ret = glint_error_set(ECANCELED, "capture cancelled");
+	if (p.has_held) {
+		p.has_held = 0;
+		if (ret == 0)
+			ret = keep(&p, &p.held);
+		else
+			glint_frame_release(&p.held);
+	}
 	if (ret < 0) {
 		glint_bracket_release(b);
 		return ret;

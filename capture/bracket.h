@@ -4,9 +4,11 @@
 
 /*
  * Exposure brackets that cover a region of interest's dynamic range.
- * From a metered start exposure the planner steps down (by step_ev) until the
- * ROI has no saturated pixel, and up until the ROI's darkest pixels (its 1st
- * percentile) are above the noise floor; when exposure reaches the
+ * From a start exposure the planner steps down (by step_ev) until the ROI
+ * has no saturated pixel, and up until the ROI's darkest pixels (its 1st
+ * percentile) are above the noise floor; the frames themselves are the
+ * meter (no frames are spent before the bracket: wherever it starts, the
+ * two goals bound it); when exposure reaches the
  * camera's maximum it raises gain instead, and says so.  Capped in frame
  * count and total time; every frame carries its applied exposure and gain.
  */
@@ -25,9 +27,12 @@ struct glint_bracket_opts {
 	double step_ev;	   /* default 1 */
 	int max_frames;	   /* default 24 */
 	double max_time_s; /* total capture time, default 60 */
-	double start_s;	   /* 0: metered */
-	double floor_dn;   /* darkest ROI pixels must exceed black + this */
-	int max_drop;	   /* frames to wait for an exposure to land */
+	double start_s;	   /* 0: metered by the bracket's own frames */
+	/* Meter with frames of its own before the bracket starts, as glint
+	 * did until 2026-11 (bench/capture compares the two). */
+	int meter_apart;
+	double floor_dn; /* darkest ROI pixels must exceed black + this */
+	int max_drop;	 /* frames to wait for an exposure to land */
 	/* Called with each frame as it is captured (capture order, from 0),
 	 * e.g. to put it on disk before the next; nonzero return stops the
 	 * bracket with that error. */
@@ -47,7 +52,7 @@ struct glint_bracket {
 	int covered_low, covered_high; /* the two goals reached */
 	double seconds;		       /* on the camera's clock */
 	double metered_start_s;	       /* where it started */
-	int metering_frames;	       /* frames spent metering */
+	int metering_frames;	       /* frames spent metering apart */
 };
 
 int glint_bracket_capture(struct glint_camera *cam, const struct glint_roi *roi,
@@ -64,7 +69,8 @@ void glint_frame_roi_stats(const struct glint_frame *f,
 
 /* A start exposure: the one that puts the ROI's 99th percentile near
  * half the range, found in at most 5 frames from 10 ms (fewer when
- * the first lands); frames are not kept. */
+ * the first lands); frames are not kept.  The bracket calls it only with
+ * meter_apart set. */
 int glint_bracket_meter(struct glint_camera *cam, const struct glint_roi *roi,
 			const struct glint_bracket_opts *o, double *start_s,
 			int *frames);

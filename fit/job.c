@@ -18,6 +18,7 @@
 #include "core/error.h"
 #include "core/path.h"
 #include "core/formats.h"
+#include "core/json.h"
 #include "core/log.h"
 
 #include <math.h>
@@ -214,6 +215,175 @@ static const char *material_name(const struct glint_fit_job *job, char buf[256])
 	return strcmp(buf, ".") && strcmp(buf, "..") && *buf ? buf : "material";
 }
 
+/*
+ * The final render, with its own Monte Carlo noise held below the photo's
+ * where the photo has a noise model (a weight image of 1/variance), so
+ * that the residual judged in misfit and compare.png is the photo's noise
+ * and the model's misfit, not the render's.  Two renders on independent
+ * sample sets give the noise of their mean, (a - b)^2 / 4 per value; in
+ * the photo's variance units, averaged over the sphere's weighted values,
+ * that is q.  At the scene's sample counts q is measured; when it is above
+ * RENDER_NOISE_TARGET (the render's noise at most half the photo's, adding
+ * at most a quarter to chi^2) one more pair is rendered with the samples
+ * that should bring the two together to the target (q falls as 1 /
+ * samples), at most RENDER_MAX_FACTOR times the scene's, and the two
+ * means are combined by inverse variance.  Without a noise model the
+ * scene's counts are used as they are.
+ */
+#define RENDER_NOISE_TARGET 0.25
+#define RENDER_MAX_FACTOR   4
+
+static double render_noise(const struct glint_image *a,
+			   const struct glint_image *b,
+			   const struct glint_image *cov,
+			   const struct glint_image *w, long *nv)
+{
+	double sum = 0;
+	long n = 0;
+	size_t np = (size_t)a->width * a->height;
+	for (size_t i = 0; i < np; i++) {
+		if (cov->data[3 * i] < 1)
+			continue; /* rim or backdrop */
+		for (int c = 0; c < 3; c++) {
+			double wi = w->data[3 * i + c];
+			double d = a->data[3 * i + c] - b->data[3 * i + c];
+			if (!(wi > 0) || !isfinite(wi) || !isfinite(d))
+				continue;
+			sum += d * d / 4 * wi;
+			n++;
+		}
+	}
+	*nv = n;
+	return n ? sum / n : NAN;
+}
+
+/* Into img, the mean of a pair of renders at `factor` times the scene's
+ * samples; b receives the second.  *q: the mean's noise. */
+static int render_pair(struct glint_renderer *r,
+		       const struct glint_fit_job *job,
+		       const struct glint_model_ops *model, const double *p,
+		       int factor, uint32_t seed, struct glint_image *img,
+		       struct glint_image *b, struct glint_image *cov,
+		       double *q, long *nv)
+{
+	struct glint_shade_opts so = {
+		.light_samples = job->scene.light_samples * factor,
+		.brdf_samples = job->scene.brdf_samples * factor,
+		.background = 1,
+		.nthreads = job->nthreads,
+		.seed = seed,
+	};
+	int ret = glint_renderer_shade(r, model, p, &so, img, cov);
+	so.seed = seed + 1;
+	if (ret == 0)
+		ret = glint_renderer_shade(r, model, p, &so, b, NULL);
+	if (ret < 0)
+		return ret;
+	*q = render_noise(img, b, cov, job->weight, nv);
+	for (size_t i = 0; i < (size_t)img->width * img->height * 3; i++)
+		img->data[i] = 0.5f * (img->data[i] + b->data[i]);
+	return 0;
+}
+
+static json_t *render_step(const struct glint_fit_job *job, int factor,
+			   double q)
+{
+	return json_pack("{s:i, s:i, s:o}", "light_samples",
+			 2 * factor * job->scene.light_samples, "brdf_samples",
+			 2 * factor * job->scene.brdf_samples, "noise",
+			 glint_json_real_or_null(q));
+}
+
+static int render_final(struct glint_renderer *r,
+			const struct glint_fit_job *job,
+			const struct glint_model_ops *model, const double *p,
+			struct glint_image *img, struct glint_image *cov,
+			json_t **info)
+{
+	const struct glint_image *w = job->weight;
+	double t0 = glint_now(), q1, q2 = NAN;
+	struct glint_image *b = NULL, *more = NULL;
+	long nv = 0;
+	int ret, factor = 0;
+
+	*info = NULL;
+	if (!w || model->transparent || w->width != img->width ||
+	    w->height != img->height) {
+		struct glint_shade_opts so = {
+			.light_samples = job->scene.light_samples,
+			.brdf_samples = job->scene.brdf_samples,
+			.background = 1,
+			.nthreads = job->nthreads,
+		};
+		ret = glint_renderer_shade(r, model, p, &so, img, cov);
+		if (ret < 0)
+			return ret;
+		*info = json_pack("{s:i, s:i, s:s}", "light_samples",
+				  so.light_samples, "brdf_samples",
+				  so.brdf_samples, "noise",
+				  "not compared: the photo has no noise model");
+		return *info ? 0 : glint_error_set(ENOMEM, "out of memory");
+	}
+	b = glint_image_new(img->width, img->height);
+	more = glint_image_new(img->width, img->height);
+	if (!b || !more) {
+		ret = glint_error_set(ENOMEM, "out of memory");
+		goto out;
+	}
+	ret = render_pair(r, job, model, p, 1, 0, img, b, cov, &q1, &nv);
+	if (ret < 0)
+		goto out;
+	double q = q1;
+	if (q1 > RENDER_NOISE_TARGET) {
+		factor = (int)ceil(q1 / RENDER_NOISE_TARGET - 1 - 1e-9);
+		if (factor > RENDER_MAX_FACTOR)
+			factor = RENDER_MAX_FACTOR;
+		ret = render_pair(r, job, model, p, factor, 2, more, b, cov,
+				  &q2, &nv);
+		if (ret < 0)
+			goto out;
+		/* Inverse-variance weights, one for the whole image: the
+		 * pixels' variances all fall with the samples alike. */
+		double w1 = 1 / q1, w2 = 1 / q2;
+		if (!(w2 > 0) || !isfinite(w2))
+			w1 = 0, w2 = 1; /* a noiseless second pair */
+		for (size_t i = 0; i < (size_t)img->width * img->height * 3;
+		     i++)
+			img->data[i] = (float)((w1 * img->data[i] +
+						w2 * more->data[i]) /
+					       (w1 + w2));
+		q = 1 / (w1 + w2);
+	}
+	int total = 2 * (1 + factor);
+	json_t *steps = json_array();
+	if (steps) {
+		json_array_append_new(steps, render_step(job, 1, q1));
+		if (factor)
+			json_array_append_new(steps,
+					      render_step(job, factor, q2));
+	}
+	*info = json_pack("{s:i, s:i, s:o, s:f, s:b, s:I, s:f, s:o*}",
+			  "light_samples", total * job->scene.light_samples,
+			  "brdf_samples", total * job->scene.brdf_samples,
+			  "noise", glint_json_real_or_null(q), "noise_target",
+			  RENDER_NOISE_TARGET, "below_target",
+			  q <= RENDER_NOISE_TARGET, "values", (json_int_t)nv,
+			  "seconds", glint_now() - t0, "steps", steps);
+	if (!*info) {
+		ret = glint_error_set(ENOMEM, "out of memory");
+		goto out;
+	}
+	glint_log_info("final render: %d + %d samples, its noise %.2f of the "
+		       "photo's variance (target %.2f), %.1f s",
+		       total * job->scene.light_samples,
+		       total * job->scene.brdf_samples, q, RENDER_NOISE_TARGET,
+		       glint_now() - t0);
+out:
+	glint_image_free(b);
+	glint_image_free(more);
+	return ret;
+}
+
 /* params.json, render.exr and compare.png into job->out_dir, as one
  * atomic folder (the old one stays whole on failure). */
 static int write_results(const struct glint_fit_job *job, const char *dir,
@@ -404,20 +574,17 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 		ret = glint_error_set(ENOMEM, "out of memory");
 		goto out;
 	}
-	struct glint_shade_opts so = {
-		.light_samples = job->scene.light_samples,
-		.brdf_samples = job->scene.brdf_samples,
-		.background = 1,
-		.nthreads = job->nthreads,
-	};
-	ret = glint_renderer_shade(&r, model, res.p, &so, img, cov);
+	json_t *render_info = NULL;
+	ret = render_final(&r, job, model, res.p, img, cov, &render_info);
 	if (ret < 0)
 		goto out;
 	doc = params_doc(job, &o, &res);
 	if (!doc) {
+		json_decref(render_info);
 		ret = glint_error_set(ENOMEM, "out of memory");
 		goto out;
 	}
+	json_object_set_new(doc, "render", render_info);
 	if (why)
 		json_object_set(doc, "model_choice", why);
 	if (fidelity)

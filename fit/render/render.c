@@ -134,7 +134,9 @@ static void shade_rows(void *ctx, int y0, int y1, int thread)
 						h,
 						glint_hash32(
 							(uint32_t)(pix * spp +
-								   s)),
+								   s) +
+							job->opts->seed *
+								0x9e3779b9u),
 						job->tracer, job->env,
 						job->model, job->params,
 						job->opts->light_samples,

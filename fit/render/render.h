@@ -26,6 +26,9 @@ struct glint_shade_opts {
 	int background;	   /* misses show the env map (else black) */
 	int nthreads;	   /* 0 = all CPUs */
 	struct glint_progress *progress; /* may be NULL; counts rows */
+	/* Which sample sets: renders with different seeds are independent
+	 * estimates (0: the sets every render used before seeds). */
+	uint32_t seed;
 };
 
 /*

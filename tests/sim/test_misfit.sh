@@ -32,6 +32,11 @@ for b in bands + m['by_mirror_angle']:
     if b['pixels'] >= 20:
         assert abs(b['mean_residual']) <= 5 * b['standard_error'], b
 "
+check "... without a noise model the render keeps the scene's samples, and says so" python3 -c "
+import json
+r = json.load(open('d/fit/params.json'))['render']
+assert r['light_samples'] == r['brdf_samples'] == 32 and r['noise'].startswith('not compared'), r
+"
 check "a Lambert fit of the glossy sphere" bash -c "'$glint' fit '$data/demo-scene.json' d/photo.exr --model lambert --accept-rmse 10 -o lam >lam.txt 2>lam.err"
 check "... is called structured in both angles" python3 -c "
 import json

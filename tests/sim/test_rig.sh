@@ -94,6 +94,17 @@ p = {q['name']: q['value'] for q in d['fit']['parameters']}
 print('  fitted', {k: round(v, 3) for k, v in p.items()})
 assert abs(p['diffuse.r'] - 0.292) < 0.02 and abs(p['diffuse.g'] - 0.117) < 0.02
 "
+check "... the final render's own noise below the photo's (its noise model)" python3 -c "
+import json, os
+d = json.load(open('$tmp/one.out'))
+r = json.load(open(os.path.join(d['sample'], 'fit', 'params.json')))['render']
+print('  render', {k: r[k] for k in ('light_samples', 'brdf_samples', 'noise', 'seconds')},
+      'steps', [(s['light_samples'], round(s['noise'], 3)) for s in r['steps']])
+assert r['below_target'] and 0 < r['noise'] <= r['noise_target'] == 0.25, r
+# at the scene's counts the render is as noisy as the photo: more samples
+assert r['steps'][0]['noise'] > 0.25 and r['light_samples'] > r['steps'][0]['light_samples'], r
+assert r['values'] > 1000, r
+"
 check "... bounces were debounced into one press" bash -c "test \$(grep -c 'button pressed: starting' '$tmp/one.err') = 1"
 check "... outputs safe at the end (lights off, stepper disabled, LED off)" final one "lights=0,turntable_enable=0,led=0,turntable_step=0"
 check "... lights were on while capturing, turntable went to 180 deg" python3 -c "

@@ -272,10 +272,12 @@ static int got_frame(void *ctx, struct glint_frame *f)
 		if (p->has_held && eg(f) <= eg(&p->held)) {
 			glint_frame_release(f);
 			p->requested--;
+			p->b->superseded++;
 		} else {
 			if (p->has_held) {
 				glint_frame_release(&p->held);
 				p->requested--;
+				p->b->superseded++;
 			}
 			p->held = *f;
 			p->has_held = 1;

@@ -53,6 +53,8 @@ struct glint_bracket {
 	double seconds;		       /* on the camera's clock */
 	double metered_start_s;	       /* where it started */
 	int metering_frames;	       /* frames spent metering apart */
+	int superseded; /* unclipped frames a longer unclipped one replaced
+			   (captured, not kept) */
 };
 
 int glint_bracket_capture(struct glint_camera *cam, const struct glint_roi *roi,

@@ -238,12 +238,15 @@ int glint_session_finish(struct glint_session *s, const struct glint_bracket *b,
 		json_object_set_new(s->doc, "status", json_string("complete"));
 		json_object_set_new(
 			s->doc, "bracket",
-			json_pack("{s:i, s:b, s:b, s:b, s:b, s:f, s:f}",
+			json_pack("{s:i, s:b, s:b, s:b, s:b, s:f, s:f, s:i, "
+				  "s:i}",
 				  "frames", b->n, "covered_low", b->covered_low,
 				  "covered_high", b->covered_high, "used_gain",
 				  b->used_gain, "truncated", b->truncated,
 				  "seconds", b->seconds, "metered_start_s",
-				  b->metered_start_s));
+				  b->metered_start_s, "metering_frames",
+				  b->metering_frames, "unclipped_superseded",
+				  b->superseded));
 		glint_session_log(s, "complete: %d frames in %.2f s", b->n,
 				  b->seconds);
 	}

@@ -3,7 +3,8 @@
 frame present and whole (a DNG: its IFD, every strip inside the file, the
 glint metadata, EXIF's exposure time; or an older session's PNG: through
 IEND, CRCs right, metadata chunk), sidecar JSON matching, no temporary
-files left.
+files left; a complete session's bracket counts (frames kept as listed,
+unclipped frames superseded, metering frames).
 usage: check_session.py DIR STATUS [MIN_FRAMES]"""
 import json
 import os
@@ -119,6 +120,10 @@ def main():
     assert not junk, f"temporary files left: {junk}"
     json.load(open(os.path.join(d, "rig.json")))
     assert os.path.getsize(os.path.join(d, "log.txt")) > 0
+    if status == "complete":
+        b = s["bracket"]
+        assert b["frames"] == len(frames), f"bracket says {b['frames']} frames, {len(frames)} listed"
+        assert b["unclipped_superseded"] >= 0 and b["metering_frames"] >= 0, b
     print(f"{d}: {status}, {len(frames)} frames whole")
 
 

@@ -171,6 +171,10 @@ static void test_metering(void)
 	CHECK(glint_bracket_capture(cam, &all, &o, &clk, &b) == 0, "%s",
 	      glint_error_msg());
 	CHECK(b.metering_frames == 0, "%d metering frames", b.metering_frames);
+	/* The test card's brightest disk clips from about 0.3 ms: the
+	 * frames from 10 us below that were replaced, and say so. */
+	CHECK(b.superseded >= 3, "%d unclipped frames superseded",
+	      b.superseded);
 	/* Up from the camera's shortest exposure, of the unsaturated frames
 	 * only the longest kept: the shortest frame is unclipped, the next
 	 * clips. */

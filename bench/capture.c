@@ -72,7 +72,8 @@ static int run_bracket(const char *dev, double start_s, int apart, double *wall,
 		return ret;
 	*flr = floor_of(&b, in.frame_period_min_s);
 	*n = b.n;
-	*e0 = b.metered_start_s;
+	if (e0)
+		*e0 = b.metered_start_s;
 	if (!b.covered_low || !b.covered_high)
 		fprintf(stderr, "warning: bracket did not cover the range\n");
 	if (keep)
@@ -131,14 +132,13 @@ int main(int argc, char **argv)
 		struct glint_bracket plan;
 		double e0;
 		int n;
-		double e_shipped;
 		if (run_bracket(dev, 0, 1, &wall[M_APART][r], &flr[M_APART][r],
 				&frames[M_APART], &e0, &plan) < 0 ||
 		    run_bracket(dev, 0, 0, &wall[M_SHIPPED][r],
-				&flr[M_SHIPPED][r], &frames[M_SHIPPED],
-				&e_shipped, NULL) < 0 ||
+				&flr[M_SHIPPED][r], &frames[M_SHIPPED], NULL,
+				NULL) < 0 ||
 		    run_bracket(dev, e0, 0, &wall[M_KNOWN][r], &flr[M_KNOWN][r],
-				&frames[M_KNOWN], &e0, NULL) < 0 ||
+				&frames[M_KNOWN], NULL, NULL) < 0 ||
 		    run_sequential(dev, &plan, &wall[M_SEQUENTIAL][r],
 				   &flr[M_SEQUENTIAL][r]) < 0) {
 			fprintf(stderr, "bench/capture: %s\n",

@@ -257,6 +257,23 @@ static double render_noise(const struct glint_image *a,
 	return n ? sum / n : NAN;
 }
 
+/* One render at `factor` times the scene's samples, on sample sets
+ * `seed`. */
+static int shade(struct glint_renderer *r, const struct glint_fit_job *job,
+		 const struct glint_model_ops *model, const double *p,
+		 int factor, uint32_t seed, struct glint_image *out,
+		 struct glint_image *cov)
+{
+	struct glint_shade_opts so = {
+		.light_samples = job->scene.light_samples * factor,
+		.brdf_samples = job->scene.brdf_samples * factor,
+		.background = 1,
+		.nthreads = job->nthreads,
+		.seed = seed,
+	};
+	return glint_renderer_shade(r, model, p, &so, out, cov);
+}
+
 /* Into img, the mean of a pair of renders at `factor` times the scene's
  * samples; b receives the second.  *q: the mean's noise. */
 static int render_pair(struct glint_renderer *r,
@@ -266,17 +283,9 @@ static int render_pair(struct glint_renderer *r,
 		       struct glint_image *b, struct glint_image *cov,
 		       double *q, long *nv)
 {
-	struct glint_shade_opts so = {
-		.light_samples = job->scene.light_samples * factor,
-		.brdf_samples = job->scene.brdf_samples * factor,
-		.background = 1,
-		.nthreads = job->nthreads,
-		.seed = seed,
-	};
-	int ret = glint_renderer_shade(r, model, p, &so, img, cov);
-	so.seed = seed + 1;
+	int ret = shade(r, job, model, p, factor, seed, img, cov);
 	if (ret == 0)
-		ret = glint_renderer_shade(r, model, p, &so, b, NULL);
+		ret = shade(r, job, model, p, factor, seed + 1, b, NULL);
 	if (ret < 0)
 		return ret;
 	*q = render_noise(img, b, cov, job->weight, nv);
@@ -309,18 +318,12 @@ static int render_final(struct glint_renderer *r,
 	*info = NULL;
 	if (!w || model->transparent || w->width != img->width ||
 	    w->height != img->height) {
-		struct glint_shade_opts so = {
-			.light_samples = job->scene.light_samples,
-			.brdf_samples = job->scene.brdf_samples,
-			.background = 1,
-			.nthreads = job->nthreads,
-		};
-		ret = glint_renderer_shade(r, model, p, &so, img, cov);
+		ret = shade(r, job, model, p, 1, 0, img, cov);
 		if (ret < 0)
 			return ret;
 		*info = json_pack("{s:i, s:i, s:s}", "light_samples",
-				  so.light_samples, "brdf_samples",
-				  so.brdf_samples, "noise",
+				  job->scene.light_samples, "brdf_samples",
+				  job->scene.brdf_samples, "noise",
 				  "not compared: the photo has no noise model");
 		return *info ? 0 : glint_error_set(ENOMEM, "out of memory");
 	}

@@ -227,11 +227,38 @@ static const char *material_name(const struct glint_fit_job *job, char buf[256])
  * at most a quarter to chi^2) one more pair is rendered with the samples
  * that should bring the two together to the target (q falls as 1 /
  * samples), at most RENDER_MAX_FACTOR times the scene's, and the two
- * means are combined by inverse variance.  Without a noise model the
+ * means are combined by inverse variance.  The second pair also keeps to
+ * a time budget, twice the fit's time and at least RENDER_MIN_BUDGET_S,
+ * predicted from the first pair's time (a pair's time grows with its
+ * samples): a large photo (a 1 MP frame's sphere is 220,000 pixels) would
+ * otherwise spend minutes on a preview after a fit of seconds.  What
+ * limited the render is said in params.json.  Without a noise model the
  * scene's counts are used as they are.
  */
 #define RENDER_NOISE_TARGET 0.25
 #define RENDER_MAX_FACTOR   4
+#define RENDER_MIN_BUDGET_S 20.0
+
+int glint_render_factor(double q1, double pair_s, double budget_s,
+			const char **limited_by)
+{
+	*limited_by = NULL;
+	if (!(q1 > RENDER_NOISE_TARGET))
+		return 0;
+	int want = (int)ceil(q1 / RENDER_NOISE_TARGET - 1 - 1e-9);
+	int factor = want;
+	if (factor > RENDER_MAX_FACTOR) {
+		factor = RENDER_MAX_FACTOR;
+		*limited_by = "samples: at most 4 times the scene's per pair";
+	}
+	/* The second pair at `factor` takes about factor * pair_s. */
+	int afford = pair_s > 0 ? (int)floor(budget_s / pair_s) : factor;
+	if (afford < factor) {
+		factor = afford > 0 ? afford : 0;
+		*limited_by = "time: the budget of twice the fit's time";
+	}
+	return factor;
+}
 
 static double render_noise(const struct glint_image *a,
 			   const struct glint_image *b,
@@ -306,8 +333,8 @@ static json_t *render_step(const struct glint_fit_job *job, int factor,
 static int render_final(struct glint_renderer *r,
 			const struct glint_fit_job *job,
 			const struct glint_model_ops *model, const double *p,
-			struct glint_image *img, struct glint_image *cov,
-			json_t **info)
+			double fit_s, struct glint_image *img,
+			struct glint_image *cov, json_t **info)
 {
 	const struct glint_image *w = job->weight;
 	double t0 = glint_now(), q1, q2 = NAN;
@@ -336,11 +363,11 @@ static int render_final(struct glint_renderer *r,
 	ret = render_pair(r, job, model, p, 1, 0, img, b, cov, &q1, &nv);
 	if (ret < 0)
 		goto out;
-	double q = q1;
-	if (q1 > RENDER_NOISE_TARGET) {
-		factor = (int)ceil(q1 / RENDER_NOISE_TARGET - 1 - 1e-9);
-		if (factor > RENDER_MAX_FACTOR)
-			factor = RENDER_MAX_FACTOR;
+	double q = q1, pair_s = glint_now() - t0;
+	double budget_s = fmax(2 * fit_s, RENDER_MIN_BUDGET_S);
+	const char *limited_by;
+	factor = glint_render_factor(q1, pair_s, budget_s, &limited_by);
+	if (factor) {
 		ret = render_pair(r, job, model, p, factor, 2, more, b, cov,
 				  &q2, &nv);
 		if (ret < 0)
@@ -365,22 +392,28 @@ static int render_final(struct glint_renderer *r,
 			json_array_append_new(steps,
 					      render_step(job, factor, q2));
 	}
-	*info = json_pack("{s:i, s:i, s:o, s:f, s:b, s:I, s:f, s:o*}",
-			  "light_samples", total * job->scene.light_samples,
-			  "brdf_samples", total * job->scene.brdf_samples,
-			  "noise", glint_json_real_or_null(q), "noise_target",
-			  RENDER_NOISE_TARGET, "below_target",
-			  q <= RENDER_NOISE_TARGET, "values", (json_int_t)nv,
-			  "seconds", glint_now() - t0, "steps", steps);
+	*info = json_pack(
+		"{s:i, s:i, s:o, s:f, s:b, s:I, s:f, s:f, s:s?, "
+		"s:o*}",
+		"light_samples", total * job->scene.light_samples,
+		"brdf_samples", total * job->scene.brdf_samples, "noise",
+		glint_json_real_or_null(q), "noise_target", RENDER_NOISE_TARGET,
+		"below_target", q <= RENDER_NOISE_TARGET, "values",
+		(json_int_t)nv, "seconds", glint_now() - t0, "budget_seconds",
+		budget_s, "limited_by",
+		q <= RENDER_NOISE_TARGET ? NULL : limited_by, "steps", steps);
 	if (!*info) {
 		ret = glint_error_set(ENOMEM, "out of memory");
 		goto out;
 	}
 	glint_log_info("final render: %d + %d samples, its noise %.2f of the "
-		       "photo's variance (target %.2f), %.1f s",
+		       "photo's variance (target %.2f), %.1f s%s%s",
 		       total * job->scene.light_samples,
 		       total * job->scene.brdf_samples, q, RENDER_NOISE_TARGET,
-		       glint_now() - t0);
+		       glint_now() - t0,
+		       q > RENDER_NOISE_TARGET && limited_by ? "; limited by "
+							     : "",
+		       q > RENDER_NOISE_TARGET && limited_by ? limited_by : "");
 out:
 	glint_image_free(b);
 	glint_image_free(more);
@@ -578,7 +611,8 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 		goto out;
 	}
 	json_t *render_info = NULL;
-	ret = render_final(&r, job, model, res.p, img, cov, &render_info);
+	ret = render_final(&r, job, model, res.p, res.seconds, img, cov,
+			   &render_info);
 	if (ret < 0)
 		goto out;
 	doc = params_doc(job, &o, &res);

@@ -67,6 +67,16 @@ void glint_fit_job_unload(struct glint_fit_job *job);
  */
 int glint_fit_job_run(const struct glint_fit_job *job, json_t **result);
 
+/*
+ * The final render's second pair of renders (fit/job.c): given the first
+ * pair's noise q1 in the photo's variance units and its time pair_s, the
+ * factor on the scene's samples that brings the combined noise to the
+ * target, at most 4 and affordable within budget_s (0: no second pair).
+ * *limited_by names what held it below the target, else NULL.
+ */
+int glint_render_factor(double q1, double pair_s, double budget_s,
+			const char **limited_by);
+
 /* params.json's "parameters" (name, value, stderr, at_bound, bounds) and
  * "passes" arrays for a result; new references. */
 json_t *glint_fit_params_json(const struct glint_fit_result *r);

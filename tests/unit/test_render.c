@@ -1,9 +1,12 @@
 /* SPDX-License-Identifier: MIT */
 /* Tracer and shading: furnace tests, silhouettes, camera geometry. */
+#include <string.h>
+
 #include "quadrature.h"
 #include "test.h"
 
 #include "core/error.h"
+#include "fit/job.h"
 #include "fit/render/render.h"
 
 static struct glint_envmap *constant_env(double l)
@@ -396,8 +399,38 @@ static void test_sample_pattern(void)
 	teardown(&s);
 }
 
+/* The final render's second pair (fit/job.c): the samples that bring its
+ * noise to the target, capped at 4 times the scene's and by the time
+ * budget, and what capped them named. */
+static void test_render_factor(void)
+{
+	const char *why;
+
+	/* Below the target: no second pair. */
+	CHECK(glint_render_factor(0.2, 1, 20, &why) == 0 && !why, "%s",
+	      "below target");
+	/* q1 = 1.01 of the photo's variance: 1/q1 + f/q1 = 4 at f = 3.04,
+	 * so 4 times the samples, which 20 s affords at 2 s a pair. */
+	int f = glint_render_factor(1.01, 2, 20, &why);
+	CHECK(f == 4 && !why, "factor %d (%s)", f, why ? why : "-");
+	/* q1 = 0.5: one more pair at the scene's samples halves it. */
+	f = glint_render_factor(0.5, 2, 20, &why);
+	CHECK(f == 1 && !why, "factor %d", f);
+	/* Far above: capped at 4, and said. */
+	f = glint_render_factor(10, 2, 20, &why);
+	CHECK(f == 4 && why && strstr(why, "samples"), "factor %d", f);
+	/* A 1 MP photo: 57 s a pair against a 20 s budget: no second pair,
+	 * and the time is what stopped it. */
+	f = glint_render_factor(1.8, 57, 20, &why);
+	CHECK(f == 0 && why && strstr(why, "time"), "factor %d", f);
+	/* Part of it affordable. */
+	f = glint_render_factor(1.8, 7, 20, &why);
+	CHECK(f == 2 && why && strstr(why, "time"), "factor %d", f);
+}
+
 int main(void)
 {
+	RUN(test_render_factor);
 	RUN(test_sample_pattern);
 	RUN(test_furnace_lambert);
 	RUN(test_furnace_ts);

@@ -10,6 +10,10 @@
  *
  * Device string: "sim" or "sim:key=value,...", keys: width, height,
  * latency (frames), manual (0 = no manual exposure), seed, noise (0/1),
+ * scene_scale (the probe, sample and rig scenes rendered at 1/N of the
+ * width and height and interpolated up, bilinearly: a 12 MP frame's
+ * reference render would take most of an hour, and a benchmark of the
+ * pipeline's memory and time needs the pixels, not their detail),
  * scene (card, the default; probe: a chrome ball reflecting the Venice
  * map; sample: a sphere of a Table-1 material under the same map, see
  * sim/camera_sim.h), material (the sample's Table-1 name, default
@@ -46,7 +50,11 @@ struct sim_cam {
 	double timescale, decades;
 	enum { SCENE_CARD, SCENE_PROBE, SCENE_SAMPLE, SCENE_RIG } scene;
 	/* scene=rig: what the board's world shows (sim/world.h) */
-	struct glint_image *probe_img, *sample_img, *dark_img;
+	struct glint_image *probe_img, *sample_img;
+	/* the lights-off or empty view, made on first need */
+	struct glint_image *scratch;
+	const struct glint_image *view; /* what the sensor sees */
+	int scene_scale;
 	char material[48]; /* the sample's Table-1 name */
 	char world[256];   /* scene=rig: what is in view, from this file */
 	struct glint_sensor sensor;
@@ -119,7 +127,7 @@ static int parse_device(const char *dev, struct sim_cam *s)
 			snprintf(s->world, sizeof(s->world), "%s", p + 6);
 			break;
 		}
-		if (sscanf(p, "%31[a-z]=%lf%n", key, &v, &n) != 2)
+		if (sscanf(p, "%31[a-z_]=%lf%n", key, &v, &n) != 2)
 			return glint_error_set(EINVAL,
 					       "sim camera device '%s': bad "
 					       "option at '%s'",
@@ -140,13 +148,16 @@ static int parse_device(const char *dev, struct sim_cam *s)
 			s->decades = v;
 		else if (!strcmp(key, "timescale") && v > 0 && v <= 1)
 			s->timescale = v;
+		else if (!strcmp(key, "scene_scale") && v >= 1 && v <= 64)
+			s->scene_scale = (int)v;
 		else
 			return glint_error_set(EINVAL,
 					       "sim camera device '%s': option "
 					       "%s=%g: expected width, height "
 					       "(2..8192), latency (0..7), "
 					       "manual, seed, noise, decades "
-					       "(0..8) or timescale (0..1]",
+					       "(0..8), timescale (0..1] or "
+					       "scene_scale (1..64)",
 					       dev, key, v);
 		p += n;
 		if (*p == ',')
@@ -343,6 +354,57 @@ static void scaled_sleep_until(void *ctx, double t)
 	s->outer.sleep_until(s->outer.ctx, t * s->timescale);
 }
 
+/* *img (w/k x h/k, rounded up) interpolated to w x h, bilinearly at the
+ * pixel centres; it replaces *img. */
+static int upscale(struct glint_image **img, int w, int h, int k)
+{
+	const struct glint_image *a = *img;
+	struct glint_image *b = glint_image_new(w, h);
+	if (!b)
+		return glint_error_set(ENOMEM, "out of memory");
+	for (int y = 0; y < h; y++) {
+		double fy = fmin(fmax((y + 0.5) / k - 0.5, 0), a->height - 1);
+		int y0 = (int)fy, y1 = y0 + (y0 + 1 < a->height);
+		double ty = fy - y0;
+		for (int x = 0; x < w; x++) {
+			double fx = fmin(fmax((x + 0.5) / k - 0.5, 0),
+					 a->width - 1);
+			int x0 = (int)fx, x1 = x0 + (x0 + 1 < a->width);
+			double tx = fx - x0;
+			const float *p00 = glint_image_px(a, x0, y0);
+			const float *p01 = glint_image_px(a, x1, y0);
+			const float *p10 = glint_image_px(a, x0, y1);
+			const float *p11 = glint_image_px(a, x1, y1);
+			float *o = glint_image_px(b, x, y);
+			for (int c = 0; c < 3; c++)
+				o[c] = (float)((1 - ty) * ((1 - tx) * p00[c] +
+							   tx * p01[c]) +
+					       ty * ((1 - tx) * p10[c] +
+						     tx * p11[c]));
+		}
+	}
+	glint_image_free(*img);
+	*img = b;
+	return 0;
+}
+
+/* A scene's radiance at the sensor's size, rendered at 1/scene_scale. */
+static int scene_image(const struct sim_cam *s, int sample,
+		       struct glint_image **out)
+{
+	int k = s->scene_scale > 1 ? s->scene_scale : 1;
+	int w = (s->width + k - 1) / k, h = (s->height + k - 1) / k;
+	int ret = sample ? glint_sim_sample_scene(w, h, s->material, out)
+			 : glint_sim_probe_scene(w, h, out);
+	if (ret == 0 && k > 1)
+		ret = upscale(out, s->width, s->height, k);
+	if (ret < 0) {
+		glint_image_free(*out);
+		*out = NULL;
+	}
+	return ret;
+}
+
 static int sim_open(const char *device, const struct glint_clock *clock,
 		    void **priv)
 {
@@ -373,38 +435,27 @@ static int sim_open(const char *device, const struct glint_clock *clock,
 		s->clock.sleep_until = scaled_sleep_until;
 		s->clock.ctx = s;
 	}
-	if (s->scene == SCENE_PROBE)
-		ret = glint_sim_probe_scene(s->width, s->height, &s->radiance);
-	else if (s->scene == SCENE_SAMPLE)
-		ret = glint_sim_sample_scene(s->width, s->height, s->material,
-					     &s->radiance);
+	if (s->scene == SCENE_PROBE || s->scene == SCENE_SAMPLE)
+		ret = scene_image(s, s->scene == SCENE_SAMPLE, &s->radiance);
 	else if (s->scene == SCENE_RIG) {
-		ret = glint_sim_probe_scene(s->width, s->height, &s->probe_img);
+		/* Two views; the sensor looks at one of them in place (a
+		 * 12 MP view is 148 MB), a lights-off or empty one is made
+		 * on first need (rig_view). */
+		ret = scene_image(s, 0, &s->probe_img);
 		if (!ret)
-			ret = glint_sim_sample_scene(s->width, s->height,
-						     s->material,
-						     &s->sample_img);
-		s->dark_img = glint_image_new(s->width, s->height);
-		s->radiance = glint_image_new(s->width, s->height);
-		if (!ret && (!s->dark_img || !s->radiance))
-			ret = glint_error_set(ENOMEM, "out of memory");
+			ret = scene_image(s, 1, &s->sample_img);
 		if (ret < 0) {
 			glint_image_free(s->probe_img);
 			glint_image_free(s->sample_img);
-			glint_image_free(s->dark_img);
-			glint_image_free(s->radiance);
 		}
-	} else
-		s->radiance =
-			glint_sim_test_card(s->width, s->height, s->decades);
+	} else if (!(s->radiance = glint_sim_test_card(s->width, s->height,
+						       s->decades)))
+		ret = glint_error_set(ENOMEM, "out of memory");
 	if (ret < 0) {
 		free(s);
-		return ret;
+		return glint_error_prefix(ret, "sim camera");
 	}
-	if (!s->radiance) {
-		free(s);
-		return glint_error_prefix(ENOMEM, "sim camera");
-	}
+	s->view = s->radiance;
 	s->exposure_s = s->sensor.exposure_s;
 	s->gain = 1;
 	for (int i = 0; i < 8; i++) {
@@ -424,7 +475,7 @@ static void sim_close(void *priv)
 	glint_image_free(s->radiance);
 	glint_image_free(s->probe_img);
 	glint_image_free(s->sample_img);
-	glint_image_free(s->dark_img);
+	glint_image_free(s->scratch);
 	free(s);
 }
 
@@ -453,7 +504,7 @@ static void world_from_file(const char *path, struct glint_sim_world *w)
 	fclose(f);
 }
 
-static void rig_view(struct sim_cam *s)
+static int rig_view(struct sim_cam *s)
 {
 	struct glint_sim_world w;
 	if (s->world[0])
@@ -463,11 +514,19 @@ static void rig_view(struct sim_cam *s)
 	const struct glint_image *src =
 		w.view == GLINT_SIM_VIEW_PROBE	  ? s->probe_img
 		: w.view == GLINT_SIM_VIEW_SAMPLE ? s->sample_img
-						  : s->dark_img;
-	float k = w.lights ? 1.0f : (float)GLINT_SIM_LIGHTS_OFF_FACTOR;
+						  : NULL; /* dark */
+	if (src && w.lights) {
+		s->view = src;
+		return 0;
+	}
+	if (!s->scratch && !(s->scratch = glint_image_new(s->width, s->height)))
+		return glint_error_set(ENOMEM, "sim camera: out of memory");
+	float k = (float)GLINT_SIM_LIGHTS_OFF_FACTOR;
 	size_t n = (size_t)s->width * s->height * 3;
 	for (size_t i = 0; i < n; i++)
-		s->radiance->data[i] = k * src->data[i];
+		s->scratch->data[i] = src ? k * src->data[i] : 0;
+	s->view = s->scratch;
+	return 0;
 }
 
 static int sim_describe(void *priv, struct glint_camera_info *in)
@@ -550,9 +609,9 @@ static int sim_grab(void *priv, struct glint_frame *f)
 		ret = glint_error_set(ENOMEM, "sim camera: out of memory");
 		goto err;
 	}
-	if (s->scene == SCENE_RIG)
-		rig_view(s);
-	ret = glint_sensor_capture(&sn, s->radiance, dn);
+	if (s->scene == SCENE_RIG && (ret = rig_view(s)) < 0)
+		goto err;
+	ret = glint_sensor_capture(&sn, s->view, dn);
 	if (ret < 0)
 		goto err;
 	/* Bayer RGGB: R at (even, even), B at (odd, odd), G elsewhere. */

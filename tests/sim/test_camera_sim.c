@@ -179,6 +179,36 @@ static void test_world_file(void)
 	CHECK_MSG(glint_error_msg(), "world");
 }
 
+/* scene_scale=K: the views rendered at 1/K and interpolated up keep the
+ * scene's brightness and place (bench/rig_size's 12 MP frames). */
+static void test_scene_scale(void)
+{
+	struct glint_fake_clock fc = { 0 };
+	struct glint_clock clk = glint_clock_fake(&fc);
+	struct glint_camera *cam;
+	double m[2];
+	for (int k = 0; k < 2; k++) {
+		char dev[96];
+		snprintf(dev, sizeof(dev),
+			 "sim:width=96,height=72,scene=sample,noise=0%s",
+			 k ? ",scene_scale=3" : "");
+		CHECK(glint_camera_open("sim", dev, &clk, &cam) == 0, "%s",
+		      glint_error_msg());
+		if (!cam)
+			return;
+		m[k] = mean_signal(cam);
+		glint_camera_close(cam);
+	}
+	printf("scene_scale: mean %.2f DN rendered whole, %.2f at 1/3\n", m[0],
+	       m[1]);
+	CHECK(m[0] > 5 && fabs(m[1] - m[0]) < 0.05 * m[0], "%g against %g",
+	      m[1], m[0]);
+	CHECK(glint_camera_open("sim", "sim:scene=sample,scene_scale=0", &clk,
+				&cam) < 0,
+	      "scene_scale=0 accepted");
+	CHECK_MSG(glint_error_msg(), "scene_scale");
+}
+
 int main(void)
 {
 	glint_backends_register();
@@ -186,5 +216,6 @@ int main(void)
 	RUN(test_applied_exposure);
 	RUN(test_refusals);
 	RUN(test_world_file);
+	RUN(test_scene_scale);
 	return test_result();
 }

@@ -355,8 +355,7 @@ static int render_final(struct glint_renderer *r,
 		return *info ? 0 : glint_error_set(ENOMEM, "out of memory");
 	}
 	b = glint_image_new(img->width, img->height);
-	more = glint_image_new(img->width, img->height);
-	if (!b || !more) {
+	if (!b) {
 		ret = glint_error_set(ENOMEM, "out of memory");
 		goto out;
 	}
@@ -367,6 +366,10 @@ static int render_final(struct glint_renderer *r,
 	double budget_s = fmax(2 * fit_s, RENDER_MIN_BUDGET_S);
 	const char *limited_by;
 	factor = glint_render_factor(q1, pair_s, budget_s, &limited_by);
+	if (factor && !(more = glint_image_new(img->width, img->height))) {
+		ret = glint_error_set(ENOMEM, "out of memory");
+		goto out;
+	}
 	if (factor) {
 		ret = render_pair(r, job, model, p, factor, 2, more, b, cov,
 				  &q2, &nv);

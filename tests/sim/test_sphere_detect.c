@@ -96,9 +96,37 @@ static void test_simulated_ball(void)
 	glint_image_free(env);
 }
 
+/* A 12 MP frame (a Pi HQ-class sensor) with the ball against the map's
+ * detailed backdrop: its rim is a small share of the edges, which is where
+ * detecting on the full frame alone failed (bench/rig_size). */
+static void test_large_frame(void)
+{
+	struct glint_image *env, *photo;
+	double n[3] = { 3.2, 3.2, 3.2 }, k[3] = { 3.3, 3.3, 3.3 };
+	CHECK(glint_image_read(GLINT_DATA_DIR "/env/venice_sunset_1k.hdr",
+			       &env) == 0,
+	      "%s", glint_error_msg());
+	double fpx = 8112, d = 8;
+	CHECK(glint_sim_mirror_ball(env, 4056, 3040, fpx, v3(0, 0, -d), 1, n, k,
+				    1, &photo) == 0,
+	      "%s", glint_error_msg());
+	struct glint_circle c;
+	CHECK(glint_sphere_detect(photo, 0, 0, &c) == 0, "%s",
+	      glint_error_msg());
+	/* On the axis: a circle, centred on the frame. */
+	double r = fpx * tan(asin(1 / d));
+	printf("12 MP ball: (%.3f, %.3f) r %.3f, truth (2028, 1520) r %.3f\n",
+	       c.cx, c.cy, c.r, r);
+	CHECK(hypot(c.cx - 2028, c.cy - 1520) < 0.5 && fabs(c.r - r) < 0.5,
+	      "12 MP ball detected at (%.2f, %.2f) r %.2f", c.cx, c.cy, c.r);
+	glint_image_free(photo);
+	glint_image_free(env);
+}
+
 int main(void)
 {
 	RUN(test_real);
 	RUN(test_simulated_ball);
+	RUN(test_large_frame);
 	return test_result();
 }

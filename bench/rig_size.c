@@ -101,9 +101,10 @@ static int write_config(const char *path, const char *out, const struct row *r)
 			    json_integer(2 * r->w));
 	json_object_set_new(json_object_get(rig, "board"), "scenario",
 			    json_string(GLINT_DATA_DIR "/sim-press.json"));
-	/* The simulator spends about 5 s making each 12 MP frame (shot and
-	 * read noise drawn per site, on one thread), which a real sensor
-	 * delivers in 0.1 s: the bracket's 60 s cap would stop it short. */
+	/* The simulator spends about 8 s on each 12 MP frame (shot and read
+	 * noise drawn per site on one thread, the DNG written), which a real
+	 * sensor delivers in 0.1 s: the bracket's 60 s cap would stop it short.
+	 */
 	json_t *br = json_object_get(rig, "bracket");
 	if (!br)
 		json_object_set_new(rig, "bracket", br = json_object());

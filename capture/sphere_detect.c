@@ -303,38 +303,6 @@ static void circle_fit(const double *px, const double *py, int np, double c[3])
 	}
 }
 
-/* img reduced k times in each direction by the mean of each k x k block
- * (a partial block at the right and bottom edges: the mean of what there
- * is). */
-static struct glint_image *reduce(const struct glint_image *img, int k)
-{
-	int w = (img->width + k - 1) / k, h = (img->height + k - 1) / k;
-	struct glint_image *o = glint_image_new(w, h);
-	if (!o)
-		return NULL;
-	for (int y = 0; y < h; y++)
-		for (int x = 0; x < w; x++) {
-			double sum[3] = { 0, 0, 0 };
-			int n = 0;
-			for (int yy = y * k;
-			     yy < (y + 1) * k && yy < img->height; yy++)
-				for (int xx = x * k;
-				     xx < (x + 1) * k && xx < img->width;
-				     xx++) {
-					const float *p =
-						glint_image_px(img, xx, yy);
-					for (int c = 0; c < 3; c++)
-						sum[c] += isfinite(p[c]) ? p[c]
-									 : 0;
-					n++;
-				}
-			float *q = glint_image_px(o, x, y);
-			for (int c = 0; c < 3; c++)
-				q[c] = (float)(sum[c] / n);
-		}
-	return o;
-}
-
 /*
  * Above DETECT_SIDE px on the shorter side the circle is found first on a
  * copy reduced to at most that, then refined on the full image.  RANSAC
@@ -364,7 +332,7 @@ int glint_sphere_detect(const struct glint_image *img, double r_min,
 	int side = w < h ? w : h;
 	if (side > DETECT_SIDE) {
 		int k = (side + DETECT_SIDE - 1) / DETECT_SIDE;
-		struct glint_image *small = reduce(img, k);
+		struct glint_image *small = glint_image_downsample(img, k);
 		struct glint_circle sc;
 		if (!small)
 			return glint_error_set(

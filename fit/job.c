@@ -255,7 +255,7 @@ int glint_render_factor(double q1, double pair_s, double budget_s,
 	int afford = pair_s > 0 ? (int)floor(budget_s / pair_s) : factor;
 	if (afford < factor) {
 		factor = afford > 0 ? afford : 0;
-		*limited_by = "time: the budget of twice the fit's time";
+		*limited_by = "time: the budget_seconds it may take";
 	}
 	return factor;
 }

@@ -153,7 +153,7 @@ static int write_ldr_result(const char *out, struct glint_image *rad,
 	if (mkdir(out, 0777) < 0 && errno != EEXIST)
 		return glint_error_set(errno, "%s: %s", out, strerror(errno));
 	for (int i = 0; i < 3; i++) {
-		struct glint_write_opts wo = { 0, 0, i == 2 };
+		struct glint_write_opts wo = { .auto_expose = i == 2 };
 		int ret = glint_path_join(path, sizeof(path), out, names[i]);
 		if (ret == 0)
 			ret = glint_image_write(path, imgs[i], &wo);

@@ -505,7 +505,7 @@ int glint_probe_unwrap_write(const struct glint_image *photo,
 			     const char *env_path, int *width, int *height)
 {
 	struct glint_image *env = NULL, *mask = NULL, *dens = NULL;
-	struct glint_write_opts png = { 0, 0, 0 };
+	struct glint_write_opts png = { 0 };
 	char path[GLINT_PATH_MAX];
 	int ret = glint_probe_unwrap(photo, o, &env, &mask, &dens);
 

@@ -178,7 +178,7 @@ int glint_hdr_merge_write(const struct glint_frame *frames, int n,
 	char path[GLINT_PATH_MAX];
 	struct glint_image *imgs[] = { rad, var, weights, valid, rad };
 	for (int i = 0; i < 5 && ret == 0; i++) {
-		struct glint_write_opts wo = { 0, 0, i == 4 };
+		struct glint_write_opts wo = { .auto_expose = i == 4 };
 		ret = glint_path_join(path, sizeof(path), out, names[i]);
 		if (!ret)
 			ret = glint_image_write(path, imgs[i], &wo);

@@ -398,7 +398,7 @@ static exr_result_t compress_or_store(exr_encode_pipeline_t *enc)
 }
 
 static int encode_rows(exr_context_t ctx, int part, const uint8_t *base,
-		       int pixel_stride, int width, int height,
+		       int pixel_stride, int width, int height, int y0,
 		       exr_pixel_type_t type)
 {
 	exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
@@ -410,7 +410,7 @@ static int encode_rows(exr_context_t ctx, int part, const uint8_t *base,
 	for (int y = 0; y < height && rv == EXR_ERR_SUCCESS; y += lines) {
 		exr_chunk_info_t cinfo;
 
-		rv = exr_write_scanline_chunk_info(ctx, part, y, &cinfo);
+		rv = exr_write_scanline_chunk_info(ctx, part, y0 + y, &cinfo);
 		if (rv != EXR_ERR_SUCCESS)
 			break;
 		if (first)
@@ -450,8 +450,18 @@ static int encode_rows(exr_context_t ctx, int part, const uint8_t *base,
 	return rv;
 }
 
-int glint_exr_write(const char *path, const struct glint_image *img, int half)
+int glint_exr_write(const char *path, const struct glint_image *img,
+		    const struct glint_write_opts *opts)
 {
+	int half = opts->exr_half;
+	exr_attr_box2i_t dw, disp;
+	dw.min.x = opts->window_x;
+	dw.min.y = opts->window_y;
+	dw.max.x = opts->window_x + img->width - 1;
+	dw.max.y = opts->window_y + img->height - 1;
+	disp.min.x = disp.min.y = 0;
+	disp.max.x = opts->frame_width - 1;
+	disp.max.y = opts->frame_height - 1;
 	exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
 	exr_pixel_type_t type = half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT;
 	static const char *names[3] = { "R", "G", "B" };
@@ -462,6 +472,15 @@ int glint_exr_write(const char *path, const struct glint_image *img, int half)
 	int part, ret;
 	exr_result_t rv;
 
+	if (opts->frame_width &&
+	    (opts->window_x < 0 || opts->window_y < 0 ||
+	     dw.max.x >= opts->frame_width || dw.max.y >= opts->frame_height))
+		return glint_error_set(EINVAL,
+				       "%s: a %dx%d window at (%d, %d) does "
+				       "not lie inside the %dx%d frame",
+				       path, img->width, img->height,
+				       opts->window_x, opts->window_y,
+				       opts->frame_width, opts->frame_height);
 	ret = glint_atomic_tmpname(path, tmp, sizeof(tmp));
 	if (ret < 0)
 		return ret;
@@ -486,6 +505,11 @@ int glint_exr_write(const char *path, const struct glint_image *img, int half)
 		rv = exr_initialize_required_attr_simple(ctx, part, img->width,
 							 img->height,
 							 EXR_COMPRESSION_ZIP);
+	if (rv == EXR_ERR_SUCCESS && opts->frame_width) {
+		rv = exr_set_data_window(ctx, part, &dw);
+		if (rv == EXR_ERR_SUCCESS)
+			rv = exr_set_display_window(ctx, part, &disp);
+	}
 	for (int c = 0; c < 3 && rv == EXR_ERR_SUCCESS; c++)
 		rv = exr_add_channel(ctx, part, names[c], type,
 				     EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
@@ -493,7 +517,8 @@ int glint_exr_write(const char *path, const struct glint_image *img, int half)
 		rv = exr_write_header(ctx);
 	if (rv == EXR_ERR_SUCCESS)
 		rv = encode_rows(ctx, part, base, half ? 6 : 12, img->width,
-				 img->height, type);
+				 img->height, opts->frame_width ? dw.min.y : 0,
+				 type);
 	if (rv != EXR_ERR_SUCCESS) {
 		ret = exr_fail(path, "writing", rv);
 		goto err;

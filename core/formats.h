@@ -18,8 +18,11 @@
  * float or uint; scanline or tiled (level 0); DWAA/DWAB fall back to the
  * C++ library (exr_cxx.cpp). */
 int glint_exr_read(const char *path, struct glint_image **out);
-/* ZIP-compressed scanline EXR with R, G, B as 32-bit float or half. */
-int glint_exr_write(const char *path, const struct glint_image *img, int half);
+/* ZIP-compressed scanline EXR with R, G, B as 32-bit float or half
+ * (opts->exr_half); the data window and display window as opts says
+ * (glint_write_opts), checked to lie inside the frame. */
+int glint_exr_write(const char *path, const struct glint_image *img,
+		    const struct glint_write_opts *opts);
 
 /* Radiance RGBE (.hdr), flat or new-style RLE scanlines, -Y H +X W. */
 int glint_rgbe_read(const char *path, struct glint_image **out);

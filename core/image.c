@@ -229,7 +229,12 @@ int glint_image_write(const char *path, const struct glint_image *img,
 		opts = &defaults;
 	glint_path_ext(path, ext, sizeof(ext));
 	if (!strcmp(ext, "exr"))
-		return glint_exr_write(path, img, opts->exr_half);
+		return glint_exr_write(path, img, opts);
+	if (opts->frame_width)
+		return glint_error_set(EINVAL,
+				       "%s: a data window inside a larger "
+				       "frame needs an .exr file",
+				       path);
 	if (!strcmp(ext, "hdr") || !strcmp(ext, "pic"))
 		return glint_rgbe_write(path, img);
 	if (!strcmp(ext, "pfm"))
@@ -243,6 +248,16 @@ int glint_image_write(const char *path, const struct glint_image *img,
 			       "%s: unknown image extension '.%s': expected "
 			       ".exr, .hdr, .pfm, .tif or .png",
 			       path, ext);
+}
+
+struct glint_image *glint_image_crop(const struct glint_image *src, int x,
+				     int y, int w, int h)
+{
+	struct glint_image *d = glint_image_new(w, h);
+	for (int j = 0; d && j < h; j++)
+		memcpy(glint_image_px(d, 0, j), glint_image_px(src, x, y + j),
+		       (size_t)w * 3 * sizeof(float));
+	return d;
 }
 
 struct glint_image *glint_image_downsample(const struct glint_image *src, int f)

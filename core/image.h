@@ -35,6 +35,10 @@ struct glint_image *glint_image_dup(const struct glint_image *img);
  * remainder rows and columns dropped); NULL if out of memory. */
 struct glint_image *glint_image_downsample(const struct glint_image *src,
 					   int f);
+/* The w x h rectangle of src at (x, y), which must lie inside src; NULL
+ * if out of memory. */
+struct glint_image *glint_image_crop(const struct glint_image *src, int x,
+				     int y, int w, int h);
 
 static inline float *glint_image_px(const struct glint_image *img, int x, int y)
 {
@@ -88,6 +92,10 @@ struct glint_write_opts {
 	int exr_half;	 /* EXR: store half floats instead of 32-bit */
 	double exposure; /* PNG: linear scale 2^exposure before the curve */
 	int auto_expose; /* PNG: choose exposure from the image (see png.h) */
+	/* EXR only: the image is the data window at (window_x, window_y)
+	 * of a frame_width x frame_height display window (0: no window,
+	 * the image is the whole frame).  Other formats refuse a window. */
+	int window_x, window_y, frame_width, frame_height;
 };
 
 /*

@@ -46,11 +46,14 @@ static double max_rel_err(const struct glint_image *a,
 	return worst;
 }
 
+static const struct glint_write_opts exr_float = { 0 };
+static const struct glint_write_opts exr_half = { .exr_half = 1 };
+
 static void test_exr_float_roundtrip(void)
 {
 	struct glint_image *a = card(97, 61), *b = NULL;
 	const char *p = tmp_path("f.exr");
-	CHECK(glint_exr_write(p, a, 0) == 0, "%s", glint_error_msg());
+	CHECK(glint_exr_write(p, a, &exr_float) == 0, "%s", glint_error_msg());
 	CHECK(glint_image_read(p, &b) == 0, "%s", glint_error_msg());
 	if (b) {
 		CHECK(b->width == 97 && b->height == 61, "%dx%d", b->width,
@@ -62,11 +65,61 @@ static void test_exr_float_roundtrip(void)
 	glint_image_free(b);
 }
 
+/* A data window inside a larger display window (render.exr of a fit
+ * cropped to the sphere): read back as the window, placed where it was
+ * written, and refused when it does not fit the frame or the format
+ * cannot say it. */
+static void test_exr_window(void)
+{
+	struct glint_image *a = card(97, 61), *b = NULL;
+	const char *p = tmp_path("win.exr");
+	struct glint_write_opts o = { .window_x = 5,
+				      .window_y = 17,
+				      .frame_width = 200,
+				      .frame_height = 100 };
+	CHECK(glint_image_write(p, a, &o) == 0, "%s", glint_error_msg());
+	CHECK(glint_image_read(p, &b) == 0, "%s", glint_error_msg());
+	if (b)
+		CHECK(b->width == 97 && b->height == 61 &&
+			      !memcmp(a->data, b->data, 97 * 61 * 12),
+		      "windowed EXR read back %dx%d", b->width, b->height);
+	exr_context_t ctx = NULL;
+	exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+	exr_attr_box2i_t dw, disp;
+	memset(&dw, 0, sizeof(dw));
+	disp = dw;
+	CHECK(exr_start_read(&ctx, p, &init) == EXR_ERR_SUCCESS &&
+		      exr_get_data_window(ctx, 0, &dw) == EXR_ERR_SUCCESS &&
+		      exr_get_display_window(ctx, 0, &disp) == EXR_ERR_SUCCESS,
+	      "reading %s's header", p);
+	CHECK(dw.min.x == 5 && dw.min.y == 17 && dw.max.x == 101 &&
+		      dw.max.y == 77,
+	      "data window (%d,%d)-(%d,%d)", dw.min.x, dw.min.y, dw.max.x,
+	      dw.max.y);
+	CHECK(disp.min.x == 0 && disp.min.y == 0 && disp.max.x == 199 &&
+		      disp.max.y == 99,
+	      "display window (%d,%d)-(%d,%d)", disp.min.x, disp.min.y,
+	      disp.max.x, disp.max.y);
+	if (ctx)
+		exr_finish(&ctx);
+	o.window_x = 104; /* 104 + 97 > 200 */
+	CHECK(glint_image_write(tmp_path("out.exr"), a, &o) == -EINVAL &&
+		      strstr(glint_error_msg(), "inside the 200x100 frame"),
+	      "window outside the frame: %s", glint_error_msg());
+	o.window_x = 5;
+	CHECK(glint_image_write(tmp_path("win.pfm"), a, &o) == -EINVAL &&
+		      strstr(glint_error_msg(), "needs an .exr"),
+	      "window in a PFM: %s", glint_error_msg());
+	glint_error_clear();
+	glint_image_free(a);
+	glint_image_free(b);
+}
+
 static void test_exr_half_roundtrip(void)
 {
 	struct glint_image *a = card(64, 40), *b = NULL;
 	const char *p = tmp_path("h.exr");
-	CHECK(glint_exr_write(p, a, 1) == 0, "%s", glint_error_msg());
+	CHECK(glint_exr_write(p, a, &exr_half) == 0, "%s", glint_error_msg());
 	CHECK(glint_image_read(p, &b) == 0, "%s", glint_error_msg());
 	/* Half has an 11-bit significand: relative error <= 2^-11 for
 	 * normal values (>= 6.1e-5); below that the spacing is 6e-8. */
@@ -88,7 +141,7 @@ static void test_exr_zip_equal_size(void)
 	      "%s", glint_error_msg());
 	if (!a)
 		return;
-	CHECK(glint_exr_write(p, a, 0) == 0, "%s", glint_error_msg());
+	CHECK(glint_exr_write(p, a, &exr_float) == 0, "%s", glint_error_msg());
 	CHECK(glint_image_read(p, &b) == 0, "%s", glint_error_msg());
 	if (b)
 		CHECK(!memcmp(a->data, b->data, 64 * 48 * 12),
@@ -487,7 +540,7 @@ static void test_bad_exr(void)
 {
 	struct glint_image *a = card(128, 128);
 	const char *good = tmp_path("good.exr");
-	glint_exr_write(good, a, 0);
+	glint_exr_write(good, a, &exr_float);
 	long n = file_size(good);
 
 	copy_prefix(good, tmp_path("trunc.exr"), n * 6 / 10);
@@ -631,7 +684,7 @@ static void test_header_bombs(void)
 	expect_read_error(tmp_path("bomb.pfm"), "PFM header says 8000x8000");
 
 	struct glint_image *a = card(16, 16);
-	CHECK(glint_exr_write(tmp_path("bomb.exr"), a, 1) == 0, "%s",
+	CHECK(glint_exr_write(tmp_path("bomb.exr"), a, &exr_half) == 0, "%s",
 	      glint_error_msg());
 	exr_set_window(tmp_path("bomb.exr"), 8000, 8000);
 	expect_read_error(tmp_path("bomb.exr"), "dataWindow says 8000x8000");
@@ -808,6 +861,7 @@ int main(void)
 	RUN(test_atomic_dir_link);
 	RUN(test_exr_float_roundtrip);
 	RUN(test_exr_half_roundtrip);
+	RUN(test_exr_window);
 	RUN(test_exr_zip_equal_size);
 	RUN(test_exr_tiled_read);
 	RUN(test_exr_dwab);

@@ -116,11 +116,14 @@ int cmd_demo(int argc, char **argv)
 	job.scene_path = scene_path;
 	job.photo_path = photo_path;
 	job.photo = photo;
+	photo = NULL; /* the job's from here: glint_fit_job_crop() */
 	job.model = model;
 	job.out_dir = fit_dir;
 	json_t *doc;
 	job.opts.progress = cmd_fit_progress;
-	ret = glint_fit_job_run(&job, &doc);
+	ret = glint_fit_job_crop(&job);
+	if (ret == 0)
+		ret = glint_fit_job_run(&job, &doc);
 	if (ret < 0)
 		goto fail;
 	if (json) {
@@ -133,7 +136,10 @@ int cmd_demo(int argc, char **argv)
 	} else {
 		printf("demo: %s sphere under %s, %dx%d%s\n", material,
 		       strrchr(job.scene.env_path, '/') + 1,
-		       job.scene.cam.width, job.scene.cam.height,
+		       job.window.frame_width ? job.window.frame_width
+					      : job.scene.cam.width,
+		       job.window.frame_width ? job.window.frame_height
+					      : job.scene.cam.height,
 		       noise ? ", one noisy 12-bit exposure"
 			     : ", noise-free HDR");
 		printf("  photo simulated in %.1f s; fit (%s) in %.2f s, "
@@ -152,10 +158,12 @@ int cmd_demo(int argc, char **argv)
 		json_decref(doc);
 	}
 	glint_image_free(photo);
+	glint_image_free(job.photo);
 	glint_image_free(job.weight);
 	return GLINT_EXIT_OK;
 fail:
 	glint_image_free(photo);
+	glint_image_free(job.photo);
 	glint_image_free(job.weight);
 	return cmd_fail("demo");
 }

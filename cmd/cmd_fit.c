@@ -353,6 +353,8 @@ int cmd_fit(int argc, char **argv)
 	job.opts.progress = cmd_fit_progress;
 	ret = glint_fit_job_load(&job, weights);
 	if (!ret)
+		ret = glint_fit_job_crop(&job);
+	if (!ret)
 		ret = glint_fit_job_run(&job, &doc);
 	glint_fit_job_unload(&job);
 	glint_lockfile_release(lock);

@@ -691,7 +691,7 @@ static double backdrop_error(const struct glint_gbuffer *gb,
 		double bg[3] = { 0, 0, 0 }, l[3];
 		for (int s = 0; s < gb->spp; s++) {
 			const float *dir =
-				gb->hits[(size_t)d->pix[i] * gb->spp + s].d;
+				glint_gbuffer_pixel(gb, (size_t)d->pix[i])[s].d;
 			glint_envmap_lookup(env, v3(dir[0], dir[1], dir[2]), l);
 			for (int c = 0; c < 3; c++)
 				bg[c] += l[c] / gb->spp;
@@ -953,8 +953,9 @@ static int make_selections(struct objective *ob, struct selections *sl)
 	if (ret < 0)
 		goto out;
 	for (int s = 0; s < d->n; s++) {
-		int on_grid = d->xy[2 * s] % (4 * d->stride) == 0 &&
-			      d->xy[2 * s + 1] % (4 * d->stride) == 0;
+		int on_grid =
+			(d->xy[2 * s] + d->frame_x) % (4 * d->stride) == 0 &&
+			(d->xy[2 * s + 1] + d->frame_y) % (4 * d->stride) == 0;
 		if (is_spec[s])
 			sl->spec[sl->nspec++] = s;
 		if (on_grid || is_spec[s])

@@ -11,11 +11,7 @@ static int covered(const struct glint_gbuffer *gb, int x, int y)
 {
 	if (x < 0 || y < 0 || x >= gb->width || y >= gb->height)
 		return 0;
-	size_t i = (size_t)y * gb->width + x;
-	for (int s = 0; s < gb->spp; s++)
-		if (gb->hits[i * gb->spp + s].geom < 0)
-			return 0;
-	return 1;
+	return gb->cover[(size_t)y * gb->width + x] == gb->spp;
 }
 
 /*
@@ -50,7 +46,8 @@ static int collect_pixels(const struct glint_gbuffer *gb, int stride,
 			if (!on)
 				continue;
 			(*interior)++;
-			if (x % stride || y % stride)
+			if ((x + gb->frame_x) % stride ||
+			    (y + gb->frame_y) % stride)
 				continue;
 			const float *v = glint_image_px(photo, x, y);
 			const float *w =
@@ -170,8 +167,7 @@ static int stride_for(int interior, int max_pixels)
 	return s < 1 ? 1 : s;
 }
 
-int fit_data_prepare(const struct glint_gbuffer *gb,
-		     const struct glint_image *photo,
+int fit_data_prepare(struct glint_gbuffer *gb, const struct glint_image *photo,
 		     const struct glint_image *weight,
 		     const struct glint_fit_opts *o, struct fit_data *d,
 		     int *interior)
@@ -210,6 +206,11 @@ int fit_data_prepare(const struct glint_gbuffer *gb,
 	if (ret < 0)
 		return ret;
 	d->stride = stride;
+	d->frame_x = gb->frame_x;
+	d->frame_y = gb->frame_y;
+	ret = glint_gbuffer_keep(gb, d->pix, d->n, o->nthreads);
+	if (ret < 0)
+		return ret;
 	ret = check_photo(d);
 	if (ret < 0)
 		return ret;

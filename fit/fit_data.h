@@ -23,6 +23,7 @@ struct fit_data {
 	double *va, *vb;
 	int noise_model; /* va, vb model a weight image (a real noise model) */
 	int stride;	 /* every stride-th row and column was taken */
+	int frame_x, frame_y; /* xy's origin in the frame (pinhole.h) */
 };
 
 void free_data(struct fit_data *d);
@@ -31,11 +32,11 @@ void free_data(struct fit_data *d);
  * Check photo and weight against the camera, collect the pixels wholly on
  * the sphere (every stride-th, about o->max_pixels of them) with their
  * values and sqrt weights (o->weighting when weight is NULL), and check
- * the photo shows something there.  *interior gets the count before
+ * the photo shows something there.  A sparse G-buffer is made to hold
+ * the chosen pixels.  *interior gets the count before
  * subsampling.
  */
-int fit_data_prepare(const struct glint_gbuffer *gb,
-		     const struct glint_image *photo,
+int fit_data_prepare(struct glint_gbuffer *gb, const struct glint_image *photo,
 		     const struct glint_image *weight,
 		     const struct glint_fit_opts *o, struct fit_data *d,
 		     int *interior);

@@ -422,16 +422,17 @@ int glint_fit_dielectric(struct glint_renderer *r,
 	memset(&ob, 0, sizeof(ob));
 	memset(&lr, 0, sizeof(lr));
 	res->model = model;
-	ob.gb = &r->gb;
+	struct glint_gbuffer *gb = &r->gb;
 	if (r->gb.spp < DIELECTRIC_MIN_SPP) {
-		ret = glint_tracer_primary(r->tracer, &r->scene.cam,
-					   DIELECTRIC_MIN_SPP, o->nthreads,
-					   NULL, &fine);
+		ret = glint_tracer_primary_sparse(r->tracer, &r->scene.cam,
+						  DIELECTRIC_MIN_SPP,
+						  o->nthreads, NULL, &fine);
 		if (ret < 0)
 			return ret;
-		ob.gb = &fine;
+		gb = &fine;
 	}
-	ret = fit_data_prepare(ob.gb, photo, weight, o, &d, &interior);
+	ob.gb = gb;
+	ret = fit_data_prepare(gb, photo, weight, o, &d, &interior);
 	if (ret < 0)
 		goto out;
 	res->interior = interior;

@@ -467,11 +467,17 @@ static int write_results(const struct glint_fit_job *job, const char *dir,
 			     text, strlen(text))
 		   : glint_error_set(ENOMEM, "out of memory");
 	free(text);
+	struct glint_write_opts wo = {
+		.window_x = job->window.x,
+		.window_y = job->window.y,
+		.frame_width = job->window.frame_width,
+		.frame_height = job->window.frame_height,
+	};
 	if (!ret)
 		ret = glint_image_write(glint_atomic_dir_file(&ad, "render.exr",
 							      path,
 							      sizeof(path)),
-					img, NULL);
+					img, &wo);
 	if (!ret)
 		ret = glint_compare_png_plots(
 			glint_atomic_dir_file(&ad, "compare.png", path,
@@ -572,6 +578,80 @@ int glint_fit_job_load(struct glint_fit_job *job, const char *weights_path)
 	return ret;
 }
 
+#define CROP_MIN_SAVING 0.25
+
+int glint_fit_job_crop(struct glint_fit_job *job)
+{
+	struct glint_pinhole *cam = &job->scene.cam;
+	int fw = cam->width, fh = cam->height;
+	struct glint_ellipse e;
+
+	if (job->window.frame_width || !job->photo || job->photo->width != fw ||
+	    job->photo->height != fh ||
+	    (job->weight &&
+	     (job->weight->width != fw || job->weight->height != fh)))
+		return 0;
+	if (glint_pinhole_sphere_ellipse(cam, job->scene.sphere_centre,
+					 job->scene.sphere_radius, &e) < 0) {
+		glint_error_clear(); /* the fit reports what is wrong */
+		return 0;
+	}
+	/* The ellipse's half extents along x and y, then the margin: lens
+	 * blur at the sphere's nearest depth, a tenth of the radius for the
+	 * compare image's context, 8 pixels. */
+	double ca = cos(e.angle), sa = sin(e.angle);
+	double hx = sqrt(e.a * e.a * ca * ca + e.b * e.b * sa * sa);
+	double hy = sqrt(e.a * e.a * sa * sa + e.b * e.b * ca * ca);
+	double z =
+		v3_dot(v3_sub(job->scene.sphere_centre, cam->pos), cam->fwd) -
+		job->scene.sphere_radius;
+	double blur = 0;
+	if (cam->aperture_radius > 0 && z > 0 && cam->focus_distance > 0)
+		blur = cam->aperture_radius * cam->fpx *
+		       fabs(1 / z - 1 / cam->focus_distance);
+	double margin = 8 + 0.1 * fmax(e.a, e.b) + blur;
+	int x0 = (int)floor(fmax(0, e.cx - hx - margin));
+	int y0 = (int)floor(fmax(0, e.cy - hy - margin));
+	int x1 = (int)ceil(fmin(fw, e.cx + hx + margin));
+	int y1 = (int)ceil(fmin(fh, e.cy + hy + margin));
+	if (x1 - x0 < 1 || y1 - y0 < 1 ||
+	    (double)(x1 - x0) * (y1 - y0) >
+		    (1 - CROP_MIN_SAVING) * (double)fw * fh)
+		return 0;
+	struct glint_image *p =
+		glint_image_crop(job->photo, x0, y0, x1 - x0, y1 - y0);
+	struct glint_image *w = job->weight
+					? glint_image_crop(job->weight, x0, y0,
+							   x1 - x0, y1 - y0)
+					: NULL;
+	if (!p || (job->weight && !w)) {
+		glint_image_free(p);
+		glint_image_free(w);
+		return glint_error_set(ENOMEM, "out of memory");
+	}
+	glint_image_free(job->photo);
+	glint_image_free(job->weight);
+	job->photo = p;
+	job->weight = w;
+	cam->width = x1 - x0;
+	cam->height = y1 - y0;
+	cam->cx -= x0;
+	cam->cy -= y0;
+	cam->frame_x = x0;
+	cam->frame_y = y0;
+	cam->frame_width = fw;
+	job->window.x = x0;
+	job->window.y = y0;
+	job->window.frame_width = fw;
+	job->window.frame_height = fh;
+	glint_log_info("fitting the %dx%d window at (%d, %d) around the "
+		       "sphere: %.0f%% of the %dx%d frame",
+		       x1 - x0, y1 - y0, x0, y0,
+		       100.0 * (x1 - x0) * (y1 - y0) / ((double)fw * fh), fw,
+		       fh);
+	return 0;
+}
+
 void glint_fit_job_unload(struct glint_fit_job *job)
 {
 	glint_image_free(job->photo);
@@ -624,6 +704,15 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 		ret = glint_error_set(ENOMEM, "out of memory");
 		goto out;
 	}
+	if (job->window.frame_width)
+		json_object_set_new(
+			render_info, "window",
+			json_pack("{s:i, s:i, s:i, s:i, s:i, s:i}", "x",
+				  job->window.x, "y", job->window.y, "width",
+				  job->scene.cam.width, "height",
+				  job->scene.cam.height, "frame_width",
+				  job->window.frame_width, "frame_height",
+				  job->window.frame_height));
 	json_object_set_new(doc, "render", render_info);
 	if (why)
 		json_object_set(doc, "model_choice", why);

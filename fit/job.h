@@ -40,6 +40,12 @@ struct glint_fit_job {
 	/* bit k set: write out_dir/material + the extension of export
 	 * format k (fit/export.h) with an accepted result */
 	unsigned exports;
+	/* Set by glint_fit_job_crop(): the photo, weights and camera are
+	 * the window at (x, y) of a frame_width x frame_height frame
+	 * (frame_width 0: the whole frame). */
+	struct {
+		int x, y, frame_width, frame_height;
+	} window;
 };
 
 /*
@@ -50,6 +56,20 @@ struct glint_fit_job {
  */
 int glint_fit_job_load(struct glint_fit_job *job, const char *weights_path);
 void glint_fit_job_unload(struct glint_fit_job *job);
+
+/*
+ * Narrow the job to the sphere: the rectangle around the scene sphere's
+ * silhouette plus a margin (a tenth of its radius and 8 pixels, and the
+ * lens blur), when that saves at least a quarter of the frame.  The photo
+ * and weights (the job's, freed and replaced) become that window, the
+ * camera is shifted to it, job->window says where it lies; the fit, the
+ * final render and compare.png then cover the window only, and
+ * render.exr keeps the frame as its display window.  The fit's pixels
+ * all lie on the sphere, so its answer does not depend on the window.
+ * A photo that is not the camera's size is left alone (the fit says
+ * so).  Returns 0, or -ENOMEM.
+ */
+int glint_fit_job_crop(struct glint_fit_job *job);
 
 /*
  * Trace, fit, render the result and write out_dir/{params.json,

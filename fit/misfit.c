@@ -4,6 +4,8 @@
 #include "core/error.h"
 #include "core/json.h"
 
+#include <stdlib.h>
+
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -53,14 +55,15 @@ static int band_of(const double *edges, double a)
 	return GLINT_MISFIT_BANDS - 1;
 }
 
-/* Pixel i's mean normal and view direction (towards the camera). */
-static void pixel_geometry(const struct glint_gbuffer *gb, size_t i,
-			   struct vec3 *n, struct vec3 *wo)
+/* A pixel's mean normal and view direction (towards the camera) from
+ * its spp hits hs. */
+static void pixel_geometry(const struct glint_hit *hs, int spp, struct vec3 *n,
+			   struct vec3 *wo)
 {
 	struct vec3 sn = v3(0, 0, 0), sd = v3(0, 0, 0);
 
-	for (int s = 0; s < gb->spp; s++) {
-		const struct glint_hit *h = &gb->hits[i * gb->spp + s];
+	for (int s = 0; s < spp; s++) {
+		const struct glint_hit *h = &hs[s];
 		sn = v3_add(sn, v3(h->n[0], h->n[1], h->n[2]));
 		sd = v3_add(sd, v3(h->d[0], h->d[1], h->d[2]));
 	}
@@ -196,6 +199,13 @@ int glint_misfit_analyse(const struct glint_gbuffer *gb,
 	m->light[0] = light.x;
 	m->light[1] = light.y;
 	m->light[2] = light.z;
+	/* A sparse G-buffer's rows are traced again as they are read. */
+	struct glint_hit *buf =
+		gb->hits ? NULL : malloc((size_t)w * gb->spp * sizeof(*buf));
+	if (!gb->hits && !buf)
+		return glint_error_set(ENOMEM, "out of memory");
+	const struct glint_hit *row = NULL;
+	int row_y = -1;
 	for (size_t i = 0; i < (size_t)w * h; i++) {
 		if (cov->data[3 * i] < 0.999f)
 			continue;
@@ -216,7 +226,11 @@ int glint_misfit_analyse(const struct glint_gbuffer *gb,
 			continue;
 		r /= used;
 		struct vec3 n, wo;
-		pixel_geometry(gb, i, &n, &wo);
+		if ((int)(i / (size_t)w) != row_y) {
+			row_y = (int)(i / (size_t)w);
+			row = glint_gbuffer_row(gb, row_y, buf);
+		}
+		pixel_geometry(row + i % (size_t)w * gb->spp, gb->spp, &n, &wo);
 		double cv = fmin(1, fmax(-1, v3_dot(n, wo)));
 		struct vec3 refl = v3_sub(v3_scale(n, 2 * cv), wo);
 		double a_view = acos(cv) * 180 / M_PI;
@@ -234,6 +248,7 @@ int glint_misfit_analyse(const struct glint_gbuffer *gb,
 		bm->n++;
 		c2 += rr / used;
 	}
+	free(buf);
 	long total = 0;
 	for (int k = 0; k < GLINT_MISFIT_BANDS; k++)
 		total += av[k].n;

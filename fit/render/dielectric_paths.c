@@ -182,7 +182,11 @@ static void trace_rows(void *ctx, int lo, int hi, int thread)
 	for (int i = lo; i < hi && !j->error; i++) {
 		int64_t before = l->n;
 		const struct glint_hit *h =
-			j->gb->hits + (size_t)j->pix[i] * spp;
+			glint_gbuffer_pixel(j->gb, (size_t)j->pix[i]);
+		if (!h) { /* not kept: the caller's mistake */
+			j->error = EINVAL;
+			return;
+		}
 		for (int s = 0; s < spp; s++)
 			if (trace_sample(j, l, h + s, 1.0 / spp) < 0) {
 				j->error = ENOMEM;
@@ -223,7 +227,12 @@ int glint_dielectric_trace(struct glint_tracer *tracer,
 	}
 	glint_parallel_for(n, chunk, nthreads, trace_rows, &j);
 	if (j.error) {
-		ret = glint_error_set(ENOMEM, "out of memory");
+		ret = j.error == EINVAL
+			      ? glint_error_set(EINVAL,
+						"dielectric: a pixel's primary "
+						"hits are not held by the "
+						"G-buffer")
+			      : glint_error_set(ENOMEM, "out of memory");
 		goto done;
 	}
 	/* Chunks are contiguous pixel ranges: concatenate in order. */
@@ -333,9 +342,7 @@ int glint_dielectric_render(struct glint_tracer *tracer,
 	glint_dielectric_shade(&c, p, rgb);
 	glint_dielectric_cache_free(&c);
 	for (int i = 0; i < n; i++) {
-		int hits = 0;
-		for (int s = 0; s < gb->spp; s++)
-			hits += gb->hits[(size_t)i * gb->spp + s].geom >= 0;
+		int hits = gb->cover[i];
 		for (int ch = 0; ch < 3; ch++) {
 			out->data[3 * (size_t)i + ch] = (float)rgb[3 * i + ch];
 			if (cov)

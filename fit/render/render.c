@@ -8,6 +8,7 @@
 #include "core/parallel.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 static struct vec3 hvec(const float f[3])
@@ -105,6 +106,7 @@ struct shade_job {
 	const double *params;
 	const struct glint_shade_opts *opts;
 	struct glint_image *out, *coverage;
+	int failed;
 };
 
 static void shade_rows(void *ctx, int y0, int y1, int thread)
@@ -112,13 +114,20 @@ static void shade_rows(void *ctx, int y0, int y1, int thread)
 	struct shade_job *job = ctx;
 	const struct glint_gbuffer *gb = job->gb;
 	int spp = gb->spp;
+	struct glint_hit *buf = NULL;
 
 	(void)thread;
 	glint_thread_ftz();
+	if (!gb->hits &&
+	    !(buf = malloc((size_t)gb->width * spp * sizeof(*buf)))) {
+		job->failed = 1;
+		return;
+	}
 	for (int y = y0; y < y1; y++) {
+		const struct glint_hit *row = glint_gbuffer_row(gb, y, buf);
 		for (int x = 0; x < gb->width; x++) {
 			size_t pix = (size_t)y * gb->width + x;
-			const struct glint_hit *hs = gb->hits + pix * spp;
+			const struct glint_hit *hs = row + (size_t)x * spp;
 			double sum[3] = { 0, 0, 0 }, rgb[3];
 			int hits = 0;
 			for (int s = 0; s < spp; s++) {
@@ -133,8 +142,10 @@ static void shade_rows(void *ctx, int y0, int y1, int thread)
 					glint_shade_hit(
 						h,
 						glint_hash32(
-							(uint32_t)(pix * spp +
-								   s) +
+							glint_gbuffer_frame_pixel(
+								gb, pix) *
+								(uint32_t)spp +
+							(uint32_t)s +
 							job->opts->seed *
 								0x9e3779b9u),
 						job->tracer, job->env,
@@ -156,6 +167,7 @@ static void shade_rows(void *ctx, int y0, int y1, int thread)
 		if (job->opts->progress)
 			glint_progress_add(job->opts->progress, 1);
 	}
+	free(buf);
 }
 
 int glint_render_shade(const struct glint_gbuffer *gb,
@@ -166,8 +178,8 @@ int glint_render_shade(const struct glint_gbuffer *gb,
 		       const struct glint_shade_opts *opts,
 		       struct glint_image *out, struct glint_image *coverage)
 {
-	struct shade_job job = { gb,	 tracer, env, model,
-				 params, opts,	 out, coverage };
+	struct shade_job job = { gb,   tracer, env,	 model, params,
+				 opts, out,    coverage, 0 };
 
 	if (out->width != gb->width || out->height != gb->height ||
 	    (coverage &&
@@ -184,6 +196,8 @@ int glint_render_shade(const struct glint_gbuffer *gb,
 	if (tracer && glint_tracer_is_convex(tracer))
 		job.tracer = NULL;
 	glint_parallel_for(gb->height, 2, opts->nthreads, shade_rows, &job);
+	if (job.failed)
+		return glint_error_set(ENOMEM, "out of memory");
 	return 0;
 }
 
@@ -219,8 +233,15 @@ int glint_renderer_init_env(struct glint_renderer *r,
 	if (ret < 0)
 		goto err;
 	double t0 = glint_now();
-	ret = glint_tracer_primary(r->tracer, &scene->cam, scene->spp, nthreads,
-				   progress, &r->gb);
+	double dense_mb = (double)scene->cam.width * scene->cam.height *
+			  scene->spp * sizeof(struct glint_hit) / 1048576;
+	if (dense_mb > glint_gbuffer_dense_mb())
+		ret = glint_tracer_primary_sparse(r->tracer, &scene->cam,
+						  scene->spp, nthreads,
+						  progress, &r->gb);
+	else
+		ret = glint_tracer_primary(r->tracer, &scene->cam, scene->spp,
+					   nthreads, progress, &r->gb);
 	r->trace_seconds = glint_now() - t0;
 	if (ret < 0)
 		goto err;
@@ -245,11 +266,25 @@ int glint_renderer_shade(struct glint_renderer *r,
 			 const struct glint_shade_opts *opts,
 			 struct glint_image *out, struct glint_image *coverage)
 {
-	if (model->transparent)
+	if (model->transparent) {
+		/* Its paths are traced for every pixel at once. */
+		int n = r->gb.width * r->gb.height;
+		int32_t *all = r->gb.hits ? NULL : malloc((size_t)n * 4);
+		if (!r->gb.hits && !all)
+			return glint_error_set(ENOMEM, "out of memory");
+		for (int i = 0; all && i < n; i++)
+			all[i] = i;
+		int ret =
+			all ? glint_gbuffer_keep(&r->gb, all, n, opts->nthreads)
+			    : 0;
+		free(all);
+		if (ret < 0)
+			return ret;
 		return glint_dielectric_render(r->tracer, &r->gb, r->env,
 					       r->scene.sphere_centre,
 					       r->scene.sphere_radius, params,
 					       opts->nthreads, out, coverage);
+	}
 	return glint_render_shade(&r->gb, r->tracer, r->env, model, params,
 				  opts, out, coverage);
 }

@@ -319,9 +319,11 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 	for (int i = 0; i < n; i++) {
 		for (int s = 0; s < gb->spp; s++) {
 			const struct glint_hit *g =
-				&gb->hits[(size_t)pix[i] * gb->spp + s];
+				glint_gbuffer_pixel(gb, (size_t)pix[i]);
 			struct cache_hit *h = &c->hits[(size_t)i * gb->spp + s];
-			if (g->geom < 0) {
+			if (g)
+				g += s;
+			if (!g || g->geom < 0) {
 				glint_shade_cache_free(c);
 				return glint_error_set(
 					EINVAL,
@@ -345,8 +347,10 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 			h->wo[1] = (float)v3_dot(wo, b);
 			h->wo[2] = (float)v3_dot(wo, nn);
 			h->seed = glint_hash32(
-				(uint32_t)(pix[i] * gb->spp + s) ^ 0x85ebca6bu ^
-				glint_hash32(opts->seed));
+				(glint_gbuffer_frame_pixel(gb, (size_t)pix[i]) *
+					 (uint32_t)gb->spp +
+				 (uint32_t)s) ^
+				0x85ebca6bu ^ glint_hash32(opts->seed));
 		}
 	}
 	struct setup_job job = { c, opts->static_samples, p0, 0 };

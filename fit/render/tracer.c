@@ -380,14 +380,6 @@ void glint_pixel_sample(int x, int y, int s, int spp, double pix[2],
 	lens[1] = frac(glint_radical2(k) + ps.lens[1]);
 }
 
-struct primary_job {
-	struct glint_tracer *t;
-	const struct glint_pinhole *cam;
-	struct glint_gbuffer *gb;
-	struct glint_progress *progress;
-	struct pixel_pattern pattern;
-};
-
 static void store_hit(const struct RTCRayHit16 *rh, int k, struct glint_hit *h)
 {
 	double o[3] = { rh->ray.org_x[k], rh->ray.org_y[k], rh->ray.org_z[k] };
@@ -449,56 +441,105 @@ static void set_lane(struct RTCRayHit16 *rh, int k, struct vec3 o,
 	rh->hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
 }
 
+/* What re-traces a sparse G-buffer's pixels: the tracer (borrowed), the
+ * camera and the pattern. */
+struct glint_gbuffer_src {
+	struct glint_tracer *t;
+	struct glint_pinhole cam;
+	struct pixel_pattern pattern;
+};
+
+/* Rays gathered into a packet of 16, their hits written through dst. */
+struct packet {
+	_Alignas(64) struct RTCRayHit16 rh;
+	_Alignas(64) int valid[16];
+	struct glint_hit *dst[16];
+	int count;
+};
+
+static void packet_flush(struct glint_tracer *t, struct packet *pk)
+{
+	if (pk->count)
+		flush_packet(t, &pk->rh, pk->valid, pk->count, pk->dst);
+	pk->count = 0;
+}
+
+/* Pixel (x, y)'s spp samples into out[0 .. spp). */
+static void trace_pixel(const struct glint_gbuffer_src *src,
+			const struct glint_gbuffer *gb, struct packet *pk,
+			int x, int y, struct glint_hit *out)
+{
+	struct pixel_shift ps;
+
+	pixel_shift(x + gb->frame_x, y + gb->frame_y, gb->spp, &ps);
+	for (int s = 0; s < gb->spp; s++) {
+		double pix[2], lens[2];
+		struct vec3 o, d;
+		pattern_sample(&src->pattern, &ps, s, pix, lens);
+		glint_pinhole_ray(&src->cam, x + pix[0], y + pix[1], lens[0],
+				  lens[1], &o, &d);
+		set_lane(&pk->rh, pk->count, o, d);
+		pk->valid[pk->count] = -1;
+		pk->dst[pk->count] = &out[s];
+		if (++pk->count == 16)
+			packet_flush(src->t, pk);
+	}
+}
+
+static void count_cover(struct glint_gbuffer *gb, int y,
+			const struct glint_hit *row)
+{
+	for (int x = 0; x < gb->width; x++) {
+		int n = 0;
+		for (int s = 0; s < gb->spp; s++)
+			n += row[(size_t)x * gb->spp + s].geom >= 0;
+		gb->cover[(size_t)y * gb->width + x] = (uint16_t)n;
+	}
+}
+
+struct primary_job {
+	struct glint_gbuffer *gb;
+	struct glint_progress *progress;
+	int failed;
+};
+
 static void primary_rows(void *ctx, int y0, int y1, int thread)
 {
 	struct primary_job *job = ctx;
 	struct glint_gbuffer *gb = job->gb;
-	_Alignas(64) struct RTCRayHit16 rh;
-	_Alignas(64) int valid[16];
-	struct glint_hit *dst[16];
-	int count = 0;
+	size_t row = (size_t)gb->width * gb->spp;
+	struct glint_hit *buf = NULL;
+	struct packet pk;
 
 	(void)thread;
 	glint_thread_ftz();
+	pk.count = 0;
+	if (!gb->hits && !(buf = malloc(row * sizeof(*buf)))) {
+		job->failed = 1;
+		return;
+	}
 	for (int y = y0; y < y1; y++) {
-		for (int x = 0; x < gb->width; x++) {
-			struct pixel_shift ps;
-			pixel_shift(x, y, gb->spp, &ps);
-			for (int s = 0; s < gb->spp; s++) {
-				double pix[2], lens[2];
-				struct vec3 o, d;
-				pattern_sample(&job->pattern, &ps, s, pix,
-					       lens);
-				glint_pinhole_ray(job->cam, x + pix[0],
-						  y + pix[1], lens[0], lens[1],
-						  &o, &d);
-				set_lane(&rh, count, o, d);
-				valid[count] = -1;
-				dst[count] = &gb->hits[((size_t)y * gb->width +
-							x) * gb->spp +
-						       s];
-				if (++count == 16) {
-					flush_packet(job->t, &rh, valid, count,
-						     dst);
-					count = 0;
-				}
-			}
+		struct glint_hit *dst = buf ? buf : gb->hits + (size_t)y * row;
+		for (int x = 0; x < gb->width; x++)
+			trace_pixel(gb->src, gb, &pk, x, y,
+				    dst + (size_t)x * gb->spp);
+		if (buf) { /* sparse: the row is counted, then dropped */
+			packet_flush(gb->src->t, &pk);
+			count_cover(gb, y, buf);
 		}
 		if (job->progress)
 			glint_progress_add(job->progress, 1);
 	}
-	if (count)
-		flush_packet(job->t, &rh, valid, count, dst);
+	packet_flush(gb->src->t, &pk);
+	for (int y = y0; !buf && y < y1; y++)
+		count_cover(gb, y, gb->hits + (size_t)y * row);
+	free(buf);
 }
 
-int glint_tracer_primary(struct glint_tracer *t,
-			 const struct glint_pinhole *cam, int spp, int nthreads,
-			 struct glint_progress *progress,
+static int gbuffer_begin(struct glint_tracer *t,
+			 const struct glint_pinhole *cam, int spp,
 			 struct glint_gbuffer *gb)
 {
-	struct primary_job job = { t, cam, gb, progress, { 0 } };
-	int ret;
-
 	memset(gb, 0, sizeof(*gb));
 	if (!t->committed)
 		return glint_error_set(EINVAL, "tracer used before commit");
@@ -508,26 +549,165 @@ int glint_tracer_primary(struct glint_tracer *t,
 	gb->width = cam->width;
 	gb->height = cam->height;
 	gb->spp = spp;
+	gb->frame_x = cam->frame_x;
+	gb->frame_y = cam->frame_y;
+	gb->frame_width = cam->frame_width;
+	gb->src = calloc(1, sizeof(*gb->src));
+	gb->cover =
+		malloc((size_t)cam->width * cam->height * sizeof(*gb->cover));
+	if (!gb->src || !gb->cover ||
+	    pattern_init(&gb->src->pattern, spp) < 0) {
+		free(gb->src);
+		free(gb->cover);
+		memset(gb, 0, sizeof(*gb));
+		return glint_error_set(ENOMEM,
+				       "out of memory for a %dx%d G-buffer",
+				       cam->width, cam->height);
+	}
+	gb->src->t = t;
+	gb->src->cam = *cam;
+	return 0;
+}
+
+static int gbuffer_trace(struct glint_gbuffer *gb, int nthreads,
+			 struct glint_progress *progress)
+{
+	struct primary_job job = { gb, progress, 0 };
+
+	glint_parallel_for(gb->height, 2, nthreads, primary_rows, &job);
+	if (job.failed) {
+		glint_gbuffer_free(gb);
+		return glint_error_set(ENOMEM, "out of memory tracing a row");
+	}
+	return 0;
+}
+
+int glint_tracer_primary(struct glint_tracer *t,
+			 const struct glint_pinhole *cam, int spp, int nthreads,
+			 struct glint_progress *progress,
+			 struct glint_gbuffer *gb)
+{
+	int ret = gbuffer_begin(t, cam, spp, gb);
+
+	if (ret < 0)
+		return ret;
 	gb->hits = malloc((size_t)cam->width * cam->height * spp *
 			  sizeof(*gb->hits));
-	if (!gb->hits)
+	if (!gb->hits) {
+		glint_gbuffer_free(gb);
 		return glint_error_set(ENOMEM,
 				       "out of memory for %dx%d x %d samples",
 				       cam->width, cam->height, spp);
-	ret = pattern_init(&job.pattern, spp);
-	if (ret < 0) {
-		glint_gbuffer_free(gb);
-		return ret;
 	}
-	glint_parallel_for(cam->height, 2, nthreads, primary_rows, &job);
-	pattern_free(&job.pattern);
+	return gbuffer_trace(gb, nthreads, progress);
+}
+
+int glint_tracer_primary_sparse(struct glint_tracer *t,
+				const struct glint_pinhole *cam, int spp,
+				int nthreads, struct glint_progress *progress,
+				struct glint_gbuffer *gb)
+{
+	int ret = gbuffer_begin(t, cam, spp, gb);
+	size_t n = (size_t)cam->width * cam->height;
+
+	if (ret < 0)
+		return ret;
+	gb->slot = malloc(n * sizeof(*gb->slot));
+	if (!gb->slot) {
+		glint_gbuffer_free(gb);
+		return glint_error_set(ENOMEM, "out of memory");
+	}
+	for (size_t i = 0; i < n; i++)
+		gb->slot[i] = -1;
+	return gbuffer_trace(gb, nthreads, progress);
+}
+
+struct keep_job {
+	struct glint_gbuffer *gb;
+	const int32_t *pix; /* the pixels to trace, slots assigned */
+};
+
+static void keep_pixels(void *ctx, int lo, int hi, int thread)
+{
+	struct keep_job *job = ctx;
+	struct glint_gbuffer *gb = job->gb;
+	struct packet pk;
+
+	(void)thread;
+	glint_thread_ftz();
+	pk.count = 0;
+	for (int k = lo; k < hi; k++) {
+		int32_t i = job->pix[k];
+		trace_pixel(gb->src, gb, &pk, i % gb->width, i / gb->width,
+			    gb->stored + (size_t)gb->slot[i] * gb->spp);
+	}
+	packet_flush(gb->src->t, &pk);
+}
+
+int glint_gbuffer_keep(struct glint_gbuffer *gb, const int32_t *pix, int n,
+		       int nthreads)
+{
+	if (gb->hits)
+		return 0;
+	int32_t *todo = malloc((size_t)(n ? n : 1) * sizeof(*todo));
+	int m = 0;
+	if (!todo)
+		return glint_error_set(ENOMEM, "out of memory");
+	for (int k = 0; k < n; k++)
+		if (gb->slot[pix[k]] < 0) {
+			gb->slot[pix[k]] = gb->nstored + m;
+			todo[m++] = pix[k];
+		}
+	if (m) {
+		size_t want = (size_t)(gb->nstored + m) * gb->spp;
+		struct glint_hit *st =
+			realloc(gb->stored, want * sizeof(*gb->stored));
+		if (!st) {
+			for (int k = 0; k < m; k++)
+				gb->slot[todo[k]] = -1;
+			free(todo);
+			return glint_error_set(ENOMEM, "out of memory");
+		}
+		gb->stored = st;
+		gb->nstored += m;
+		struct keep_job job = { gb, todo };
+		glint_parallel_for(m, 256, nthreads, keep_pixels, &job);
+	}
+	free(todo);
 	return 0;
+}
+
+const struct glint_hit *glint_gbuffer_row(const struct glint_gbuffer *gb, int y,
+					  struct glint_hit *buf)
+{
+	if (gb->hits)
+		return gb->hits + (size_t)y * gb->width * gb->spp;
+	struct packet pk;
+	pk.count = 0;
+	for (int x = 0; x < gb->width; x++)
+		trace_pixel(gb->src, gb, &pk, x, y, buf + (size_t)x * gb->spp);
+	packet_flush(gb->src->t, &pk);
+	return buf;
+}
+
+double glint_gbuffer_dense_mb(void)
+{
+	const char *e = getenv("GLINT_GBUFFER_MB");
+	char *end;
+	double v = e ? strtod(e, &end) : NAN;
+	return e && end != e && !*end && v >= 0 ? v : 256;
 }
 
 void glint_gbuffer_free(struct glint_gbuffer *gb)
 {
 	free(gb->hits);
-	gb->hits = NULL;
+	free(gb->cover);
+	free(gb->slot);
+	free(gb->stored);
+	if (gb->src)
+		pattern_free(&gb->src->pattern);
+	free(gb->src);
+	memset(gb, 0, sizeof(*gb));
 }
 
 int glint_tracer_occluded(struct glint_tracer *t, struct vec3 org,

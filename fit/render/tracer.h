@@ -12,6 +12,7 @@
 
 #include "core/log.h"
 
+#include <stddef.h>
 #include <stdint.h>
 
 struct glint_tracer;
@@ -43,21 +44,77 @@ struct glint_hit {
 	int32_t geom; /* geometry id, -1 for a miss */
 };
 
-/* Per-pixel stratified samples of a camera: width * height * spp hits. */
+/*
+ * Per-pixel stratified samples of a camera: width * height * spp hits.
+ * Dense, every pixel's hits are held (`hits`); sparse, only the pixels
+ * asked for with glint_gbuffer_keep() are (`slot`, `stored`: 40 bytes a
+ * sample is 2 GB for a 12 MP frame at 4 samples), and a row is traced
+ * again when it is read (glint_gbuffer_row()).  Either way `cover` holds
+ * each pixel's count of samples that hit, and a pixel's samples are the
+ * same (the same rays, traced the same way).
+ */
 struct glint_gbuffer {
 	int width, height, spp;
-	struct glint_hit *hits; /* [(y * width + x) * spp + s] */
+	struct glint_hit *hits; /* dense: [(y * width + x) * spp + s] */
+	int frame_x, frame_y, frame_width; /* the camera's (pinhole.h) */
+	uint16_t *cover;		   /* [y * width + x]: hits of spp */
+	int32_t *slot;		  /* sparse: pixel's row of stored, or -1 */
+	struct glint_hit *stored; /* sparse: [slot * spp + s] */
+	int nstored;
+	struct glint_gbuffer_src *src; /* what traces it (tracer.c) */
 };
+
+/* Pixel i's index in the whole frame (glint_pinhole's window), which
+ * seeds its samples. */
+static inline uint32_t glint_gbuffer_frame_pixel(const struct glint_gbuffer *gb,
+						 size_t i)
+{
+	if (!gb->frame_width)
+		return (uint32_t)i;
+	size_t y = i / (size_t)gb->width, x = i % (size_t)gb->width;
+	return (uint32_t)((y + (size_t)gb->frame_y) * (size_t)gb->frame_width +
+			  x + (size_t)gb->frame_x);
+}
+
+/* Pixel i's spp hits, or NULL when a sparse G-buffer does not hold them
+ * (glint_gbuffer_keep()). */
+static inline const struct glint_hit *
+glint_gbuffer_pixel(const struct glint_gbuffer *gb, size_t i)
+{
+	if (gb->hits)
+		return gb->hits + i * (size_t)gb->spp;
+	if (!gb->slot || gb->slot[i] < 0)
+		return NULL;
+	return gb->stored + (size_t)gb->slot[i] * (size_t)gb->spp;
+}
 
 /*
  * Trace spp deterministic stratified sub-pixel samples per pixel (and lens
  * samples for a thin lens) with rtcIntersect16 packets on nthreads threads
- * (0 = all CPUs).  progress may be NULL.  Free with glint_gbuffer_free().
+ * (0 = all CPUs).  progress may be NULL.  Free with glint_gbuffer_free();
+ * the tracer must outlive the G-buffer.  _sparse keeps only `cover`.
  */
 int glint_tracer_primary(struct glint_tracer *t,
 			 const struct glint_pinhole *cam, int spp, int nthreads,
 			 struct glint_progress *progress,
 			 struct glint_gbuffer *gb);
+int glint_tracer_primary_sparse(struct glint_tracer *t,
+				const struct glint_pinhole *cam, int spp,
+				int nthreads, struct glint_progress *progress,
+				struct glint_gbuffer *gb);
+/* The largest dense G-buffer a renderer makes, in MiB: GLINT_GBUFFER_MB
+ * in the environment, default 256 (a 1.6 MP window at 4 samples);
+ * above it the renderer's G-buffer is sparse (render.h). */
+double glint_gbuffer_dense_mb(void);
+
+/* Hold pixels pix[0 .. n) of a sparse G-buffer (traced now); nothing to
+ * do for a dense one. */
+int glint_gbuffer_keep(struct glint_gbuffer *gb, const int32_t *pix, int n,
+		       int nthreads);
+/* Row y's width * spp hits: the dense G-buffer's own, or traced into buf
+ * (width * spp hits, the caller's).  Safe from several threads. */
+const struct glint_hit *glint_gbuffer_row(const struct glint_gbuffer *gb, int y,
+					  struct glint_hit *buf);
 void glint_gbuffer_free(struct glint_gbuffer *gb);
 
 /* Nearest hit of one ray beyond tnear: its geometry id (-1 for none),

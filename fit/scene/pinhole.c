@@ -20,6 +20,7 @@ int glint_pinhole_init(struct glint_pinhole *cam, int width, int height,
 				       "position)");
 	cam->width = width;
 	cam->height = height;
+	cam->frame_x = cam->frame_y = cam->frame_width = 0;
 	cam->fpx = focal_m / pitch_m;
 	cam->cx = width / 2.0;
 	cam->cy = height / 2.0;

@@ -18,6 +18,11 @@ struct glint_pinhole {
 	double aperture_radius; /* metres; 0 = pinhole */
 	double focus_distance;	/* metres along fwd (thin lens only) */
 	struct vec3 pos, right, up, fwd;
+	/* This image is the window at (frame_x, frame_y) of a frame
+	 * frame_width pixels wide (0: the whole frame; glint_fit_job_crop).
+	 * Only the per-pixel sample patterns and seeds use it, so that a
+	 * window's pixels get the frame's samples. */
+	int frame_x, frame_y, frame_width;
 };
 
 /*

@@ -28,11 +28,16 @@ for c in checks:
 assert not bad, bad
 for f in ("demo-out/photo.exr", "demo-out/fit/render.exr"):
     assert open(f, "rb").read(4) == b"\x76\x2f\x31\x01", f
+p = json.load(open("demo-out/fit/params.json"))
+# The fit covers the sphere's window of the 256x256 frame; render.exr
+# keeps the frame as its display window, compare.png shows the window.
+win = p["render"]["window"]
+assert (win["frame_width"], win["frame_height"]) == (256, 256), win
+assert win["width"] < 256 and win["x"] > 0, win
 png = open("demo-out/fit/compare.png", "rb").read()
 assert png[:8] == b"\x89PNG\r\n\x1a\n"
 w, h = struct.unpack(">II", png[16:24])
-assert w == 3 * 256 + 12 and h > 256, (w, h)
-p = json.load(open("demo-out/fit/params.json"))
+assert w == 3 * win["width"] + 12 and h > win["height"], (w, h)
 assert [q["name"] for q in p["parameters"]][6:] == ["roughness", "ior"]
 assert p["method"]["name"] == "three-pass" and len(p["passes"]) >= 3
 print("1 passed, 0 failed")

@@ -181,6 +181,8 @@ int main(int argc, char **argv)
 	double truth[GLINT_MAX_PARAMS];
 	char photo_path[512];
 
+	/* The dielectric rows read the G-buffer's hits: keep them all. */
+	setenv("GLINT_GBUFFER_MB", "1e9", 1);
 	for (int i = 1; i < argc; i++) {
 		if (!strcmp(argv[i], "--no-faithful"))
 			faithful = 0;

@@ -70,6 +70,8 @@ int main(int argc, char **argv)
 	if (rounds < 1)
 		rounds = 1;
 	glint_log_set_mode(GLINT_LOG_QUIET);
+	/* It reads the G-buffer's hits: keep them all (dense). */
+	setenv("GLINT_GBUFFER_MB", "1e9", 1);
 	if (glint_scene_load(GLINT_DATA_DIR "/demo-scene.json", &sc) < 0 ||
 	    glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
 				"yellow-plastic", &model, p) < 0 ||

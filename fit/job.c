@@ -238,6 +238,27 @@ static const char *material_name(const struct glint_fit_job *job, char buf[256])
 #define RENDER_NOISE_TARGET 0.25
 #define RENDER_MAX_FACTOR   4
 #define RENDER_MIN_BUDGET_S 20.0
+/* The first pair's pilot: every 16th row, on images of 512 rows or more;
+ * its samples are cut at most to an eighth. */
+#define RENDER_PILOT_STEP     16
+#define RENDER_PILOT_MIN_ROWS 512
+#define RENDER_MIN_FACTOR     0.125
+
+double glint_render_first_factor(double q_pilot, double pair_s,
+				 double budget_s, const char **limited_by)
+{
+	double f = 1;
+
+	*limited_by = NULL;
+	/* aimed at half the target, so that the pair lands below it */
+	if (q_pilot >= 0 && isfinite(q_pilot))
+		f = fmin(1, q_pilot / (0.5 * RENDER_NOISE_TARGET));
+	if (pair_s > 0 && f * pair_s > budget_s) {
+		f = budget_s / pair_s;
+		*limited_by = "time: the budget_seconds it may take";
+	}
+	return fmax(f, RENDER_MIN_FACTOR);
+}
 
 int glint_render_factor(double q1, double pair_s, double budget_s,
 			const char **limited_by)
@@ -284,19 +305,26 @@ static double render_noise(const struct glint_image *a,
 	return n ? sum / n : NAN;
 }
 
+/* The scene's count n times factor, at least 1 when n is not 0. */
+static int scaled(int n, double factor)
+{
+	return n ? (int)fmax(1, floor(n * factor + 0.5)) : 0;
+}
+
 /* One render at `factor` times the scene's samples, on sample sets
- * `seed`. */
+ * `seed`, of every row_step-th row. */
 static int shade(struct glint_renderer *r, const struct glint_fit_job *job,
 		 const struct glint_model_ops *model, const double *p,
-		 int factor, uint32_t seed, struct glint_image *out,
-		 struct glint_image *cov)
+		 double factor, uint32_t seed, int row_step,
+		 struct glint_image *out, struct glint_image *cov)
 {
 	struct glint_shade_opts so = {
-		.light_samples = job->scene.light_samples * factor,
-		.brdf_samples = job->scene.brdf_samples * factor,
+		.light_samples = scaled(job->scene.light_samples, factor),
+		.brdf_samples = scaled(job->scene.brdf_samples, factor),
 		.background = 1,
 		.nthreads = job->nthreads,
 		.seed = seed,
+		.row_step = row_step,
 	};
 	return glint_renderer_shade(r, model, p, &so, out, cov);
 }
@@ -306,13 +334,14 @@ static int shade(struct glint_renderer *r, const struct glint_fit_job *job,
 static int render_pair(struct glint_renderer *r,
 		       const struct glint_fit_job *job,
 		       const struct glint_model_ops *model, const double *p,
-		       int factor, uint32_t seed, struct glint_image *img,
-		       struct glint_image *b, struct glint_image *cov,
-		       double *q, long *nv)
+		       double factor, uint32_t seed, int row_step,
+		       struct glint_image *img, struct glint_image *b,
+		       struct glint_image *cov, double *q, long *nv)
 {
-	int ret = shade(r, job, model, p, factor, seed, img, cov);
+	int ret = shade(r, job, model, p, factor, seed, row_step, img, cov);
 	if (ret == 0)
-		ret = shade(r, job, model, p, factor, seed + 1, b, NULL);
+		ret = shade(r, job, model, p, factor, seed + 1, row_step, b,
+			    NULL);
 	if (ret < 0)
 		return ret;
 	*q = render_noise(img, b, cov, job->weight, nv);
@@ -321,12 +350,13 @@ static int render_pair(struct glint_renderer *r,
 	return 0;
 }
 
-static json_t *render_step(const struct glint_fit_job *job, int factor,
+static json_t *render_step(const struct glint_fit_job *job, double factor,
 			   double q)
 {
 	return json_pack("{s:i, s:i, s:o}", "light_samples",
-			 2 * factor * job->scene.light_samples, "brdf_samples",
-			 2 * factor * job->scene.brdf_samples, "noise",
+			 2 * scaled(job->scene.light_samples, factor),
+			 "brdf_samples",
+			 2 * scaled(job->scene.brdf_samples, factor), "noise",
 			 glint_json_real_or_null(q));
 }
 
@@ -345,7 +375,7 @@ static int render_final(struct glint_renderer *r,
 	*info = NULL;
 	if (!w || model->transparent || w->width != img->width ||
 	    w->height != img->height) {
-		ret = shade(r, job, model, p, 1, 0, img, cov);
+		ret = shade(r, job, model, p, 1, 0, 1, img, cov);
 		if (ret < 0)
 			return ret;
 		*info = json_pack("{s:i, s:i, s:s}", "light_samples",
@@ -359,20 +389,38 @@ static int render_final(struct glint_renderer *r,
 		ret = glint_error_set(ENOMEM, "out of memory");
 		goto out;
 	}
-	ret = render_pair(r, job, model, p, 1, 0, img, b, cov, &q1, &nv);
+	double budget_s = fmax(2 * fit_s, RENDER_MIN_BUDGET_S);
+	/* A large image's first pair is sized by a pilot of every 16th row:
+	 * fewer samples where the render is already far below the photo's
+	 * noise, and within the time budget. */
+	double f1 = 1, qp = NAN;
+	const char *first_limit = NULL;
+	if (img->height >= RENDER_PILOT_MIN_ROWS) {
+		double tp = glint_now();
+		ret = render_pair(r, job, model, p, 1, 0, RENDER_PILOT_STEP, img,
+				  b, cov, &qp, &nv);
+		if (ret < 0)
+			goto out;
+		f1 = glint_render_first_factor(
+			qp, (glint_now() - tp) * RENDER_PILOT_STEP, budget_s,
+			&first_limit);
+	}
+	double t1 = glint_now();
+	ret = render_pair(r, job, model, p, f1, 0, 1, img, b, cov, &q1, &nv);
 	if (ret < 0)
 		goto out;
-	double q = q1, pair_s = glint_now() - t0;
-	double budget_s = fmax(2 * fit_s, RENDER_MIN_BUDGET_S);
+	double q = q1, pair_s = glint_now() - t1;
 	const char *limited_by;
 	factor = glint_render_factor(q1, pair_s, budget_s, &limited_by);
+	if (!factor && first_limit)
+		limited_by = first_limit;
 	if (factor && !(more = glint_image_new(img->width, img->height))) {
 		ret = glint_error_set(ENOMEM, "out of memory");
 		goto out;
 	}
 	if (factor) {
-		ret = render_pair(r, job, model, p, factor, 2, more, b, cov,
-				  &q2, &nv);
+		ret = render_pair(r, job, model, p, f1 * factor, 2, 1, more, b,
+				  cov, &q2, &nv);
 		if (ret < 0)
 			goto out;
 		/* Inverse-variance weights, one for the whole image: the
@@ -387,32 +435,44 @@ static int render_final(struct glint_renderer *r,
 					       (w1 + w2));
 		q = 1 / (w1 + w2);
 	}
-	int total = 2 * (1 + factor);
+	int total_l = 2 * scaled(job->scene.light_samples, f1) +
+		      (factor ? 2 * scaled(job->scene.light_samples,
+					   f1 * factor)
+			      : 0);
+	int total_b = 2 * scaled(job->scene.brdf_samples, f1) +
+		      (factor ? 2 * scaled(job->scene.brdf_samples,
+					   f1 * factor)
+			      : 0);
 	json_t *steps = json_array();
 	if (steps) {
-		json_array_append_new(steps, render_step(job, 1, q1));
+		json_array_append_new(steps, render_step(job, f1, q1));
 		if (factor)
 			json_array_append_new(steps,
-					      render_step(job, factor, q2));
+					      render_step(job, f1 * factor, q2));
 	}
 	*info = json_pack(
 		"{s:i, s:i, s:o, s:f, s:b, s:I, s:f, s:f, s:s?, "
 		"s:o*}",
-		"light_samples", total * job->scene.light_samples,
-		"brdf_samples", total * job->scene.brdf_samples, "noise",
+		"light_samples", total_l, "brdf_samples", total_b, "noise",
 		glint_json_real_or_null(q), "noise_target", RENDER_NOISE_TARGET,
 		"below_target", q <= RENDER_NOISE_TARGET, "values",
 		(json_int_t)nv, "seconds", glint_now() - t0, "budget_seconds",
 		budget_s, "limited_by",
 		q <= RENDER_NOISE_TARGET ? NULL : limited_by, "steps", steps);
+	if (*info && img->height >= RENDER_PILOT_MIN_ROWS)
+		json_object_set_new(
+			*info, "pilot",
+			json_pack("{s:i, s:o, s:f}", "row_step",
+				  RENDER_PILOT_STEP, "noise",
+				  glint_json_real_or_null(qp),
+				  "first_pair_factor", f1));
 	if (!*info) {
 		ret = glint_error_set(ENOMEM, "out of memory");
 		goto out;
 	}
 	glint_log_info("final render: %d + %d samples, its noise %.2f of the "
 		       "photo's variance (target %.2f), %.1f s%s%s",
-		       total * job->scene.light_samples,
-		       total * job->scene.brdf_samples, q, RENDER_NOISE_TARGET,
+		       total_l, total_b, q, RENDER_NOISE_TARGET,
 		       glint_now() - t0,
 		       q > RENDER_NOISE_TARGET && limited_by ? "; limited by "
 							     : "",

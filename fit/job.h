@@ -97,6 +97,16 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result);
 int glint_render_factor(double q1, double pair_s, double budget_s,
 			const char **limited_by);
 
+/*
+ * The first pair's samples, as a factor on the scene's, from a pilot
+ * (every 16th row) whose pair's noise is q_pilot and whose full-size pair
+ * would take pair_s: no more than half the noise target needs (q falls
+ * as 1 / samples) and no more than budget_s affords, at most 1 and at least
+ * 1/8.  *limited_by says "time" when the budget cut it, else NULL.
+ */
+double glint_render_first_factor(double q_pilot, double pair_s,
+				 double budget_s, const char **limited_by);
+
 /* params.json's "parameters" (name, value, stderr, at_bound, bounds) and
  * "passes" arrays for a result; new references. */
 json_t *glint_fit_params_json(const struct glint_fit_result *r);

@@ -124,6 +124,11 @@ static void shade_rows(void *ctx, int y0, int y1, int thread)
 		return;
 	}
 	for (int y = y0; y < y1; y++) {
+		if (job->opts->row_step > 1 && y % job->opts->row_step) {
+			if (job->opts->progress)
+				glint_progress_add(job->opts->progress, 1);
+			continue;
+		}
 		const struct glint_hit *row = glint_gbuffer_row(gb, y, buf);
 		for (int x = 0; x < gb->width; x++) {
 			size_t pix = (size_t)y * gb->width + x;

@@ -29,6 +29,9 @@ struct glint_shade_opts {
 	/* Which sample sets: renders with different seeds are independent
 	 * estimates (0: the sets every render used before seeds). */
 	uint32_t seed;
+	/* > 1: shade only the rows y with y % row_step == 0 (a pilot);
+	 * the others are left as they are */
+	int row_step;
 };
 
 /*

@@ -426,6 +426,31 @@ static void test_render_factor(void)
 	/* Part of it affordable. */
 	f = glint_render_factor(1.8, 7, 20, &why);
 	CHECK(f == 2 && why && strstr(why, "time"), "factor %d", f);
+
+	/* The first pair from its pilot.  Noisy enough: the scene's
+	 * samples. */
+	double g = glint_render_first_factor(0.5, 10, 20, &why);
+	CHECK(g == 1 && !why, "first factor %g", g);
+	/* Far below the noise target (0.25; aimed at half of it): a quarter
+	 * of the samples brings q from 0.03125 to 0.125. */
+	g = glint_render_first_factor(0.03125, 10, 20, &why);
+	CHECK(fabs(g - 0.25) < 1e-12 && !why, "first factor %g", g);
+	/* Never below an eighth. */
+	g = glint_render_first_factor(0.001, 10, 20, &why);
+	CHECK(g == 0.125 && !why, "first factor %g", g);
+	/* A 12 MP window: 400 s a pair against 50 s: an eighth, said to be
+	 * the time's doing; 800 s: still an eighth (over the budget). */
+	g = glint_render_first_factor(0.5, 400, 50, &why);
+	CHECK(g == 0.125 && why && strstr(why, "time"), "first factor %g",
+	      g);
+	g = glint_render_first_factor(0.5, 800, 50, &why);
+	CHECK(g == 0.125 && why, "first factor %g", g);
+	/* Between: 100 s against 50 s. */
+	g = glint_render_first_factor(0.5, 100, 50, &why);
+	CHECK(fabs(g - 0.5) < 1e-12 && why, "first factor %g", g);
+	/* No pilot noise (no values): the budget alone. */
+	g = glint_render_first_factor(NAN, 10, 20, &why);
+	CHECK(g == 1 && !why, "first factor %g", g);
 }
 
 int main(void)

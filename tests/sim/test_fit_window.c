@@ -9,6 +9,11 @@
  * where the window lies.  The photo: an off-centre Table-1 sphere from the
  * reference renderer, with a weight image (so the final render's noise
  * check runs).  A photo of the wrong size is left alone.
+ *
+ * `test_fit_window pilot`: a sphere 240 px in radius, whose final render
+ * is sized by its pilot of every 16th row (fit/job.c): the pilot is
+ * reported, the render's noise is below the target or what held it is
+ * named, and no row is left unrendered.
  */
 #include "test.h"
 #include "exr_windows.h"
@@ -126,8 +131,92 @@ static struct glint_fit_job job_of(const struct glint_scene *sc,
 	return job;
 }
 
-int main(void)
+/* A pixel's mean value. */
+static double px_mean(const struct glint_image *img, int x, int y)
 {
+	const float *v = glint_image_px(img, x, y);
+	return (v[0] + v[1] + v[2]) / 3;
+}
+
+static int pilot(void)
+{
+	struct glint_scene sc;
+	struct glint_renderer r;
+	const struct glint_model_ops *m;
+	double truth[GLINT_MAX_PARAMS];
+
+	CHECK(mkdtemp(tmpdir) != NULL, "mkdtemp");
+	sim_scene_192(&sc, GLINT_DATA_DIR "/env/venice_sunset_1k.hdr", -114);
+	glint_pinhole_init(&sc.cam, 560, 560, 0.1, 0.036 / 560, 0, 0,
+			   v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
+	sc.sphere_centre = v3(0, 0, -0.32);
+	CHECK(glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
+				  "yellow-plastic", &m, truth) == 0,
+	      "%s", glint_error_msg());
+	CHECK(glint_renderer_init(&r, &sc, 0, NULL) == 0, "%s",
+	      glint_error_msg());
+	if (test_failures)
+		return test_result();
+	struct glint_image *photo = glint_image_new(560, 560);
+	struct glint_reference_opts ro;
+	glint_reference_default_opts(&ro);
+	ro.spp = 4;
+	ro.samples = 16;
+	CHECK(photo && glint_reference_render(&r.scene, r.env, m, truth, &ro,
+					      photo) == 0,
+	      "%s", glint_error_msg());
+	glint_renderer_release(&r);
+	struct glint_image *weight = glint_image_new(560, 560);
+	for (size_t i = 0; weight && i < 560 * 560 * 3; i++)
+		weight->data[i] = 1e4f;
+	struct glint_fit_job job = job_of(&sc, m, photo, weight);
+	json_t *doc = photo && weight ? run(&job, "pilot", 1, 0) : NULL;
+	int h = job.scene.cam.height, w = job.scene.cam.width;
+	printf("window %dx%d of 560x560\n", w, h);
+	CHECK(h >= 512, "the window has %d rows: the pilot needs 512", h);
+	json_t *ren = json_object_get(doc, "render");
+	json_t *pl = json_object_get(ren, "pilot");
+	double f1 = json_real_value(json_object_get(pl, "first_pair_factor"));
+	double q = json_real_value(json_object_get(ren, "noise"));
+	const char *lim = json_string_value(json_object_get(ren, "limited_by"));
+	printf("pilot noise %.4f, first pair at %.3f of the scene's samples; "
+	       "render noise %.4f (%s), %.1f s\n",
+	       json_real_value(json_object_get(pl, "noise")), f1, q,
+	       lim ? lim : "below target",
+	       json_real_value(json_object_get(ren, "seconds")));
+	CHECK(json_integer_value(json_object_get(pl, "row_step")) == 16 &&
+		      f1 >= 0.125 && f1 <= 1,
+	      "render.pilot: step %lld, factor %g",
+	      (long long)json_integer_value(json_object_get(pl, "row_step")),
+	      f1);
+	CHECK(q > 0 && (q <= 0.25 || lim), "render noise %g, limited by %s", q,
+	      lim ? lim : "nothing said");
+	/* Every row through the sphere's middle column is rendered (a row
+	 * the pilot skipped and the pair missed would stay 0). */
+	char path[600];
+	struct glint_image *ri = NULL;
+	snprintf(path, sizeof(path), "%s/pilot/render.exr", tmpdir);
+	CHECK(glint_image_read(path, &ri) == 0, "%s", glint_error_msg());
+	int dark = 0;
+	for (int y = h / 4; ri && y < 3 * h / 4; y++)
+		dark += !(px_mean(ri, w / 2, y) > 0);
+	CHECK(ri && !dark, "%d rows through the sphere are black", dark);
+	glint_image_free(ri);
+	json_decref(doc);
+	glint_fit_job_unload(&job);
+	glint_image_free(photo);
+	glint_image_free(weight);
+	char cmd[600];
+	snprintf(cmd, sizeof(cmd), "rm -rf '%s'", tmpdir);
+	if (system(cmd) != 0)
+		fprintf(stderr, "could not remove %s\n", tmpdir);
+	return test_result();
+}
+
+int main(int argc, char **argv)
+{
+	if (argc > 1 && !strcmp(argv[1], "pilot"))
+		return pilot();
 	struct glint_scene sc;
 	struct glint_renderer r;
 	const struct glint_model_ops *m;

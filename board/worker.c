@@ -14,6 +14,7 @@
 #include <string.h>
 #include <signal.h>
 #include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
@@ -114,8 +115,11 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 			json_pack("{s:s}", "error", strerror(e)));
 	}
 	int status = 0, cancelled = 0;
+	struct rusage ru;
+	memset(&ru, 0, sizeof(ru));
 	for (;;) {
-		pid_t w = waitpid(pid, &status, WNOHANG);
+		/* wait4: the fit's own peak memory, for the job's record */
+		pid_t w = wait4(pid, &status, WNOHANG, &ru);
 		if (w == pid || (w < 0 && errno != EINTR))
 			break;
 		if (!cancelled &&
@@ -145,12 +149,14 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 				      ? json_loadfd(fo, 0, NULL)
 				      : NULL;
 		state = "done";
-		res = json_pack(
-			"{s:o, s:f*}", "parameters",
-			doc ? json_incref(json_object_get(doc, "parameters"))
-			    : json_null(),
-			"relative_rmse",
-			json_real_value(json_object_get(doc, "relative_rmse")));
+		/* (json_pack has no optional real: "f*" made the whole
+		 * result NULL, and the job kept none of it) */
+		res = json_object();
+		json_t *pa = json_object_get(doc, "parameters");
+		json_t *rr = json_object_get(doc, "relative_rmse");
+		json_object_set(res, "parameters", pa ? pa : json_null());
+		if (json_is_number(rr))
+			json_object_set(res, "relative_rmse", rr);
 		json_decref(doc);
 	} else {
 		char msg[1024];
@@ -161,7 +167,14 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 				WIFEXITED(status) ? WEXITSTATUS(status)
 						  : 128 + WTERMSIG(status));
 	}
-	glint_log_info("job %s: %s", job->id, state);
+	double peak_mib = ru.ru_maxrss / 1024.0; /* kB */
+	if (res && ru.ru_maxrss > 0)
+		json_object_set_new(res, "peak_rss_mib", json_real(peak_mib));
+	if (ru.ru_maxrss > 0)
+		glint_log_info("job %s: %s (the fit's peak memory %.0f MiB)",
+			       job->id, state, peak_mib);
+	else
+		glint_log_info("job %s: %s", job->id, state);
 	close(fo);
 	close(fe);
 	return glint_queue_finish(queue, job, state, res);

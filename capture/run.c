@@ -130,7 +130,7 @@ static int bracket_into(struct glint_camera *cam,
  * probe's unwrap or the sample's scene. */
 static int merge_session(const struct glint_capture_setup *s, const char *kind,
 			 const char *out, const char *probe,
-			 const struct glint_bracket *b,
+			 struct glint_bracket *b,
 			 struct glint_capture_result *res)
 {
 	static const char *const suffix[5] = { ".exr", "-variance.exr",

@@ -148,40 +148,54 @@ void glint_frames_free(struct glint_frame *f, int n)
 	free(f);
 }
 
-int glint_hdr_merge_write(const struct glint_frame *frames, int n,
+int glint_hdr_merge_write(struct glint_frame *frames, int n,
 			  const struct glint_noise_model *nm, const char *out,
 			  const char *const names[5],
 			  struct glint_hdr_report *rep, int *width, int *height,
 			  long *valid_px, struct glint_image **radiance)
 {
 	struct glint_raw_hdr raw;
-	struct glint_image *rad = NULL, *var = NULL, *valid = NULL,
-			   *weights = NULL;
+	struct glint_image *rad = NULL, *var = NULL, *valid = NULL;
+	char path[GLINT_PATH_MAX];
 	int ret = glint_hdr_merge_raw(frames, n, nm, &raw, rep);
+
+	for (int i = 0; i < n; i++)
+		glint_frame_release(&frames[i]);
 	if (ret == 0)
 		ret = glint_hdr_demosaic(&raw, &rad, &var, &valid);
+	glint_raw_hdr_release(&raw);
 	if (ret == 0 && mkdir(out, 0777) < 0 && errno != EEXIST)
 		ret = glint_error_set(errno, "%s: %s", out, strerror(errno));
-	if (ret == 0 && !(weights = glint_image_new(rad->width, rad->height)))
-		ret = glint_error_set(ENOMEM, "out of memory");
 	*valid_px = 0;
 	if (ret == 0) {
 		size_t np = (size_t)rad->width * rad->height * 3;
-		for (size_t i = 0; i < np; i++)
-			weights->data[i] =
-				var->data[i] > 0 ? 1 / var->data[i] : 0;
 		for (size_t i = 0; i < np; i += 3)
 			*valid_px += valid->data[i] > 0;
 		*width = rad->width;
 		*height = rad->height;
 	}
-	char path[GLINT_PATH_MAX];
-	struct glint_image *imgs[] = { rad, var, weights, valid, rad };
+	/* In order, each image freed once written; the weights are the
+	 * variance image turned into 1 / variance (0 where invalid) in
+	 * place. */
+	struct glint_image *imgs[] = { rad, var, var, valid, rad };
 	for (int i = 0; i < 5 && ret == 0; i++) {
 		struct glint_write_opts wo = { .auto_expose = i == 4 };
+		if (i == 2) {
+			size_t np = (size_t)var->width * var->height * 3;
+			for (size_t k = 0; k < np; k++)
+				var->data[k] =
+					var->data[k] > 0 ? 1 / var->data[k] : 0;
+		}
 		ret = glint_path_join(path, sizeof(path), out, names[i]);
 		if (!ret)
 			ret = glint_image_write(path, imgs[i], &wo);
+		if (i == 2) {
+			glint_image_free(var);
+			var = NULL;
+		} else if (i == 3) {
+			glint_image_free(valid);
+			valid = NULL;
+		}
 	}
 	if (radiance && ret == 0)
 		*radiance = rad;
@@ -189,8 +203,6 @@ int glint_hdr_merge_write(const struct glint_frame *frames, int n,
 		glint_image_free(rad);
 	glint_image_free(var);
 	glint_image_free(valid);
-	glint_image_free(weights);
-	glint_raw_hdr_release(&raw);
 	return ret;
 }
 

@@ -22,9 +22,12 @@ void glint_frames_free(struct glint_frame *f, int n);
  * radiance, variance, weights (1/variance, 0 where invalid), validity mask
  * and a tone-mapped preview under names[0..4].  *valid_px counts pixels
  * with a valid sample; the radiance goes to *radiance (the caller frees
- * it with glint_image_free) when that is not NULL.
+ * it with glint_image_free) when that is not NULL.  The frames' pixel
+ * data is released (glint_frame_release: their metadata stays) once the
+ * merge has read them, and each image is freed once written: a 12 MP
+ * bracket of 22 frames is 540 MB, the merged images 148 MB each.
  */
-int glint_hdr_merge_write(const struct glint_frame *frames, int n,
+int glint_hdr_merge_write(struct glint_frame *frames, int n,
 			  const struct glint_noise_model *nm, const char *out,
 			  const char *const names[5],
 			  struct glint_hdr_report *rep, int *width, int *height,

@@ -244,8 +244,8 @@ static const char *material_name(const struct glint_fit_job *job, char buf[256])
 #define RENDER_PILOT_MIN_ROWS 512
 #define RENDER_MIN_FACTOR     0.125
 
-double glint_render_first_factor(double q_pilot, double pair_s,
-				 double budget_s, const char **limited_by)
+double glint_render_first_factor(double q_pilot, double pair_s, double budget_s,
+				 const char **limited_by)
 {
 	double f = 1;
 
@@ -397,8 +397,8 @@ static int render_final(struct glint_renderer *r,
 	const char *first_limit = NULL;
 	if (img->height >= RENDER_PILOT_MIN_ROWS) {
 		double tp = glint_now();
-		ret = render_pair(r, job, model, p, 1, 0, RENDER_PILOT_STEP, img,
-				  b, cov, &qp, &nv);
+		ret = render_pair(r, job, model, p, 1, 0, RENDER_PILOT_STEP,
+				  img, b, cov, &qp, &nv);
 		if (ret < 0)
 			goto out;
 		f1 = glint_render_first_factor(
@@ -435,20 +435,19 @@ static int render_final(struct glint_renderer *r,
 					       (w1 + w2));
 		q = 1 / (w1 + w2);
 	}
-	int total_l = 2 * scaled(job->scene.light_samples, f1) +
-		      (factor ? 2 * scaled(job->scene.light_samples,
-					   f1 * factor)
-			      : 0);
-	int total_b = 2 * scaled(job->scene.brdf_samples, f1) +
-		      (factor ? 2 * scaled(job->scene.brdf_samples,
-					   f1 * factor)
-			      : 0);
+	int total_l =
+		2 * scaled(job->scene.light_samples, f1) +
+		(factor ? 2 * scaled(job->scene.light_samples, f1 * factor)
+			: 0);
+	int total_b =
+		2 * scaled(job->scene.brdf_samples, f1) +
+		(factor ? 2 * scaled(job->scene.brdf_samples, f1 * factor) : 0);
 	json_t *steps = json_array();
 	if (steps) {
 		json_array_append_new(steps, render_step(job, f1, q1));
 		if (factor)
-			json_array_append_new(steps,
-					      render_step(job, f1 * factor, q2));
+			json_array_append_new(
+				steps, render_step(job, f1 * factor, q2));
 	}
 	*info = json_pack(
 		"{s:i, s:i, s:o, s:f, s:b, s:I, s:f, s:f, s:s?, "
@@ -460,23 +459,21 @@ static int render_final(struct glint_renderer *r,
 		budget_s, "limited_by",
 		q <= RENDER_NOISE_TARGET ? NULL : limited_by, "steps", steps);
 	if (*info && img->height >= RENDER_PILOT_MIN_ROWS)
-		json_object_set_new(
-			*info, "pilot",
-			json_pack("{s:i, s:o, s:f}", "row_step",
-				  RENDER_PILOT_STEP, "noise",
-				  glint_json_real_or_null(qp),
-				  "first_pair_factor", f1));
+		json_object_set_new(*info, "pilot",
+				    json_pack("{s:i, s:o, s:f}", "row_step",
+					      RENDER_PILOT_STEP, "noise",
+					      glint_json_real_or_null(qp),
+					      "first_pair_factor", f1));
 	if (!*info) {
 		ret = glint_error_set(ENOMEM, "out of memory");
 		goto out;
 	}
-	glint_log_info("final render: %d + %d samples, its noise %.2f of the "
-		       "photo's variance (target %.2f), %.1f s%s%s",
-		       total_l, total_b, q, RENDER_NOISE_TARGET,
-		       glint_now() - t0,
-		       q > RENDER_NOISE_TARGET && limited_by ? "; limited by "
-							     : "",
-		       q > RENDER_NOISE_TARGET && limited_by ? limited_by : "");
+	glint_log_info(
+		"final render: %d + %d samples, its noise %.2f of the "
+		"photo's variance (target %.2f), %.1f s%s%s",
+		total_l, total_b, q, RENDER_NOISE_TARGET, glint_now() - t0,
+		q > RENDER_NOISE_TARGET && limited_by ? "; limited by " : "",
+		q > RENDER_NOISE_TARGET && limited_by ? limited_by : "");
 out:
 	glint_image_free(b);
 	glint_image_free(more);

@@ -104,8 +104,8 @@ int glint_render_factor(double q1, double pair_s, double budget_s,
  * as 1 / samples) and no more than budget_s affords, at most 1 and at least
  * 1/8.  *limited_by says "time" when the budget cut it, else NULL.
  */
-double glint_render_first_factor(double q_pilot, double pair_s,
-				 double budget_s, const char **limited_by);
+double glint_render_first_factor(double q_pilot, double pair_s, double budget_s,
+				 const char **limited_by);
 
 /* params.json's "parameters" (name, value, stderr, at_bound, bounds) and
  * "passes" arrays for a result; new references. */

@@ -441,8 +441,7 @@ static void test_render_factor(void)
 	/* A 12 MP window: 400 s a pair against 50 s: an eighth, said to be
 	 * the time's doing; 800 s: still an eighth (over the budget). */
 	g = glint_render_first_factor(0.5, 400, 50, &why);
-	CHECK(g == 0.125 && why && strstr(why, "time"), "first factor %g",
-	      g);
+	CHECK(g == 0.125 && why && strstr(why, "time"), "first factor %g", g);
 	g = glint_render_first_factor(0.5, 800, 50, &why);
 	CHECK(g == 0.125 && why, "first factor %g", g);
 	/* Between: 100 s against 50 s. */

@@ -59,19 +59,47 @@ static int channel_slot(const char *name)
 	return -1;
 }
 
+/* A chunk's worth of floats that channels glint does not use are decoded
+ * into: OpenEXRCore 3.1's unpackers can write through a channel left
+ * without a pointer (a fuzzed file with channels "=", 0xde and Y crashed
+ * it), so none is left without one. */
+struct exr_scratch {
+	float *p;
+	size_t n;
+};
+
 /*
  * Point the decoder's channels at rows [y0, y0 + h) and columns
- * [x0, x0 + w) of img.  Y goes to the R plane and is copied later.
+ * [x0, x0 + w) of img, and the others at the scratch (width x height of
+ * the chunk).  Y goes to the R plane and is copied later.
  */
-static void bind_channels(exr_decode_pipeline_t *dec, struct glint_image *img,
-			  int x0, int y0)
+static exr_result_t bind_channels(exr_decode_pipeline_t *dec,
+				  const exr_chunk_info_t *cinfo,
+				  struct glint_image *img, int x0, int y0,
+				  struct exr_scratch *sc)
 {
+	size_t need = (size_t)(cinfo->width > 0 ? cinfo->width : 1) *
+		      (size_t)(cinfo->height > 0 ? cinfo->height : 1);
 	for (int c = 0; c < dec->channel_count; c++) {
 		exr_coding_channel_info_t *ch = &dec->channels[c];
 		int slot = channel_slot(ch->channel_name);
 
 		if (slot < 0) {
-			ch->decode_to_ptr = NULL;
+			if (sc->n < need) {
+				float *p = realloc(sc->p, need * sizeof(float));
+				if (!p)
+					return EXR_ERR_OUT_OF_MEMORY;
+				sc->p = p;
+				sc->n = need;
+			}
+			ch->decode_to_ptr = (uint8_t *)sc->p;
+			ch->user_pixel_stride = sizeof(float);
+			ch->user_line_stride =
+				(int32_t)((cinfo->width > 0 ? cinfo->width
+							    : 1) *
+					  sizeof(float));
+			ch->user_data_type = EXR_PIXEL_FLOAT;
+			ch->user_bytes_per_element = sizeof(float);
 			continue;
 		}
 		if (slot == 3)
@@ -83,11 +111,13 @@ static void bind_channels(exr_decode_pipeline_t *dec, struct glint_image *img,
 		ch->user_data_type = EXR_PIXEL_FLOAT;
 		ch->user_bytes_per_element = sizeof(float);
 	}
+	return EXR_ERR_SUCCESS;
 }
 
 static exr_result_t decode_chunk(exr_context_t ctx, exr_decode_pipeline_t *dec,
 				 const exr_chunk_info_t *cinfo, int *first,
-				 struct glint_image *img, int x0, int y0)
+				 struct glint_image *img, int x0, int y0,
+				 struct exr_scratch *sc)
 {
 	exr_result_t rv;
 
@@ -97,7 +127,9 @@ static exr_result_t decode_chunk(exr_context_t ctx, exr_decode_pipeline_t *dec,
 		rv = exr_decoding_update(ctx, 0, cinfo, dec);
 	if (rv != EXR_ERR_SUCCESS)
 		return rv;
-	bind_channels(dec, img, x0, y0);
+	rv = bind_channels(dec, cinfo, img, x0, y0, sc);
+	if (rv != EXR_ERR_SUCCESS)
+		return rv;
 	if (*first) {
 		rv = exr_decoding_choose_default_routines(ctx, 0, dec);
 		if (rv != EXR_ERR_SUCCESS)
@@ -112,6 +144,7 @@ static exr_result_t read_scanlines(exr_context_t ctx,
 				   struct glint_image *img, int *failed_y)
 {
 	exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
+	struct exr_scratch sc = { NULL, 0 };
 	exr_result_t rv;
 	int32_t lines;
 	int first = 1;
@@ -127,11 +160,12 @@ static exr_result_t read_scanlines(exr_context_t ctx,
 		if (rv != EXR_ERR_SUCCESS)
 			break;
 		rv = decode_chunk(ctx, &dec, &cinfo, &first, img, 0,
-				  cinfo.start_y - dw->min.y);
+				  cinfo.start_y - dw->min.y, &sc);
 		if (rv != EXR_ERR_SUCCESS)
 			break;
 	}
 	exr_decoding_destroy(ctx, &dec);
+	free(sc.p);
 	return rv;
 }
 
@@ -139,6 +173,7 @@ static exr_result_t read_tiles(exr_context_t ctx, struct glint_image *img,
 			       int *failed_y)
 {
 	exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
+	struct exr_scratch sc = { NULL, 0 };
 	int32_t tw, th, lw, lh;
 	exr_result_t rv;
 	int first = 1;
@@ -160,12 +195,13 @@ static exr_result_t read_tiles(exr_context_t ctx, struct glint_image *img,
 			if (rv != EXR_ERR_SUCCESS)
 				break;
 			rv = decode_chunk(ctx, &dec, &cinfo, &first, img,
-					  tx * (int)tw, ty * (int)th);
+					  tx * (int)tw, ty * (int)th, &sc);
 			if (rv != EXR_ERR_SUCCESS)
 				break;
 		}
 	}
 	exr_decoding_destroy(ctx, &dec);
+	free(sc.p);
 	return rv;
 }
 

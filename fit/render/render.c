@@ -274,7 +274,8 @@ int glint_renderer_shade(struct glint_renderer *r,
 	if (model->transparent) {
 		/* Its paths are traced for every pixel at once. */
 		int n = r->gb.width * r->gb.height;
-		int32_t *all = r->gb.hits ? NULL : malloc((size_t)n * 4);
+		int32_t *all =
+			r->gb.hits ? NULL : malloc((size_t)n * sizeof(*all));
 		if (!r->gb.hits && !all)
 			return glint_error_set(ENOMEM, "out of memory");
 		for (int i = 0; all && i < n; i++)

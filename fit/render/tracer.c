@@ -465,10 +465,10 @@ static void packet_flush(struct glint_tracer *t, struct packet *pk)
 }
 
 /* Pixel (x, y)'s spp samples into out[0 .. spp). */
-static void trace_pixel(const struct glint_gbuffer_src *src,
-			const struct glint_gbuffer *gb, struct packet *pk,
+static void trace_pixel(const struct glint_gbuffer *gb, struct packet *pk,
 			int x, int y, struct glint_hit *out)
 {
+	const struct glint_gbuffer_src *src = gb->src;
 	struct pixel_shift ps;
 
 	pixel_shift(x + gb->frame_x, y + gb->frame_y, gb->spp, &ps);
@@ -521,8 +521,7 @@ static void primary_rows(void *ctx, int y0, int y1, int thread)
 	for (int y = y0; y < y1; y++) {
 		struct glint_hit *dst = buf ? buf : gb->hits + (size_t)y * row;
 		for (int x = 0; x < gb->width; x++)
-			trace_pixel(gb->src, gb, &pk, x, y,
-				    dst + (size_t)x * gb->spp);
+			trace_pixel(gb, &pk, x, y, dst + (size_t)x * gb->spp);
 		if (buf) { /* sparse: the row is counted, then dropped */
 			packet_flush(gb->src->t, &pk);
 			count_cover(gb, y, buf);
@@ -638,7 +637,7 @@ static void keep_pixels(void *ctx, int lo, int hi, int thread)
 	pk.count = 0;
 	for (int k = lo; k < hi; k++) {
 		int32_t i = job->pix[k];
-		trace_pixel(gb->src, gb, &pk, i % gb->width, i / gb->width,
+		trace_pixel(gb, &pk, i % gb->width, i / gb->width,
 			    gb->stored + (size_t)gb->slot[i] * gb->spp);
 	}
 	packet_flush(gb->src->t, &pk);
@@ -685,7 +684,7 @@ const struct glint_hit *glint_gbuffer_row(const struct glint_gbuffer *gb, int y,
 	struct packet pk;
 	pk.count = 0;
 	for (int x = 0; x < gb->width; x++)
-		trace_pixel(gb->src, gb, &pk, x, y, buf + (size_t)x * gb->spp);
+		trace_pixel(gb, &pk, x, y, buf + (size_t)x * gb->spp);
 	packet_flush(gb->src->t, &pk);
 	return buf;
 }

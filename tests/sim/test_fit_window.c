@@ -131,6 +131,37 @@ static struct glint_fit_job job_of(const struct glint_scene *sc,
 	return job;
 }
 
+/* A w x h weight image of 1 / variance for a 1 % noise on the mean
+ * signal. */
+static struct glint_image *flat_weights(int w, int h)
+{
+	struct glint_image *img = glint_image_new(w, h);
+	for (size_t i = 0; img && i < (size_t)w * h * 3; i++)
+		img->data[i] = 1e4f;
+	return img;
+}
+
+/* Yellow plastic (Table 1) and the renderer of scene sc; 0 or -1. */
+static int setup(const struct glint_scene *sc, const struct glint_model_ops **m,
+		 double *truth, struct glint_renderer *r)
+{
+	CHECK(mkdtemp(tmpdir) != NULL, "mkdtemp");
+	CHECK(glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
+				  "yellow-plastic", m, truth) == 0,
+	      "%s", glint_error_msg());
+	CHECK(glint_renderer_init(r, sc, 0, NULL) == 0, "%s",
+	      glint_error_msg());
+	return test_failures ? -1 : 0;
+}
+
+static void remove_tmpdir(void)
+{
+	char cmd[600];
+	snprintf(cmd, sizeof(cmd), "rm -rf '%s'", tmpdir);
+	if (system(cmd) != 0)
+		fprintf(stderr, "could not remove %s\n", tmpdir);
+}
+
 /* A pixel's mean value. */
 static double px_mean(const struct glint_image *img, int x, int y)
 {
@@ -145,17 +176,11 @@ static int pilot(void)
 	const struct glint_model_ops *m;
 	double truth[GLINT_MAX_PARAMS];
 
-	CHECK(mkdtemp(tmpdir) != NULL, "mkdtemp");
 	sim_scene_192(&sc, GLINT_DATA_DIR "/env/venice_sunset_1k.hdr", -114);
 	glint_pinhole_init(&sc.cam, 560, 560, 0.1, 0.036 / 560, 0, 0,
 			   v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
 	sc.sphere_centre = v3(0, 0, -0.32);
-	CHECK(glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
-				  "yellow-plastic", &m, truth) == 0,
-	      "%s", glint_error_msg());
-	CHECK(glint_renderer_init(&r, &sc, 0, NULL) == 0, "%s",
-	      glint_error_msg());
-	if (test_failures)
+	if (setup(&sc, &m, truth, &r) < 0)
 		return test_result();
 	struct glint_image *photo = glint_image_new(560, 560);
 	struct glint_reference_opts ro;
@@ -166,9 +191,7 @@ static int pilot(void)
 					      photo) == 0,
 	      "%s", glint_error_msg());
 	glint_renderer_release(&r);
-	struct glint_image *weight = glint_image_new(560, 560);
-	for (size_t i = 0; weight && i < 560 * 560 * 3; i++)
-		weight->data[i] = 1e4f;
+	struct glint_image *weight = flat_weights(560, 560);
 	struct glint_fit_job job = job_of(&sc, m, photo, weight);
 	json_t *doc = photo && weight ? run(&job, "pilot", 1, 0) : NULL;
 	int h = job.scene.cam.height, w = job.scene.cam.width;
@@ -206,10 +229,7 @@ static int pilot(void)
 	glint_fit_job_unload(&job);
 	glint_image_free(photo);
 	glint_image_free(weight);
-	char cmd[600];
-	snprintf(cmd, sizeof(cmd), "rm -rf '%s'", tmpdir);
-	if (system(cmd) != 0)
-		fprintf(stderr, "could not remove %s\n", tmpdir);
+	remove_tmpdir();
 	return test_result();
 }
 
@@ -222,16 +242,10 @@ int main(int argc, char **argv)
 	const struct glint_model_ops *m;
 	double truth[GLINT_MAX_PARAMS];
 
-	CHECK(mkdtemp(tmpdir) != NULL, "mkdtemp");
 	sim_scene_192(&sc, GLINT_DATA_DIR "/env/venice_sunset_1k.hdr", -114);
 	sc.sphere_centre =
 		v3(0.035, -0.02, -0.5); /* right of and below centre */
-	CHECK(glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
-				  "yellow-plastic", &m, truth) == 0,
-	      "%s", glint_error_msg());
-	CHECK(glint_renderer_init(&r, &sc, 0, NULL) == 0, "%s",
-	      glint_error_msg());
-	if (test_failures)
+	if (setup(&sc, &m, truth, &r) < 0)
 		return test_result();
 	struct glint_image *photo = sim_photo(&r, m, truth);
 	glint_renderer_release(&r);
@@ -245,10 +259,7 @@ int main(int argc, char **argv)
 	CHECK(!r.gb.hits && r.gb.slot && r.gb.cover && !r.gb.nstored,
 	      "the G-buffer is not sparse");
 	glint_renderer_release(&r);
-	/* 1 / variance of a 1 % noise on the mean signal */
-	struct glint_image *weight = glint_image_new(192, 192);
-	for (size_t i = 0; weight && i < 192 * 192 * 3; i++)
-		weight->data[i] = 1e4f;
+	struct glint_image *weight = flat_weights(192, 192);
 
 	struct glint_fit_job full = job_of(&sc, m, photo, weight);
 	struct glint_fit_job win = job_of(&sc, m, photo, weight);
@@ -306,9 +317,6 @@ out:
 	glint_fit_job_unload(&sparse);
 	glint_image_free(photo);
 	glint_image_free(weight);
-	char cmd[600];
-	snprintf(cmd, sizeof(cmd), "rm -rf '%s'", tmpdir);
-	if (system(cmd) != 0)
-		fprintf(stderr, "could not remove %s\n", tmpdir);
+	remove_tmpdir();
 	return test_result();
 }

@@ -11,7 +11,7 @@ VM's CPUs are scheduled: polling sysfs under TCG on a loaded host missed
 `value` (the physical level). Every change is written as a JSON line
 {"t": seconds on CLOCK_MONOTONIC (the event's kernel time), "line": NAME,
 "value": 0|1} to LOG, flushed at once so a reader sees it while it runs.
-Runs until SIGTERM.
+Runs until SIGTERM, then reads what the kernel still holds before it exits.
 
 With --world, it also plays the rig's hardware for the simulated camera:
 the lamps follow the `lights` line and the turntable turns 360/STEPS_PER_TURN
@@ -31,6 +31,7 @@ import glob
 import json
 import os
 import re
+import select
 import signal
 import sys
 import time
@@ -39,12 +40,11 @@ TRACE = "/sys/kernel/tracing"
 EVENT = TRACE + "/events/gpio/gpio_value"
 
 
-class Stop(Exception):
-    pass
+stopping = [False]
 
 
 def on_term(*_):
-    raise Stop()
+    stopping[0] = True
 
 
 def put(path, text):
@@ -171,22 +171,37 @@ def main():
         change(name, int(open(path).read().strip()), now, last)
     end_batch()
     event = re.compile(rb"(\d+\.\d+): gpio_value: (\d+) set (\d+)")
-    pipe = os.open(TRACE + "/trace_pipe", os.O_RDONLY)
+    pipe = os.open(TRACE + "/trace_pipe", os.O_RDONLY | os.O_NONBLOCK)
     buf = b""
-    try:
-        while True:
+
+    def read_events():
+        """Every event the kernel holds now; False once there are none."""
+        nonlocal buf
+        try:
             chunk = os.read(pipe, 65536)
-            if not chunk:
-                continue
-            buf += chunk
-            *done, buf = buf.split(b"\n")
-            for line in done:
-                m = event.search(line)
-                if m and int(m.group(2)) in by_gpio:
-                    change(by_gpio[int(m.group(2))], int(int(m.group(3)) != 0),
-                           float(m.group(1)), last)
-            end_batch()
-    except Stop:
+        except BlockingIOError:
+            return False
+        if not chunk:
+            return False
+        buf += chunk
+        *done, buf = buf.split(b"\n")
+        for line in done:
+            m = event.search(line)
+            if m and int(m.group(2)) in by_gpio:
+                change(by_gpio[int(m.group(2))], int(int(m.group(3)) != 0),
+                       float(m.group(1)), last)
+        end_batch()
+        return True
+
+    # SIGTERM only sets a flag: the loop wakes at least every 0.1 s to see
+    # it, and then reads what the kernel still holds. A test stops the
+    # sampler right after glint exits, when glint's last values (outputs
+    # made safe) may not have been read yet; stopping at once lost them.
+    while not stopping[0]:
+        select.select([pipe], [], [], 0.1)
+        while read_events():
+            pass
+    while read_events():
         pass
     put(EVENT + "/enable", "0")
 

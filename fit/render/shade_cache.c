@@ -52,17 +52,22 @@ static struct vec3 local_to_world(const struct cache_hit *h, struct vec3 v)
 		      v3_scale(fv(h->n), v.z));
 }
 
-/* Lobe j over the hot texels, on their fixed points. */
+/* Lobe j over the hot texels, on their fixed points: the map's
+ * radiance on the hot texels' area (by_area: with the irradiance of the
+ * other texels) or the hot texels' part of the radiance wherever it
+ * reaches (with lobe and env samples of the rest: envmap.h). */
 static void hot_quadrature(const struct glint_shade_cache *c,
 			   const struct cache_hit *h, const double *p, int j,
-			   double out[3])
+			   int by_area, double out[3])
 {
 	const struct glint_env_hot *hot = c->hot;
 	const struct glint_model_ops *m = c->model;
 	struct vec3 wo = fv(h->wo);
 	double b[GLINT_MAX_PARAMS];
+	int npts = by_area ? hot->npts : hot->npart;
+	const float *pts = by_area ? hot->pts : hot->part;
 
-	if (!hot->npts)
+	if (!npts)
 		return;
 	double ext = m->lobe_extent ? m->lobe_extent(p, j) : -1;
 	if (ext > 0) {
@@ -71,8 +76,8 @@ static void hot_quadrature(const struct glint_shade_cache *c,
 		if (a - hot->radius > ext)
 			return;
 	}
-	for (int k = 0; k < hot->npts; k++) {
-		const float *pt = hot->pts + 6 * (size_t)k;
+	for (int k = 0; k < npts; k++) {
+		const float *pt = pts + 6 * (size_t)k;
 		struct vec3 d = v3(pt[0], pt[1], pt[2]);
 		struct vec3 wi = v3(v3_dot(d, fv(h->t)), v3_dot(d, fv(h->b)),
 				    v3_dot(d, fv(h->n)));
@@ -104,7 +109,7 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 	double sy = glint_u01(glint_hash32(h->seed ^ 0x9e3779b9u));
 
 	out[0] = out[1] = out[2] = 0;
-	hot_quadrature(c, h, p, j, out);
+	hot_quadrature(c, h, p, j, 0, out);
 	for (int k = 0; k < nl; k++) {
 		const struct env_sample *e = &es[k];
 		struct vec3 wi = fv(e->wi);
@@ -130,12 +135,9 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 			continue;
 		struct vec3 ww = local_to_world(h, wi);
 		double l[3], ps = 0;
-		int is_hot;
-		/* One conversion to map coordinates for all three answers. */
-		glint_env_query(c->env, &c->hot->rest, c->hot, ww, l, &ps,
-				&is_hot);
-		if (is_hot)
-			continue; /* integrated by hot_quadrature() */
+		/* The rest's radiance, continuous across the hot texels'
+		 * edges (their part is hot_quadrature()'s). */
+		glint_env_query(c->env, &c->hot->rest, c->hot, ww, l, &ps);
 		if (!nl)
 			ps = 0;
 		double w = b[j] * wi.z / (nl * ps + nb * pb);
@@ -161,7 +163,7 @@ static void draw_env_samples(const struct glint_envmap *env,
 		memset(e, 0, sizeof(*e));
 		if (!(pdf > 0) || !(wi.z > 0))
 			continue; /* contributes nothing: b = 0 below */
-		glint_envmap_lookup(env, d, l);
+		glint_env_rest_lookup(env, hot, d, l);
 		e->wi[0] = (float)wi.x;
 		e->wi[1] = (float)wi.y;
 		e->wi[2] = (float)wi.z;
@@ -217,7 +219,7 @@ static void setup_pixels(void *ctx, int i0, int i1, int thread)
 					continue;
 				if (c->lambert[j]) {
 					/* Exact: hot texels + irradiance. */
-					hot_quadrature(c, h, job->p0, j, a);
+					hot_quadrature(c, h, job->p0, j, 1, a);
 					glint_irradiance_lookup(&c->irr,
 								fv(h->n), e);
 					for (int ch = 0; ch < 3; ch++)

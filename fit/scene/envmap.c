@@ -215,6 +215,39 @@ static void lookup_uv(const struct glint_envmap *env, double u, double v,
 				      ty * ((1 - tx) * c[k] + tx * e[k]));
 }
 
+/*
+ * The bilinear radiance made from one part of the texels: the hot ones
+ * (part 1) or the others (part 0), the rest read as black.  The two parts
+ * add up to lookup_uv() and each is continuous, where cutting the map at
+ * a hot texel's edge is not: next to a sun the bilinear radiance is half
+ * the sun's.
+ */
+static void lookup_uv_part(const struct glint_envmap *env,
+			   const unsigned char *is_hot, int part, double u,
+			   double v, double rgb[3])
+{
+	const struct glint_image *img = env->img;
+	int w = img->width, h = img->height;
+	double x = u * w - 0.5, y = v * h - 0.5;
+	double fx = floor(x), fy = floor(y);
+	double tx = x - fx, ty = y - fy;
+	int xs[2] = { (int)fx, (int)fx + 1 }, ys[2] = { (int)fy, (int)fy + 1 };
+	double wx[2] = { 1 - tx, tx }, wy[2] = { 1 - ty, ty };
+
+	rgb[0] = rgb[1] = rgb[2] = 0;
+	for (int b = 0; b < 2; b++) {
+		int yy = ys[b] < 0 ? 0 : ys[b] >= h ? h - 1 : ys[b];
+		for (int a = 0; a < 2; a++) {
+			int xx = ((xs[a] % w) + w) % w;
+			if (!is_hot[(size_t)yy * w + xx] != !part)
+				continue;
+			const float *t = glint_image_px(img, xx, yy);
+			for (int k = 0; k < 3; k++)
+				rgb[k] += env->scale * wy[b] * wx[a] * t[k];
+		}
+	}
+}
+
 void glint_envmap_lookup(const struct glint_envmap *env, struct vec3 d,
 			 double rgb[3])
 {
@@ -348,6 +381,63 @@ double glint_env_dist_pdf_smooth(const struct glint_envmap *env,
 	return pdf_smooth_uv(env, dd, u, v);
 }
 
+/* Is texel (i, j) hot or next to one (the support of the hot part's
+ * bilinear radiance)? */
+static int near_hot(const struct glint_env_hot *hot, int w, int h, int i, int j)
+{
+	for (int b = -1; b <= 1; b++)
+		for (int a = -1; a <= 1; a++) {
+			int y = j + b, x = ((i + a) % w + w) % w;
+			if (y >= 0 && y < h && hot->is_hot[(size_t)y * w + x])
+				return 1;
+		}
+	return 0;
+}
+
+/* hot->part: q x q points on every texel where the hot part's radiance
+ * (lookup_uv_part(), part 1) is not zero, carrying it x solid angle. */
+static int hot_part_points(const struct glint_envmap *env,
+			   struct glint_env_hot *hot, int q)
+{
+	int w = env->img->width, h = env->img->height, n = 0;
+
+	for (int j = 0; j < h && hot->ntexels; j++)
+		for (int i = 0; i < w; i++)
+			n += near_hot(hot, w, h, i, j);
+	hot->part = malloc((size_t)(n ? n * q * q : 1) * 6 * sizeof(float));
+	if (!hot->part)
+		return glint_error_set(ENOMEM, "out of memory");
+	for (int j = 0; j < h && n; j++)
+		for (int i = 0; i < w; i++) {
+			if (!near_hot(hot, w, h, i, j))
+				continue;
+			for (int b = 0; b < q; b++)
+				for (int a = 0; a < q; a++) {
+					double u = (i + (a + 0.5) / q) / w;
+					double v = (j + (b + 0.5) / q) / h;
+					double l[3];
+					lookup_uv_part(env, hot->is_hot, 1, u,
+						       v, l);
+					if (!(l[0] + l[1] + l[2] > 0))
+						continue;
+					double dom = (2 * M_PI / w) *
+						     (M_PI / h) *
+						     sin(M_PI * v) / (q * q);
+					struct vec3 d = m3_mul(
+						&env->rot,
+						glint_envmap_uv_to_dir(u, v));
+					float *pt = hot->part +
+						    6 * (size_t)hot->npart++;
+					pt[0] = (float)d.x;
+					pt[1] = (float)d.y;
+					pt[2] = (float)d.z;
+					for (int c = 0; c < 3; c++)
+						pt[3 + c] = (float)(l[c] * dom);
+				}
+		}
+	return 0;
+}
+
 int glint_env_hot_new(const struct glint_envmap *env, double tau,
 		      int max_texels, int q, struct glint_env_hot **out)
 {
@@ -422,10 +512,18 @@ int glint_env_hot_new(const struct glint_envmap *env, double tau,
 				}
 		}
 	hot->axis = v3_norm(axis);
-	/* Half-angle: the farthest point plus a texel's half diagonal. */
+	ret = hot_part_points(env, hot, q);
+	if (ret < 0) {
+		glint_env_hot_free(hot);
+		return ret;
+	}
+	/* Half-angle: the farthest point of either set plus a texel's half
+	 * diagonal. */
 	double radius = 0;
-	for (int t = 0; t < hot->npts; t++) {
-		const float *pt = hot->pts + 6 * (size_t)t;
+	for (int t = 0; t < hot->npts + hot->npart; t++) {
+		const float *pt =
+			t < hot->npts ? hot->pts + 6 * (size_t)t
+				      : hot->part + 6 * (size_t)(t - hot->npts);
 		double c = v3_dot(hot->axis, v3(pt[0], pt[1], pt[2]));
 		radius = fmax(radius, acos(fmin(1, fmax(-1, c))));
 	}
@@ -444,6 +542,7 @@ void glint_env_hot_free(struct glint_env_hot *hot)
 	if (!hot)
 		return;
 	free(hot->pts);
+	free(hot->part);
 	free(hot->is_hot);
 	dist_free(&hot->rest);
 	free(hot);
@@ -452,21 +551,27 @@ void glint_env_hot_free(struct glint_env_hot *hot)
 void glint_env_query(const struct glint_envmap *env,
 		     const struct glint_env_dist *dd,
 		     const struct glint_env_hot *hot, struct vec3 d,
-		     double rgb[3], double *pdf_smooth, int *is_hot)
+		     double rgb[3], double *pdf_smooth)
 {
-	int w = env->img->width, h = env->img->height;
 	double u, v;
 
 	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
-	*is_hot = 0;
-	if (hot && hot->ntexels) {
-		int i = (int)(u * w), j = (int)(v * h);
-		i = i < 0 ? 0 : i >= w ? w - 1 : i;
-		j = j < 0 ? 0 : j >= h ? h - 1 : j;
-		*is_hot = hot->is_hot[(size_t)j * w + i];
-		if (*is_hot)
-			return;
-	}
-	lookup_uv(env, u, v, rgb);
+	if (hot && hot->ntexels)
+		lookup_uv_part(env, hot->is_hot, 0, u, v, rgb);
+	else
+		lookup_uv(env, u, v, rgb);
 	*pdf_smooth = pdf_smooth_uv(env, dd, u, v);
+}
+
+void glint_env_rest_lookup(const struct glint_envmap *env,
+			   const struct glint_env_hot *hot, struct vec3 d,
+			   double rgb[3])
+{
+	double u, v;
+
+	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
+	if (hot && hot->ntexels)
+		lookup_uv_part(env, hot->is_hot, 0, u, v, rgb);
+	else
+		lookup_uv(env, u, v, rgb);
 }

@@ -90,15 +90,25 @@ double glint_env_dist_pdf_smooth(const struct glint_envmap *env,
  * The few brightest texels of a map (a sun), to be integrated
  * deterministically rather than sampled: texels whose sampling weight is at
  * least tau times the largest, when there are at most max_texels of them
- * (else none: the map has no compact peak).  Each hot texel is covered by
- * q x q points carrying radiance x solid angle; `rest` samples everything
- * else.  A direction belongs to the hot part when its texel is hot
- * (glint_env_query reports it).
+ * (else none: the map has no compact peak).  `rest` samples everything
+ * else.  The map is split two ways:
+ * - by area (`pts`): each hot texel covered by q x q points carrying the
+ *   map's radiance x solid angle; the rest is every other texel (the
+ *   irradiance of the diffuse lobe);
+ * - by value (`part`): the map's bilinear radiance made from the hot
+ *   texels' values alone, on q x q points of every texel it reaches (the
+ *   hot ones and their neighbours); the rest is the radiance made from the
+ *   other texels' values (glint_env_query(), glint_env_rest_lookup()).
+ *   Both parts are continuous, so a lobe sample that moves with the
+ *   parameters never jumps at a hot texel's edge: the fitter's objective
+ *   stays smooth in roughness (shade_cache.c).
  */
 struct glint_env_hot {
 	int ntexels;
 	int npts;
 	float *pts; /* npts x 6: world direction, radiance x solid angle */
+	int npart;
+	float *part; /* npart x 6: the same for the hot part's radiance */
 	unsigned char *is_hot; /* W x H */
 	struct glint_env_dist rest;
 	struct vec3 axis; /* a cone holding every hot texel: */
@@ -107,13 +117,17 @@ struct glint_env_hot {
 
 /*
  * One query for a direction, converting it to map coordinates once: the
- * radiance (bilinear), the smooth pdf of distribution dd, and whether the
- * direction lies in a hot texel (hot may be NULL).
+ * radiance of the map's rest (bilinear, from the texels that are not hot;
+ * all of them when hot is NULL) and the smooth pdf of distribution dd.
  */
 void glint_env_query(const struct glint_envmap *env,
 		     const struct glint_env_dist *dd,
 		     const struct glint_env_hot *hot, struct vec3 d,
-		     double rgb[3], double *pdf_smooth, int *is_hot);
+		     double rgb[3], double *pdf_smooth);
+/* The radiance of the map's rest alone (glint_env_query()). */
+void glint_env_rest_lookup(const struct glint_envmap *env,
+			   const struct glint_env_hot *hot, struct vec3 d,
+			   double rgb[3]);
 
 /* The map's hot texels: those whose share of the map's sampling
  * distribution is at least tau of the largest share (none when that is

@@ -23,7 +23,9 @@
  * For the studies behind docs/fitting.md: COVERAGE_ONLY=MATERIAL fits
  * that material's cases only, COVERAGE_SAMPLES=N fits with N + N samples
  * per set, COVERAGE_SETS=K on K sample sets (1: one fixed set, no
- * polish), COVERAGE_VERBOSE=1 prints each fit's value and error parts.
+ * polish), COVERAGE_SPP=N with N primary samples per pixel,
+ * COVERAGE_SHARED_PATTERN=1 with one sub-pixel pattern for every set,
+ * COVERAGE_VERBOSE=1 prints each fit's value and error parts.
  */
 #include "test.h"
 
@@ -116,6 +118,8 @@ static void one_case(const char *map, const char *material, int placement,
 	snprintf(rots, sizeof(rots), "%.1f", rot);
 
 	sim_scene_192(&sc, map, rot);
+	if (getenv("COVERAGE_SPP"))
+		sc.spp = atoi(getenv("COVERAGE_SPP"));
 	/* Anywhere in the frame's middle: +- 2 cm (20 px) each way. */
 	sc.sphere_centre.x = 0.04 * (urand() - 0.5);
 	sc.sphere_centre.y = 0.04 * (urand() - 0.5);
@@ -151,12 +155,36 @@ static void one_case(const char *map, const char *material, int placement,
 		glint_fit_default_opts(&o);
 		if (getenv("COVERAGE_SETS"))
 			o.mc_draws = atoi(getenv("COVERAGE_SETS")) - 1;
+		o.shared_pattern = getenv("COVERAGE_SHARED_PATTERN") != NULL;
+		if (getenv("COVERAGE_START_TRUTH"))
+			o.start = truth;
 		if (getenv("COVERAGE_SAMPLES"))
 			o.light_samples = o.lobe_samples =
 				atoi(getenv("COVERAGE_SAMPLES"));
 		CHECK(glint_fit(&r, m, photo, weight, &o, &res) == 0,
 		      "%s %s %s: %s", material, map, level_names[lv],
 		      glint_error_msg());
+		struct glint_fit_result at_truth = { 0 };
+		if (getenv("COVERAGE_VERBOSE")) {
+			/* The truth on the fit's own objective. */
+			o.weights_at = res.p;
+			CHECK(glint_fit_evaluate(&r, m, photo, weight, &o,
+						 truth, &at_truth) == 0,
+			      "%s", glint_error_msg());
+			for (int q = 0; getenv("COVERAGE_LINE") && q <= 10;
+			     q++) {
+				double pq[GLINT_MAX_PARAMS];
+				struct glint_fit_result e;
+				for (int k = 0; k < m->nparams; k++)
+					pq[k] = res.p[k] +
+						q / 10.0 *
+							(truth[k] - res.p[k]);
+				glint_fit_evaluate(&r, m, photo, weight, &o, pq,
+						   &e);
+				printf("    line %.1f rough %.4f cost %.6g\n",
+				       q / 10.0, pq[6], e.wcost);
+			}
+		}
 		glint_image_free(photo);
 		glint_image_free(weight);
 		if (test_failures)
@@ -191,6 +219,17 @@ static void one_case(const char *map, const char *material, int placement,
 				printf(" %s:%.4f[%.4f,%.4f]", pi->name,
 				       truth[k], lo, hi);
 		}
+		if (getenv("COVERAGE_VERBOSE"))
+			printf("\n    cost %.6g, at the truth %.6g; %d + %d "
+			       "samples",
+			       res.wcost, at_truth.wcost, res.light_samples,
+			       res.lobe_samples);
+		for (int q = 0; getenv("COVERAGE_VERBOSE") && q < res.npasses;
+		     q++)
+			printf("\n    pass %-16s %5d px %3d it %9.6g -> %9.6g",
+			       res.passes[q].name, res.passes[q].pixels,
+			       res.passes[q].iterations, res.passes[q].cost0,
+			       res.passes[q].cost);
 		if (getenv("COVERAGE_VERBOSE"))
 			for (int k = 0; k < m->nparams; k++) {
 				int n = res.unc.n;

@@ -224,6 +224,87 @@ static void test_irradiance_odd_sizes(void)
 	}
 }
 
+/*
+ * The map split at its sun (glint_env_hot_new): the rest's radiance plus
+ * the hot part's adds up to the map's everywhere; the rest's is
+ * continuous across a hot texel's edge, where a cut by area jumps (the
+ * fitter's objective jumped there); the hot part's points integrate
+ * what the rest leaves out, and the area split's points the hot texels'
+ * area.
+ */
+static void test_hot_split(void)
+{
+	double rot[3] = { 0, 25, 0 };
+	int w = 64, h = 32;
+	struct glint_envmap *env = make_env(w, h, rot);
+	struct glint_env_hot *hot = NULL;
+
+	CHECK(env && glint_env_hot_new(env, 0.01, 64, 2, &hot) == 0, "%s",
+	      glint_error_msg());
+	if (test_failures)
+		return;
+	/* The sun and the texels its bilinear pdf reaches. */
+	CHECK(hot->ntexels >= 1 && hot->ntexels <= 9, "hot texels: %d",
+	      hot->ntexels);
+	CHECK(hot->npts == 4 * hot->ntexels, "2 x 2 points on each: %d",
+	      hot->npts);
+	CHECK(hot->npart > hot->npts, "the hot part reaches beyond: %d",
+	      hot->npart);
+
+	/* rest + hot part = map, on a fine grid of directions; the hot part
+	 * integrated on a fine grid against its points. */
+	int n = 1024, m = 512;
+	double hot_fine = 0, area_fine = 0;
+	for (int j = 0; j < m; j++) {
+		double v = (j + 0.5) / m, sn = sin(M_PI * v);
+		for (int i = 0; i < n; i++) {
+			double u = (i + 0.5) / n;
+			struct vec3 d =
+				m3_mul(&env->rot, glint_envmap_uv_to_dir(u, v));
+			double all[3], rest[3], q[3], pdf;
+			glint_envmap_lookup(env, d, all);
+			glint_env_rest_lookup(env, hot, d, rest);
+			glint_env_query(env, &hot->rest, hot, d, q, &pdf);
+			CHECK(rest[0] <= all[0] + 1e-9 && q[0] == rest[0],
+			      "query and lookup of the rest agree");
+			double dom = (2 * M_PI / n) * (M_PI / m) * sn;
+			hot_fine += (all[0] - rest[0]) * dom;
+			int ti = (int)(u * w), tj = (int)(v * h);
+			if (hot->is_hot[(size_t)tj * w + ti])
+				area_fine += all[0] * dom;
+		}
+	}
+	double hot_pts = 0, area_pts = 0;
+	for (int k = 0; k < hot->npart; k++)
+		hot_pts += hot->part[6 * k + 3];
+	for (int k = 0; k < hot->npts; k++)
+		area_pts += hot->pts[6 * k + 3];
+	CHECK_NEAR(hot_pts, hot_fine, 0.02 * hot_fine,
+		   "the hot part's points integrate it");
+	CHECK_NEAR(area_pts, area_fine, 0.02 * area_fine,
+		   "the area split's points integrate the hot texel");
+
+	/* Across the hot texels' right edge the rest is continuous. */
+	double v = (h / 4 + 0.5) / h, eps = 1e-7;
+	int edge = w / 3;
+	while (hot->is_hot[(size_t)(h / 4) * w + edge])
+		edge++;
+	double ue = (double)edge / w;
+	struct vec3 in = m3_mul(&env->rot, glint_envmap_uv_to_dir(ue - eps, v));
+	struct vec3 out =
+		m3_mul(&env->rot, glint_envmap_uv_to_dir(ue + eps, v));
+	double ri[3], ro[3], ai[3];
+	glint_env_rest_lookup(env, hot, in, ri);
+	glint_env_rest_lookup(env, hot, out, ro);
+	glint_envmap_lookup(env, in, ai);
+	/* Cut by area the rest would jump from 0 to the map's value. */
+	CHECK(ai[0] > 0.5, "the map at the hot edge: %g", ai[0]);
+	CHECK_NEAR(ri[0], ro[0], 1e-3, "the rest is continuous at the edge");
+	CHECK(ri[0] < 2, "the rest holds no sun: %g", ri[0]);
+	glint_env_hot_free(hot);
+	glint_envmap_free(env);
+}
+
 int main(void)
 {
 	RUN(test_uv_dir);
@@ -232,5 +313,6 @@ int main(void)
 	RUN(test_sampling_histogram);
 	RUN(test_bad_maps);
 	RUN(test_irradiance_odd_sizes);
+	RUN(test_hot_split);
 	return test_result();
 }

@@ -792,14 +792,8 @@ static void objective_free(struct objective *ob)
 	free(ob->lobes2);
 }
 
-/*
- * A shade cache over every fitted pixel at the objective's sample counts;
- * seed 0 is glint's fixed set, others independent ones, each with its own
- * sub-pixel pattern as well as its own light and lobe samples: a pixel's
- * footprint sampled at a few fixed points is a Monte Carlo error like the
- * others, and the sets' spread should hold it (on teflon at 192 px it
- * moved no fit by more than 0.002 in roughness).
- */
+/* A shade cache over every fitted pixel at the objective's sample counts;
+ * seed 0 is glint's fixed set, others independent ones. */
 static int new_cache(const struct objective *ob, uint32_t seed,
 		     struct glint_shade_cache **out)
 {
@@ -811,22 +805,8 @@ static int new_cache(const struct objective *ob, uint32_t seed,
 		.seed = seed,
 		.nthreads = o->nthreads,
 	};
-	struct glint_gbuffer own;
-	const struct glint_gbuffer *gb = &ob->r->gb;
-	int ret;
-
-	if (seed && !o->shared_pattern) {
-		ret = glint_gbuffer_resample(gb, seed, ob->d->pix, ob->d->n,
-					     o->nthreads, &own);
-		if (ret < 0)
-			return ret;
-		gb = &own;
-	}
-	ret = glint_shade_cache_new(gb, ob->d->pix, ob->d->n, ob->r->env, ob->m,
-				    &co, out);
-	if (gb == &own)
-		glint_gbuffer_free(&own);
-	return ret;
+	return glint_shade_cache_new(&ob->r->gb, ob->d->pix, ob->d->n,
+				     ob->r->env, ob->m, &co, out);
 }
 
 /* The objective over d at the start values: lobe buffers and the shade

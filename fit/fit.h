@@ -82,9 +82,6 @@ struct glint_fit_opts {
 	 * fitter's own Monte Carlo error (fit/optim/uncertainty.h); 0: none
 	 * (the intervals then ignore it). */
 	int mc_draws;
-	/* the sets share the fitted set's sub-pixel pattern (as before each
-	 * set took its own: fit.c, new_cache()); for the studies */
-	int shared_pattern;
 	double level; /* of the reported intervals (0.95) */
 	/* leave out the systematic term (the fast render's accuracy against
 	 * the reference renderer: fit.c, systematic()) */

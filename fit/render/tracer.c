@@ -336,13 +336,9 @@ struct pixel_shift {
 	int rot;
 };
 
-/* Pixel (x, y)'s shift of the pattern; pattern 0 is the G-buffer's own,
- * others independent ones (glint_gbuffer_resample()). */
-static void pixel_shift(int x, int y, int spp, uint32_t pattern,
-			struct pixel_shift *ps)
+static void pixel_shift(int x, int y, int spp, struct pixel_shift *ps)
 {
-	uint32_t seed = glint_hash3((uint32_t)x, (uint32_t)y,
-				    0x51u ^ (pattern * 0x9e3779b9u));
+	uint32_t seed = glint_hash3((uint32_t)x, (uint32_t)y, 0x51u);
 	uint32_t lseed = seed ^ 0xa511e9b3u;
 
 	ps->pix[0] = glint_u01(glint_hash32(seed));
@@ -376,7 +372,7 @@ void glint_pixel_sample(int x, int y, int s, int spp, double pix[2],
 	struct pixel_shift ps;
 	uint32_t k = (uint32_t)s * 2654435761u % (uint32_t)spp;
 
-	pixel_shift(x, y, spp, 0, &ps);
+	pixel_shift(x, y, spp, &ps);
 	k = (k + (uint32_t)ps.rot) % (uint32_t)spp;
 	pix[0] = frac((s + 0.5) / spp + ps.pix[0]);
 	pix[1] = frac(glint_radical2((uint32_t)s) + ps.pix[1]);
@@ -451,7 +447,6 @@ struct glint_gbuffer_src {
 	struct glint_tracer *t;
 	struct glint_pinhole cam;
 	struct pixel_pattern pattern;
-	uint32_t seed; /* the pattern's shifts (pixel_shift()) */
 };
 
 /* Rays gathered into a packet of 16, their hits written through dst. */
@@ -476,7 +471,7 @@ static void trace_pixel(const struct glint_gbuffer *gb, struct packet *pk,
 	const struct glint_gbuffer_src *src = gb->src;
 	struct pixel_shift ps;
 
-	pixel_shift(x + gb->frame_x, y + gb->frame_y, gb->spp, src->seed, &ps);
+	pixel_shift(x + gb->frame_x, y + gb->frame_y, gb->spp, &ps);
 	for (int s = 0; s < gb->spp; s++) {
 		double pix[2], lens[2];
 		struct vec3 o, d;
@@ -679,41 +674,6 @@ int glint_gbuffer_keep(struct glint_gbuffer *gb, const int32_t *pix, int n,
 	}
 	free(todo);
 	return 0;
-}
-
-int glint_gbuffer_resample(const struct glint_gbuffer *gb, uint32_t seed,
-			   const int32_t *pix, int n, int nthreads,
-			   struct glint_gbuffer *out)
-{
-	size_t npx = (size_t)gb->width * gb->height;
-
-	memset(out, 0, sizeof(*out));
-	if (!gb->src)
-		return glint_error_set(EINVAL, "G-buffer without a tracer");
-	out->width = gb->width;
-	out->height = gb->height;
-	out->spp = gb->spp;
-	out->frame_x = gb->frame_x;
-	out->frame_y = gb->frame_y;
-	out->frame_width = gb->frame_width;
-	out->src = calloc(1, sizeof(*out->src));
-	out->slot = malloc(npx * sizeof(*out->slot));
-	if (!out->src || !out->slot ||
-	    pattern_init(&out->src->pattern, gb->spp) < 0) {
-		free(out->src);
-		free(out->slot);
-		memset(out, 0, sizeof(*out));
-		return glint_error_set(ENOMEM, "out of memory");
-	}
-	out->src->t = gb->src->t;
-	out->src->cam = gb->src->cam;
-	out->src->seed = seed;
-	for (size_t i = 0; i < npx; i++)
-		out->slot[i] = -1;
-	int ret = glint_gbuffer_keep(out, pix, n, nthreads);
-	if (ret < 0)
-		glint_gbuffer_free(out);
-	return ret;
 }
 
 const struct glint_hit *glint_gbuffer_row(const struct glint_gbuffer *gb, int y,

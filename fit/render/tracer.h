@@ -111,17 +111,6 @@ double glint_gbuffer_dense_mb(void);
  * do for a dense one. */
 int glint_gbuffer_keep(struct glint_gbuffer *gb, const int32_t *pix, int n,
 		       int nthreads);
-/*
- * The same camera's pixels pix[0 .. n) traced again with another sub-pixel
- * (and lens) pattern, independent of gb's for seed != 0: a sparse
- * G-buffer without `cover` (it counts gb's pattern, not this one), to be
- * freed with glint_gbuffer_free().  The fit's sample sets each take their
- * own pattern, so that their spread holds the pixel footprint's sampling
- * error too (fit.c).  gb's tracer must outlive it.
- */
-int glint_gbuffer_resample(const struct glint_gbuffer *gb, uint32_t seed,
-			   const int32_t *pix, int n, int nthreads,
-			   struct glint_gbuffer *out);
 /* Row y's width * spp hits: the dense G-buffer's own, or traced into buf
  * (width * spp hits, the caller's).  Safe from several threads. */
 const struct glint_hit *glint_gbuffer_row(const struct glint_gbuffer *gb, int y,

@@ -24,7 +24,6 @@
  * that material's cases only, COVERAGE_SAMPLES=N fits with N + N samples
  * per set, COVERAGE_SETS=K on K sample sets (1: one fixed set, no
  * polish), COVERAGE_SPP=N with N primary samples per pixel,
- * COVERAGE_SHARED_PATTERN=1 with one sub-pixel pattern for every set,
  * COVERAGE_VERBOSE=1 prints each fit's value and error parts.
  */
 #include "test.h"
@@ -155,7 +154,6 @@ static void one_case(const char *map, const char *material, int placement,
 		glint_fit_default_opts(&o);
 		if (getenv("COVERAGE_SETS"))
 			o.mc_draws = atoi(getenv("COVERAGE_SETS")) - 1;
-		o.shared_pattern = getenv("COVERAGE_SHARED_PATTERN") != NULL;
 		if (getenv("COVERAGE_START_TRUTH"))
 			o.start = truth;
 		if (getenv("COVERAGE_SAMPLES"))

@@ -32,7 +32,8 @@ struct vec3 glint_envmap_uv_to_dir(double u, double v)
  * returns half its radiance there: fireflies.  With the filter, radiance /
  * pdf stays bounded.
  */
-static double texel_weight(const struct glint_image *img, int i, int j)
+static double texel_weight(const struct glint_image *img,
+			   const unsigned char *zero, int i, int j)
 {
 	static const double k[3] = { 1.0 / 8, 6.0 / 8, 1.0 / 8 };
 	int w = img->width, h = img->height;
@@ -42,6 +43,8 @@ static double texel_weight(const struct glint_image *img, int i, int j)
 		int y = j + dy < 0 ? 0 : j + dy >= h ? h - 1 : j + dy;
 		for (int dx = -1; dx <= 1; dx++) {
 			int x = ((i + dx) % w + w) % w;
+			if (zero && zero[(size_t)y * w + x])
+				continue;
 			const float *p = glint_image_px(img, x, y);
 			sum += k[dx + 1] * k[dy + 1] *
 			       rgb_luminance(p[0], p[1], p[2]);
@@ -50,8 +53,14 @@ static double texel_weight(const struct glint_image *img, int i, int j)
 	return sum * sin(M_PI * (j + 0.5) / h);
 }
 
-/* CDFs of the texel weights, leaving out texels where skip[] is set. */
-static int dist_build(const struct glint_image *img, const unsigned char *skip,
+/*
+ * CDFs of the texel weights, the texels where zero[] is set read as black:
+ * the rest of a map split by value (glint_env_hot).  A texel next to a
+ * black one keeps the weight of its other neighbours (the weights are
+ * blurred), so the samples reach wherever the rest's bilinear radiance
+ * does, inside the black texels' edges too.
+ */
+static int dist_build(const struct glint_image *img, const unsigned char *zero,
 		      struct glint_env_dist *d)
 {
 	int w = img->width, h = img->height;
@@ -64,10 +73,8 @@ static int dist_build(const struct glint_image *img, const unsigned char *skip,
 				       "sampling tables");
 	for (int j = 0; j < h; j++) {
 		double *c = d->cond + (size_t)j * (w + 1);
-		for (int i = 0; i < w; i++) {
-			int off = skip && skip[(size_t)j * w + i];
-			c[i + 1] = c[i] + (off ? 0 : texel_weight(img, i, j));
-		}
+		for (int i = 0; i < w; i++)
+			c[i + 1] = c[i] + texel_weight(img, zero, i, j);
 		d->marginal[j + 1] = d->marginal[j] + c[w];
 	}
 	d->total = d->marginal[h];

@@ -228,7 +228,8 @@ static void test_irradiance_odd_sizes(void)
  * The map split at its sun (glint_env_hot_new): the rest's radiance plus
  * the hot part's adds up to the map's everywhere; the rest's is
  * continuous across a hot texel's edge, where a cut by area jumps (the
- * fitter's objective jumped there); the hot part's points integrate
+ * fitter's objective jumped there), and sampled wherever it is not black
+ * (inside the hot texels' edges too); the hot part's points integrate
  * what the rest leaves out, and the area split's points the hot texels'
  * area.
  */
@@ -267,6 +268,11 @@ static void test_hot_split(void)
 			glint_env_query(env, &hot->rest, hot, d, q, &pdf);
 			CHECK(rest[0] <= all[0] + 1e-9 && q[0] == rest[0],
 			      "query and lookup of the rest agree");
+			/* MIS needs the rest's samples wherever it shines. */
+			CHECK(!(rest[0] > 1e-9) ||
+				      glint_env_dist_pdf(env, &hot->rest, d) >
+					      0,
+			      "the rest is sampled where it shines");
 			double dom = (2 * M_PI / n) * (M_PI / m) * sn;
 			hot_fine += (all[0] - rest[0]) * dom;
 			int ti = (int)(u * w), tj = (int)(v * h);

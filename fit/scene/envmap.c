@@ -555,6 +555,17 @@ void glint_env_hot_free(struct glint_env_hot *hot)
 	free(hot);
 }
 
+/* The rest's radiance at (u, v): the whole map's without hot texels. */
+static void rest_uv(const struct glint_envmap *env,
+		    const struct glint_env_hot *hot, double u, double v,
+		    double rgb[3])
+{
+	if (hot && hot->ntexels)
+		lookup_uv_part(env, hot->is_hot, 0, u, v, rgb);
+	else
+		lookup_uv(env, u, v, rgb);
+}
+
 void glint_env_query(const struct glint_envmap *env,
 		     const struct glint_env_dist *dd,
 		     const struct glint_env_hot *hot, struct vec3 d,
@@ -563,10 +574,7 @@ void glint_env_query(const struct glint_envmap *env,
 	double u, v;
 
 	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
-	if (hot && hot->ntexels)
-		lookup_uv_part(env, hot->is_hot, 0, u, v, rgb);
-	else
-		lookup_uv(env, u, v, rgb);
+	rest_uv(env, hot, u, v, rgb);
 	*pdf_smooth = pdf_smooth_uv(env, dd, u, v);
 }
 
@@ -577,8 +585,5 @@ void glint_env_rest_lookup(const struct glint_envmap *env,
 	double u, v;
 
 	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
-	if (hot && hot->ntexels)
-		lookup_uv_part(env, hot->is_hot, 0, u, v, rgb);
-	else
-		lookup_uv(env, u, v, rgb);
+	rest_uv(env, hot, u, v, rgb);
 }

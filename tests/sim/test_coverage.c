@@ -178,7 +178,7 @@ static void one_case(const char *map, const char *material, int placement,
 			for (int q = 0; getenv("COVERAGE_LINE") && q <= 10;
 			     q++) {
 				double pq[GLINT_MAX_PARAMS];
-				struct glint_fit_result e;
+				struct glint_fit_result e = { 0 };
 				for (int k = 0; k < m->nparams; k++)
 					pq[k] = res.p[k] +
 						q / 10.0 *

@@ -11,6 +11,9 @@
  * default) against LM alone, and what a change of transmission costs (a
  * re-sum of cached paths) against a change of ior (a re-trace).
  *   bench/fit [ROUNDS] [--no-faithful] [--no-dielectric] [--material NAME]
+ *             [--default-only]
+ * --default-only: the default row alone, with where its time went (the
+ * passes, the uncertainty stage, the rest).
  */
 #define _POSIX_C_SOURCE 200809L
 #include "bench.h"
@@ -60,6 +63,24 @@ static void errors(const double *p, const double *t, double e[3])
 		e[0] = fmax(e[0], fabs(p[k] - t[k]));
 	e[1] = fabs(p[6] / t[6] - 1);
 	e[2] = fabs(p[7] - t[7]);
+}
+
+/* Where one fit's time went: its passes, the uncertainty, the rest. */
+static void print_breakdown(const struct glint_fit_result *res, double wall)
+{
+	double passes = 0;
+	printf("  %-28s %7s %6s %6s %8s\n", "pass", "pixels", "iters", "evals",
+	       "s");
+	for (int i = 0; i < res->npasses; i++) {
+		const struct glint_fit_pass *p = &res->passes[i];
+		printf("  %-28s %7d %6d %6d %8.3f\n", p->name, p->pixels,
+		       p->iterations, p->evaluations, p->seconds);
+		passes += p->seconds;
+	}
+	printf("  %-28s %30.3f\n", "uncertainty", res->unc_seconds);
+	printf("  %-28s %30.3f\n", "the rest (set-up, statistics)",
+	       wall - passes - res->unc_seconds);
+	printf("  %-28s %30.3f\n", "wall", wall);
 }
 
 /* The quartz spheres: annealing vs LM, re-sum vs re-trace. */
@@ -173,7 +194,7 @@ static int dielectric_rows(int rounds)
 
 int main(int argc, char **argv)
 {
-	int rounds = 3, faithful = 1, dielectric = 1;
+	int rounds = 3, faithful = 1, dielectric = 1, default_only = 0;
 	const char *material = "yellow-plastic";
 	struct glint_scene sc;
 	struct glint_renderer r;
@@ -188,6 +209,8 @@ int main(int argc, char **argv)
 			faithful = 0;
 		else if (!strcmp(argv[i], "--no-dielectric"))
 			dielectric = 0;
+		else if (!strcmp(argv[i], "--default-only"))
+			default_only = 1;
 		else if (!strcmp(argv[i], "--material") && i + 1 < argc)
 			material = argv[++i];
 		else
@@ -234,6 +257,8 @@ int main(int argc, char **argv)
 			struct glint_fit_result res;
 			if (variants[v].faithful && (k > 0 || !faithful))
 				continue;
+			if (default_only && v > 0)
+				continue;
 			glint_fit_default_opts(&o);
 			o.method = variants[v].method;
 			o.coarse_to_fine = variants[v].coarse;
@@ -252,6 +277,8 @@ int main(int argc, char **argv)
 				return 1;
 			}
 			t[v][k] = glint_now() - t0;
+			if (default_only)
+				print_breakdown(&res, t[v][k]);
 			errors(res.p, truth, e[v]);
 			iters[v] = 0;
 			evals[v] = 0;
@@ -270,6 +297,8 @@ int main(int argc, char **argv)
 	       "vs 1st", "speedup", "albedo", "rough.", "ior", "iters");
 	for (int v = 0; v < NV; v++) {
 		int n = variants[v].faithful ? (faithful ? 1 : 0) : rounds;
+		if (default_only && v > 0)
+			n = 0;
 		if (!n) {
 			med[v] = NAN;
 			continue;
@@ -291,7 +320,7 @@ int main(int argc, char **argv)
 	       "|ior - truth|;\nspeedup = paper-faithful time / this time; "
 	       "medians of %d rounds (faithful: 1 run)\n",
 	       rounds);
-	if (dielectric && dielectric_rows(rounds) < 0) {
+	if (dielectric && !default_only && dielectric_rows(rounds) < 0) {
 		fprintf(stderr, "bench/fit: dielectric: %s\n",
 			glint_error_msg());
 		return 1;

@@ -99,6 +99,7 @@ struct objective {
 	 * the others owned), whose mean the statistics use */
 	struct glint_shade_cache *sets[MAX_SETS];
 	int nsets;
+	struct glint_env_hot *hot; /* the map's split, shared by the caches */
 	/* the shade caches' light and lobe samples are o's times this
 	 * (raised when the sample sets disagree by more than the noise) */
 	int sample_scale;
@@ -787,6 +788,7 @@ static void objective_free(struct objective *ob)
 	for (int k = 1; k < ob->nsets; k++)
 		glint_shade_cache_free(ob->sets[k]);
 	glint_shade_cache_free(ob->cache);
+	glint_env_hot_free(ob->hot);
 	glint_image_free(ob->img);
 	free(ob->lobes);
 	free(ob->lobes2);
@@ -804,6 +806,7 @@ static int new_cache(const struct objective *ob, uint32_t seed,
 		.static_samples = o->static_samples,
 		.seed = seed,
 		.nthreads = o->nthreads,
+		.hot = ob->hot,
 	};
 	return glint_shade_cache_new(&ob->r->gb, ob->d->pix, ob->d->n,
 				     ob->r->env, ob->m, &co, out);
@@ -840,7 +843,9 @@ static int objective_init(struct objective *ob, struct glint_renderer *r,
 		ob->img = glint_image_new(r->gb.width, r->gb.height);
 		return ob->img ? 0 : glint_error_set(ENOMEM, "out of memory");
 	}
-	return new_cache(ob, 0, &ob->cache);
+	struct glint_shade_cache_opts co = { .no_hot = 0 };
+	int ret = glint_shade_cache_hot_new(r->env, &co, &ob->hot);
+	return ret < 0 ? ret : new_cache(ob, 0, &ob->cache);
 }
 
 /* The white render at every fitted pixel: the constant lobes at albedo 1
@@ -1270,7 +1275,8 @@ static int sets_residuals(void *ctx, const double *q, double *r)
 	int rows = 3 * ob->nsel, ret = 0;
 
 	memset(r, 0, sizeof(double) * (size_t)rows);
-	for (int k = 0; k < so->nsets && !ret; k++) {
+	/* The fitted set last: its lobes stay memoised for the Jacobian. */
+	for (int k = so->nsets - 1; k >= 0 && !ret; k--) {
 		double *rk = so->each + (size_t)k * rows;
 		ob->cache = so->sets[k];
 		ob->memo_valid = 0;
@@ -1279,7 +1285,8 @@ static int sets_residuals(void *ctx, const double *q, double *r)
 			r[i] += rk[i] / so->nsets;
 	}
 	ob->cache = fitted;
-	ob->memo_valid = 0;
+	if (ret < 0 || so->sets[0] != fitted)
+		ob->memo_valid = 0;
 	return ret;
 }
 
@@ -1291,11 +1298,9 @@ static int sets_jacobian(void *ctx, const double *q, const double *r,
 			 double *jac)
 {
 	struct sets_objective *so = ctx;
-	struct objective *ob = so->ob;
 
 	(void)r;
-	ob->memo_valid = 0;
-	return obj_jacobian(ob, q, NULL, jac);
+	return obj_jacobian(so->ob, q, NULL, jac);
 }
 
 /*

@@ -29,7 +29,8 @@ struct cache_hit {
 struct glint_shade_cache {
 	const struct glint_model_ops *model;
 	const struct glint_envmap *env;
-	struct glint_env_hot *hot;
+	const struct glint_env_hot *hot;
+	struct glint_env_hot *own_hot; /* when not shared */
 	/* Irradiance of the non-hot texels, for constant 1/pi lobes. */
 	struct glint_irradiance irr;
 	int lambert[GLINT_MAX_PARAMS]; /* lobe j is the constant 1/pi */
@@ -137,7 +138,7 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 		double l[3], ps = 0;
 		/* The rest's radiance, continuous across the hot texels'
 		 * edges (their part is hot_quadrature()'s). */
-		glint_env_query(c->env, &c->hot->rest, c->hot, ww, l, &ps);
+		glint_env_query(c->hot, ww, l, &ps);
 		if (!nl)
 			ps = 0;
 		double w = b[j] * wi.z / (nl * ps + nb * pb);
@@ -245,6 +246,15 @@ out:
 	free(u);
 }
 
+/* Hot texels: within 1 % of the brightest, if at most 64 of them;
+ * 2 x 2 points each. */
+int glint_shade_cache_hot_new(const struct glint_envmap *env,
+			      const struct glint_shade_cache_opts *opts,
+			      struct glint_env_hot **out)
+{
+	return glint_env_hot_new(env, 0.01, opts->no_hot ? 0 : 64, 2, out);
+}
+
 int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 			  int n, const struct glint_envmap *env,
 			  const struct glint_model_ops *model,
@@ -286,10 +296,12 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 				       n);
 	}
 	memcpy(c->pix, pix, (size_t)n * sizeof(*pix));
-	/* Hot texels: within 1 % of the brightest, if at most 64 of them;
-	 * 2 x 2 points each. */
-	int ret =
-		glint_env_hot_new(env, 0.01, opts->no_hot ? 0 : 64, 2, &c->hot);
+	int ret = 0;
+	c->hot = opts->hot;
+	if (!c->hot) {
+		ret = glint_shade_cache_hot_new(env, opts, &c->own_hot);
+		c->hot = c->own_hot;
+	}
 	if (ret < 0) {
 		glint_shade_cache_free(c);
 		return ret;
@@ -374,7 +386,7 @@ void glint_shade_cache_free(struct glint_shade_cache *c)
 	free(c->envs);
 	free(c->lobe_u);
 	free(c->static_lobes);
-	glint_env_hot_free(c->hot);
+	glint_env_hot_free(c->own_hot);
 	glint_irradiance_free(&c->irr);
 	free(c);
 }

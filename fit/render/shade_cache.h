@@ -42,7 +42,17 @@ struct glint_shade_cache_opts {
 	 * sets). */
 	uint32_t seed;
 	int nthreads;
+	/* The map's split (glint_shade_cache_hot_new()), shared by caches of
+	 * one map and borrowed: it must outlive them.  NULL: the cache makes
+	 * its own. */
+	const struct glint_env_hot *hot;
 };
+
+/* The split of env that caches with these opts use (no_hot honoured), to
+ * be shared through opts->hot; freed with glint_env_hot_free(). */
+int glint_shade_cache_hot_new(const struct glint_envmap *env,
+			      const struct glint_shade_cache_opts *opts,
+			      struct glint_env_hot **out);
 
 /*
  * Build a cache for pixels pix[0..n) (indices y * width + x of gb) that

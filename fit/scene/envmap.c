@@ -445,6 +445,37 @@ static int hot_part_points(const struct glint_envmap *env,
 	return 0;
 }
 
+/* hot->tab: the rest's texels and densities with a one-texel border. */
+static int rest_table(const struct glint_envmap *env, struct glint_env_hot *hot)
+{
+	int w = env->img->width, h = env->img->height;
+	size_t stride = (size_t)w + 2;
+
+	hot->env = env;
+	hot->tab = malloc(stride * ((size_t)h + 2) * 4 * sizeof(float));
+	if (!hot->tab)
+		return glint_error_set(ENOMEM,
+				       "out of memory for the env map's "
+				       "table");
+	for (int j = -1; j <= h; j++) {
+		int y = j < 0 ? 0 : j >= h ? h - 1 : j;
+		for (int i = -1; i <= w; i++) {
+			int x = ((i % w) + w) % w;
+			float *t = hot->tab +
+				   4 * (((size_t)j + 1) * stride + (size_t)i + 1);
+			const float *px = glint_image_px(env->img, x, y);
+			int off = hot->is_hot[(size_t)y * w + x];
+			for (int c = 0; c < 3; c++)
+				t[c] = off ? 0.0f : px[c];
+			t[3] = hot->rest.total > 0
+				       ? (float)uv_density(env, &hot->rest, x,
+							   y)
+				       : 0.0f;
+		}
+	}
+	return 0;
+}
+
 int glint_env_hot_new(const struct glint_envmap *env, double tau,
 		      int max_texels, int q, struct glint_env_hot **out)
 {
@@ -536,6 +567,8 @@ int glint_env_hot_new(const struct glint_envmap *env, double tau,
 	}
 	hot->radius = radius + M_PI / h * 1.5 + 2 * M_PI / w * 1.5;
 	ret = dist_build(env->img, hot->is_hot, &hot->rest);
+	if (ret == 0)
+		ret = rest_table(env, hot);
 	if (ret < 0) {
 		glint_env_hot_free(hot);
 		return ret;
@@ -551,6 +584,7 @@ void glint_env_hot_free(struct glint_env_hot *hot)
 	free(hot->pts);
 	free(hot->part);
 	free(hot->is_hot);
+	free(hot->tab);
 	dist_free(&hot->rest);
 	free(hot);
 }
@@ -566,16 +600,37 @@ static void rest_uv(const struct glint_envmap *env,
 		lookup_uv(env, u, v, rgb);
 }
 
-void glint_env_query(const struct glint_envmap *env,
-		     const struct glint_env_dist *dd,
-		     const struct glint_env_hot *hot, struct vec3 d,
+void glint_env_query(const struct glint_env_hot *hot, struct vec3 d,
 		     double rgb[3], double *pdf_smooth)
 {
+	const struct glint_envmap *env = hot->env;
+	int w = env->img->width, h = env->img->height;
 	double u, v;
 
 	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
-	rest_uv(env, hot, u, v, rgb);
-	*pdf_smooth = pdf_smooth_uv(env, dd, u, v);
+	/* u, v in [0, 1]: x, y within half a texel of the map, whose
+	 * border in the table holds what wrapping and clamping would read. */
+	double x = fmin(fmax(u * w - 0.5, -0.5), w - 0.5);
+	double y = fmin(fmax(v * h - 0.5, -0.5), h - 0.5);
+	double fx = floor(x), fy = floor(y), tx = x - fx, ty = y - fy;
+	size_t stride = (size_t)w + 2;
+	const float *t = hot->tab + 4 * (((size_t)fy + 1) * stride +
+					 (size_t)fx + 1);
+	const float *q[4] = { t, t + 4, t + 4 * stride, t + 4 * stride + 4 };
+	double wt[4] = { (1 - ty) * (1 - tx), (1 - ty) * tx, ty * (1 - tx),
+			 ty * tx };
+
+	rgb[0] = rgb[1] = rgb[2] = 0;
+	double p = 0;
+	for (int k = 0; k < 4; k++) {
+		for (int c = 0; c < 3; c++)
+			rgb[c] += env->scale * wt[k] * q[k][c];
+		p += wt[k] * q[k][3];
+	}
+	double s = sin(M_PI * v);
+	*pdf_smooth = s > 0 && hot->rest.total > 0
+			      ? p / (2 * M_PI * M_PI * s)
+			      : 0;
 }
 
 void glint_env_rest_lookup(const struct glint_envmap *env,

@@ -113,16 +113,21 @@ struct glint_env_hot {
 	struct glint_env_dist rest;
 	struct vec3 axis; /* a cone holding every hot texel: */
 	double radius;	  /* axis and half-angle (radians) */
+	/* The rest as one table for glint_env_query(): per texel its RGB
+	 * (hot texels black) and its density under `rest`, with a border of
+	 * one texel (wrapped in azimuth, clamped at the poles) so that a
+	 * bilinear read needs no wrapping: (W + 2) x (H + 2) x 4 floats. */
+	float *tab;
+	const struct glint_envmap *env;
 };
 
 /*
  * One query for a direction, converting it to map coordinates once: the
- * radiance of the map's rest (bilinear, from the texels that are not hot;
- * all of them when hot is NULL) and the smooth pdf of distribution dd.
+ * radiance of the map's rest (bilinear, from the texels that are not hot)
+ * and the smooth pdf of hot->rest there (glint_env_dist_pdf_smooth()),
+ * from one read of hot->tab: the lobe samples' inner loop.
  */
-void glint_env_query(const struct glint_envmap *env,
-		     const struct glint_env_dist *dd,
-		     const struct glint_env_hot *hot, struct vec3 d,
+void glint_env_query(const struct glint_env_hot *hot, struct vec3 d,
 		     double rgb[3], double *pdf_smooth);
 /* The radiance of the map's rest alone (glint_env_query()). */
 void glint_env_rest_lookup(const struct glint_envmap *env,

@@ -134,6 +134,50 @@ void glint_beckmann_sample(double m, struct vec3 wo, const double u[2],
 	reflect_about(-m * m * log(1 - u[0]), u[1], wo, wi);
 }
 
+/* D G F / (4 (n.i)(n.o)) and D (n.h) / (4 (o.h)) from D and h. */
+static double lobe_and_pdf(double d, struct vec3 h, double ior, struct vec3 wo,
+			   struct vec3 wi, double *pdf)
+{
+	double oh = v3_dot(wo, h);
+
+	if (pdf)
+		*pdf = oh > 0 ? d * h.z / (4 * oh) : 0;
+	return d * glint_vcavity_g(h.z, wo.z, wi.z, oh) *
+	       glint_fresnel_or_one(oh, ior) / (4 * wi.z * wo.z);
+}
+
+double glint_beckmann_lobe_pdf(double m, double ior, struct vec3 wo,
+			       struct vec3 wi, double *pdf)
+{
+	if (!(wo.z > 0 && wi.z > 0)) {
+		if (pdf)
+			*pdf = 0;
+		return 0;
+	}
+	struct vec3 h = v3_norm(v3_add(wo, wi));
+	return lobe_and_pdf(glint_beckmann_d(h.z, m), h, ior, wo, wi, pdf);
+}
+
+double glint_beckmann_sample_lobe(double m, double ior, struct vec3 wo,
+				  const double u[2], struct vec3 *wi,
+				  double *lobe)
+{
+	double pdf;
+
+	*lobe = 0;
+	if (!(wo.z > 0))
+		return 0;
+	glint_beckmann_sample(m, wo, u, wi);
+	if (!(wi->z > 0))
+		return 0;
+	/* exp(-tan^2 / m^2) = 1 - u[0] at the normal drawn. */
+	struct vec3 h = v3_norm(v3_add(wo, *wi));
+	double c2 = h.z * h.z;
+	double d = h.z > 0 ? (1 - u[0]) / (M_PI * m * m * c2 * c2) : 0;
+	*lobe = lobe_and_pdf(d, h, ior, wo, *wi, &pdf);
+	return pdf;
+}
+
 double glint_ggx_lobe(double a, double ior, struct vec3 wo, struct vec3 wi)
 {
 	if (!(wo.z > 0 && wi.z > 0))

@@ -53,6 +53,19 @@ void glint_ggx_sample(double a, struct vec3 wo, const double u[2],
 double glint_ggx_pdf(double a, struct vec3 wo, struct vec3 wi);
 
 /*
+ * The Beckmann lobe's value and its sampling pdf together, sharing the
+ * half vector and D (the fitter's inner loop): _lobe_pdf at wi (both 0
+ * below the surface; pdf may be NULL), _sample_lobe draws wi as
+ * glint_beckmann_sample() does and returns its pdf, D from the uniform
+ * without an exp (0 and *lobe = 0 when wi falls below the surface).
+ */
+double glint_beckmann_lobe_pdf(double m, double ior, struct vec3 wo,
+			       struct vec3 wi, double *pdf);
+double glint_beckmann_sample_lobe(double m, double ior, struct vec3 wo,
+				  const double u[2], struct vec3 *wi,
+				  double *lobe);
+
+/*
  * How a lobe is sampled: cosine-weighted (diffuse lobes), or by reflecting
  * about a Beckmann or GGX normal of width w (above).  _sample returns the
  * pdf at the direction drawn, 0 when it falls below the surface; both are

@@ -190,6 +190,36 @@ void glint_lobes_eval(const struct glint_model_ops *m, const double *p,
 			f[c] += p[m->lobe_param[j] + c] * b[j];
 }
 
+double glint_lobe_value_pdf(const struct glint_model_ops *m, const double *p,
+			    int j, struct vec3 wo, struct vec3 wi, double *pdf)
+{
+	double b[GLINT_MAX_PARAMS];
+
+	if (m->lobe_value_pdf)
+		return m->lobe_value_pdf(p, j, wo, wi, pdf);
+	m->eval_lobes(p, wo, wi, b);
+	if (pdf)
+		*pdf = m->pdf_lobe(p, j, wo, wi);
+	return b[j];
+}
+
+double glint_lobe_sample_value(const struct glint_model_ops *m,
+			       const double *p, int j, struct vec3 wo,
+			       const double u[2], struct vec3 *wi, double *bj)
+{
+	double b[GLINT_MAX_PARAMS];
+
+	if (m->sample_lobe_value)
+		return m->sample_lobe_value(p, j, wo, u, wi, bj);
+	*bj = 0;
+	double pdf = m->sample_lobe(p, j, wo, u, wi);
+	if (pdf > 0) {
+		m->eval_lobes(p, wo, *wi, b);
+		*bj = b[j];
+	}
+	return pdf;
+}
+
 /* Lobe j's share of the samples: w[j] / sum w, at least 5 % for every
  * lobe with weight (none is starved), all alike when no lobe has any;
  * w[j] the luminance of lobe j's albedo, times spec_scale past lobe 0. */

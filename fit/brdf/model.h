@@ -63,6 +63,15 @@ struct glint_model_ops {
 			      const double u[2], struct vec3 *wi);
 	double (*pdf_lobe)(const double *p, int j, struct vec3 wo,
 			   struct vec3 wi);
+	/* Optional, the same sharing work (glint_lobe_value_pdf(),
+	 * glint_lobe_sample_value() fall back on the three above): b_j at wi
+	 * and pdf_lobe (pdf may be NULL); sample_lobe, b_j at the direction
+	 * drawn in *bj. */
+	double (*lobe_value_pdf)(const double *p, int j, struct vec3 wo,
+				 struct vec3 wi, double *pdf);
+	double (*sample_lobe_value)(const double *p, int j, struct vec3 wo,
+				    const double u[2], struct vec3 *wi,
+				    double *bj);
 	/* Index of the parameter that sets the lobe's angular width (a
 	 * roughness), or -1: coarse fitting levels bound it from below by
 	 * what they can resolve. */
@@ -100,6 +109,14 @@ double glint_lobes_pdf(const struct glint_model_ops *m, const double *p,
 double glint_lobes_sample(const struct glint_model_ops *m, const double *p,
 			  double spec_scale, struct vec3 wo, const double u[3],
 			  struct vec3 *wi);
+
+/* Lobe j of a linear model: b_j at wi and pdf_lobe there (pdf may be
+ * NULL); sample_lobe with b_j at the direction drawn (0 when none). */
+double glint_lobe_value_pdf(const struct glint_model_ops *m, const double *p,
+			    int j, struct vec3 wo, struct vec3 wi, double *pdf);
+double glint_lobe_sample_value(const struct glint_model_ops *m,
+			       const double *p, int j, struct vec3 wo,
+			       const double u[2], struct vec3 *wi, double *bj);
 
 /* Model by name (a static table entry, never freed), or NULL. */
 const struct glint_model_ops *glint_model_find(const char *name);

@@ -108,6 +108,29 @@ static double ts_sample_lobe(const double *p, int j, struct vec3 wo,
 				       p[ROUGH], wo, u, wi);
 }
 
+static double ts_lobe_value_pdf(const double *p, int j, struct vec3 wo,
+				struct vec3 wi, double *pdf)
+{
+	if (j)
+		return glint_beckmann_lobe_pdf(p[ROUGH], p[IOR], wo, wi, pdf);
+	double b = wo.z > 0 && wi.z > 0 ? 1 / M_PI : 0;
+	if (pdf)
+		*pdf = b * wi.z;
+	return b;
+}
+
+static double ts_sample_lobe_value(const double *p, int j, struct vec3 wo,
+				   const double u[2], struct vec3 *wi,
+				   double *bj)
+{
+	if (j)
+		return glint_beckmann_sample_lobe(p[ROUGH], p[IOR], wo, u, wi,
+						  bj);
+	double pdf = ts_sample_lobe(p, j, wo, u, wi);
+	*bj = pdf > 0 ? 1 / M_PI : 0;
+	return pdf;
+}
+
 /* Beckmann D falls below 1e-12 of its peak where tan^2(t_h) > 27.6 m^2;
  * the reflected direction turns by twice the half-vector's angle. */
 static double ts_lobe_extent(const double *p, int j)
@@ -135,6 +158,8 @@ const struct glint_model_ops glint_model_torrance_sparrow = {
 	.eval_lobes = ts_lobes,
 	.sample_lobe = ts_sample_lobe,
 	.pdf_lobe = ts_pdf_lobe,
+	.lobe_value_pdf = ts_lobe_value_pdf,
+	.sample_lobe_value = ts_sample_lobe_value,
 	.lobe_extent = ts_lobe_extent,
 };
 
@@ -174,6 +199,21 @@ static void nf_lobes(const double *p, struct vec3 wo, struct vec3 wi, double *b)
 	ts_lobes(q, wo, wi, b);
 }
 
+static double nf_lobe_value_pdf(const double *p, int j, struct vec3 wo,
+				struct vec3 wi, double *pdf)
+{
+	NF_P(q, p);
+	return ts_lobe_value_pdf(q, j, wo, wi, pdf);
+}
+
+static double nf_sample_lobe_value(const double *p, int j, struct vec3 wo,
+				   const double u[2], struct vec3 *wi,
+				   double *bj)
+{
+	NF_P(q, p);
+	return ts_sample_lobe_value(q, j, wo, u, wi, bj);
+}
+
 const struct glint_model_ops glint_model_ts_constant_fresnel = {
 	.name = "torrance-sparrow-constant-fresnel",
 	.conventions =
@@ -193,5 +233,7 @@ const struct glint_model_ops glint_model_ts_constant_fresnel = {
 	.eval_lobes = nf_lobes,
 	.sample_lobe = ts_sample_lobe,
 	.pdf_lobe = ts_pdf_lobe,
+	.lobe_value_pdf = nf_lobe_value_pdf,
+	.sample_lobe_value = nf_sample_lobe_value,
 	.lobe_extent = ts_lobe_extent,
 };

@@ -64,7 +64,6 @@ static void hot_quadrature(const struct glint_shade_cache *c,
 	const struct glint_env_hot *hot = c->hot;
 	const struct glint_model_ops *m = c->model;
 	struct vec3 wo = fv(h->wo);
-	double b[GLINT_MAX_PARAMS];
 	int npts = by_area ? hot->npts : hot->npart;
 	const float *pts = by_area ? hot->pts : hot->part;
 
@@ -84,11 +83,11 @@ static void hot_quadrature(const struct glint_shade_cache *c,
 				    v3_dot(d, fv(h->n)));
 		if (!(wi.z > 0))
 			continue;
-		m->eval_lobes(p, wo, wi, b);
-		if (b[j] <= 0)
+		double bj = glint_lobe_value_pdf(m, p, j, wo, wi, NULL);
+		if (bj <= 0)
 			continue;
 		for (int ch = 0; ch < 3; ch++)
-			out[ch] += b[j] * wi.z * pt[3 + ch];
+			out[ch] += bj * wi.z * pt[3 + ch];
 	}
 }
 
@@ -105,7 +104,6 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 {
 	const struct glint_model_ops *m = c->model;
 	struct vec3 wo = fv(h->wo);
-	double b[GLINT_MAX_PARAMS];
 	double sx = glint_u01(glint_hash32(h->seed ^ 0x2545f491u));
 	double sy = glint_u01(glint_hash32(h->seed ^ 0x9e3779b9u));
 
@@ -114,11 +112,12 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 	for (int k = 0; k < nl; k++) {
 		const struct env_sample *e = &es[k];
 		struct vec3 wi = fv(e->wi);
-		m->eval_lobes(p, wo, wi, b);
-		if (b[j] <= 0)
+		double pb = 0;
+		double bj = glint_lobe_value_pdf(m, p, j, wo, wi,
+						 nb ? &pb : NULL);
+		if (bj <= 0)
 			continue;
-		double pb = nb ? m->pdf_lobe(p, j, wo, wi) : 0;
-		double w = b[j] * wi.z * e->pdf_smooth /
+		double w = bj * wi.z * e->pdf_smooth /
 			   (e->pdf * (nl * e->pdf_smooth + nb * pb));
 		for (int ch = 0; ch < 3; ch++)
 			out[ch] += w * e->l[ch];
@@ -128,11 +127,9 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 		struct vec3 wi;
 		uu[0] -= uu[0] >= 1;
 		uu[1] -= uu[1] >= 1;
-		double pb = m->sample_lobe(p, j, wo, uu, &wi);
-		if (!(pb > 0))
-			continue;
-		m->eval_lobes(p, wo, wi, b);
-		if (b[j] <= 0)
+		double bj;
+		double pb = glint_lobe_sample_value(m, p, j, wo, uu, &wi, &bj);
+		if (!(pb > 0) || bj <= 0)
 			continue;
 		struct vec3 ww = local_to_world(h, wi);
 		double l[3], ps = 0;
@@ -141,7 +138,7 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 		glint_env_query(c->hot, ww, l, &ps);
 		if (!nl)
 			ps = 0;
-		double w = b[j] * wi.z / (nl * ps + nb * pb);
+		double w = bj * wi.z / (nl * ps + nb * pb);
 		for (int ch = 0; ch < 3; ch++)
 			out[ch] += w * l[ch];
 	}

@@ -230,6 +230,57 @@ static void test_reciprocity_and_lobes(void)
 	}
 }
 
+/* The fitter's shared-work lobe ops agree with eval_lobes, pdf_lobe and
+ * sample_lobe, at roughnesses from near-mirror to rough. */
+static void test_lobe_value_ops(void)
+{
+	for (int k = 0; k < NSAMPLED; k++) {
+		const struct glint_model_ops *m = sampled[k].m;
+		double p[GLINT_MAX_PARAMS];
+		int bad = 0, checked = 0;
+		if (!m->nlobes)
+			continue;
+		memcpy(p, sampled[k].p, sizeof(double) * (size_t)m->nparams);
+		for (int s = 0; s < 6000; s++) {
+			if (m->roughness_param >= 0)
+				p[m->roughness_param] =
+					(s % 3 == 0)   ? 0.004
+					: (s % 3 == 1) ? 0.05
+						       : 0.4;
+			struct vec3 o = random_dir(s, 7), i = random_dir(s, 8);
+			if (s % 7 == 0)
+				i.z = -i.z; /* below the surface */
+			double u[2] = { glint_u01(glint_hash3(s, 9, 1)),
+					glint_u01(glint_hash3(s, 9, 2)) };
+			for (int j = 0; j < m->nlobes; j++) {
+				double b[GLINT_MAX_PARAMS], pdf, bj, wb, wpdf;
+				struct vec3 wi, wj;
+				m->eval_lobes(p, o, i, b);
+				wpdf = m->pdf_lobe(p, j, o, i);
+				bj = glint_lobe_value_pdf(m, p, j, o, i, &pdf);
+				bad += fabs(bj - b[j]) > 1e-9 * fabs(b[j]) ||
+				       fabs(pdf - wpdf) > 1e-9 * wpdf;
+				double ps = m->sample_lobe(p, j, o, u, &wi);
+				wb = 0;
+				if (ps > 0) {
+					m->eval_lobes(p, o, wi, b);
+					wb = b[j];
+				}
+				double pf = glint_lobe_sample_value(m, p, j, o,
+								    u, &wj, &bj);
+				bad += fabs(pf - ps) > 1e-8 * ps ||
+				       fabs(bj - wb) > 1e-8 * wb ||
+				       (ps > 0 && v3_dot(wi, wj) < 1 - 1e-12);
+				checked += ps > 0 && wb > 0;
+			}
+		}
+		CHECK(bad == 0, "%s: %d lobe values or pdfs differ", m->name,
+		      bad);
+		CHECK(checked > 1000, "%s: %d sampled lobes checked", m->name,
+		      checked);
+	}
+}
+
 /* Without Fresnel variation: the full model's specular divided by F. */
 static void test_constant_fresnel(void)
 {
@@ -559,6 +610,7 @@ int main(void)
 	RUN(test_vcavity);
 	RUN(test_pdf_and_sampling);
 	RUN(test_reciprocity_and_lobes);
+	RUN(test_lobe_value_ops);
 	RUN(test_lambert);
 	RUN(test_constant_fresnel);
 	RUN(test_ts_energy);

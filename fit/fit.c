@@ -99,7 +99,7 @@ struct objective {
 	 * the others owned), whose mean the statistics use */
 	struct glint_shade_cache *sets[MAX_SETS];
 	int nsets;
-	struct glint_env_hot *hot; /* the map's split, shared by the caches */
+	struct glint_shade_light *light; /* shared by the caches */
 	/* the shade caches' light and lobe samples are o's times this
 	 * (raised when the sample sets disagree by more than the noise) */
 	int sample_scale;
@@ -788,7 +788,7 @@ static void objective_free(struct objective *ob)
 	for (int k = 1; k < ob->nsets; k++)
 		glint_shade_cache_free(ob->sets[k]);
 	glint_shade_cache_free(ob->cache);
-	glint_env_hot_free(ob->hot);
+	glint_shade_light_free(ob->light);
 	glint_image_free(ob->img);
 	free(ob->lobes);
 	free(ob->lobes2);
@@ -806,7 +806,7 @@ static int new_cache(const struct objective *ob, uint32_t seed,
 		.static_samples = o->static_samples,
 		.seed = seed,
 		.nthreads = o->nthreads,
-		.hot = ob->hot,
+		.light = ob->light,
 	};
 	return glint_shade_cache_new(&ob->r->gb, ob->d->pix, ob->d->n,
 				     ob->r->env, ob->m, &co, out);
@@ -843,8 +843,8 @@ static int objective_init(struct objective *ob, struct glint_renderer *r,
 		ob->img = glint_image_new(r->gb.width, r->gb.height);
 		return ob->img ? 0 : glint_error_set(ENOMEM, "out of memory");
 	}
-	struct glint_shade_cache_opts co = { .no_hot = 0 };
-	int ret = glint_shade_cache_hot_new(r->env, &co, &ob->hot);
+	struct glint_shade_cache_opts co = { .nthreads = o->nthreads };
+	int ret = glint_shade_light_new(r->env, &co, &ob->light);
 	return ret < 0 ? ret : new_cache(ob, 0, &ob->cache);
 }
 
@@ -1265,7 +1265,21 @@ struct sets_objective {
 	struct glint_shade_cache *const *sets;
 	int nsets;
 	double *each; /* nsets x rows: each set's residuals at the last p */
+	/* The last points evaluated and their Jacobian (jac_last: rows x n,
+	 * may be NULL), which the polish's end need not evaluate again. */
+	double q_res[GLINT_MAX_PARAMS], q_jac[GLINT_MAX_PARAMS];
+	int have_res, have_jac;
+	double *jac_last;
 };
+
+/* The mean of the sets' residuals in so->each. */
+static void sets_mean(const struct sets_objective *so, int rows, double *r)
+{
+	memset(r, 0, sizeof(double) * (size_t)rows);
+	for (int k = so->nsets - 1; k >= 0; k--)
+		for (int i = 0; i < rows; i++)
+			r[i] += so->each[(size_t)k * rows + i] / so->nsets;
+}
 
 static int sets_residuals(void *ctx, const double *q, double *r)
 {
@@ -1274,20 +1288,22 @@ static int sets_residuals(void *ctx, const double *q, double *r)
 	struct glint_shade_cache *fitted = ob->cache;
 	int rows = 3 * ob->nsel, ret = 0;
 
-	memset(r, 0, sizeof(double) * (size_t)rows);
+	so->have_res = 0;
 	/* The fitted set last: its lobes stay memoised for the Jacobian. */
 	for (int k = so->nsets - 1; k >= 0 && !ret; k--) {
-		double *rk = so->each + (size_t)k * rows;
 		ob->cache = so->sets[k];
 		ob->memo_valid = 0;
-		ret = obj_residuals(ob, q, rk);
-		for (int i = 0; i < rows && !ret; i++)
-			r[i] += rk[i] / so->nsets;
+		ret = obj_residuals(ob, q, so->each + (size_t)k * rows);
 	}
 	ob->cache = fitted;
 	if (ret < 0 || so->sets[0] != fitted)
 		ob->memo_valid = 0;
-	return ret;
+	if (ret < 0)
+		return ret;
+	sets_mean(so, rows, r);
+	memcpy(so->q_res, q, sizeof(double) * (size_t)ob->nfree);
+	so->have_res = 1;
+	return 0;
 }
 
 /* The fitted set's Jacobian stands for the average's: the polish then
@@ -1298,9 +1314,18 @@ static int sets_jacobian(void *ctx, const double *q, const double *r,
 			 double *jac)
 {
 	struct sets_objective *so = ctx;
+	int n = so->ob->nfree, ret;
 
 	(void)r;
-	return obj_jacobian(so->ob, q, NULL, jac);
+	so->have_jac = 0;
+	ret = obj_jacobian(so->ob, q, NULL, jac);
+	if (ret == 0 && so->jac_last) {
+		memcpy(so->jac_last, jac,
+		       sizeof(double) * (size_t)n * 3 * so->ob->nsel);
+		memcpy(so->q_jac, q, sizeof(double) * (size_t)n);
+		so->have_jac = 1;
+	}
+	return ret;
 }
 
 /*
@@ -1320,31 +1345,42 @@ static int refine_on_sets(struct objective *ob,
 			  const double *lo, const double *hi, double *each,
 			  double *r, double *jac, struct glint_fit_result *res)
 {
-	struct sets_objective so = { ob, sets, nsets, each };
+	struct sets_objective so = { .ob = ob, .sets = sets, .nsets = nsets,
+				     .each = each };
 	int n = ob->nfree, rows = 3 * ob->nsel, ret = 0;
 	struct glint_lm_opts lo_opts;
 	struct glint_lm_result lr;
 	struct progress_ctx pc = { ob->o, "sample sets" };
 	double q[GLINT_MAX_PARAMS], t0 = glint_now();
+	size_t qb = sizeof(double) * (size_t)n;
 
 	memcpy(q, ob->p, sizeof(q));
 	if (nsets > 1) {
 		struct glint_lm_problem pr = {
 			n, rows, lo, hi, sets_residuals, sets_jacobian, &so,
 		};
+		so.jac_last = malloc(sizeof(double) * (size_t)rows * n);
 		objective_lm_opts(&lo_opts, 4, &pc);
 		ret = glint_lm_solve(&pr, &lo_opts, q, &lr);
 		if (ret < 0)
-			return ret;
-		memcpy(ob->p, q, sizeof(double) * (size_t)n);
+			goto out;
+		memcpy(ob->p, q, qb);
 		char name[32];
 		snprintf(name, sizeof(name), "%d sample sets", nsets);
 		add_pass(res, name, ob->nsel, lr.iterations, lr.evaluations,
 			 lr.cost0, lr.cost, t0);
 	}
-	ret = sets_residuals(&so, ob->p, r);
-	if (ret == 0)
+	/* At the polish's end, usually where it last evaluated both. */
+	if (so.have_res && !memcmp(so.q_res, ob->p, qb))
+		sets_mean(&so, rows, r);
+	else
+		ret = sets_residuals(&so, ob->p, r);
+	if (ret == 0 && so.have_jac && !memcmp(so.q_jac, ob->p, qb))
+		memcpy(jac, so.jac_last, sizeof(double) * (size_t)rows * n);
+	else if (ret == 0)
 		ret = sets_jacobian(&so, ob->p, r, jac);
+out:
+	free(so.jac_last);
 	return ret;
 }
 

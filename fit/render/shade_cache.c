@@ -29,10 +29,11 @@ struct cache_hit {
 struct glint_shade_cache {
 	const struct glint_model_ops *model;
 	const struct glint_envmap *env;
-	const struct glint_env_hot *hot;
-	struct glint_env_hot *own_hot; /* when not shared */
-	/* Irradiance of the non-hot texels, for constant 1/pi lobes. */
-	struct glint_irradiance irr;
+	/* The split of the map, and the irradiance of the non-hot texels
+	 * for constant 1/pi lobes. */
+	const struct glint_shade_light *light;
+	const struct glint_env_hot *hot; /* light->hot */
+	struct glint_shade_light *own_light; /* when not shared */
 	int lambert[GLINT_MAX_PARAMS]; /* lobe j is the constant 1/pi */
 	int n, spp, nl, nb, nthreads;
 	int32_t *pix;
@@ -218,7 +219,7 @@ static void setup_pixels(void *ctx, int i0, int i1, int thread)
 				if (c->lambert[j]) {
 					/* Exact: hot texels + irradiance. */
 					hot_quadrature(c, h, job->p0, j, 1, a);
-					glint_irradiance_lookup(&c->irr,
+					glint_irradiance_lookup(&c->light->irr,
 								fv(h->n), e);
 					for (int ch = 0; ch < 3; ch++)
 						a[ch] += e[ch] / M_PI;
@@ -245,11 +246,35 @@ out:
 
 /* Hot texels: within 1 % of the brightest, if at most 64 of them;
  * 2 x 2 points each. */
-int glint_shade_cache_hot_new(const struct glint_envmap *env,
-			      const struct glint_shade_cache_opts *opts,
-			      struct glint_env_hot **out)
+int glint_shade_light_new(const struct glint_envmap *env,
+			  const struct glint_shade_cache_opts *opts,
+			  struct glint_shade_light **out)
 {
-	return glint_env_hot_new(env, 0.01, opts->no_hot ? 0 : 64, 2, out);
+	struct glint_shade_light *l = calloc(1, sizeof(*l));
+	int ret;
+
+	*out = NULL;
+	if (!l)
+		return glint_error_set(ENOMEM, "out of memory");
+	ret = glint_env_hot_new(env, 0.01, opts->no_hot ? 0 : 64, 2, &l->hot);
+	if (ret == 0)
+		ret = glint_irradiance_build(env, l->hot->is_hot, 64,
+					     opts->nthreads, &l->irr);
+	if (ret < 0) {
+		glint_shade_light_free(l);
+		return ret;
+	}
+	*out = l;
+	return 0;
+}
+
+void glint_shade_light_free(struct glint_shade_light *l)
+{
+	if (!l)
+		return;
+	glint_env_hot_free(l->hot);
+	glint_irradiance_free(&l->irr);
+	free(l);
 }
 
 int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
@@ -294,18 +319,18 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 	}
 	memcpy(c->pix, pix, (size_t)n * sizeof(*pix));
 	int ret = 0;
-	c->hot = opts->hot;
-	if (!c->hot) {
-		ret = glint_shade_cache_hot_new(env, opts, &c->own_hot);
-		c->hot = c->own_hot;
+	c->light = opts->light;
+	if (!c->light) {
+		ret = glint_shade_light_new(env, opts, &c->own_light);
+		c->light = c->own_light;
 	}
 	if (ret < 0) {
 		glint_shade_cache_free(c);
 		return ret;
 	}
+	c->hot = c->light->hot;
 	/* Constant lobes equal to 1/pi (Lambert) integrate exactly through
 	 * the irradiance of the rest of the map. */
-	int any_lambert = 0;
 	for (int k = 0; k < model->nparams; k++)
 		p0[k] = model->params[k].def;
 	for (int j = 0; j < model->nlobes; j++) {
@@ -313,15 +338,6 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 		model->eval_lobes(p0, v3(0, 0.6, 0.8), v3(0.3, 0, 0.9539), b);
 		c->lambert[j] =
 			!model->lobe_varies[j] && fabs(b[j] - 1 / M_PI) < 1e-12;
-		any_lambert |= c->lambert[j];
-	}
-	if (any_lambert) {
-		ret = glint_irradiance_build(env, c->hot->is_hot, 64,
-					     opts->nthreads, &c->irr);
-		if (ret < 0) {
-			glint_shade_cache_free(c);
-			return ret;
-		}
 	}
 	for (int k = 0; k < c->nb; k++) {
 		c->lobe_u[k][0] = (k + 0.5) / c->nb;
@@ -383,8 +399,7 @@ void glint_shade_cache_free(struct glint_shade_cache *c)
 	free(c->envs);
 	free(c->lobe_u);
 	free(c->static_lobes);
-	glint_env_hot_free(c->own_hot);
-	glint_irradiance_free(&c->irr);
+	glint_shade_light_free(c->own_light);
 	free(c);
 }
 

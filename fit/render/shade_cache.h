@@ -28,6 +28,7 @@
 
 #include "fit/scene/envmap.h"
 #include "fit/brdf/model.h"
+#include "irradiance.h"
 #include "tracer.h"
 
 struct glint_shade_cache;
@@ -42,17 +43,21 @@ struct glint_shade_cache_opts {
 	 * sets). */
 	uint32_t seed;
 	int nthreads;
-	/* The map's split (glint_shade_cache_hot_new()), shared by caches of
-	 * one map and borrowed: it must outlive them.  NULL: the cache makes
-	 * its own. */
-	const struct glint_env_hot *hot;
+	/* What the caches of one map share (glint_shade_light_new()),
+	 * borrowed: it must outlive them.  NULL: the cache makes its own. */
+	const struct glint_shade_light *light;
 };
 
-/* The split of env that caches with these opts use (no_hot honoured), to
- * be shared through opts->hot; freed with glint_env_hot_free(). */
-int glint_shade_cache_hot_new(const struct glint_envmap *env,
-			      const struct glint_shade_cache_opts *opts,
-			      struct glint_env_hot **out);
+/* The map's split into hot texels and the rest (no_hot honoured) and the
+ * rest's irradiance, which every cache of the map reads. */
+struct glint_shade_light {
+	struct glint_env_hot *hot;
+	struct glint_irradiance irr;
+};
+int glint_shade_light_new(const struct glint_envmap *env,
+			  const struct glint_shade_cache_opts *opts,
+			  struct glint_shade_light **out);
+void glint_shade_light_free(struct glint_shade_light *l);
 
 /*
  * Build a cache for pixels pix[0..n) (indices y * width + x of gb) that

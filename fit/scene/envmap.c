@@ -605,9 +605,10 @@ void glint_env_query(const struct glint_env_hot *hot, struct vec3 d,
 {
 	const struct glint_envmap *env = hot->env;
 	int w = env->img->width, h = env->img->height;
-	double u, v;
+	struct vec3 dm = m3_tmul(&env->rot, d);
+	double u, v, cy = fmin(fmax(dm.y, -1), 1);
 
-	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
+	glint_envmap_dir_to_uv(dm, &u, &v);
 	/* u, v in [0, 1]: x, y within half a texel of the map, whose
 	 * border in the table holds what wrapping and clamping would read. */
 	double x = fmin(fmax(u * w - 0.5, -0.5), w - 0.5);
@@ -627,7 +628,7 @@ void glint_env_query(const struct glint_env_hot *hot, struct vec3 d,
 			rgb[c] += env->scale * wt[k] * q[k][c];
 		p += wt[k] * q[k][3];
 	}
-	double s = sin(M_PI * v);
+	double s = sqrt(1 - cy * cy); /* sin(pi v) */
 	*pdf_smooth = s > 0 && hot->rest.total > 0
 			      ? p / (2 * M_PI * M_PI * s)
 			      : 0;

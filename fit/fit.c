@@ -1345,8 +1345,9 @@ static int refine_on_sets(struct objective *ob,
 			  const double *lo, const double *hi, double *each,
 			  double *r, double *jac, struct glint_fit_result *res)
 {
-	struct sets_objective so = { .ob = ob, .sets = sets, .nsets = nsets,
-				     .each = each };
+	struct sets_objective so = {
+		.ob = ob, .sets = sets, .nsets = nsets, .each = each
+	};
 	int n = ob->nfree, rows = 3 * ob->nsel, ret = 0;
 	struct glint_lm_opts lo_opts;
 	struct glint_lm_result lr;

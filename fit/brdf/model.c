@@ -203,9 +203,9 @@ double glint_lobe_value_pdf(const struct glint_model_ops *m, const double *p,
 	return b[j];
 }
 
-double glint_lobe_sample_value(const struct glint_model_ops *m,
-			       const double *p, int j, struct vec3 wo,
-			       const double u[2], struct vec3 *wi, double *bj)
+double glint_lobe_sample_value(const struct glint_model_ops *m, const double *p,
+			       int j, struct vec3 wo, const double u[2],
+			       struct vec3 *wi, double *bj)
 {
 	double b[GLINT_MAX_PARAMS];
 

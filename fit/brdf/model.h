@@ -114,9 +114,9 @@ double glint_lobes_sample(const struct glint_model_ops *m, const double *p,
  * NULL); sample_lobe with b_j at the direction drawn (0 when none). */
 double glint_lobe_value_pdf(const struct glint_model_ops *m, const double *p,
 			    int j, struct vec3 wo, struct vec3 wi, double *pdf);
-double glint_lobe_sample_value(const struct glint_model_ops *m,
-			       const double *p, int j, struct vec3 wo,
-			       const double u[2], struct vec3 *wi, double *bj);
+double glint_lobe_sample_value(const struct glint_model_ops *m, const double *p,
+			       int j, struct vec3 wo, const double u[2],
+			       struct vec3 *wi, double *bj);
 
 /* Model by name (a static table entry, never freed), or NULL. */
 const struct glint_model_ops *glint_model_find(const char *name);

@@ -32,9 +32,9 @@ struct glint_shade_cache {
 	/* The split of the map, and the irradiance of the non-hot texels
 	 * for constant 1/pi lobes. */
 	const struct glint_shade_light *light;
-	const struct glint_env_hot *hot; /* light->hot */
+	const struct glint_env_hot *hot;     /* light->hot */
 	struct glint_shade_light *own_light; /* when not shared */
-	int lambert[GLINT_MAX_PARAMS]; /* lobe j is the constant 1/pi */
+	int lambert[GLINT_MAX_PARAMS];	     /* lobe j is the constant 1/pi */
 	int n, spp, nl, nb, nthreads;
 	int32_t *pix;
 	struct cache_hit *hits;	 /* n * spp */
@@ -114,8 +114,8 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 		const struct env_sample *e = &es[k];
 		struct vec3 wi = fv(e->wi);
 		double pb = 0;
-		double bj = glint_lobe_value_pdf(m, p, j, wo, wi,
-						 nb ? &pb : NULL);
+		double bj =
+			glint_lobe_value_pdf(m, p, j, wo, wi, nb ? &pb : NULL);
 		if (bj <= 0)
 			continue;
 		double w = bj * wi.z * e->pdf_smooth /

@@ -461,8 +461,8 @@ static int rest_table(const struct glint_envmap *env, struct glint_env_hot *hot)
 		int y = j < 0 ? 0 : j >= h ? h - 1 : j;
 		for (int i = -1; i <= w; i++) {
 			int x = ((i % w) + w) % w;
-			float *t = hot->tab +
-				   4 * (((size_t)j + 1) * stride + (size_t)i + 1);
+			float *t = hot->tab + 4 * (((size_t)j + 1) * stride +
+						   (size_t)i + 1);
 			const float *px = glint_image_px(env->img, x, y);
 			int off = hot->is_hot[(size_t)y * w + x];
 			for (int c = 0; c < 3; c++)
@@ -615,8 +615,8 @@ void glint_env_query(const struct glint_env_hot *hot, struct vec3 d,
 	double y = fmin(fmax(v * h - 0.5, -0.5), h - 0.5);
 	double fx = floor(x), fy = floor(y), tx = x - fx, ty = y - fy;
 	size_t stride = (size_t)w + 2;
-	const float *t = hot->tab + 4 * (((size_t)fy + 1) * stride +
-					 (size_t)fx + 1);
+	const float *t =
+		hot->tab + 4 * (((size_t)fy + 1) * stride + (size_t)fx + 1);
 	const float *q[4] = { t, t + 4, t + 4 * stride, t + 4 * stride + 4 };
 	double wt[4] = { (1 - ty) * (1 - tx), (1 - ty) * tx, ty * (1 - tx),
 			 ty * tx };
@@ -629,9 +629,8 @@ void glint_env_query(const struct glint_env_hot *hot, struct vec3 d,
 		p += wt[k] * q[k][3];
 	}
 	double s = sqrt(1 - cy * cy); /* sin(pi v) */
-	*pdf_smooth = s > 0 && hot->rest.total > 0
-			      ? p / (2 * M_PI * M_PI * s)
-			      : 0;
+	*pdf_smooth =
+		s > 0 && hot->rest.total > 0 ? p / (2 * M_PI * M_PI * s) : 0;
 }
 
 void glint_env_rest_lookup(const struct glint_envmap *env,

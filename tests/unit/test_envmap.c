@@ -266,12 +266,13 @@ static void test_hot_split(void)
 			glint_envmap_lookup(env, d, all);
 			glint_env_rest_lookup(env, hot, d, rest);
 			glint_env_query(hot, d, q, &pdf);
-			double ps = glint_env_dist_pdf_smooth(env, &hot->rest,
-							      d);
+			double ps =
+				glint_env_dist_pdf_smooth(env, &hot->rest, d);
 			CHECK(rest[0] <= all[0] + 1e-9, "the rest is below");
 			for (int c = 0; c < 3; c++)
-				CHECK_NEAR(q[c], rest[c], 1e-6 * (1 + rest[c]),
-					   "query and lookup of the rest agree");
+				CHECK_NEAR(
+					q[c], rest[c], 1e-6 * (1 + rest[c]),
+					"query and lookup of the rest agree");
 			CHECK_NEAR(pdf, ps, 1e-6 * ps + 1e-12,
 				   "query and smooth pdf agree");
 			/* MIS needs the rest's samples wherever it shines. */

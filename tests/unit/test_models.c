@@ -243,10 +243,9 @@ static void test_lobe_value_ops(void)
 		memcpy(p, sampled[k].p, sizeof(double) * (size_t)m->nparams);
 		for (int s = 0; s < 6000; s++) {
 			if (m->roughness_param >= 0)
-				p[m->roughness_param] =
-					(s % 3 == 0)   ? 0.004
-					: (s % 3 == 1) ? 0.05
-						       : 0.4;
+				p[m->roughness_param] = (s % 3 == 0)   ? 0.004
+							: (s % 3 == 1) ? 0.05
+								       : 0.4;
 			struct vec3 o = random_dir(s, 7), i = random_dir(s, 8);
 			if (s % 7 == 0)
 				i.z = -i.z; /* below the surface */
@@ -266,8 +265,8 @@ static void test_lobe_value_ops(void)
 					m->eval_lobes(p, o, wi, b);
 					wb = b[j];
 				}
-				double pf = glint_lobe_sample_value(m, p, j, o,
-								    u, &wj, &bj);
+				double pf = glint_lobe_sample_value(
+					m, p, j, o, u, &wj, &bj);
 				bad += fabs(pf - ps) > 1e-8 * ps ||
 				       fabs(bj - wb) > 1e-8 * wb ||
 				       (ps > 0 && v3_dot(wi, wj) < 1 - 1e-12);

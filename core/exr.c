@@ -139,9 +139,59 @@ static exr_result_t decode_chunk(exr_context_t ctx, exr_decode_pipeline_t *dec,
 	return exr_decoding_run(ctx, 0, dec);
 }
 
+/*
+ * Where decoded chunks go: straight into img (the whole data window), or,
+ * for a window of it, into a chunk-sized buffer whose overlap with the
+ * window is copied out: memory of the window and one chunk.
+ */
+struct exr_dest {
+	struct glint_image *img;
+	const struct glint_image_window *win; /* NULL: the whole image */
+	struct glint_image *chunk;
+};
+
+/* Is the chunk at (x, y) (relative to the data window), w x h, needed? */
+static int chunk_wanted(const struct exr_dest *d, int x, int y, int w, int h)
+{
+	const struct glint_image_window *v = d->win;
+
+	return !v || (x < v->x + v->width && x + w > v->x &&
+		      y < v->y + v->height && y + h > v->y);
+}
+
+static exr_result_t decode_into(exr_context_t ctx, exr_decode_pipeline_t *dec,
+				const exr_chunk_info_t *cinfo, int *first,
+				struct exr_dest *d, int x, int y,
+				struct exr_scratch *sc)
+{
+	const struct glint_image_window *v = d->win;
+	int w = cinfo->width, h = cinfo->height;
+
+	if (!v)
+		return decode_chunk(ctx, dec, cinfo, first, d->img, x, y, sc);
+	if (!d->chunk || d->chunk->width != w || d->chunk->height < h) {
+		glint_image_free(d->chunk);
+		d->chunk = glint_image_new(w, h);
+		if (!d->chunk)
+			return EXR_ERR_OUT_OF_MEMORY;
+	}
+	exr_result_t rv =
+		decode_chunk(ctx, dec, cinfo, first, d->chunk, 0, 0, sc);
+	if (rv != EXR_ERR_SUCCESS)
+		return rv;
+	int x0 = x > v->x ? x : v->x, y0 = y > v->y ? y : v->y;
+	int x1 = x + w < v->x + v->width ? x + w : v->x + v->width;
+	int y1 = y + h < v->y + v->height ? y + h : v->y + v->height;
+	for (int yy = y0; yy < y1; yy++)
+		memcpy(glint_image_px(d->img, x0 - v->x, yy - v->y),
+		       glint_image_px(d->chunk, x0 - x, yy - y),
+		       (size_t)(x1 - x0) * 3 * sizeof(float));
+	return EXR_ERR_SUCCESS;
+}
+
 static exr_result_t read_scanlines(exr_context_t ctx,
 				   const exr_attr_box2i_t *dw,
-				   struct glint_image *img, int *failed_y)
+				   struct exr_dest *d, int *failed_y)
 {
 	exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
 	struct exr_scratch sc = { NULL, 0 };
@@ -152,15 +202,18 @@ static exr_result_t read_scanlines(exr_context_t ctx,
 	rv = exr_get_scanlines_per_chunk(ctx, 0, &lines);
 	if (rv != EXR_ERR_SUCCESS)
 		return rv;
+	int width = dw->max.x - dw->min.x + 1;
 	for (int y = dw->min.y; y <= dw->max.y; y += lines) {
 		exr_chunk_info_t cinfo;
 
+		if (!chunk_wanted(d, 0, y - dw->min.y, width, lines))
+			continue;
 		*failed_y = y;
 		rv = exr_read_scanline_chunk_info(ctx, 0, y, &cinfo);
 		if (rv != EXR_ERR_SUCCESS)
 			break;
-		rv = decode_chunk(ctx, &dec, &cinfo, &first, img, 0,
-				  cinfo.start_y - dw->min.y, &sc);
+		rv = decode_into(ctx, &dec, &cinfo, &first, d, 0,
+				 cinfo.start_y - dw->min.y, &sc);
 		if (rv != EXR_ERR_SUCCESS)
 			break;
 	}
@@ -169,7 +222,7 @@ static exr_result_t read_scanlines(exr_context_t ctx,
 	return rv;
 }
 
-static exr_result_t read_tiles(exr_context_t ctx, struct glint_image *img,
+static exr_result_t read_tiles(exr_context_t ctx, struct exr_dest *d,
 			       int *failed_y)
 {
 	exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
@@ -189,13 +242,15 @@ static exr_result_t read_tiles(exr_context_t ctx, struct glint_image *img,
 		for (int tx = 0; tx < nx; tx++) {
 			exr_chunk_info_t cinfo;
 
+			if (!chunk_wanted(d, tx * tw, ty * th, tw, th))
+				continue;
 			*failed_y = ty * (int)th;
 			rv = exr_read_tile_chunk_info(ctx, 0, tx, ty, 0, 0,
 						      &cinfo);
 			if (rv != EXR_ERR_SUCCESS)
 				break;
-			rv = decode_chunk(ctx, &dec, &cinfo, &first, img,
-					  tx * (int)tw, ty * (int)th, &sc);
+			rv = decode_into(ctx, &dec, &cinfo, &first, d,
+					 tx * (int)tw, ty * (int)th, &sc);
 			if (rv != EXR_ERR_SUCCESS)
 				break;
 		}
@@ -254,7 +309,10 @@ static double min_data_bytes(const exr_attr_box2i_t *dw, exr_compression_t comp)
 	return comp == EXR_COMPRESSION_NONE ? 2 * px : 2 * px / 1032;
 }
 
-static int exr_read_core(const char *path, struct glint_image **out)
+/* win: NULL, or a window of the data window to read alone (checked to
+ * lie inside it). */
+static int exr_read_core(const char *path, const struct glint_image_window *win,
+			 struct glint_image **out)
 {
 	exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
 	exr_context_t ctx = NULL;
@@ -301,15 +359,29 @@ static int exr_read_core(const char *path, struct glint_image **out)
 	ret = check_channels(ctx, path, &has_y);
 	if (ret < 0)
 		goto out;
-	img = glint_image_new(dw.max.x - dw.min.x + 1, dw.max.y - dw.min.y + 1);
+	int dw_w = dw.max.x - dw.min.x + 1, dw_h = dw.max.y - dw.min.y + 1;
+	if (win &&
+	    (win->x < 0 || win->y < 0 || win->width < 1 || win->height < 1 ||
+	     win->x + win->width > dw_w || win->y + win->height > dw_h)) {
+		ret = glint_error_set(EINVAL,
+				      "%s: window %dx%d at (%d, %d) is not "
+				      "inside the %dx%d image",
+				      path, win->width, win->height, win->x,
+				      win->y, dw_w, dw_h);
+		goto out;
+	}
+	img = win ? glint_image_new(win->width, win->height)
+		  : glint_image_new(dw_w, dw_h);
 	if (!img) {
 		ret = glint_error_prefix(EINVAL, "%s: data window", path);
 		goto out;
 	}
+	struct exr_dest dest = { img, win, NULL };
 	if (storage == EXR_STORAGE_SCANLINE)
-		rv = read_scanlines(ctx, &dw, img, &failed_y);
+		rv = read_scanlines(ctx, &dw, &dest, &failed_y);
 	else
-		rv = read_tiles(ctx, img, &failed_y);
+		rv = read_tiles(ctx, &dest, &failed_y);
+	glint_image_free(dest.chunk);
 	if (rv == EXR_ERR_FEATURE_NOT_IMPLEMENTED) {
 		ret = 1;
 		goto out;
@@ -392,7 +464,9 @@ static int check_attribute_sizes(const char *path)
 	return ret;
 }
 
-int glint_exr_read(const char *path, struct glint_image **out)
+int glint_exr_read_window(const char *path,
+			  const struct glint_image_window *win,
+			  struct glint_image **out)
 {
 	int ret;
 
@@ -400,13 +474,61 @@ int glint_exr_read(const char *path, struct glint_image **out)
 	if (access(path, R_OK) < 0)
 		return glint_error_set(errno, "%s: cannot open: %s", path,
 				       strerror(errno));
-	ret = exr_read_core(path, out);
+	ret = exr_read_core(path, win, out);
 	if (ret <= 0)
 		return ret;
+	/* DWA: the C++ library reads it whole. */
 	ret = check_attribute_sizes(path);
-	if (ret < 0)
+	if (ret == 0)
+		ret = glint_exr_read_cxx(path, out);
+	if (ret < 0 || !win)
 		return ret;
-	return glint_exr_read_cxx(path, out);
+	struct glint_image *c = NULL;
+	if (win->x + win->width <= (*out)->width &&
+	    win->y + win->height <= (*out)->height && win->x >= 0 &&
+	    win->y >= 0 && win->width > 0 && win->height > 0)
+		c = glint_image_crop(*out, win->x, win->y, win->width,
+				     win->height);
+	else
+		ret = glint_error_set(EINVAL,
+				      "%s: window %dx%d at (%d, %d) is not "
+				      "inside the %dx%d image",
+				      path, win->width, win->height, win->x,
+				      win->y, (*out)->width, (*out)->height);
+	if (!c && ret == 0)
+		ret = glint_error_set(ENOMEM, "out of memory");
+	glint_image_free(*out);
+	*out = c;
+	return ret;
+}
+
+int glint_exr_size(const char *path, int *width, int *height)
+{
+	exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+	exr_context_t ctx = NULL;
+	exr_attr_box2i_t dw;
+	exr_result_t rv;
+	int ret = 0;
+
+	init.error_handler_fn = exr_error_cb;
+	exr_last_msg[0] = '\0';
+	rv = exr_start_read(&ctx, path, &init);
+	if (rv == EXR_ERR_SUCCESS)
+		rv = exr_get_data_window(ctx, 0, &dw);
+	if (rv != EXR_ERR_SUCCESS)
+		ret = exr_fail(path, "reading the header", rv);
+	else {
+		*width = dw.max.x - dw.min.x + 1;
+		*height = dw.max.y - dw.min.y + 1;
+	}
+	if (ctx)
+		exr_finish(&ctx);
+	return ret;
+}
+
+int glint_exr_read(const char *path, struct glint_image **out)
+{
+	return glint_exr_read_window(path, NULL, out);
 }
 
 /*

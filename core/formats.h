@@ -18,6 +18,13 @@
  * float or uint; scanline or tiled (level 0); DWAA/DWAB fall back to the
  * C++ library (exr_cxx.cpp). */
 int glint_exr_read(const char *path, struct glint_image **out);
+/* Only a window of the data window (which it must lie in), decoding only
+ * the chunks (scanline blocks or tiles) it touches. */
+/* The data window's size, from the header alone. */
+int glint_exr_size(const char *path, int *width, int *height);
+int glint_exr_read_window(const char *path,
+			  const struct glint_image_window *win,
+			  struct glint_image **out);
 /* ZIP-compressed scanline EXR with R, G, B as 32-bit float or half
  * (opts->exr_half); the data window and display window as opts says
  * (glint_write_opts), checked to lie inside the frame. */

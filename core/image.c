@@ -219,6 +219,54 @@ int glint_image_read(const char *path, struct glint_image **out)
 	return ret;
 }
 
+int glint_image_read_window(const char *path, int frame_width, int frame_height,
+			    const struct glint_image_window *win,
+			    struct glint_image **out, int *cropped)
+{
+	char ext[16];
+	int w = 0, h = 0, ret;
+
+	*out = NULL;
+	*cropped = 0;
+	glint_path_ext(path, ext, sizeof(ext));
+	if (!strcmp(ext, "exr")) {
+		ret = glint_exr_size(path, &w, &h);
+		if (ret == 0 && (w != frame_width || h != frame_height))
+			return glint_image_read(path, out);
+		if (ret == 0)
+			ret = glint_exr_read_window(path, win, out);
+		*cropped = ret == 0;
+		if (ret == 0)
+			glint_log_debug("read %s: its %dx%d window at (%d, %d)",
+					path, win->width, win->height, win->x,
+					win->y);
+		return ret;
+	}
+	ret = glint_image_read(path, out);
+	if (ret < 0 || (*out)->width != frame_width ||
+	    (*out)->height != frame_height)
+		return ret;
+	if (win->x < 0 || win->y < 0 || win->width < 1 || win->height < 1 ||
+	    win->x + win->width > frame_width ||
+	    win->y + win->height > frame_height) {
+		glint_image_free(*out);
+		*out = NULL;
+		return glint_error_set(EINVAL,
+				       "%s: window %dx%d at (%d, %d) is not "
+				       "inside the %dx%d image",
+				       path, win->width, win->height, win->x,
+				       win->y, frame_width, frame_height);
+	}
+	struct glint_image *c =
+		glint_image_crop(*out, win->x, win->y, win->width, win->height);
+	glint_image_free(*out);
+	*out = c;
+	if (!c)
+		return glint_error_set(ENOMEM, "out of memory");
+	*cropped = 1;
+	return 0;
+}
+
 int glint_image_write(const char *path, const struct glint_image *img,
 		      const struct glint_write_opts *opts)
 {

@@ -87,6 +87,22 @@ int glint_image_check_finite(const struct glint_image *img, const char *what,
  */
 int glint_image_read(const char *path, struct glint_image **out);
 
+/* A rectangle of an image's pixels. */
+struct glint_image_window {
+	int x, y, width, height;
+};
+
+/*
+ * Read only window win of the image at path when the image is
+ * frame_width x frame_height (*cropped = 1); an image of any other size
+ * is read whole (*cropped = 0).  An EXR decodes only the chunks the
+ * window touches, so memory is the window's (a 12 MP photo's sphere);
+ * other formats are read whole and cropped.
+ */
+int glint_image_read_window(const char *path, int frame_width, int frame_height,
+			    const struct glint_image_window *win,
+			    struct glint_image **out, int *cropped);
+
 /* Options for glint_image_write(). */
 struct glint_write_opts {
 	int exr_half;	 /* EXR: store half floats instead of 32-bit */

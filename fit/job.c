@@ -623,39 +623,29 @@ static int check_outputs(const struct glint_fit_job *job)
 	return ret;
 }
 
-int glint_fit_job_load(struct glint_fit_job *job, const char *weights_path)
-{
-	int ret = glint_scene_load(job->scene_path, &job->scene);
-
-	job->photo = job->weight = NULL;
-	if (ret == 0)
-		ret = glint_image_read(job->photo_path, &job->photo);
-	if (ret == 0 && weights_path)
-		ret = glint_image_read(weights_path, &job->weight);
-	return ret;
-}
-
 #define CROP_MIN_SAVING 0.25
 
-int glint_fit_job_crop(struct glint_fit_job *job)
+/*
+ * The window around the scene sphere's silhouette in the camera's frame:
+ * the ellipse's extent plus a margin (lens blur at the sphere's nearest
+ * depth, a tenth of the radius for the compare image's context, 8
+ * pixels).  Returns 1 when it saves at least CROP_MIN_SAVING of the
+ * frame, else 0.
+ */
+static int sphere_window(const struct glint_fit_job *job,
+			 struct glint_image_window *win)
 {
-	struct glint_pinhole *cam = &job->scene.cam;
+	const struct glint_pinhole *cam = &job->scene.cam;
 	int fw = cam->width, fh = cam->height;
 	struct glint_ellipse e;
 
-	if (job->window.frame_width || !job->photo || job->photo->width != fw ||
-	    job->photo->height != fh ||
-	    (job->weight &&
-	     (job->weight->width != fw || job->weight->height != fh)))
+	if (job->window.frame_width)
 		return 0;
 	if (glint_pinhole_sphere_ellipse(cam, job->scene.sphere_centre,
 					 job->scene.sphere_radius, &e) < 0) {
 		glint_error_clear(); /* the fit reports what is wrong */
 		return 0;
 	}
-	/* The ellipse's half extents along x and y, then the margin: lens
-	 * blur at the sphere's nearest depth, a tenth of the radius for the
-	 * compare image's context, 8 pixels. */
 	double ca = cos(e.angle), sa = sin(e.angle);
 	double hx = sqrt(e.a * e.a * ca * ca + e.b * e.b * sa * sa);
 	double hy = sqrt(e.a * e.a * sa * sa + e.b * e.b * ca * ca);
@@ -675,12 +665,90 @@ int glint_fit_job_crop(struct glint_fit_job *job)
 	    (double)(x1 - x0) * (y1 - y0) >
 		    (1 - CROP_MIN_SAVING) * (double)fw * fh)
 		return 0;
-	struct glint_image *p =
-		glint_image_crop(job->photo, x0, y0, x1 - x0, y1 - y0);
-	struct glint_image *w = job->weight
-					? glint_image_crop(job->weight, x0, y0,
-							   x1 - x0, y1 - y0)
-					: NULL;
+	*win = (struct glint_image_window){ x0, y0, x1 - x0, y1 - y0 };
+	return 1;
+}
+
+/* The camera shifted to the window, and job->window set. */
+static void apply_window(struct glint_fit_job *job,
+			 const struct glint_image_window *win)
+{
+	struct glint_pinhole *cam = &job->scene.cam;
+	int fw = cam->width, fh = cam->height;
+
+	cam->width = win->width;
+	cam->height = win->height;
+	cam->cx -= win->x;
+	cam->cy -= win->y;
+	cam->frame_x = win->x;
+	cam->frame_y = win->y;
+	cam->frame_width = fw;
+	job->window.x = win->x;
+	job->window.y = win->y;
+	job->window.frame_width = fw;
+	job->window.frame_height = fh;
+	glint_log_info("fitting the %dx%d window at (%d, %d) around the "
+		       "sphere: %.0f%% of the %dx%d frame",
+		       win->width, win->height, win->x, win->y,
+		       100.0 * win->width * win->height / ((double)fw * fh), fw,
+		       fh);
+}
+
+int glint_fit_job_load(struct glint_fit_job *job, const char *weights_path)
+{
+	struct glint_image_window win;
+	int ret = glint_scene_load(job->scene_path, &job->scene);
+	int cp = 0, cw = 0;
+
+	job->photo = job->weight = NULL;
+	if (ret < 0)
+		return ret;
+	if (!sphere_window(job, &win)) {
+		ret = glint_image_read(job->photo_path, &job->photo);
+		if (ret == 0 && weights_path)
+			ret = glint_image_read(weights_path, &job->weight);
+		return ret;
+	}
+	/* Only the window of a frame-sized photo and weights: a 12 MP
+	 * frame's EXR is never held whole. */
+	int fw = job->scene.cam.width, fh = job->scene.cam.height;
+	ret = glint_image_read_window(job->photo_path, fw, fh, &win,
+				      &job->photo, &cp);
+	if (ret == 0 && weights_path)
+		ret = glint_image_read_window(weights_path, fw, fh, &win,
+					      &job->weight, &cw);
+	if (ret < 0)
+		return ret;
+	if (cp && (!weights_path || cw)) {
+		apply_window(job, &win);
+		return 0;
+	}
+	/* An image of another size: both whole, as the fit expects to say
+	 * what is wrong with them. */
+	glint_fit_job_unload(job);
+	ret = glint_image_read(job->photo_path, &job->photo);
+	if (ret == 0 && weights_path)
+		ret = glint_image_read(weights_path, &job->weight);
+	return ret;
+}
+
+int glint_fit_job_crop(struct glint_fit_job *job)
+{
+	const struct glint_pinhole *cam = &job->scene.cam;
+	struct glint_image_window win;
+
+	if (!job->photo || job->photo->width != cam->width ||
+	    job->photo->height != cam->height ||
+	    (job->weight && (job->weight->width != cam->width ||
+			     job->weight->height != cam->height)) ||
+	    !sphere_window(job, &win))
+		return 0;
+	struct glint_image *p = glint_image_crop(job->photo, win.x, win.y,
+						 win.width, win.height);
+	struct glint_image *w =
+		job->weight ? glint_image_crop(job->weight, win.x, win.y,
+					       win.width, win.height)
+			    : NULL;
 	if (!p || (job->weight && !w)) {
 		glint_image_free(p);
 		glint_image_free(w);
@@ -690,22 +758,7 @@ int glint_fit_job_crop(struct glint_fit_job *job)
 	glint_image_free(job->weight);
 	job->photo = p;
 	job->weight = w;
-	cam->width = x1 - x0;
-	cam->height = y1 - y0;
-	cam->cx -= x0;
-	cam->cy -= y0;
-	cam->frame_x = x0;
-	cam->frame_y = y0;
-	cam->frame_width = fw;
-	job->window.x = x0;
-	job->window.y = y0;
-	job->window.frame_width = fw;
-	job->window.frame_height = fh;
-	glint_log_info("fitting the %dx%d window at (%d, %d) around the "
-		       "sphere: %.0f%% of the %dx%d frame",
-		       x1 - x0, y1 - y0, x0, y0,
-		       100.0 * (x1 - x0) * (y1 - y0) / ((double)fw * fh), fw,
-		       fh);
+	apply_window(job, &win);
 	return 0;
 }
 

@@ -40,7 +40,8 @@ struct glint_fit_job {
 	/* bit k set: write out_dir/material + the extension of export
 	 * format k (fit/export.h) with an accepted result */
 	unsigned exports;
-	/* Set by glint_fit_job_crop(): the photo, weights and camera are
+	/* Set by glint_fit_job_crop() or _load(): the photo, weights and
+	 * camera are
 	 * the window at (x, y) of a frame_width x frame_height frame
 	 * (frame_width 0: the whole frame). */
 	struct {
@@ -51,8 +52,12 @@ struct glint_fit_job {
 /*
  * Read the job's inputs: the scene from scene_path, the photo from
  * photo_path and, when weights_path is not NULL, the per-pixel weights.
- * The images are the job's until glint_fit_job_unload(), which is safe
- * after a failed load too.
+ * When the photo (and the weights) are the camera's frame and the
+ * sphere's window saves a quarter of it (glint_fit_job_crop()), only the
+ * window is read (an EXR decodes only the chunks it touches: a 12 MP
+ * photo is never held whole) and the job is narrowed to it as
+ * glint_fit_job_crop() does.  The images are the job's until
+ * glint_fit_job_unload(), which is safe after a failed load too.
  */
 int glint_fit_job_load(struct glint_fit_job *job, const char *weights_path);
 void glint_fit_job_unload(struct glint_fit_job *job);

@@ -217,6 +217,73 @@ static void test_exr_tiled_read(void)
 	glint_image_free(b);
 }
 
+/* A window read from the file is the whole read's crop, to the bit. */
+static void check_window(const char *p, const struct glint_image *whole, int x,
+			 int y, int w, int h)
+{
+	struct glint_image_window win = { x, y, w, h };
+	struct glint_image *b = NULL, *c = NULL;
+	int cropped = 0;
+
+	CHECK(glint_image_read_window(p, whole->width, whole->height, &win, &b,
+				      &cropped) == 0 &&
+		      cropped,
+	      "%s: window %dx%d at (%d, %d): %s", p, w, h, x, y,
+	      glint_error_msg());
+	c = glint_image_crop(whole, x, y, w, h);
+	CHECK(b && c && b->width == w && b->height == h &&
+		      !memcmp(b->data, c->data, (size_t)w * h * 12),
+	      "%s: window %dx%d at (%d, %d) differs from the crop", p, w, h, x,
+	      y);
+	glint_image_free(b);
+	glint_image_free(c);
+}
+
+/* Windows of scanline (ZIP: 16-row chunks), tiled, DWAB and PFM files,
+ * at the edges and inside; a window outside is refused; an image of
+ * another size than the frame is read whole. */
+static void test_read_window(void)
+{
+	struct glint_image *a = card(50, 70), *w = NULL;
+	const char *paths[3] = { tmp_path("w-scan.exr"),
+				 tmp_path("w-tiled.exr"), tmp_path("w.pfm") };
+	CHECK(glint_exr_write(paths[0], a, &exr_float) == 0, "%s",
+	      glint_error_msg());
+	CHECK(write_tiled(paths[1], a) == 0, "tiled test file");
+	CHECK(glint_image_write(paths[2], a, NULL) == 0, "%s",
+	      glint_error_msg());
+	for (int k = 0; k < 3; k++) {
+		check_window(paths[k], a, 0, 0, 50, 70);
+		check_window(paths[k], a, 13, 17, 20, 30);
+		check_window(paths[k], a, 49, 69, 1, 1);
+		check_window(paths[k], a, 0, 33, 50, 1);
+		check_window(paths[k], a, 16, 16, 16, 16);
+		struct glint_image_window out = { 40, 60, 11, 5 };
+		int cropped = 1;
+		CHECK(glint_image_read_window(paths[k], 50, 70, &out, &w,
+					      &cropped) == -EINVAL &&
+			      !w && strstr(glint_error_msg(), "not inside"),
+		      "%s: a window outside: %s", paths[k], glint_error_msg());
+		glint_error_clear();
+		struct glint_image_window in = { 1, 1, 5, 5 };
+		CHECK(glint_image_read_window(paths[k], 64, 70, &in, &w,
+					      &cropped) == 0 &&
+			      !cropped && w && w->width == 50 &&
+			      w->height == 70,
+		      "%s: another size's image not read whole", paths[k]);
+		glint_image_free(w);
+		w = NULL;
+	}
+	/* DWAB (the C++ library's path): the window of the whole read. */
+	struct glint_image *d = NULL;
+	const char *dp = GLINT_TEST_DATA "/studio_dwab.exr";
+	CHECK(glint_image_read(dp, &d) == 0, "%s", glint_error_msg());
+	if (d)
+		check_window(dp, d, 300, 100, 200, 150);
+	glint_image_free(d);
+	glint_image_free(a);
+}
+
 /* Blender's studio light map (CC0), DWAB-compressed: C core can't. */
 static void test_exr_dwab(void)
 {
@@ -856,6 +923,7 @@ int main(void)
 	RUN(test_exr_window);
 	RUN(test_exr_zip_equal_size);
 	RUN(test_exr_tiled_read);
+	RUN(test_read_window);
 	RUN(test_exr_dwab);
 	RUN(test_rgbe_roundtrip);
 	RUN(test_pfm_roundtrip);

@@ -86,6 +86,8 @@ static void print_breakdown(const struct glint_fit_result *res, double wall)
 	printf("  %-28s %30.3f\n", "the rest (scans, statistics)",
 	       wall - passes - res->unc_seconds - res->setup_seconds);
 	printf("  %-28s %30.3f\n", "wall", wall);
+	printf("  relative RMSE %.9g, weighted cost %.9g (all pixels %.9g)\n",
+	       res->rel_rmse, res->cost, res->wcost);
 }
 
 /* The quartz spheres: annealing vs LM, re-sum vs re-trace. */

@@ -100,6 +100,10 @@ struct objective {
 	struct glint_shade_cache *sets[MAX_SETS];
 	int nsets;
 	struct glint_shade_light *light; /* shared by the caches */
+	/* The sets' mean weighted residuals at the final p over every
+	 * fitted pixel (uncertainty()), which the statistics reuse */
+	double *final_r;
+	int final_rows;
 	/* the shade caches' light and lobe samples are o's times this
 	 * (raised when the sample sets disagree by more than the noise) */
 	int sample_scale;
@@ -735,9 +739,14 @@ static void finish_stats(struct objective *ob, const int *sel, int nsel,
 {
 	double se = 0, sy = 0, wcost = 0;
 	int n = 0;
-	double *lobes = ob->cache ? malloc((size_t)nsel * ob->m->nlobes * 3 *
-					   sizeof(double))
-				  : NULL;
+	/* The uncertainty stage's residuals are these pixels' at ob->p. */
+	const double *fr = ob->final_r && ob->final_rows == 3 * nsel
+				   ? ob->final_r
+				   : NULL;
+	double *lobes = ob->cache && !fr ? malloc((size_t)nsel *
+						  ob->m->nlobes * 3 *
+						  sizeof(double))
+					 : NULL;
 
 	if (ob->cache && lobes)
 		mean_lobes(ob, sel, nsel, lobes);
@@ -749,7 +758,10 @@ static void finish_stats(struct objective *ob, const int *sel, int nsel,
 			if (ob->d->sw[3 * s + c] <= 0)
 				continue;
 			double v;
-			if (lobes)
+			if (fr)
+				v = ob->d->y[3 * s + c] +
+				    fr[3 * t + c] / ob->d->sw[3 * s + c];
+			else if (lobes)
 				v = pixel_value(ob, ob->p, lobes, t, c);
 			else
 				v = glint_image_px(ob->img, ob->d->xy[2 * s],
@@ -789,6 +801,7 @@ static void objective_free(struct objective *ob)
 		glint_shade_cache_free(ob->sets[k]);
 	glint_shade_cache_free(ob->cache);
 	glint_shade_light_free(ob->light);
+	free(ob->final_r);
 	glint_image_free(ob->img);
 	free(ob->lobes);
 	free(ob->lobes2);
@@ -1626,6 +1639,10 @@ static int uncertainty(struct objective *ob, struct fit_data *d,
 			ob->p[k] <= lo[k] + tol || ob->p[k] >= hi[k] - tol;
 	}
 	res->unc_seconds = glint_now() - t0;
+	free(ob->final_r);
+	ob->final_r = r;
+	ob->final_rows = rows;
+	r = NULL;
 out:
 	free(jac);
 	free(r);

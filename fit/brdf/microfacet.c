@@ -178,6 +178,34 @@ double glint_beckmann_sample_lobe(double m, double ior, struct vec3 wo,
 	return pdf;
 }
 
+void glint_beckmann_geometry(struct vec3 wo, struct vec3 wi, float g[4])
+{
+	g[0] = g[1] = g[2] = g[3] = 0;
+	if (!(wo.z > 0 && wi.z > 0))
+		return;
+	struct vec3 h = v3_norm(v3_add(wo, wi));
+	double c2 = h.z * h.z, oh = v3_dot(wo, h);
+	if (!(h.z > 0))
+		return;
+	double k = 1 / (M_PI * c2 * c2);
+	g[0] = (float)((1 - c2) / c2);
+	g[1] = (float)oh;
+	g[2] = (float)(k * glint_vcavity_g(h.z, wo.z, wi.z, oh) /
+		       (4 * wi.z * wo.z));
+	g[3] = oh > 0 ? (float)(k * h.z / (4 * oh)) : 0.0f;
+}
+
+double glint_beckmann_from_geometry(double m, double ior, const float g[4],
+				    double *pdf)
+{
+	double m2 = m * m;
+	double d = g[2] > 0 || g[3] > 0 ? exp(-g[0] / m2) / m2 : 0;
+
+	if (pdf)
+		*pdf = d * g[3];
+	return d > 0 ? d * g[2] * glint_fresnel_or_one(g[1], ior) : 0;
+}
+
 double glint_ggx_lobe(double a, double ior, struct vec3 wo, struct vec3 wi)
 {
 	if (!(wo.z > 0 && wi.z > 0))

@@ -64,6 +64,15 @@ double glint_beckmann_lobe_pdf(double m, double ior, struct vec3 wo,
 double glint_beckmann_sample_lobe(double m, double ior, struct vec3 wo,
 				  const double u[2], struct vec3 *wi,
 				  double *lobe);
+/*
+ * The same at a fixed wo, wi, in two steps: what depends on neither m nor
+ * ior (tan^2 of the half vector, o.h, G / (4 (n.i)(n.o) pi cos^4) and
+ * (n.h) / (4 (o.h) pi cos^4); all 0 below the surface), then the lobe and
+ * pdf for m and ior from it.
+ */
+void glint_beckmann_geometry(struct vec3 wo, struct vec3 wi, float g[4]);
+double glint_beckmann_from_geometry(double m, double ior, const float g[4],
+				    double *pdf);
 
 /*
  * How a lobe is sampled: cosine-weighted (diffuse lobes), or by reflecting

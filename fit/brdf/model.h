@@ -72,6 +72,13 @@ struct glint_model_ops {
 	double (*sample_lobe_value)(const double *p, int j, struct vec3 wo,
 				    const double u[2], struct vec3 *wi,
 				    double *bj);
+	/* Optional, for directions fixed across evaluations (the fitter's
+	 * env samples): what of the varying lobes' value and pdf at wo, wi
+	 * depends on no parameter, in g[4] (all 0 where the lobes are), and
+	 * lobe j's value and pdf_lobe (pdf may be NULL) from it. */
+	void (*lobe_geometry)(struct vec3 wo, struct vec3 wi, float g[4]);
+	double (*lobe_from_geometry)(const double *p, int j, const float g[4],
+				     double *pdf);
 	/* Index of the parameter that sets the lobe's angular width (a
 	 * roughness), or -1: coarse fitting levels bound it from below by
 	 * what they can resolve. */

@@ -131,6 +131,20 @@ static double ts_sample_lobe_value(const double *p, int j, struct vec3 wo,
 	return pdf;
 }
 
+static double ts_lobe_from_geometry(const double *p, int j, const float g[4],
+				    double *pdf)
+{
+	(void)j; /* only the specular lobe varies */
+	return glint_beckmann_from_geometry(p[ROUGH], p[IOR], g, pdf);
+}
+
+static double nf_lobe_from_geometry(const double *p, int j, const float g[4],
+				    double *pdf)
+{
+	(void)j;
+	return glint_beckmann_from_geometry(p[ROUGH], 0, g, pdf);
+}
+
 /* Beckmann D falls below 1e-12 of its peak where tan^2(t_h) > 27.6 m^2;
  * the reflected direction turns by twice the half-vector's angle. */
 static double ts_lobe_extent(const double *p, int j)
@@ -160,6 +174,8 @@ const struct glint_model_ops glint_model_torrance_sparrow = {
 	.pdf_lobe = ts_pdf_lobe,
 	.lobe_value_pdf = ts_lobe_value_pdf,
 	.sample_lobe_value = ts_sample_lobe_value,
+	.lobe_geometry = glint_beckmann_geometry,
+	.lobe_from_geometry = ts_lobe_from_geometry,
 	.lobe_extent = ts_lobe_extent,
 };
 
@@ -235,5 +251,7 @@ const struct glint_model_ops glint_model_ts_constant_fresnel = {
 	.pdf_lobe = ts_pdf_lobe,
 	.lobe_value_pdf = nf_lobe_value_pdf,
 	.sample_lobe_value = nf_sample_lobe_value,
+	.lobe_geometry = glint_beckmann_geometry,
+	.lobe_from_geometry = nf_lobe_from_geometry,
 	.lobe_extent = ts_lobe_extent,
 };

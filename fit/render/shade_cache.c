@@ -17,6 +17,7 @@ struct env_sample {
 	float l[3];
 	float pdf;	  /* the sampling pdf */
 	float pdf_smooth; /* continuous stand-in for the MIS weights */
+	float g[4];	  /* model->lobe_geometry() at wo, wi */
 };
 
 /* One primary hit: its frame, its view direction, its sample shift. */
@@ -108,14 +109,18 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 	double sx = glint_u01(glint_hash32(h->seed ^ 0x2545f491u));
 	double sy = glint_u01(glint_hash32(h->seed ^ 0x9e3779b9u));
 
+	int geom = m->lobe_from_geometry && m->lobe_varies[j];
+
 	out[0] = out[1] = out[2] = 0;
 	hot_quadrature(c, h, p, j, 0, out);
 	for (int k = 0; k < nl; k++) {
 		const struct env_sample *e = &es[k];
 		struct vec3 wi = fv(e->wi);
 		double pb = 0;
-		double bj =
-			glint_lobe_value_pdf(m, p, j, wo, wi, nb ? &pb : NULL);
+		double bj = geom ? m->lobe_from_geometry(p, j, e->g,
+							 nb ? &pb : NULL)
+				 : glint_lobe_value_pdf(m, p, j, wo, wi,
+							nb ? &pb : NULL);
 		if (bj <= 0)
 			continue;
 		double w = bj * wi.z * e->pdf_smooth /
@@ -147,6 +152,7 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 
 static void draw_env_samples(const struct glint_envmap *env,
 			     const struct glint_env_hot *hot,
+			     const struct glint_model_ops *m,
 			     const struct cache_hit *h, int nl, uint32_t salt,
 			     struct env_sample *es)
 {
@@ -175,6 +181,8 @@ static void draw_env_samples(const struct glint_envmap *env,
 		 * finite: fall back to the sampling pdf. */
 		if (!(e->pdf_smooth > 0))
 			e->pdf_smooth = e->pdf;
+		if (m->lobe_geometry)
+			m->lobe_geometry(fv(h->wo), wi, e->g);
 	}
 }
 
@@ -208,9 +216,9 @@ static void setup_pixels(void *ctx, int i0, int i1, int thread)
 		for (int s = 0; s < c->spp; s++) {
 			const struct cache_hit *h =
 				&c->hits[(size_t)i * c->spp + s];
-			draw_env_samples(c->env, c->hot, h, c->nl, 0x3c6ef372u,
-					 c->envs + ((size_t)i * c->spp + s) *
-							   c->nl);
+			draw_env_samples(
+				c->env, c->hot, m, h, c->nl, 0x3c6ef372u,
+				c->envs + ((size_t)i * c->spp + s) * c->nl);
 			int drawn = 0;
 			for (int j = 0; j < m->nlobes; j++) {
 				double a[3] = { 0, 0, 0 }, e[3];
@@ -226,8 +234,8 @@ static void setup_pixels(void *ctx, int i0, int i1, int thread)
 				} else {
 					if (!drawn)
 						draw_env_samples(
-							c->env, c->hot, h, ns,
-							0x1b873593u, tmp);
+							c->env, c->hot, m, h,
+							ns, 0x1b873593u, tmp);
 					drawn = 1;
 					lobe_at_hit(c, h, tmp, ns, ns, u,
 						    job->p0, j, a);

@@ -237,7 +237,7 @@ static void test_lobe_value_ops(void)
 	for (int k = 0; k < NSAMPLED; k++) {
 		const struct glint_model_ops *m = sampled[k].m;
 		double p[GLINT_MAX_PARAMS];
-		int bad = 0, checked = 0;
+		int bad = 0, checked = 0, geom = 0;
 		if (!m->nlobes)
 			continue;
 		memcpy(p, sampled[k].p, sizeof(double) * (size_t)m->nparams);
@@ -259,6 +259,24 @@ static void test_lobe_value_ops(void)
 				bj = glint_lobe_value_pdf(m, p, j, o, i, &pdf);
 				bad += fabs(bj - b[j]) > 1e-9 * fabs(b[j]) ||
 				       fabs(pdf - wpdf) > 1e-9 * wpdf;
+				if (m->lobe_geometry && m->lobe_varies[j]) {
+					/* Kept in floats: tan^2 to 2^-24,
+					 * so D to (tan^2 / m^2) 2^-24. */
+					float g[4];
+					m->lobe_geometry(o, i, g);
+					bj = m->lobe_from_geometry(p, j, g,
+								   &pdf);
+					double mm = p[m->roughness_param];
+					double tol = 1e-6 +
+						     1.2e-7 * g[0] / (mm * mm);
+					/* (and subnormals aside) */
+					bad += fabs(bj - b[j]) >
+						       tol * fabs(b[j]) +
+							       1e-300 ||
+					       fabs(pdf - wpdf) >
+						       tol * wpdf + 1e-300;
+					geom += b[j] > 0;
+				}
 				double ps = m->sample_lobe(p, j, o, u, &wi);
 				wb = 0;
 				if (ps > 0) {
@@ -277,6 +295,8 @@ static void test_lobe_value_ops(void)
 		      bad);
 		CHECK(checked > 1000, "%s: %d sampled lobes checked", m->name,
 		      checked);
+		CHECK(!m->lobe_geometry || geom > 1000,
+		      "%s: %d lobes from geometry checked", m->name, geom);
 	}
 }
 

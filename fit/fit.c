@@ -740,12 +740,10 @@ static void finish_stats(struct objective *ob, const int *sel, int nsel,
 	double se = 0, sy = 0, wcost = 0;
 	int n = 0;
 	/* The uncertainty stage's residuals are these pixels' at ob->p. */
-	const double *fr = ob->final_r && ob->final_rows == 3 * nsel
-				   ? ob->final_r
-				   : NULL;
-	double *lobes = ob->cache && !fr ? malloc((size_t)nsel *
-						  ob->m->nlobes * 3 *
-						  sizeof(double))
+	const double *fr =
+		ob->final_r && ob->final_rows == 3 * nsel ? ob->final_r : NULL;
+	double *lobes = ob->cache && !fr ? malloc((size_t)nsel * ob->m->nlobes *
+						  3 * sizeof(double))
 					 : NULL;
 
 	if (ob->cache && lobes)

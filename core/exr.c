@@ -513,9 +513,9 @@ int glint_exr_size(const char *path, int *width, int *height)
 	init.error_handler_fn = exr_error_cb;
 	exr_last_msg[0] = '\0';
 	rv = exr_start_read(&ctx, path, &init);
-	if (rv == EXR_ERR_SUCCESS)
-		rv = exr_get_data_window(ctx, 0, &dw);
 	if (rv != EXR_ERR_SUCCESS)
+		ret = exr_fail(path, "not a readable OpenEXR file", rv);
+	else if ((rv = exr_get_data_window(ctx, 0, &dw)) != EXR_ERR_SUCCESS)
 		ret = exr_fail(path, "reading the header", rv);
 	else {
 		*width = dw.max.x - dw.min.x + 1;

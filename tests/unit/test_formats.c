@@ -274,6 +274,20 @@ static void test_read_window(void)
 		glint_image_free(w);
 		w = NULL;
 	}
+	/* Not an EXR: said as the whole read says it. */
+	const char *junk = tmp_path("junk.exr");
+	FILE *f = fopen(junk, "w");
+	if (f) {
+		fputs("not an image at all", f);
+		fclose(f);
+	}
+	struct glint_image_window jw = { 0, 0, 4, 4 };
+	int jc = 1;
+	CHECK(glint_image_read_window(junk, 50, 70, &jw, &w, &jc) < 0 && !w &&
+		      !jc &&
+		      strstr(glint_error_msg(), "not a readable OpenEXR"),
+	      "junk .exr: %s", glint_error_msg());
+	glint_error_clear();
 	/* DWAB (the C++ library's path): the window of the whole read. */
 	struct glint_image *d = NULL;
 	const char *dp = GLINT_TEST_DATA "/studio_dwab.exr";

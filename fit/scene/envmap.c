@@ -615,8 +615,8 @@ void glint_env_query(const struct glint_env_hot *hot, struct vec3 d,
 	double y = fmin(fmax(v * h - 0.5, -0.5), h - 0.5);
 	double fx = floor(x), fy = floor(y), tx = x - fx, ty = y - fy;
 	size_t stride = (size_t)w + 2;
-	const float *t =
-		hot->tab + 4 * (((size_t)fy + 1) * stride + (size_t)fx + 1);
+	const float *t = hot->tab + 4 * ((size_t)((int)fy + 1) * stride +
+					 (size_t)((int)fx + 1));
 	const float *q[4] = { t, t + 4, t + 4 * stride, t + 4 * stride + 4 };
 	double wt[4] = { (1 - ty) * (1 - tx), (1 - ty) * tx, ty * (1 - tx),
 			 ty * tx };

@@ -360,15 +360,10 @@ static int exr_read_core(const char *path, const struct glint_image_window *win,
 	if (ret < 0)
 		goto out;
 	int dw_w = dw.max.x - dw.min.x + 1, dw_h = dw.max.y - dw.min.y + 1;
-	if (win &&
-	    (win->x < 0 || win->y < 0 || win->width < 1 || win->height < 1 ||
-	     win->x + win->width > dw_w || win->y + win->height > dw_h)) {
-		ret = glint_error_set(EINVAL,
-				      "%s: window %dx%d at (%d, %d) is not "
-				      "inside the %dx%d image",
-				      path, win->width, win->height, win->x,
-				      win->y, dw_w, dw_h);
-		goto out;
+	if (win) {
+		ret = glint_image_window_check(path, win, dw_w, dw_h);
+		if (ret < 0)
+			goto out;
 	}
 	img = win ? glint_image_new(win->width, win->height)
 		  : glint_image_new(dw_w, dw_h);
@@ -483,23 +478,7 @@ int glint_exr_read_window(const char *path,
 		ret = glint_exr_read_cxx(path, out);
 	if (ret < 0 || !win)
 		return ret;
-	struct glint_image *c = NULL;
-	if (win->x + win->width <= (*out)->width &&
-	    win->y + win->height <= (*out)->height && win->x >= 0 &&
-	    win->y >= 0 && win->width > 0 && win->height > 0)
-		c = glint_image_crop(*out, win->x, win->y, win->width,
-				     win->height);
-	else
-		ret = glint_error_set(EINVAL,
-				      "%s: window %dx%d at (%d, %d) is not "
-				      "inside the %dx%d image",
-				      path, win->width, win->height, win->x,
-				      win->y, (*out)->width, (*out)->height);
-	if (!c && ret == 0)
-		ret = glint_error_set(ENOMEM, "out of memory");
-	glint_image_free(*out);
-	*out = c;
-	return ret;
+	return glint_image_window_take(path, win, out);
 }
 
 int glint_exr_size(const char *path, int *width, int *height)

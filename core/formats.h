@@ -18,10 +18,10 @@
  * float or uint; scanline or tiled (level 0); DWAA/DWAB fall back to the
  * C++ library (exr_cxx.cpp). */
 int glint_exr_read(const char *path, struct glint_image **out);
-/* Only a window of the data window (which it must lie in), decoding only
- * the chunks (scanline blocks or tiles) it touches. */
 /* The data window's size, from the header alone. */
 int glint_exr_size(const char *path, int *width, int *height);
+/* Only a window of the data window (which it must lie in), decoding only
+ * the chunks (scanline blocks or tiles) it touches. */
 int glint_exr_read_window(const char *path,
 			  const struct glint_image_window *win,
 			  struct glint_image **out);

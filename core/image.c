@@ -219,6 +219,36 @@ int glint_image_read(const char *path, struct glint_image **out)
 	return ret;
 }
 
+int glint_image_window_check(const char *path,
+			     const struct glint_image_window *win, int w, int h)
+{
+	if (win->x < 0 || win->y < 0 || win->width < 1 || win->height < 1 ||
+	    win->x > w - win->width || win->y > h - win->height)
+		return glint_error_set(EINVAL,
+				       "%s: window %dx%d at (%d, %d) is not "
+				       "inside the %dx%d image",
+				       path, win->width, win->height, win->x,
+				       win->y, w, h);
+	return 0;
+}
+
+int glint_image_window_take(const char *path,
+			    const struct glint_image_window *win,
+			    struct glint_image **img)
+{
+	int ret = glint_image_window_check(path, win, (*img)->width,
+					   (*img)->height);
+	struct glint_image *c = ret ? NULL
+				    : glint_image_crop(*img, win->x, win->y,
+						       win->width, win->height);
+
+	if (!ret && !c)
+		ret = glint_error_set(ENOMEM, "out of memory");
+	glint_image_free(*img);
+	*img = c;
+	return ret;
+}
+
 int glint_image_read_window(const char *path, int frame_width, int frame_height,
 			    const struct glint_image_window *win,
 			    struct glint_image **out, int *cropped)
@@ -246,25 +276,9 @@ int glint_image_read_window(const char *path, int frame_width, int frame_height,
 	if (ret < 0 || (*out)->width != frame_width ||
 	    (*out)->height != frame_height)
 		return ret;
-	if (win->x < 0 || win->y < 0 || win->width < 1 || win->height < 1 ||
-	    win->x + win->width > frame_width ||
-	    win->y + win->height > frame_height) {
-		glint_image_free(*out);
-		*out = NULL;
-		return glint_error_set(EINVAL,
-				       "%s: window %dx%d at (%d, %d) is not "
-				       "inside the %dx%d image",
-				       path, win->width, win->height, win->x,
-				       win->y, frame_width, frame_height);
-	}
-	struct glint_image *c =
-		glint_image_crop(*out, win->x, win->y, win->width, win->height);
-	glint_image_free(*out);
-	*out = c;
-	if (!c)
-		return glint_error_set(ENOMEM, "out of memory");
-	*cropped = 1;
-	return 0;
+	ret = glint_image_window_take(path, win, out);
+	*cropped = ret == 0;
+	return ret;
 }
 
 int glint_image_write(const char *path, const struct glint_image *img,

@@ -92,6 +92,16 @@ struct glint_image_window {
 	int x, y, width, height;
 };
 
+/* 0 when win lies inside a w x h image, else -EINVAL naming path. */
+int glint_image_window_check(const char *path,
+			     const struct glint_image_window *win, int w,
+			     int h);
+/* *img (read from path) replaced by its window win; on error it is freed
+ * and NULL. */
+int glint_image_window_take(const char *path,
+			    const struct glint_image_window *win,
+			    struct glint_image **img);
+
 /*
  * Read only window win of the image at path when the image is
  * frame_width x frame_height (*cropped = 1); an image of any other size

@@ -694,6 +694,16 @@ static void apply_window(struct glint_fit_job *job,
 		       fh);
 }
 
+/* The photo and weights read whole. */
+static int read_whole(struct glint_fit_job *job, const char *weights_path)
+{
+	int ret = glint_image_read(job->photo_path, &job->photo);
+
+	if (ret == 0 && weights_path)
+		ret = glint_image_read(weights_path, &job->weight);
+	return ret;
+}
+
 int glint_fit_job_load(struct glint_fit_job *job, const char *weights_path)
 {
 	struct glint_image_window win;
@@ -703,12 +713,8 @@ int glint_fit_job_load(struct glint_fit_job *job, const char *weights_path)
 	job->photo = job->weight = NULL;
 	if (ret < 0)
 		return ret;
-	if (!sphere_window(job, &win)) {
-		ret = glint_image_read(job->photo_path, &job->photo);
-		if (ret == 0 && weights_path)
-			ret = glint_image_read(weights_path, &job->weight);
-		return ret;
-	}
+	if (!sphere_window(job, &win))
+		return read_whole(job, weights_path);
 	/* Only the window of a frame-sized photo and weights: a 12 MP
 	 * frame's EXR is never held whole. */
 	int fw = job->scene.cam.width, fh = job->scene.cam.height;
@@ -726,10 +732,7 @@ int glint_fit_job_load(struct glint_fit_job *job, const char *weights_path)
 	/* An image of another size: both whole, as the fit expects to say
 	 * what is wrong with them. */
 	glint_fit_job_unload(job);
-	ret = glint_image_read(job->photo_path, &job->photo);
-	if (ret == 0 && weights_path)
-		ret = glint_image_read(weights_path, &job->weight);
-	return ret;
+	return read_whole(job, weights_path);
 }
 
 int glint_fit_job_crop(struct glint_fit_job *job)

@@ -72,6 +72,15 @@ int glint_fit_optimizer_parse(const char *s, enum glint_fit_optimizer *o)
 
 #define MAX_SETS 16
 
+/* One photo of the fit: its scene, and its pixels [off, off + n) of the
+ * joint data (glint_fit_views()). */
+struct view {
+	struct glint_renderer *r;
+	int off, n;
+	int interior, stride, frame_x, frame_y;
+	struct glint_shade_light *light; /* its map's, shared by its caches */
+};
+
 /* What one LM pass optimises. */
 struct objective {
 	struct glint_renderer *r;
@@ -99,7 +108,8 @@ struct objective {
 	 * the others owned), whose mean the statistics use */
 	struct glint_shade_cache *sets[MAX_SETS];
 	int nsets;
-	struct glint_shade_light *light; /* shared by the caches */
+	struct view views[GLINT_FIT_MAX_VIEWS];
+	int nviews;
 	/* The sets' mean weighted residuals at the final p over every
 	 * fitted pixel (uncertainty()), which the statistics reuse */
 	double *final_r;
@@ -110,6 +120,16 @@ struct objective {
 	double mc_over_noise; /* the largest such ratio at the last check */
 	double model_noise;   /* the sets' variance over the residual's */
 };
+
+/* The photo holding fitted pixel s. */
+static int view_of(const struct objective *ob, int s)
+{
+	int v = 0;
+
+	while (v + 1 < ob->nviews && s >= ob->views[v + 1].off)
+		v++;
+	return v;
+}
 
 static int nonlinear_same(const struct objective *ob, const double *a,
 			  const double *b)
@@ -687,7 +707,7 @@ static double median_of(double *v, int n)
  */
 static double backdrop_error(const struct glint_gbuffer *gb,
 			     const struct glint_envmap *env,
-			     const struct fit_data *d)
+			     const struct fit_data *d, double sums[3])
 {
 	double se = 0, sy = 0;
 	int n = 0;
@@ -710,7 +730,50 @@ static double backdrop_error(const struct glint_gbuffer *gb,
 			n++;
 		}
 	}
+	sums[0] += se;
+	sums[1] += sy;
+	sums[2] += n;
 	return n && sy > 0 ? sqrt(se / n) / (sy / n) : INFINITY;
+}
+
+/* Photo v's pixels of the joint data d (borrowed: not to be freed). */
+static struct fit_data view_data(const struct fit_data *d, const struct view *v)
+{
+	struct fit_data sub = *d;
+
+	sub.n = v->n;
+	sub.pix += v->off;
+	sub.xy += 2 * (size_t)v->off;
+	sub.y += 3 * (size_t)v->off;
+	sub.sw += 3 * (size_t)v->off;
+	sub.va += 3 * (size_t)v->off;
+	sub.vb += 3 * (size_t)v->off;
+	sub.stride = v->stride;
+	sub.frame_x = v->frame_x;
+	sub.frame_y = v->frame_y;
+	return sub;
+}
+
+/* The baselines a fit is judged against (glint_fit_judge()), per photo
+ * and over all. */
+static void baselines(const struct objective *ob, const struct fit_data *d,
+		      struct glint_fit_result *res)
+{
+	double sums[3] = { 0, 0, 0 };
+
+	for (int v = 0; v < ob->nviews; v++) {
+		const struct view *vw = &ob->views[v];
+		struct glint_fit_view_stats *st = &res->view[v];
+		struct fit_data sub = view_data(d, vw);
+		st->backdrop_rel_rmse =
+			backdrop_error(&vw->r->gb, vw->r->env, &sub, sums);
+		fit_data_baselines(&sub, &st->flat_rel_rmse, &st->noise_rmse);
+	}
+	res->backdrop_rel_rmse =
+		sums[2] && sums[1] > 0
+			? sqrt(sums[0] / sums[2]) / (sums[1] / sums[2])
+			: INFINITY;
+	fit_data_baselines(d, &res->flat_rel_rmse, &res->noise_rmse);
 }
 
 /* Lobes at ob->p on sel: the mean over the sample sets when there are
@@ -738,7 +801,11 @@ static void finish_stats(struct objective *ob, const int *sel, int nsel,
 			 struct glint_fit_result *res)
 {
 	double se = 0, sy = 0, wcost = 0;
-	int n = 0;
+	double vse[GLINT_FIT_MAX_VIEWS] = { 0 },
+	       vsy[GLINT_FIT_MAX_VIEWS] = { 0 },
+	       vw[GLINT_FIT_MAX_VIEWS] = { 0 };
+	int n = 0, vn[GLINT_FIT_MAX_VIEWS] = { 0 },
+	    vp[GLINT_FIT_MAX_VIEWS] = { 0 };
 	/* The uncertainty stage's residuals are these pixels' at ob->p. */
 	const double *fr =
 		ob->final_r && ob->final_rows == 3 * nsel ? ob->final_r : NULL;
@@ -751,7 +818,8 @@ static void finish_stats(struct objective *ob, const int *sel, int nsel,
 	else if (!ob->cache)
 		render_full(ob, ob->p);
 	for (int t = 0; t < nsel; t++) {
-		int s = sel[t];
+		int s = sel[t], view = view_of(ob, s);
+		vp[view]++;
 		for (int c = 0; c < 3; c++) {
 			if (ob->d->sw[3 * s + c] <= 0)
 				continue;
@@ -766,13 +834,27 @@ static void finish_stats(struct objective *ob, const int *sel, int nsel,
 						   ob->d->xy[2 * s + 1])[c];
 			double e = v - ob->d->y[3 * s + c];
 			double we = ob->d->sw[3 * s + c] * e;
-			wcost += 0.5 * we * we;
-			se += e * e;
-			sy += ob->d->y[3 * s + c];
-			n++;
+			vw[view] += 0.5 * we * we;
+			vse[view] += e * e;
+			vsy[view] += ob->d->y[3 * s + c];
+			vn[view]++;
 		}
 	}
 	free(lobes);
+	res->nviews = ob->nviews;
+	for (int v = 0; v < ob->nviews; v++) {
+		struct glint_fit_view_stats *st = &res->view[v];
+		st->pixels = vp[v];
+		st->interior = ob->views[v].interior;
+		st->wcost = vw[v];
+		st->rmse = vn[v] ? sqrt(vse[v] / vn[v]) : NAN;
+		st->rel_rmse =
+			vn[v] && vsy[v] > 0 ? st->rmse / (vsy[v] / vn[v]) : NAN;
+		wcost += vw[v];
+		se += vse[v];
+		sy += vsy[v];
+		n += vn[v];
+	}
 	res->rmse = n ? sqrt(se / n) : NAN;
 	res->wcost = wcost;
 	res->rel_rmse = n && sy > 0 ? res->rmse / (sy / n) : NAN;
@@ -798,15 +880,17 @@ static void objective_free(struct objective *ob)
 	for (int k = 1; k < ob->nsets; k++)
 		glint_shade_cache_free(ob->sets[k]);
 	glint_shade_cache_free(ob->cache);
-	glint_shade_light_free(ob->light);
+	for (int v = 0; v < ob->nviews; v++)
+		glint_shade_light_free(ob->views[v].light);
 	free(ob->final_r);
 	glint_image_free(ob->img);
 	free(ob->lobes);
 	free(ob->lobes2);
 }
 
-/* A shade cache over every fitted pixel at the objective's sample counts;
- * seed 0 is glint's fixed set, others independent ones. */
+/* A shade cache over every fitted pixel at the objective's sample counts
+ * (one per photo, joined); seed 0 is glint's fixed set, others
+ * independent ones. */
 static int new_cache(const struct objective *ob, uint32_t seed,
 		     struct glint_shade_cache **out)
 {
@@ -817,21 +901,40 @@ static int new_cache(const struct objective *ob, uint32_t seed,
 		.static_samples = o->static_samples,
 		.seed = seed,
 		.nthreads = o->nthreads,
-		.light = ob->light,
 	};
-	return glint_shade_cache_new(&ob->r->gb, ob->d->pix, ob->d->n,
-				     ob->r->env, ob->m, &co, out);
+	struct glint_shade_cache *parts[GLINT_FIT_MAX_VIEWS];
+	int ret = 0, v;
+
+	for (v = 0; v < ob->nviews && ret == 0; v++) {
+		const struct view *vw = &ob->views[v];
+		co.light = vw->light;
+		ret = glint_shade_cache_new(&vw->r->gb, ob->d->pix + vw->off,
+					    vw->n, vw->r->env, ob->m, &co,
+					    &parts[v]);
+	}
+	if (ret < 0) {
+		for (int k = 0; k < v - 1; k++)
+			glint_shade_cache_free(parts[k]);
+		return ret;
+	}
+	if (ob->nviews == 1) {
+		*out = parts[0];
+		return 0;
+	}
+	return glint_shade_cache_join(parts, ob->nviews, out);
 }
 
 /* The objective over d at the start values: lobe buffers and the shade
  * cache (or the faithful path's image). */
-static int objective_init(struct objective *ob, struct glint_renderer *r,
-			  const struct glint_model_ops *model,
+static int objective_init(struct objective *ob, const struct view *views,
+			  int nviews, const struct glint_model_ops *model,
 			  const struct fit_data *d,
 			  const struct glint_fit_opts *o)
 {
 	memset(ob, 0, sizeof(*ob));
-	ob->r = r;
+	memcpy(ob->views, views, (size_t)nviews * sizeof(*views));
+	ob->nviews = nviews;
+	ob->r = views[0].r;
 	ob->m = model;
 	ob->d = d;
 	ob->o = o;
@@ -851,11 +954,14 @@ static int objective_init(struct objective *ob, struct glint_renderer *r,
 	if (!ob->lobes || !ob->lobes2)
 		return glint_error_set(ENOMEM, "out of memory");
 	if (o->faithful) {
-		ob->img = glint_image_new(r->gb.width, r->gb.height);
+		ob->img = glint_image_new(ob->r->gb.width, ob->r->gb.height);
 		return ob->img ? 0 : glint_error_set(ENOMEM, "out of memory");
 	}
 	struct glint_shade_cache_opts co = { .nthreads = o->nthreads };
-	int ret = glint_shade_light_new(r->env, &co, &ob->light);
+	int ret = 0;
+	for (int v = 0; v < nviews && ret == 0; v++)
+		ret = glint_shade_light_new(views[v].r->env, &co,
+					    &ob->views[v].light);
 	return ret < 0 ? ret : new_cache(ob, 0, &ob->cache);
 }
 
@@ -925,10 +1031,12 @@ static int specular_mask(struct objective *ob, const int *all,
 					  white[3 * s + 2]);
 		ratio[s] = ww > 0 ? pw / ww : 0;
 	}
-	if (!ret && d->n) {
-		memcpy(tmp, ratio, (size_t)d->n * sizeof(double));
-		double med = median_of(tmp, d->n);
-		for (int s = 0; s < d->n; s++)
+	/* Each photo's median: their lights differ. */
+	for (int v = 0; v < ob->nviews && !ret; v++) {
+		const struct view *vw = &ob->views[v];
+		memcpy(tmp, ratio + vw->off, (size_t)vw->n * sizeof(double));
+		double med = median_of(tmp, vw->n);
+		for (int s = vw->off; s < vw->off + vw->n; s++)
 			is_spec[s] =
 				ratio[s] > (1 + ob->o->mask_threshold) * med;
 	}
@@ -968,10 +1076,14 @@ static int make_selections(struct objective *ob, struct selections *sl)
 	ret = specular_mask(ob, sl->all, is_spec);
 	if (ret < 0)
 		goto out;
-	for (int s = 0; s < d->n; s++) {
+	for (int s = 0, v = 0; s < d->n; s++) {
+		while (s >= ob->views[v].off + ob->views[v].n)
+			v++;
+		const struct view *vw = &ob->views[v];
 		int on_grid =
-			(d->xy[2 * s] + d->frame_x) % (4 * d->stride) == 0 &&
-			(d->xy[2 * s + 1] + d->frame_y) % (4 * d->stride) == 0;
+			(d->xy[2 * s] + vw->frame_x) % (4 * vw->stride) == 0 &&
+			(d->xy[2 * s + 1] + vw->frame_y) % (4 * vw->stride) ==
+				0;
 		if (is_spec[s])
 			sl->spec[sl->nspec++] = s;
 		if (on_grid || is_spec[s])
@@ -1224,27 +1336,40 @@ static int jacobian_fd(struct objective *ob, const double *q, const double *r,
 	return ret;
 }
 
-/* The block of each residual: an 8 x 8 grid over the fitted pixels'
- * bounding box, numbered densely; returns the number of blocks. */
-static int pixel_blocks(const struct fit_data *d, const int *sel, int nsel,
+/* The block of each residual: an 8 x 8 grid over each photo's fitted
+ * pixels' bounding box, numbered densely; returns the number of
+ * blocks. */
+static int pixel_blocks(const struct objective *ob, const int *sel, int nsel,
 			int *block)
 {
-	int x0 = INT32_MAX, y0 = INT32_MAX, x1 = 0, y1 = 0, ids[64], nb = 0;
+	enum { G = 8 };
+	const struct fit_data *d = ob->d;
+	int x0[GLINT_FIT_MAX_VIEWS], y0[GLINT_FIT_MAX_VIEWS],
+		x1[GLINT_FIT_MAX_VIEWS], y1[GLINT_FIT_MAX_VIEWS],
+		ids[GLINT_FIT_MAX_VIEWS * G * G], nb = 0;
 
+	for (int v = 0; v < ob->nviews; v++) {
+		x0[v] = y0[v] = INT32_MAX;
+		x1[v] = y1[v] = 0;
+	}
 	for (int t = 0; t < nsel; t++) {
 		int x = d->xy[2 * sel[t]], y = d->xy[2 * sel[t] + 1];
-		x0 = x < x0 ? x : x0;
-		y0 = y < y0 ? y : y0;
-		x1 = x > x1 ? x : x1;
-		y1 = y > y1 ? y : y1;
+		int v = view_of(ob, sel[t]);
+		x0[v] = x < x0[v] ? x : x0[v];
+		y0[v] = y < y0[v] ? y : y0[v];
+		x1[v] = x > x1[v] ? x : x1[v];
+		y1[v] = y > y1[v] ? y : y1[v];
 	}
-	for (int b = 0; b < 64; b++)
+	for (int b = 0; b < ob->nviews * G * G; b++)
 		ids[b] = -1;
-	double sx = (x1 - x0 + 1) / 8.0, sy = (y1 - y0 + 1) / 8.0;
 	for (int t = 0; t < nsel; t++) {
-		int bx = (int)((d->xy[2 * sel[t]] - x0) / sx),
-		    by = (int)((d->xy[2 * sel[t] + 1] - y0) / sy);
-		int b = (by < 8 ? by : 7) * 8 + (bx < 8 ? bx : 7);
+		int v = view_of(ob, sel[t]);
+		double sx = (x1[v] - x0[v] + 1.0) / G,
+		       sy = (y1[v] - y0[v] + 1.0) / G;
+		int bx = (int)((d->xy[2 * sel[t]] - x0[v]) / sx),
+		    by = (int)((d->xy[2 * sel[t] + 1] - y0[v]) / sy);
+		int b = v * G * G + (by < G ? by : G - 1) * G +
+			(bx < G ? bx : G - 1);
 		if (ids[b] < 0)
 			ids[b] = nb++;
 		for (int c = 0; c < 3; c++)
@@ -1508,7 +1633,7 @@ static int estimate_on_sets(struct objective *ob, struct fit_data *d,
 		.jac = jac,
 		.r = r,
 		.block = block,
-		.nblocks = pixel_blocks(ob->d, sl->all, sl->nall, block),
+		.nblocks = pixel_blocks(ob, sl->all, sl->nall, block),
 		.p = ob->p,
 		.lo = lo,
 		.hi = hi,
@@ -1679,22 +1804,70 @@ static int eval_like_fit(struct objective *ob, struct fit_data *d,
 	return ret;
 }
 
-static int fit_or_eval(struct glint_renderer *r,
+/*
+ * Each photo's pixels (fit_data_prepare()), joined one after the other
+ * into d, with where each lies in views[].
+ */
+static int prepare_views(const struct glint_fit_view *in, int nviews,
+			 const struct glint_fit_opts *o, struct fit_data *d,
+			 struct view *views)
+{
+	struct fit_data parts[GLINT_FIT_MAX_VIEWS];
+	int ret = 0, off = 0, v;
+
+	memset(parts, 0, sizeof(parts));
+	for (v = 0; v < nviews && ret == 0; v++) {
+		struct view *vw = &views[v];
+		memset(vw, 0, sizeof(*vw));
+		vw->r = in[v].r;
+		ret = fit_data_prepare(&in[v].r->gb, in[v].photo, in[v].weight,
+				       o, &parts[v], &vw->interior);
+		if (ret < 0 && nviews > 1)
+			ret = glint_error_prefix(-ret, "photo %d of %d", v + 1,
+						 nviews);
+		vw->off = off;
+		vw->n = parts[v].n;
+		vw->stride = parts[v].stride;
+		vw->frame_x = parts[v].frame_x;
+		vw->frame_y = parts[v].frame_y;
+		off += parts[v].n;
+	}
+	if (ret == 0 && nviews == 1) {
+		*d = parts[0];
+		return 0;
+	}
+	if (ret == 0)
+		ret = fit_data_join(parts, nviews, d);
+	for (int k = 0; k < nviews; k++)
+		free_data(&parts[k]);
+	return ret;
+}
+
+static int fit_or_eval(const struct glint_fit_view *in, int nviews,
 		       const struct glint_model_ops *model,
-		       const struct glint_image *photo,
-		       const struct glint_image *weight,
 		       const struct glint_fit_opts *o, const double *eval_p,
 		       struct glint_fit_result *res)
 {
 	struct fit_data d = { 0 };
 	struct objective ob = { 0 };
 	struct selections sl = { 0 };
-	int ret, interior;
+	struct view views[GLINT_FIT_MAX_VIEWS];
+	int ret, interior = 0;
 	double t0 = glint_now();
 
+	if (nviews < 1 || nviews > GLINT_FIT_MAX_VIEWS)
+		return glint_error_set(EINVAL,
+				       "%d photos: a joint fit takes 1 to %d",
+				       nviews, GLINT_FIT_MAX_VIEWS);
+	if (nviews > 1 && (model->transparent || o->faithful))
+		return glint_error_set(
+			EINVAL,
+			"a joint fit of several photos needs the shade cache: "
+			"not %s",
+			o->faithful ? "--faithful" : "a transparent model");
 	if (model->transparent)
-		return glint_fit_dielectric(r, model, photo, weight, o, NULL,
-					    eval_p, res);
+		return glint_fit_dielectric(in->r, model, in->photo, in->weight,
+					    o, NULL, eval_p, res);
 	memset(res, 0, sizeof(*res));
 	res->model = model;
 	if (model->nlobes <= 0)
@@ -1702,11 +1875,13 @@ static int fit_or_eval(struct glint_renderer *r,
 				       "model %s cannot be fitted by LM here "
 				       "(no linear lobes)",
 				       model->name);
-	ret = fit_data_prepare(&r->gb, photo, weight, o, &d, &interior);
+	ret = prepare_views(in, nviews, o, &d, views);
 	if (ret < 0)
 		goto out;
+	for (int v = 0; v < nviews; v++)
+		interior += views[v].interior;
 	res->interior = interior;
-	ret = objective_init(&ob, r, model, &d, o);
+	ret = objective_init(&ob, views, nviews, model, &d, o);
 	if (ret < 0)
 		goto out;
 	res->setup_seconds = glint_now() - t0;
@@ -1738,9 +1913,14 @@ static int fit_or_eval(struct glint_renderer *r,
 	 * 2 spacing / R radians on a sphere R pixels in radius, i.e. a
 	 * roughness of spacing / R): a mirror's glint can fall between
 	 * samples and "mirror" becomes a false minimum.  Coarse passes keep
-	 * roughness above that; the fine pass is free.
+	 * roughness above that (the largest over the photos); the fine pass
+	 * is free.
 	 */
-	double coarse_rough_lo = 4.0 * d.stride / sqrt(interior / M_PI);
+	double coarse_rough_lo = 0;
+	for (int v = 0; v < nviews; v++)
+		coarse_rough_lo = fmax(coarse_rough_lo,
+				       4.0 * views[v].stride /
+					       sqrt(views[v].interior / M_PI));
 	if (sl.ncoarse < sl.nall)
 		ob.rough_lo = coarse_rough_lo;
 	ret = coarse_passes(&ob, &sl, res);
@@ -1752,8 +1932,7 @@ static int fit_or_eval(struct glint_renderer *r,
 		goto out;
 	memcpy(res->p, ob.p, sizeof(res->p));
 	finish_stats(&ob, sl.all, sl.nall, res);
-	res->backdrop_rel_rmse = backdrop_error(&r->gb, r->env, &d);
-	fit_data_baselines(&d, &res->flat_rel_rmse, &res->noise_rmse);
+	baselines(&ob, &d, res);
 	res->seconds = glint_now() - t0;
 out:
 	objective_free(&ob);
@@ -1766,7 +1945,17 @@ int glint_fit(struct glint_renderer *r, const struct glint_model_ops *model,
 	      const struct glint_image *photo, const struct glint_image *weight,
 	      const struct glint_fit_opts *o, struct glint_fit_result *res)
 {
-	return fit_or_eval(r, model, photo, weight, o, NULL, res);
+	struct glint_fit_view v = { r, photo, weight };
+
+	return fit_or_eval(&v, 1, model, o, NULL, res);
+}
+
+int glint_fit_views(const struct glint_fit_view *views, int nviews,
+		    const struct glint_model_ops *model,
+		    const struct glint_fit_opts *o,
+		    struct glint_fit_result *res)
+{
+	return fit_or_eval(views, nviews, model, o, NULL, res);
 }
 
 int glint_fit_evaluate(struct glint_renderer *r,
@@ -1776,5 +1965,7 @@ int glint_fit_evaluate(struct glint_renderer *r,
 		       const struct glint_fit_opts *o, const double *p,
 		       struct glint_fit_result *res)
 {
-	return fit_or_eval(r, model, photo, weight, o, p, res);
+	struct glint_fit_view v = { r, photo, weight };
+
+	return fit_or_eval(&v, 1, model, o, p, res);
 }

@@ -100,6 +100,25 @@ void glint_fit_default_opts(struct glint_fit_opts *o);
 
 #define GLINT_FIT_MAX_PASSES 8
 
+/* A joint fit's photos of one material (glint_fit_views()): at most. */
+#define GLINT_FIT_MAX_VIEWS 16
+
+/* One photo of a joint fit: its scene's renderer (traced already), the
+ * photo (the camera's size) and its weights (may be NULL). */
+struct glint_fit_view {
+	struct glint_renderer *r;
+	const struct glint_image *photo;
+	const struct glint_image *weight;
+};
+
+/* How the result fits one photo (the fields of glint_fit_result of the
+ * same names, over that photo's pixels). */
+struct glint_fit_view_stats {
+	int pixels, interior;
+	double wcost, rmse, rel_rmse;
+	double backdrop_rel_rmse, flat_rel_rmse, noise_rmse;
+};
+
 struct glint_fit_pass {
 	char name[32];
 	int pixels;
@@ -137,6 +156,9 @@ struct glint_fit_result {
 	int specular_pixels;
 	struct glint_fit_pass passes[GLINT_FIT_MAX_PASSES];
 	int npasses;
+	/* Per photo (one for glint_fit()); the fields above are over all. */
+	int nviews;
+	struct glint_fit_view_stats view[GLINT_FIT_MAX_VIEWS];
 	double seconds;
 	double setup_seconds;
 };
@@ -159,6 +181,20 @@ int glint_fit_dielectric(struct glint_renderer *r,
 int glint_fit(struct glint_renderer *r, const struct glint_model_ops *model,
 	      const struct glint_image *photo, const struct glint_image *weight,
 	      const struct glint_fit_opts *o, struct glint_fit_result *res);
+
+/*
+ * One material fitted to several photos of it at once (different lights,
+ * probes or turntable positions): the objective is the sum of each
+ * photo's, every photo shaded in its own scene, and the intervals come
+ * from all of them (blocks of pixels are each photo's own).  Each photo
+ * gets up to o->max_pixels pixels.  res->view[] says how the result fits
+ * each photo.  Needs the shade cache: not with o->faithful, and not for
+ * transparent models.  nviews 1 is glint_fit().
+ */
+int glint_fit_views(const struct glint_fit_view *views, int nviews,
+		    const struct glint_model_ops *model,
+		    const struct glint_fit_opts *o,
+		    struct glint_fit_result *res);
 
 /*
  * The objective of glint_fit() at given parameters p, without fitting,

@@ -240,6 +240,43 @@ int fit_data_prepare(struct glint_gbuffer *gb, const struct glint_image *photo,
 	return 0;
 }
 
+int fit_data_join(const struct fit_data *parts, int nparts, struct fit_data *d)
+{
+	size_t n = 0;
+
+	memset(d, 0, sizeof(*d));
+	for (int k = 0; k < nparts; k++)
+		n += (size_t)parts[k].n;
+	d->pix = malloc(n * sizeof(*d->pix));
+	d->xy = malloc(n * 2 * sizeof(int));
+	d->y = malloc(n * 3 * sizeof(double));
+	d->sw = malloc(n * 3 * sizeof(double));
+	d->va = malloc(n * 3 * sizeof(double));
+	d->vb = malloc(n * 3 * sizeof(double));
+	if (!d->pix || !d->xy || !d->y || !d->sw || !d->va || !d->vb ||
+	    n > INT32_MAX / 3) {
+		free_data(d);
+		return glint_error_set(ENOMEM, "out of memory");
+	}
+	d->noise_model = 1;
+	for (int k = 0; k < nparts; k++) {
+		const struct fit_data *q = &parts[k];
+		size_t o = (size_t)d->n, m = (size_t)q->n;
+		memcpy(d->pix + o, q->pix, m * sizeof(*d->pix));
+		memcpy(d->xy + 2 * o, q->xy, m * 2 * sizeof(int));
+		memcpy(d->y + 3 * o, q->y, m * 3 * sizeof(double));
+		memcpy(d->sw + 3 * o, q->sw, m * 3 * sizeof(double));
+		memcpy(d->va + 3 * o, q->va, m * 3 * sizeof(double));
+		memcpy(d->vb + 3 * o, q->vb, m * 3 * sizeof(double));
+		d->n += q->n;
+		d->noise_model &= q->noise_model;
+	}
+	d->stride = parts[0].stride;
+	d->frame_x = parts[0].frame_x;
+	d->frame_y = parts[0].frame_y;
+	return 0;
+}
+
 /*
  * What the photo alone says about a fit's residual, over the same values
  * as the backdrop check (fit.c): the relative RMSE of a flat disc of the

@@ -41,6 +41,11 @@ int fit_data_prepare(struct glint_gbuffer *gb, const struct glint_image *photo,
 		     const struct glint_fit_opts *o, struct fit_data *d,
 		     int *interior);
 
+/* The pixels of several photos one after the other (a joint fit):
+ * copies; stride and frame are parts[0]'s, noise_model is set when every
+ * part has one. */
+int fit_data_join(const struct fit_data *parts, int nparts, struct fit_data *d);
+
 /* Weights from the noise model at the predicted values pred (3 per
  * pixel), for values that have a weight (pred = y: unchanged). */
 void fit_data_reweight(struct fit_data *d, const double *pred);

@@ -7,6 +7,7 @@
 #include "core/error.h"
 #include "core/parallel.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -42,6 +43,13 @@ struct glint_shade_cache {
 	struct env_sample *envs; /* n * spp * nl */
 	double (*lobe_u)[2];	 /* nb fixed uniforms, shifted per hit */
 	double *static_lobes;	 /* n * nlobes * 3, constant lobes only */
+	/* A joint cache (glint_shade_cache_join()): its pixels are the
+	 * parts' in order; part_of[i] is pixel i's part, part_off[k] part
+	 * k's first pixel.  None of the fields above is set. */
+	struct glint_shade_cache **parts;
+	int nparts;
+	unsigned short *part_of;
+	int *part_off;
 };
 
 static struct vec3 fv(const float f[3])
@@ -398,10 +406,55 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 	return 0;
 }
 
+int glint_shade_cache_join(struct glint_shade_cache **parts, int nparts,
+			   struct glint_shade_cache **out)
+{
+	struct glint_shade_cache *c = calloc(1, sizeof(*c));
+	int n = 0;
+
+	*out = NULL;
+	for (int k = 0; k < nparts; k++)
+		n += parts[k]->n;
+	if (c) {
+		c->part_of = malloc((size_t)n * sizeof(*c->part_of));
+		c->part_off = malloc((size_t)nparts * sizeof(int));
+		c->parts = malloc((size_t)nparts * sizeof(*c->parts));
+	}
+	if (!c || !c->part_of || !c->part_off || !c->parts ||
+	    nparts > USHRT_MAX) {
+		for (int k = 0; k < nparts; k++)
+			glint_shade_cache_free(parts[k]);
+		if (c) {
+			free(c->part_of);
+			free(c->part_off);
+			free(c->parts);
+			free(c);
+		}
+		return glint_error_set(ENOMEM, "out of memory");
+	}
+	c->model = parts[0]->model;
+	c->nthreads = parts[0]->nthreads;
+	c->n = n;
+	c->nparts = nparts;
+	for (int k = 0, i = 0; k < nparts; k++) {
+		c->parts[k] = parts[k];
+		c->part_off[k] = i;
+		for (int u = 0; u < parts[k]->n; u++)
+			c->part_of[i++] = (unsigned short)k;
+	}
+	*out = c;
+	return 0;
+}
+
 void glint_shade_cache_free(struct glint_shade_cache *c)
 {
 	if (!c)
 		return;
+	for (int k = 0; k < c->nparts; k++)
+		glint_shade_cache_free(c->parts[k]);
+	free(c->parts);
+	free(c->part_of);
+	free(c->part_off);
 	free(c->pix);
 	free(c->hits);
 	free(c->envs);
@@ -421,14 +474,19 @@ struct lobes_job {
 static void lobes_pixels(void *ctx, int i0, int i1, int thread)
 {
 	struct lobes_job *job = ctx;
-	struct glint_shade_cache *c = job->c;
-	const struct glint_model_ops *m = c->model;
+	const struct glint_model_ops *m = job->c->model;
 	int nj = m->nlobes;
 
 	(void)thread;
 	glint_thread_ftz();
 	for (int k = i0; k < i1; k++) {
 		int i = job->sel ? job->sel[k] : k;
+		const struct glint_shade_cache *c = job->c;
+		if (c->parts) {
+			int part = c->part_of[i];
+			i -= c->part_off[part];
+			c = c->parts[part];
+		}
 		double *dst = job->lobes + (size_t)k * nj * 3;
 		memcpy(dst, c->static_lobes + (size_t)i * nj * 3,
 		       (size_t)nj * 3 * sizeof(double));

@@ -73,6 +73,15 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 void glint_shade_cache_free(struct glint_shade_cache *c);
 
 /*
+ * One cache over several scenes' pixels (a joint fit of several photos
+ * of one material): its pixels are parts[0]'s, then parts[1]'s, ...;
+ * each is shaded in its own scene.  The parts (same model) become the
+ * joint cache's, freed with it, and on failure here.
+ */
+int glint_shade_cache_join(struct glint_shade_cache **parts, int nparts,
+			   struct glint_shade_cache **out);
+
+/*
  * Lobe integrals for parameters p: lobes[(i * nlobes + j) * 3 + c] for
  * pixel i, lobe j, channel c.  Only varying lobes are recomputed.
  * lobes has n * nlobes * 3 doubles.

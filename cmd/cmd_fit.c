@@ -21,9 +21,10 @@
 #include <string.h>
 #include <unistd.h>
 
-void cmd_fit_help(void)
+static void fit_help_intro(void)
 {
-	printf("usage: glint fit SCENE.json PHOTO.exr [options]\n"
+	printf("usage: glint fit SCENE.json PHOTO.exr [SCENE2.json PHOTO2.exr "
+	       "...] [options]\n"
 	       "       glint fit SESSION [options]\n"
 	       "\n"
 	       "Recover a material's parameters from one HDR image of the "
@@ -42,8 +43,21 @@ void cmd_fit_help(void)
 	       "fits SESSION/sample.exr\nwith SESSION/scene.json and the "
 	       "merge's weights into SESSION/fit; one fit per\nsession at a "
 	       "time (a second one is refused, or waits with --wait).\n"
-	       "\n"
-	       "  -o, --output DIR      result folder (default fit-out); "
+	       "Given several SCENE PHOTO pairs (one sphere under different "
+	       "lights, probes or\nturntable positions, each photo with its "
+	       "own scene), it fits one material to\nall of them at once: "
+	       "what pins ior apart from specular where one light\ncannot. "
+	       "params.json's \"photos\" says how the result fits each; "
+	       "render-N.exr\nand compare-N.png show it.  --weights is then "
+	       "given once per photo, in\norder; a joint fit takes a named "
+	       "--model, not auto, --select-model or --ladder.\n"
+	       "\n");
+}
+
+void cmd_fit_help(void)
+{
+	fit_help_intro();
+	printf("  -o, --output DIR      result folder (default fit-out); "
 	       "replaced whole,\n"
 	       "                        never left half-written\n"
 	       "  --model NAME          torrance-sparrow (default), lambert, "
@@ -111,7 +125,8 @@ void cmd_fit_help(void)
 	       "                        image per evaluation (slow; the "
 	       "benchmark baseline)\n"
 	       "  --weights W.exr       per-pixel, per-channel weights "
-	       "(1/variance; 0 = ignore)\n"
+	       "(1/variance; 0 = ignore);\n"
+	       "                        once per photo of a joint fit\n"
 	       "  --weighting W         without --weights: poisson (default: "
 	       "variance ~ signal\n"
 	       "                        + 10%% of the mean) or uniform (plain "
@@ -120,8 +135,9 @@ void cmd_fit_help(void)
 	       "above (1+T) x its\n"
 	       "                        median (default 0.1; "
 	       "docs/fitting.md)\n"
-	       "  --max-pixels N        fit on about N pixels (every s-th; "
-	       "default 4096)\n"
+	       "  --max-pixels N        fit on about N pixels of each photo "
+	       "(every s-th;\n"
+	       "                        default 4096)\n"
 	       "  --samples N           fixed env and lobe samples per hit "
 	       "(default 8 each)\n"
 	       "  --sample-sets K       final polish and Monte Carlo error on "
@@ -270,11 +286,76 @@ static int parse_knobs(const char *arg, void *dest)
 	return glint_ladder_knobs_parse(arg, dest);
 }
 
+/* --weights, once per photo. */
+struct weights_list {
+	const char *path[GLINT_FIT_MAX_VIEWS];
+	int n;
+};
+
+static int add_weights(const char *arg, void *dest)
+{
+	struct weights_list *w = dest;
+
+	if (w->n == GLINT_FIT_MAX_VIEWS)
+		return glint_error_set(EINVAL,
+				       "given more than %d times (once per "
+				       "photo, at most %d photos)",
+				       GLINT_FIT_MAX_VIEWS,
+				       GLINT_FIT_MAX_VIEWS);
+	w->path[w->n++] = arg;
+	return 0;
+}
+
+/* The photos after the first of a joint fit (argv: scene, photo pairs)
+ * loaded into also[], with their weights. */
+static int load_also(struct glint_fit_job *job, struct glint_fit_job *also,
+		     int npairs, char **argv, const struct weights_list *wl)
+{
+	int ret = 0;
+
+	job->also = also;
+	for (int k = 1; k < npairs && ret == 0; k++) {
+		struct glint_fit_job *a = &also[k - 1];
+		memset(a, 0, sizeof(*a));
+		a->scene_path = argv[2 * k];
+		a->photo_path = argv[2 * k + 1];
+		a->nthreads = job->nthreads;
+		job->nalso = k;
+		ret = glint_fit_job_load(a, wl->n ? wl->path[k] : NULL);
+		if (ret == 0)
+			ret = glint_fit_job_crop(a);
+	}
+	return ret;
+}
+
+/* The joint fit's photos, one line each. */
+static void print_photos(const json_t *doc)
+{
+	size_t k;
+	json_t *e;
+
+	json_array_foreach(json_object_get(doc, "photos"), k, e)
+	{
+		json_t *acc = json_object_get(e, "acceptance");
+		printf("photo %zu: %s: relative RMSE %.4f on %d pixels "
+		       "(%s, %s); %s\n",
+		       k + 1, json_string_value(json_object_get(e, "photo")),
+		       json_real_value(json_object_get(e, "relative_rmse")),
+		       (int)json_integer_value(json_object_get(e, "pixels")),
+		       json_string_value(json_object_get(e, "render")),
+		       json_string_value(json_object_get(e, "compare")),
+		       json_string_value(json_object_get(acc, "verdict")));
+	}
+}
+
 int cmd_fit(int argc, char **argv)
 {
 	static const char *const weightings[] = { "poisson", "uniform", NULL };
 	struct glint_fit_job job = { .model = &glint_model_torrance_sparrow };
 	const char *weights = NULL;
+	struct weights_list wl = { .n = 0 };
+	static struct glint_fit_job also[GLINT_FIT_MAX_VIEWS - 1];
+	int npairs = 1;
 	int wait = 0, samples = 0, sets = 0, seed = -1, ladder = 0;
 	int method = -1, optimizer = -1, weighting = -1, nocoarse = 0;
 
@@ -286,7 +367,7 @@ int cmd_fit(int argc, char **argv)
 		CMD_CHOICE("optimizer", &optimizer, glint_fit_optimizer_names),
 		CMD_FLAG("no-coarse", 0, &nocoarse),
 		CMD_FLAG("faithful", 0, &job.opts.faithful),
-		CMD_STRING("weights", 0, &weights),
+		CMD_CALL("weights", &wl, add_weights),
 		CMD_CHOICE("weighting", &weighting, weightings),
 		CMD_REAL("mask-threshold", &job.opts.mask_threshold, 0, 1e6),
 		CMD_INT("max-pixels", &job.opts.max_pixels, 64, 1 << 24),
@@ -332,6 +413,12 @@ int cmd_fit(int argc, char **argv)
 		job.ladder = 0.5;
 	struct glint_session_fit fs;
 	int lock = -1, ret;
+	if (a.argc == 1 && wl.n > 1)
+		return cmd_usage_error("fit",
+				       "--weights given %d times for "
+				       "one photo",
+				       wl.n);
+	weights = wl.n ? wl.path[0] : NULL;
 	if (a.argc == 1) {
 		ret = glint_session_fit_open(a.argv[0], wait, &fs, &lock);
 		if (ret < 0)
@@ -342,13 +429,26 @@ int cmd_fit(int argc, char **argv)
 			weights = fs.weights;
 		if (!job.out_dir)
 			job.out_dir = fs.out;
-	} else if (a.argc == 2) {
+	} else if (a.argc >= 2 && a.argc % 2 == 0) {
+		npairs = a.argc / 2;
+		if (npairs > GLINT_FIT_MAX_VIEWS)
+			return cmd_usage_error("fit",
+					       "%d photos: a joint fit takes "
+					       "at most %d",
+					       npairs, GLINT_FIT_MAX_VIEWS);
+		if (wl.n && wl.n != npairs)
+			return cmd_usage_error(
+				"fit",
+				"--weights given %d times for %d photos: once "
+				"per photo, in their order, or not at all",
+				wl.n, npairs);
 		job.scene_path = a.argv[0];
 		job.photo_path = a.argv[1];
 	} else {
 		return cmd_usage_error("fit",
-				       "expected SCENE.json and PHOTO, or a "
-				       "capture SESSION");
+				       "expected SCENE.json and PHOTO (or "
+				       "several such pairs), or a capture "
+				       "SESSION");
 	}
 	if (!job.out_dir)
 		job.out_dir = "fit-out";
@@ -357,9 +457,13 @@ int cmd_fit(int argc, char **argv)
 	ret = glint_fit_job_load(&job, weights);
 	if (!ret)
 		ret = glint_fit_job_crop(&job);
+	if (!ret && npairs > 1)
+		ret = load_also(&job, also, npairs, a.argv, &wl);
 	if (!ret)
 		ret = glint_fit_job_run(&job, &doc);
 	glint_fit_job_unload(&job);
+	for (int k = 0; k < job.nalso; k++)
+		glint_fit_job_unload(&also[k]);
 	glint_lockfile_release(lock);
 	if (ret < 0)
 		return cmd_fail("fit");
@@ -381,8 +485,9 @@ int cmd_fit(int argc, char **argv)
 	       (int)json_integer_value(json_object_get(doc, "pixels")));
 	cmd_print_params(doc, NULL);
 	cmd_print_verdicts(doc);
-	printf("results: %s/params.json, render.exr, compare.png\n",
-	       job.out_dir);
+	print_photos(doc);
+	printf("results: %s/params.json, render%s.exr, compare%s.png\n",
+	       job.out_dir, npairs > 1 ? "[-N]" : "", npairs > 1 ? "[-N]" : "");
 	size_t k;
 	json_t *e;
 	json_array_foreach(json_object_get(doc, "exports"), k, e)

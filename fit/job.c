@@ -480,15 +480,32 @@ out:
 	return ret;
 }
 
-/* params.json, render.exr and compare.png into job->out_dir, as one
- * atomic folder (the old one stays whole on failure). */
-static int write_results(const struct glint_fit_job *job, const char *dir,
-			 const json_t *doc, const struct glint_image *img,
-			 const struct glint_image *cov,
-			 const struct glint_misfit *mf,
-			 const struct glint_export *exports,
-			 const struct glint_model_ops *model)
+/* One photo's outputs: its job (inputs), the render of the result in its
+ * scene, the render's covariance, its misfit by angle (have_mf), the
+ * final render's record. */
+struct view_out {
+	const struct glint_fit_job *job;
+	struct glint_image *img, *cov;
+	struct glint_misfit mf;
+	int have_mf;
+	json_t *render_info;
+};
+
+/* Photo k's render and compare image names: render.exr, render-2.exr, ... */
+static void view_file(int k, const char *stem, const char *ext, char *buf,
+		      size_t n)
 {
+	if (k == 0)
+		snprintf(buf, n, "%s%s", stem, ext);
+	else
+		snprintf(buf, n, "%s-%d%s", stem, k + 1, ext);
+}
+
+/* Photo k's render.exr and compare.png into the atomic folder ad. */
+static int write_view(struct glint_atomic_dir *ad, int k,
+		      const struct view_out *vo)
+{
+	const struct glint_misfit *mf = vo->have_mf ? &vo->mf : NULL;
 	double ve[GLINT_MISFIT_BANDS + 1], me[GLINT_MISFIT_BANDS + 1];
 	double mean[2][GLINT_MISFIT_BANDS], se[2][GLINT_MISFIT_BANDS];
 	long px[2][GLINT_MISFIT_BANDS];
@@ -497,20 +514,46 @@ static int write_results(const struct glint_fit_job *job, const char *dir,
 		{ "MIRROR ANGLE", GLINT_MISFIT_BANDS, me, mean[1], se[1],
 		  px[1] },
 	};
-	for (int k = 0; mf && k < GLINT_MISFIT_BANDS; k++) {
-		const struct glint_misfit_band *b[2] = { &mf->view[k],
-							 &mf->mirror[k] };
+	for (int b = 0; mf && b < GLINT_MISFIT_BANDS; b++) {
+		const struct glint_misfit_band *band[2] = { &mf->view[b],
+							    &mf->mirror[b] };
 		for (int a = 0; a < 2; a++) {
-			mean[a][k] = b[a]->mean;
-			se[a][k] = b[a]->se;
-			px[a][k] = b[a]->n;
+			mean[a][b] = band[a]->mean;
+			se[a][b] = band[a]->se;
+			px[a][b] = band[a]->n;
 		}
-		ve[k] = b[0]->lo_deg;
-		me[k] = b[1]->lo_deg;
-		ve[k + 1] = b[0]->hi_deg;
-		me[k + 1] = b[1]->hi_deg;
+		ve[b] = band[0]->lo_deg;
+		me[b] = band[1]->lo_deg;
+		ve[b + 1] = band[0]->hi_deg;
+		me[b + 1] = band[1]->hi_deg;
 	}
+	const struct glint_fit_job *job = vo->job;
+	struct glint_write_opts wo = {
+		.window_x = job->window.x,
+		.window_y = job->window.y,
+		.frame_width = job->window.frame_width,
+		.frame_height = job->window.frame_height,
+	};
+	char name[32], path[GLINT_PATH_MAX];
+	view_file(k, "render", ".exr", name, sizeof(name));
+	int ret = glint_image_write(
+		glint_atomic_dir_file(ad, name, path, sizeof(path)), vo->img,
+		&wo);
+	view_file(k, "compare", ".png", name, sizeof(name));
+	if (!ret)
+		ret = glint_compare_png_plots(
+			glint_atomic_dir_file(ad, name, path, sizeof(path)),
+			job->photo, vo->img, vo->cov, plots, mf ? 2 : 0, NULL);
+	return ret;
+}
 
+/* params.json, and each photo's render.exr and compare.png, into dir as
+ * one atomic folder (the old one stays whole on failure). */
+static int write_results(const struct glint_fit_job *job, const char *dir,
+			 const json_t *doc, const struct view_out *outs,
+			 int nviews, const struct glint_export *exports,
+			 const struct glint_model_ops *model)
+{
 	struct glint_atomic_dir ad;
 	char path[GLINT_PATH_MAX];
 	int ret = glint_atomic_dir_open(&ad, dir);
@@ -524,22 +567,8 @@ static int write_results(const struct glint_fit_job *job, const char *dir,
 			     text, strlen(text))
 		   : glint_error_set(ENOMEM, "out of memory");
 	free(text);
-	struct glint_write_opts wo = {
-		.window_x = job->window.x,
-		.window_y = job->window.y,
-		.frame_width = job->window.frame_width,
-		.frame_height = job->window.frame_height,
-	};
-	if (!ret)
-		ret = glint_image_write(glint_atomic_dir_file(&ad, "render.exr",
-							      path,
-							      sizeof(path)),
-					img, &wo);
-	if (!ret)
-		ret = glint_compare_png_plots(
-			glint_atomic_dir_file(&ad, "compare.png", path,
-					      sizeof(path)),
-			job->photo, img, cov, plots, mf ? 2 : 0, NULL);
+	for (int k = 0; k < nviews && !ret; k++)
+		ret = write_view(&ad, k, &outs[k]);
 	char name_buf[256];
 	for (int k = 0; exports && !ret && k < GLINT_EXPORT_NFORMATS; k++) {
 		const struct glint_export *e = &exports[k];
@@ -607,11 +636,24 @@ static json_t *refit_exports(const struct glint_fit_job *job,
  * previous result, or nothing): checked before any work. */
 static int check_outputs(const struct glint_fit_job *job)
 {
-	static const char *const names[] = {
-		"params.json",	 "render.exr",	  "compare.png",
-		"material.gltf", "material.xml",  "material.pbrt",
-		"material.py",	 "material.mtlx", NULL
+	static const char *const fixed[] = {
+		"params.json",	"render.exr",	 "compare.png", "material.gltf",
+		"material.xml", "material.pbrt", "material.py", "material.mtlx",
 	};
+	enum { NFIXED = sizeof(fixed) / sizeof(fixed[0]) };
+	/* and a joint fit's render-N.exr, compare-N.png */
+	char more[2 * (GLINT_FIT_MAX_VIEWS - 1)][32];
+	const char *names[NFIXED + 2 * (GLINT_FIT_MAX_VIEWS - 1) + 1];
+	int n = 0;
+	for (int k = 0; k < NFIXED; k++)
+		names[n++] = fixed[k];
+	for (int k = 1; k < GLINT_FIT_MAX_VIEWS; k++) {
+		view_file(k, "render", ".exr", more[2 * k - 2], 32);
+		view_file(k, "compare", ".png", more[2 * k - 1], 32);
+		names[n++] = more[2 * k - 2];
+		names[n++] = more[2 * k - 1];
+	}
+	names[n] = NULL;
 	char dir[GLINT_PATH_MAX];
 	int ret = glint_atomic_dir_check(job->out_dir, names, job->force);
 
@@ -772,101 +814,239 @@ void glint_fit_job_unload(struct glint_fit_job *job)
 	job->photo = job->weight = NULL;
 }
 
+/* What a joint fit cannot do (yet): checked before any work. */
+static int joint_check(const struct glint_fit_job *job)
+{
+	if (job->nalso + 1 > GLINT_FIT_MAX_VIEWS)
+		return glint_error_set(
+			EINVAL, "%d photos: a joint fit takes at most %d",
+			job->nalso + 1, GLINT_FIT_MAX_VIEWS);
+	if (!job->model)
+		return glint_error_set(EINVAL,
+				       "--model auto chooses from one photo: "
+				       "name the model for a joint fit");
+	if (job->select || job->ladder > 0)
+		return glint_error_set(EINVAL,
+				       "%s works on one photo: fit the photos "
+				       "one by one with it, or jointly "
+				       "without it",
+				       job->select ? "--select-model"
+						   : "the fidelity ladder");
+	return 0;
+}
+
+/* res seen through photo k alone (its statistics), for judging it. */
+static void view_result(const struct glint_fit_result *res, int k,
+			struct glint_fit_result *out)
+{
+	const struct glint_fit_view_stats *st = &res->view[k];
+
+	*out = *res;
+	out->pixels = st->pixels;
+	out->interior = st->interior;
+	out->wcost = st->wcost;
+	out->rmse = st->rmse;
+	out->rel_rmse = st->rel_rmse;
+	out->backdrop_rel_rmse = st->backdrop_rel_rmse;
+	out->flat_rel_rmse = st->flat_rel_rmse;
+	out->noise_rmse = st->noise_rmse;
+	out->nviews = 1;
+}
+
+/* Trace photo k's scene into r. */
+static int trace_view(const struct glint_fit_job *job, int k, int nviews,
+		      struct glint_renderer *r)
+{
+	struct glint_progress prog;
+	char what[32];
+
+	snprintf(what, sizeof(what), nviews > 1 ? "trace %d" : "trace", k + 1);
+	glint_progress_start(&prog, what, job->scene.cam.height);
+	int ret = glint_renderer_init(r, &job->scene, job->nthreads, &prog);
+	glint_progress_finish(&prog);
+	if (ret < 0 && nviews > 1)
+		ret = glint_error_prefix(-ret, "%s", job->scene_path);
+	return ret;
+}
+
+/* Photo k's final render, its record and its misfit by angle. */
+static int render_view(struct glint_renderer *r,
+		       const struct glint_model_ops *model,
+		       const struct glint_fit_result *res, struct view_out *vo)
+{
+	const struct glint_fit_job *job = vo->job;
+	int w = job->scene.cam.width, h = job->scene.cam.height;
+
+	vo->img = glint_image_new(w, h);
+	vo->cov = glint_image_new(w, h);
+	if (!vo->img || !vo->cov)
+		return glint_error_set(ENOMEM, "out of memory");
+	int ret = render_final(r, job, model, res->p, res->seconds, vo->img,
+			       vo->cov, &vo->render_info);
+	if (ret < 0)
+		return ret;
+	if (job->window.frame_width)
+		json_object_set_new(
+			vo->render_info, "window",
+			json_pack("{s:i, s:i, s:i, s:i, s:i, s:i}", "x",
+				  job->window.x, "y", job->window.y, "width", w,
+				  "height", h, "frame_width",
+				  job->window.frame_width, "frame_height",
+				  job->window.frame_height));
+	vo->have_mf = glint_misfit_analyse(&r->gb, r->env, job->photo, vo->img,
+					   job->weight, vo->cov, &vo->mf) == 0;
+	if (!vo->have_mf)
+		glint_error_clear();
+	return 0;
+}
+
+/*
+ * Whether the fit is taken, by the stated rule: over all its pixels and,
+ * in a joint fit, on every photo (each gets its entry in "photos").  A
+ * refused one's reason goes to *why_refused (the photo it concerns).
+ */
+static int judge(const struct glint_fit_job *job,
+		 const struct glint_fit_result *res,
+		 const struct view_out *outs, int nviews, json_t *doc,
+		 char *why_refused, size_t n)
+{
+	struct glint_fit_verdict v;
+	int accepted = glint_fit_judge(res, job->accept_rmse, &v);
+
+	snprintf(why_refused, n, "%s: fit refused: %s", job->photo_path,
+		 v.verdict);
+	json_object_set_new(doc, "accepted", json_boolean(accepted));
+	json_object_set_new(doc, "acceptance", glint_fit_verdict_json(res, &v));
+	json_t *photos = nviews > 1 ? json_array() : NULL;
+	for (int k = 0; photos && k < nviews; k++) {
+		struct glint_fit_result *one = malloc(sizeof(*one));
+		const struct view_out *vo = &outs[k];
+		char name[32], cname[32];
+		if (!one)
+			continue;
+		view_result(res, k, one);
+		int ok = glint_fit_judge(one, job->accept_rmse, &v);
+		if (!ok && accepted)
+			snprintf(why_refused, n,
+				 "%s (photo %d of %d): fit refused: %s",
+				 vo->job->photo_path, k + 1, nviews, v.verdict);
+		accepted &= ok;
+		view_file(k, "render", ".exr", name, sizeof(name));
+		view_file(k, "compare", ".png", cname, sizeof(cname));
+		json_array_append_new(
+			photos,
+			json_pack(
+				"{s:s, s:s, s:i, s:i, s:o, s:o, s:f, s:o, "
+				"s:s, s:s, s:o*, s:o*}",
+				"scene", vo->job->scene_path, "photo",
+				vo->job->photo_path, "pixels", one->pixels,
+				"interior_pixels", one->interior, "rmse",
+				glint_json_real_or_null(one->rmse),
+				"relative_rmse",
+				glint_json_real_or_null(one->rel_rmse),
+				"weighted_cost", one->wcost, "acceptance",
+				glint_fit_verdict_json(one, &v), "render", name,
+				"compare", cname, "misfit",
+				vo->have_mf ? glint_misfit_json(&vo->mf) : NULL,
+				"final_render", json_incref(vo->render_info)));
+		free(one);
+	}
+	if (photos)
+		json_object_set_new(doc, "photos", photos);
+	json_object_set_new(doc, "accepted", json_boolean(accepted));
+	return accepted;
+}
+
 int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 {
-	struct glint_renderer r;
+	int nv = 1 + (job->nalso > 0 ? job->nalso : 0), traced = 0;
+	struct glint_renderer *rs = NULL;
+	struct view_out *outs = NULL;
 	struct glint_fit_result res;
-	struct glint_progress prog;
-	struct glint_image *img = NULL, *cov = NULL;
 	const struct glint_model_ops *model = NULL;
 	json_t *fidelity = NULL, *selection = NULL, *why = NULL, *doc = NULL;
 	int ret;
 
 	*result = NULL;
-	ret = check_outputs(job);
+	ret = nv > 1 ? joint_check(job) : 0;
+	if (ret == 0)
+		ret = check_outputs(job);
 	if (ret < 0)
 		return ret;
-	glint_progress_start(&prog, "trace", job->scene.cam.height);
-	ret = glint_renderer_init(&r, &job->scene, job->nthreads, &prog);
-	glint_progress_finish(&prog);
-	if (ret < 0)
-		return ret;
-	struct glint_fit_opts o = job->opts;
-	o.nthreads = job->nthreads;
-	ret = run_fit(&r, job, &o, &model, &res, &why, &selection, &fidelity);
-	if (o.progress)
-		o.progress(o.progress_ctx, NULL, 0,
-			   0); /* the passes are done */
-	if (ret < 0)
-		goto out;
-	/* The result rendered in full (MIS, the scene's sample counts). */
-	img = glint_image_new(job->scene.cam.width, job->scene.cam.height);
-	cov = glint_image_new(job->scene.cam.width, job->scene.cam.height);
-	if (!img || !cov) {
+	rs = calloc((size_t)nv, sizeof(*rs));
+	outs = calloc((size_t)nv, sizeof(*outs));
+	if (!rs || !outs) {
 		ret = glint_error_set(ENOMEM, "out of memory");
 		goto out;
 	}
-	json_t *render_info = NULL;
-	ret = render_final(&r, job, model, res.p, res.seconds, img, cov,
-			   &render_info);
+	for (int k = 0; k < nv; k++)
+		outs[k].job = k ? &job->also[k - 1] : job;
+	for (; traced < nv && ret == 0; traced++)
+		ret = trace_view(outs[traced].job, traced, nv, &rs[traced]);
+	if (ret < 0) {
+		traced--; /* the failed one released itself */
+		goto out;
+	}
+	struct glint_fit_opts o = job->opts;
+	o.nthreads = job->nthreads;
+	if (nv == 1) {
+		ret = run_fit(&rs[0], job, &o, &model, &res, &why, &selection,
+			      &fidelity);
+	} else {
+		struct glint_fit_view views[GLINT_FIT_MAX_VIEWS];
+		for (int k = 0; k < nv; k++)
+			views[k] = (struct glint_fit_view){
+				&rs[k], outs[k].job->photo, outs[k].job->weight
+			};
+		model = job->model;
+		ret = glint_fit_views(views, nv, model, &o, &res);
+	}
+	if (o.progress)
+		o.progress(o.progress_ctx, NULL, 0,
+			   0); /* the passes are done */
+	/* The result rendered in full in each photo's scene (MIS, the
+	 * scene's sample counts). */
+	for (int k = 0; k < nv && ret == 0; k++)
+		ret = render_view(&rs[k], model, &res, &outs[k]);
 	if (ret < 0)
 		goto out;
 	doc = params_doc(job, &o, &res);
 	if (!doc) {
-		json_decref(render_info);
 		ret = glint_error_set(ENOMEM, "out of memory");
 		goto out;
 	}
-	if (job->window.frame_width)
-		json_object_set_new(
-			render_info, "window",
-			json_pack("{s:i, s:i, s:i, s:i, s:i, s:i}", "x",
-				  job->window.x, "y", job->window.y, "width",
-				  job->scene.cam.width, "height",
-				  job->scene.cam.height, "frame_width",
-				  job->window.frame_width, "frame_height",
-				  job->window.frame_height));
-	json_object_set_new(doc, "render", render_info);
+	json_object_set(doc, "render", outs[0].render_info);
 	if (why)
 		json_object_set(doc, "model_choice", why);
 	if (fidelity)
 		json_object_set(doc, "fidelity", fidelity);
 	if (selection)
 		json_object_set(doc, "model_selection", selection);
-	struct glint_misfit mf, *have_mf = NULL;
-	if (glint_misfit_analyse(&r.gb, r.env, job->photo, img, job->weight,
-				 cov, &mf) == 0) {
-		json_object_set_new(doc, "misfit", glint_misfit_json(&mf));
-		have_mf = &mf;
-	} else {
-		glint_error_clear();
-	}
+	if (outs[0].have_mf)
+		json_object_set_new(doc, "misfit",
+				    glint_misfit_json(&outs[0].mf));
 	/* A fit is taken as a measurement by a stated rule; a refused one
 	 * leaves its evidence beside the output, which stays as it was. */
-	struct glint_fit_verdict v;
-	int accepted = glint_fit_judge(&res, job->accept_rmse, &v);
-	json_object_set_new(doc, "accepted", json_boolean(accepted));
-	json_object_set_new(doc, "acceptance",
-			    glint_fit_verdict_json(&res, &v));
-	if (!accepted) {
+	char refused[1024];
+	if (!judge(job, &res, outs, nv, doc, refused, sizeof(refused))) {
 		char dir[GLINT_PATH_MAX];
 		ret = glint_path_fmt(dir, sizeof(dir), "%s.refused",
 				     job->out_dir);
 		if (!ret)
-			ret = write_results(job, dir, doc, img, cov, have_mf,
-					    NULL, model);
+			ret = write_results(job, dir, doc, outs, nv, NULL,
+					    model);
 		if (!ret)
 			ret = glint_error_set(EINVAL,
-					      "%s: fit refused: %s (the fit's "
-					      "diagnostics are in %s)",
-					      job->photo_path, v.verdict, dir);
+					      "%s (the fit's diagnostics are "
+					      "in %s)",
+					      refused, dir);
 		goto out;
 	}
 	struct glint_export exports[GLINT_EXPORT_NFORMATS];
 	if (job->exports)
 		json_object_set_new(doc, "exports",
 				    refit_exports(job, model, res.p, exports));
-	ret = write_results(job, job->out_dir, doc, img, cov, have_mf,
+	ret = write_results(job, job->out_dir, doc, outs, nv,
 			    job->exports ? exports : NULL, model);
 	if (ret < 0)
 		goto out;
@@ -878,8 +1058,14 @@ out:
 	json_decref(why);
 	json_decref(fidelity);
 	json_decref(selection);
-	glint_image_free(img);
-	glint_image_free(cov);
-	glint_renderer_release(&r);
+	for (int k = 0; outs && k < nv; k++) {
+		glint_image_free(outs[k].img);
+		glint_image_free(outs[k].cov);
+		json_decref(outs[k].render_info);
+	}
+	for (int k = 0; k < traced; k++)
+		glint_renderer_release(&rs[k]);
+	free(rs);
+	free(outs);
 	return ret;
 }

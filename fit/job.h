@@ -40,6 +40,15 @@ struct glint_fit_job {
 	/* bit k set: write out_dir/material + the extension of export
 	 * format k (fit/export.h) with an accepted result */
 	unsigned exports;
+	/* More photos of the same material, each in its own scene: one
+	 * fit to all of them (glint_fit_views()).  Each is a job of its own
+	 * of which only the inputs are used (scene_path, photo_path, loaded
+	 * by glint_fit_job_load() and _crop()); this job has the options
+	 * and the output.  The others' renders and compare images go into
+	 * out_dir as render-N.exr and compare-N.png (N = 2, 3, ...), their
+	 * statistics into params.json's "photos". */
+	struct glint_fit_job *also;
+	int nalso;
 	/* Set by glint_fit_job_crop() or _load(): the photo, weights and
 	 * camera are
 	 * the window at (x, y) of a frame_width x frame_height frame

@@ -252,6 +252,30 @@ check "a refused fit's diagnostics go beside the output" python3 -c "
 import json; r=json.load(open('$tmp/fit1.refused/params.json'))
 assert r['accepted'] is False and 'backdrop' in r['acceptance']['verdict'], r['acceptance']
 assert r['acceptance']['backdrop_relative_rmse'] < r['acceptance']['relative_rmse'], r['acceptance']"
+# A joint fit: the same sphere under the map turned 180 degrees, fitted
+# with the first photo at once.
+sed 's/"rotation_deg": \[0, -114, 0\]/"rotation_deg": [0, 66, 0]/' "$tmp/fscene.json" >"$tmp/fscene2.json"
+check "render a second photo, the light turned" run 0 "" render "$tmp/fscene2.json" --paper satin-paint -o "$tmp/photo2.exr" -q
+check "fit two photos jointly" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" "$tmp/fscene2.json" "$tmp/photo2.exr" -o "$tmp/joint" --json -q
+check "... one material, each photo's fit in params.json, render-2.exr, compare-2.png" python3 -c "
+import json, os; r=json.load(open('$tmp/joint/params.json'))
+ph=r['photos']
+assert [p['photo'] for p in ph]==['$tmp/photo.exr', '$tmp/photo2.exr'], ph
+assert [p['render'] for p in ph]==['render.exr', 'render-2.exr'], ph
+assert all(p['acceptance']['accepted'] and p['pixels'] > 100 for p in ph), ph
+assert r['pixels']==sum(p['pixels'] for p in ph), r['pixels']
+assert abs(r['material']['diffuse'][0]-0.124)<0.02, r['material']
+for f in ['render-2.exr', 'compare-2.png', 'render.exr', 'compare.png']:
+    assert os.path.getsize('$tmp/joint/' + f) > 0, f"
+check "a joint fit's folder is replaced by the next" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" "$tmp/fscene2.json" "$tmp/photo2.exr" -o "$tmp/joint" -q --max-pixels 256 --sample-sets 1
+check "fit: an odd number of scene and photo arguments" run 2 "several such pairs" fit "$tmp/fscene.json" "$tmp/photo.exr" "$tmp/fscene2.json"
+check "fit: --weights once for two photos" run 2 "--weights given 1 times for 2 photos" fit "$tmp/fscene.json" "$tmp/photo.exr" "$tmp/fscene2.json" "$tmp/photo2.exr" --weights "$tmp/w.exr" -o "$tmp/jx"
+check "fit: --model auto refused for a joint fit" run 1 "name the model for a joint fit" fit "$tmp/fscene.json" "$tmp/photo.exr" "$tmp/fscene2.json" "$tmp/photo2.exr" --model auto -o "$tmp/jx"
+check "fit: a joint fit with a photo that does not show its scene's sphere is refused, naming it" run 1 "photo.exr (photo 2 of 2): fit refused: the photo shows the backdrop" fit "$tmp/fscene.json" "$tmp/photo.exr" "$tmp/elsewhere.json" "$tmp/photo.exr" -o "$tmp/jx"
+check "... its evidence beside the output, per photo" python3 -c "
+import json; r=json.load(open('$tmp/jx.refused/params.json'))
+assert r['accepted'] is False, r['accepted']
+assert [p['acceptance']['accepted'] for p in r['photos']]==[True, False], r['photos']"
 check "--accept-rmse replaces the rule" run 1 "relative RMSE 0.1" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fit1" --accept-rmse 0.001
 check "--accept-rmse must be a positive number" run 2 "--accept-rmse 'no'" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fit1" --accept-rmse no
 python3 -c "

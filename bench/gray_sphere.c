@@ -140,36 +140,51 @@ struct row {
 	double rel_rmse, bic;
 };
 
-static int fit_light(int li, struct vec3 ldir, double cx, double cy, double rpx,
-		     int max_pixels, const struct glint_model_ops **models,
-		     int nmodels, struct row *rows)
+/* One light's photo, weights and scene, traced. */
+struct shot {
+	struct glint_image *photo, *weight;
+	struct glint_renderer r;
+	int inited;
+};
+
+static void shot_free(struct shot *s)
+{
+	if (s->inited)
+		glint_renderer_release(&s->r);
+	glint_image_free(s->photo);
+	glint_image_free(s->weight);
+	memset(s, 0, sizeof(*s));
+}
+
+static int load_light(int li, struct vec3 ldir, double cx, double cy,
+		      double rpx, struct shot *s)
 {
 	char path[512];
-	struct glint_image *photo = NULL, *weight = NULL, *map;
+	struct glint_image *map;
 	struct glint_envmap *env = NULL;
 	struct glint_scene sc;
-	struct glint_renderer r;
 	int ret;
 
+	memset(s, 0, sizeof(*s));
 	snprintf(path, sizeof(path), DIR "/gray/gray.%d.tga", li);
-	ret = glint_ldr_read_image(path, &photo);
+	ret = glint_ldr_read_image(path, &s->photo);
 	if (ret < 0)
 		return ret;
-	weight = glint_image_new(photo->width, photo->height);
-	if (!weight) {
-		glint_image_free(photo);
+	s->weight = glint_image_new(s->photo->width, s->photo->height);
+	if (!s->weight)
 		return -ENOMEM;
-	}
-	for (size_t k = 0; k < (size_t)photo->width * photo->height * 3; k++) {
-		double c = photo->data[k];
+	for (size_t k = 0; k < (size_t)s->photo->width * s->photo->height * 3;
+	     k++) {
+		double c = s->photo->data[k];
 		double sd = slope(c) * sqrt(1.0 / 12 + 1) / 255;
-		photo->data[k] = (float)linear(c);
-		weight->data[k] = c >= 1 ? 0 : (float)(1 / (sd * sd));
+		s->photo->data[k] = (float)linear(c);
+		s->weight->data[k] = c >= 1 ? 0 : (float)(1 / (sd * sd));
 	}
 	glint_scene_defaults(&sc);
 	double fpx = 20000, pitch = 1e-5, R = 0.05;
-	glint_pinhole_init(&sc.cam, photo->width, photo->height, fpx * pitch,
-			   pitch, 0, 0, v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
+	glint_pinhole_init(&sc.cam, s->photo->width, s->photo->height,
+			   fpx * pitch, pitch, 0, 0, v3(0, 0, 0), v3(0, 0, -1),
+			   v3(0, 1, 0));
 	ret = glint_pinhole_sphere_from_circle(&sc.cam, cx, cy, rpx, R,
 					       &sc.sphere_centre);
 	sc.sphere_radius = R;
@@ -181,34 +196,103 @@ static int fit_light(int li, struct vec3 ldir, double cx, double cy, double rpx,
 		ret = glint_envmap_new(map, sc.env_rotation, 1, "point light",
 				       &env);
 	if (!ret)
-		ret = glint_renderer_init_env(&r, &sc, env, 0, NULL);
-	int inited = !ret;
-	for (int m = 0; m < nmodels && !ret; m++) {
-		struct glint_fit_opts o;
-		struct glint_fit_result res;
-		glint_fit_default_opts(&o);
-		o.max_pixels = max_pixels;
-		ret = glint_fit(&r, models[m], photo, weight, &o, &res);
-		if (ret < 0)
-			break;
-		memcpy(rows[m].p, res.p, sizeof(res.p));
-		memcpy(rows[m].se, res.se, sizeof(res.se));
-		rows[m].rel_rmse = res.rel_rmse;
-		double n = 3.0 * res.pixels;
-		rows[m].bic =
-			n * log(2 * res.cost / n) + models[m]->nparams * log(n);
-	}
-	if (inited)
-		glint_renderer_release(&r);
-	glint_image_free(photo);
-	glint_image_free(weight);
+		ret = glint_renderer_init_env(&s->r, &sc, env, 0, NULL);
+	s->inited = !ret;
 	return ret;
+}
+
+/* Fit models[m] to the shots (one: alone; several: jointly). */
+static int fit_shots(struct shot *const *shots, int n, int max_pixels,
+		     const struct glint_model_ops *model, struct row *row,
+		     struct glint_fit_result *out)
+{
+	struct glint_fit_view v[NLIGHTS];
+	struct glint_fit_opts o;
+	struct glint_fit_result res;
+
+	for (int k = 0; k < n; k++)
+		v[k] = (struct glint_fit_view){ &shots[k]->r, shots[k]->photo,
+						shots[k]->weight };
+	glint_fit_default_opts(&o);
+	o.max_pixels = max_pixels;
+	int ret = glint_fit_views(v, n, model, &o, &res);
+	if (ret < 0)
+		return ret;
+	memcpy(row->p, res.p, sizeof(res.p));
+	memcpy(row->se, res.se, sizeof(res.se));
+	row->rel_rmse = res.rel_rmse;
+	double nv = 3.0 * res.pixels;
+	row->bic = nv * log(2 * res.cost / nv) + model->nparams * log(nv);
+	if (out)
+		*out = res;
+	return 0;
 }
 
 static int cmp_double(const void *a, const void *b)
 {
 	double x = *(const double *)a, y = *(const double *)b;
 	return (x > y) - (x < y);
+}
+
+/*
+ * One fit of each model to all the lights' photos at once (glint fit with
+ * several photos): its values and intervals, each photo's relative RMSE,
+ * and how the per-light fits sit against it: the chi^2 per degree of
+ * freedom of their differences from the joint value in their own
+ * standard errors, and how many of their intervals hold it.
+ */
+static int joint_fits(struct shot *const *shots, int n, int max_pixels,
+		      const struct glint_model_ops **models, int nmodels,
+		      struct row (*rows)[3], const int *use)
+{
+	struct glint_fit_result *res = malloc(sizeof(*res));
+
+	if (!res)
+		return -ENOMEM;
+	printf("\\njoint fit of the %d lights' photos (one material, every "
+	       "photo in its own scene):\\n",
+	       n);
+	for (int m = 0; m < nmodels; m++) {
+		struct row jr;
+		double t0 = glint_now();
+		int ret = fit_shots(shots, n, max_pixels, models[m], &jr, res);
+		if (ret < 0) {
+			free(res);
+			return ret;
+		}
+		printf("  %-17s rel.RMSE %.4f, BIC %.1f, chi2/dof %.2f, "
+		       "%.0f s; per photo:",
+		       models[m]->name, jr.rel_rmse, jr.bic, res->unc.chi2_dof,
+		       glint_now() - t0);
+		for (int v = 0; v < res->nviews; v++)
+			printf(" %.3f", res->view[v].rel_rmse);
+		printf("\\n");
+		for (int k = 0; k < models[m]->nparams; k++) {
+			if (k == 1 || k == 2 || k == 4 || k == 5)
+				continue;
+			double chi2 = 0;
+			int cnt = 0, hold = 0;
+			for (int i = 0; i < NLIGHTS; i++) {
+				if (!use[i] || !(rows[i][m].se[k] > 0) ||
+				    !isfinite(rows[i][m].se[k]))
+					continue;
+				double z = (rows[i][m].p[k] - jr.p[k]) /
+					   rows[i][m].se[k];
+				chi2 += z * z;
+				cnt++;
+				hold += fabs(z) <= 1.96;
+			}
+			printf("    %-18s %8.4f +- %.4f  [%.4f, %.4f]   per "
+			       "light vs joint: chi2/dof %.2f, %d of %d "
+			       "intervals hold it\\n",
+			       models[m]->params[k].name, jr.p[k], jr.se[k],
+			       res->unc.lo[k], res->unc.hi[k],
+			       cnt > 1 ? chi2 / (cnt - 1) : NAN, hold, cnt);
+		}
+		fflush(stdout);
+	}
+	free(res);
+	return 0;
 }
 
 int main(int argc, char **argv)
@@ -252,15 +336,23 @@ int main(int argc, char **argv)
 		printf("  gamma %.3f\n", response_gamma);
 	printf("light  angle  model              rel.RMSE        BIC   "
 	       "parameters (value +- standard error)\n");
+	static struct shot shots[NLIGHTS];
+	struct shot *used[NLIGHTS];
+	int nused = 0;
 	for (int i = 0; i < NLIGHTS; i++) {
 		if (!use[i])
 			continue;
-		if (fit_light(i, lights[i], cx, cy, rpx, max_pixels, models, NM,
-			      rows[i]) < 0) {
+		struct shot *sp = &shots[i];
+		int ret = load_light(i, lights[i], cx, cy, rpx, sp);
+		for (int m = 0; m < NM && ret == 0; m++)
+			ret = fit_shots(&sp, 1, max_pixels, models[m],
+					&rows[i][m], NULL);
+		if (ret < 0) {
 			fprintf(stderr, "gray_sphere: light %d: %s\n", i,
 				glint_error_msg());
 			return 1;
 		}
+		used[nused++] = sp;
 		for (int m = 0; m < NM; m++) {
 			printf("%5d  %5.1f  %-17s  %8.4f  %9.1f  ", i,
 			       acos(lights[i].z) * 180 / M_PI, models[m]->name,
@@ -275,6 +367,14 @@ int main(int argc, char **argv)
 		}
 		fflush(stdout);
 	}
+	if (nused > 1 &&
+	    joint_fits(used, nused, max_pixels, models, NM, rows, use) < 0) {
+		fprintf(stderr, "gray_sphere: joint fit: %s\n",
+			glint_error_msg());
+		return 1;
+	}
+	for (int i = 0; i < NLIGHTS; i++)
+		shot_free(&shots[i]);
 	/* Across lights: each parameter's spread against its errors. */
 	printf("\nacross %d lights: parameter, mean, standard deviation, "
 	       "median standard error, ratio; combined (inverse-variance) "

@@ -19,13 +19,14 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 static void fit_help_intro(void)
 {
 	printf("usage: glint fit SCENE.json PHOTO.exr [SCENE2.json PHOTO2.exr "
 	       "...] [options]\n"
-	       "       glint fit SESSION [options]\n"
+	       "       glint fit SESSION [SESSION2 ...] [options]\n"
 	       "\n"
 	       "Recover a material's parameters from one HDR image of the "
 	       "sphere (PHOTO, the\nscene camera's size, linear radiance) "
@@ -50,7 +51,10 @@ static void fit_help_intro(void)
 	       "params.json's \"photos\" says how the result fits each; "
 	       "render-N.exr\nand compare-N.png show it.  --weights is then "
 	       "given once per photo, in\norder; a joint fit takes a named "
-	       "--model, not auto, --select-model or --ladder.\n"
+	       "--model, not auto, --select-model or --ladder.\nSeveral "
+	       "SESSIONs (the sample captured under each light, each with "
+	       "its probe) are\nfitted the same way, with their merges' "
+	       "weights, into -o DIR.\n"
 	       "\n");
 }
 
@@ -306,22 +310,117 @@ static int add_weights(const char *arg, void *dest)
 	return 0;
 }
 
-/* The photos after the first of a joint fit (argv: scene, photo pairs)
- * loaded into also[], with their weights. */
-static int load_also(struct glint_fit_job *job, struct glint_fit_job *also,
-		     int npairs, char **argv, const struct weights_list *wl)
-{
-	int ret = 0;
+/* What to fit: scene, photo and weights of each photo, from SCENE PHOTO
+ * pairs or capture sessions (their fit locks held). */
+struct fit_inputs {
+	int n;
+	const char *scene[GLINT_FIT_MAX_VIEWS], *photo[GLINT_FIT_MAX_VIEWS];
+	const char *weights[GLINT_FIT_MAX_VIEWS];
+	struct glint_session_fit fs[GLINT_FIT_MAX_VIEWS];
+	int lock[GLINT_FIT_MAX_VIEWS];
+};
 
+static int is_dir(const char *path)
+{
+	struct stat st;
+
+	return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+/* Sessions: each one's scene, sample and merge weights, locked.  Returns
+ * 0, or cmd_fail()'s status. */
+static int session_inputs(char **dirs, int n, int wait,
+			  const struct weights_list *wl, struct fit_inputs *in)
+{
+	for (int k = 0; k < n; k++) {
+		struct glint_session_fit *fs = &in->fs[k];
+		if (glint_session_fit_open(dirs[k], wait, fs, &in->lock[k]) < 0)
+			return cmd_fail("fit");
+		in->n = k + 1;
+		in->scene[k] = fs->scene;
+		in->photo[k] = fs->photo;
+		in->weights[k] = wl->n		  ? wl->path[k]
+				 : fs->weights[0] ? fs->weights
+						  : NULL;
+	}
+	return 0;
+}
+
+/*
+ * The positional arguments: one SESSION, several SESSIONs (a joint fit of
+ * their samples, -o required), or SCENE PHOTO pairs; --weights once per
+ * photo.  *out_dir defaults to the session's fit folder, or fit-out.
+ * Returns 0, or the command's exit status.
+ */
+static int fit_inputs(const struct cmd_args *a, const struct weights_list *wl,
+		      int wait, struct fit_inputs *in, const char **out_dir)
+{
+	int sessions = a->argc >= 1, n;
+
+	for (int k = 0; k < GLINT_FIT_MAX_VIEWS; k++)
+		in->lock[k] = -1;
+	in->n = 0;
+	for (int k = 0; k < a->argc; k++)
+		sessions &= is_dir(a->argv[k]);
+	if (!sessions && (a->argc < 2 || a->argc % 2))
+		return cmd_usage_error("fit",
+				       "expected SCENE.json and PHOTO (or "
+				       "several such pairs), or capture "
+				       "SESSIONs");
+	n = sessions ? a->argc : a->argc / 2;
+	if (n > GLINT_FIT_MAX_VIEWS)
+		return cmd_usage_error(
+			"fit", "%d photos: a joint fit takes at most %d", n,
+			GLINT_FIT_MAX_VIEWS);
+	if (wl->n && wl->n != n)
+		return cmd_usage_error("fit",
+				       "--weights given %d times for %d "
+				       "photo%s: once per photo, in their "
+				       "order, or not at all",
+				       wl->n, n, n > 1 ? "s" : "");
+	if (sessions && n > 1 && !*out_dir)
+		return cmd_usage_error("fit",
+				       "a joint fit of %d sessions writes "
+				       "into no session's folder: give -o "
+				       "DIR",
+				       n);
+	if (sessions) {
+		int ret = session_inputs(a->argv, n, wait, wl, in);
+		if (ret)
+			return ret;
+		if (!*out_dir)
+			*out_dir = in->fs[0].out;
+		return 0;
+	}
+	for (int k = 0; k < n; k++) {
+		in->scene[k] = a->argv[2 * k];
+		in->photo[k] = a->argv[2 * k + 1];
+		in->weights[k] = wl->n ? wl->path[k] : NULL;
+	}
+	in->n = n;
+	if (!*out_dir)
+		*out_dir = "fit-out";
+	return 0;
+}
+
+/* The job's photos loaded: the first into job, the others into also[]. */
+static int load_inputs(struct glint_fit_job *job, struct glint_fit_job *also,
+		       const struct fit_inputs *in)
+{
+	job->scene_path = in->scene[0];
+	job->photo_path = in->photo[0];
+	int ret = glint_fit_job_load(job, in->weights[0]);
+	if (ret == 0)
+		ret = glint_fit_job_crop(job);
 	job->also = also;
-	for (int k = 1; k < npairs && ret == 0; k++) {
+	for (int k = 1; k < in->n && ret == 0; k++) {
 		struct glint_fit_job *a = &also[k - 1];
 		memset(a, 0, sizeof(*a));
-		a->scene_path = argv[2 * k];
-		a->photo_path = argv[2 * k + 1];
+		a->scene_path = in->scene[k];
+		a->photo_path = in->photo[k];
 		a->nthreads = job->nthreads;
 		job->nalso = k;
-		ret = glint_fit_job_load(a, wl->n ? wl->path[k] : NULL);
+		ret = glint_fit_job_load(a, in->weights[k]);
 		if (ret == 0)
 			ret = glint_fit_job_crop(a);
 	}
@@ -352,10 +451,8 @@ int cmd_fit(int argc, char **argv)
 {
 	static const char *const weightings[] = { "poisson", "uniform", NULL };
 	struct glint_fit_job job = { .model = &glint_model_torrance_sparrow };
-	const char *weights = NULL;
 	struct weights_list wl = { .n = 0 };
 	static struct glint_fit_job also[GLINT_FIT_MAX_VIEWS - 1];
-	int npairs = 1;
 	int wait = 0, samples = 0, sets = 0, seed = -1, ladder = 0;
 	int method = -1, optimizer = -1, weighting = -1, nocoarse = 0;
 
@@ -411,62 +508,24 @@ int cmd_fit(int argc, char **argv)
 		job.opts.seed = (uint64_t)seed;
 	if ((ladder || job.ladder_knobs) && !(job.ladder > 0))
 		job.ladder = 0.5;
-	struct glint_session_fit fs;
-	int lock = -1, ret;
-	if (a.argc == 1 && wl.n > 1)
-		return cmd_usage_error("fit",
-				       "--weights given %d times for "
-				       "one photo",
-				       wl.n);
-	weights = wl.n ? wl.path[0] : NULL;
-	if (a.argc == 1) {
-		ret = glint_session_fit_open(a.argv[0], wait, &fs, &lock);
-		if (ret < 0)
-			return cmd_fail("fit");
-		job.scene_path = fs.scene;
-		job.photo_path = fs.photo;
-		if (!weights && fs.weights[0])
-			weights = fs.weights;
-		if (!job.out_dir)
-			job.out_dir = fs.out;
-	} else if (a.argc >= 2 && a.argc % 2 == 0) {
-		npairs = a.argc / 2;
-		if (npairs > GLINT_FIT_MAX_VIEWS)
-			return cmd_usage_error("fit",
-					       "%d photos: a joint fit takes "
-					       "at most %d",
-					       npairs, GLINT_FIT_MAX_VIEWS);
-		if (wl.n && wl.n != npairs)
-			return cmd_usage_error(
-				"fit",
-				"--weights given %d times for %d photos: once "
-				"per photo, in their order, or not at all",
-				wl.n, npairs);
-		job.scene_path = a.argv[0];
-		job.photo_path = a.argv[1];
-	} else {
-		return cmd_usage_error("fit",
-				       "expected SCENE.json and PHOTO (or "
-				       "several such pairs), or a capture "
-				       "SESSION");
-	}
-	if (!job.out_dir)
-		job.out_dir = "fit-out";
+	static struct fit_inputs in;
+	int ret = fit_inputs(&a, &wl, wait, &in, &job.out_dir);
+	if (ret)
+		goto unlock;
 	json_t *doc = NULL;
 	job.opts.progress = cmd_fit_progress;
-	ret = glint_fit_job_load(&job, weights);
-	if (!ret)
-		ret = glint_fit_job_crop(&job);
-	if (!ret && npairs > 1)
-		ret = load_also(&job, also, npairs, a.argv, &wl);
+	ret = load_inputs(&job, also, &in);
 	if (!ret)
 		ret = glint_fit_job_run(&job, &doc);
 	glint_fit_job_unload(&job);
 	for (int k = 0; k < job.nalso; k++)
 		glint_fit_job_unload(&also[k]);
-	glint_lockfile_release(lock);
-	if (ret < 0)
-		return cmd_fail("fit");
+	ret = ret < 0 ? cmd_fail("fit") : 0;
+unlock:
+	for (int k = 0; k < GLINT_FIT_MAX_VIEWS; k++)
+		glint_lockfile_release(in.lock[k]);
+	if (ret)
+		return ret;
 	if (json) {
 		cmd_print_json(doc);
 		return GLINT_EXIT_OK;
@@ -487,7 +546,7 @@ int cmd_fit(int argc, char **argv)
 	cmd_print_verdicts(doc);
 	print_photos(doc);
 	printf("results: %s/params.json, render%s.exr, compare%s.png\n",
-	       job.out_dir, npairs > 1 ? "[-N]" : "", npairs > 1 ? "[-N]" : "");
+	       job.out_dir, in.n > 1 ? "[-N]" : "", in.n > 1 ? "[-N]" : "");
 	size_t k;
 	json_t *e;
 	json_array_foreach(json_object_get(doc, "exports"), k, e)

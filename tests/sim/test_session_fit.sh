@@ -80,6 +80,24 @@ bad = [(k, p[k], t) for k, (t, tol) in truth.items() if abs(p[k] - t) > tol]
 print('  recovered', {k: round(v, 4) for k, v in p.items()})
 sys.exit(1 if bad else 0)"
 
+# Two sample sessions fitted jointly (on a rig with several lights, one
+# per light; here the same light twice): their merges' weights, -o needed.
+check "a second sample capture" run 0 "sample sphere at" capture sample --config "$tmp/sample.json" --json
+sess2=$(python3 -c "import json; print(json.load(open('$tmp/out'))['session'])")
+check "glint fit SESSION SESSION2 without -o: exit 2, says why" run 2 "give -o DIR" fit "$sess" "$sess2"
+check "glint fit SESSION SESSION2 -o DIR: one material from both samples" run 0 "" fit "$sess" "$sess2" -o "$tmp/joint" --json -q --sample-sets 1
+check "... each session's sample and weights, both photos accepted" python3 -c "
+import json, sys
+d = json.load(open('$tmp/joint/params.json'))
+ph = d['photos']
+print('  photos', [(p['photo'], round(p['relative_rmse'], 4)) for p in ph])
+assert [p['photo'] for p in ph] == ['$sess/sample.exr', '$sess2/sample.exr'], ph
+assert d['weighting'] == 'weight image', d['weighting']
+assert all(p['acceptance']['accepted'] for p in ph), ph
+p = {q['name']: q['value'] for q in d['parameters']}
+assert abs(p['diffuse.r'] - 0.292) < 0.01, p"
+check "... and no session's fit folder touched" test ! -e "$sess2/fit"
+
 check "a probe session is not fittable: named" run 1 "expected a complete sample session" fit "$(ls -d "$tmp"/caps/probe-*)"
 
 # Two fits of one session: the second is refused, naming the holder; with

@@ -249,8 +249,8 @@ static int joint_fits(struct shot *const *shots, int n, int max_pixels,
 
 	if (!res)
 		return -ENOMEM;
-	printf("\\njoint fit of the %d lights' photos (one material, every "
-	       "photo in its own scene):\\n",
+	printf("\njoint fit of the %d lights' photos (one material, every "
+	       "photo in its own scene):\n",
 	       n);
 	for (int m = 0; m < nmodels; m++) {
 		struct row jr;
@@ -266,7 +266,7 @@ static int joint_fits(struct shot *const *shots, int n, int max_pixels,
 		       glint_now() - t0);
 		for (int v = 0; v < res->nviews; v++)
 			printf(" %.3f", res->view[v].rel_rmse);
-		printf("\\n");
+		printf("\n");
 		for (int k = 0; k < models[m]->nparams; k++) {
 			if (k == 1 || k == 2 || k == 4 || k == 5)
 				continue;
@@ -284,7 +284,7 @@ static int joint_fits(struct shot *const *shots, int n, int max_pixels,
 			}
 			printf("    %-18s %8.4f +- %.4f  [%.4f, %.4f]   per "
 			       "light vs joint: chi2/dof %.2f, %d of %d "
-			       "intervals hold it\\n",
+			       "intervals hold it\n",
 			       models[m]->params[k].name, jr.p[k], jr.se[k],
 			       res->unc.lo[k], res->unc.hi[k],
 			       cnt > 1 ? chi2 / (cnt - 1) : NAN, hold, cnt);

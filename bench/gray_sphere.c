@@ -4,7 +4,9 @@
  * sphere (../shared/data/spheres/uw_psm/gray/), 8-bit TGA, 512 x 340, each
  * lit by one distant point light of known direction (lights.txt).  Each
  * photo is fitted alone with Lambert, Oren-Nayar and Torrance-Sparrow and
- * the per-light answers are compared against their reported intervals.
+ * the per-light answers are compared against their reported intervals;
+ * then all the photos are fitted jointly (glint_fit_views()) and the
+ * per-light answers compared with that.
  *
  *   bench/gray_sphere [--response srgb|gamma:G] [--max-pixels N] [LIGHT...]
  *

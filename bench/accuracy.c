@@ -19,14 +19,20 @@
  *   refused  the fit failed (no answer at all);
  *   wrong    outside the tolerances, and the interval misses the truth.
  *
- *   bench/accuracy [quick] [MAP...]
+ *   bench/accuracy [quick|slice] [--check|--no-refusals] [MAP...]
  * No maps: every map in ../shared/data/probes (lat-long) and data/env.
- * quick: four materials (the representative slice the sim test runs).
+ * quick: four materials (yellow plastic, nylon, silver, copper); slice:
+ * yellow plastic and silver (the sim suite's `accuracy-slice`).
+ * --check: exit 1 when a case is refused or wrong; --no-refusals: when a
+ * case is refused (the slow suite's `accuracy-matrix`: no correct photo
+ * may be refused).  Either writes no CSV.
  * Writes bench-out/accuracy.csv; prints a line per case and a table per
  * map.  For studies: ACCURACY_ONLY=MATERIAL, ACCURACY_SAMPLES=N (the
  * fit's light and lobe samples per set), ACCURACY_REF_SAMPLES=N and
  * ACCURACY_REF_SPP=N (the reference photos'), ACCURACY_SPP=N (the fitter's
- * primary samples per pixel).
+ * primary samples per pixel), ACCURACY_DUMP=DIR (each clean reference photo
+ * written there as MAP-MATERIAL.exr, to fit again with glint fit: the
+ * scene is bench/captures.h's bench_scene at 256 px).
  */
 #define _DEFAULT_SOURCE
 #include "bench.h"
@@ -51,6 +57,7 @@ static const char *const all_mats[] = {
 };
 static const char *const quick_mats[] = { "yellow-plastic", "nylon", "silver",
 					  "copper" };
+static const char *const slice_mats[] = { "yellow-plastic", "silver" };
 
 static const char *const default_maps[] = {
 	GLINT_DATA_DIR "/env/venice_sunset_1k.hdr",
@@ -184,6 +191,13 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			continue;
 		}
 		double noise = mc_noise(&r, a, b);
+		if (getenv("ACCURACY_DUMP")) {
+			char path[1024];
+			snprintf(path, sizeof(path), "%s/%s-%s.exr",
+				 getenv("ACCURACY_DUMP"), base(map), mats[i]);
+			if (glint_image_write(path, a, NULL) < 0)
+				fprintf(stderr, "%s\n", glint_error_msg());
+		}
 		struct glint_fit_opts o;
 		struct glint_fit_result ev;
 		glint_fit_default_opts(&o);
@@ -237,10 +251,13 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 					       truth[k]);
 			printf("\n");
 			fflush(stdout);
-			fprintf(csv, "%s,%s,%s,%.4f,%s,%.4f,%.5f,%d\n",
-				base(map), mats[i], lv ? "noisy" : "clean",
-				bias, outcome_names[out], err,
-				out == REFUSED ? NAN : res.rel_rmse, smp);
+			if (csv)
+				fprintf(csv, "%s,%s,%s,%.4f,%s,%.4f,%.5f,%d\n",
+					base(map), mats[i],
+					lv ? "noisy" : "clean", bias,
+					outcome_names[out], err,
+					out == REFUSED ? NAN : res.rel_rmse,
+					smp);
 		next:
 			glint_image_free(photo);
 			glint_image_free(w);
@@ -253,29 +270,51 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 
 int main(int argc, char **argv)
 {
-	int quick = argc > 1 && !strcmp(argv[1], "quick");
-	const char *const *mats = quick ? quick_mats : all_mats;
-	int nmats = quick ? 4 : 11, first = 1 + quick;
+	const char *const *mats = all_mats;
+	int nmats = 11, check = 0, no_refusals = 0, a = 1;
 	const char *const *maps = default_maps;
 	int nmaps = (int)(sizeof(default_maps) / sizeof(*default_maps));
 	static struct map_tally tally[32];
 
-	if (argc > first) {
-		maps = (const char *const *)argv + first;
-		nmaps = argc - first < 32 ? argc - first : 32;
+	for (; a < argc && argv[a][0] != '/' && argv[a][0] != '.'; a++) {
+		if (!strcmp(argv[a], "quick"))
+			mats = quick_mats, nmats = 4;
+		else if (!strcmp(argv[a], "slice"))
+			mats = slice_mats, nmats = 2;
+		else if (!strcmp(argv[a], "--check"))
+			check = 1;
+		else if (!strcmp(argv[a], "--no-refusals"))
+			no_refusals = 1;
+		else
+			break;
+	}
+	if (argc > a) {
+		maps = (const char *const *)argv + a;
+		nmaps = argc - a < 32 ? argc - a : 32;
+	}
+	for (int i = 0; i < nmaps; i++) {
+		struct stat st;
+		if (stat(maps[i], &st) < 0) {
+			printf("%s: absent; skipped\n", maps[i]);
+			return 77;
+		}
 	}
 	glint_log_set_mode(GLINT_LOG_QUIET);
-	mkdir("bench-out", 0777);
-	FILE *csv = fopen("bench-out/accuracy.csv", "w");
-	if (!csv) {
-		perror("bench-out/accuracy.csv");
-		return 1;
+	FILE *csv = NULL;
+	if (!check && !no_refusals) {
+		mkdir("bench-out", 0777);
+		csv = fopen("bench-out/accuracy.csv", "w");
+		if (!csv) {
+			perror("bench-out/accuracy.csv");
+			return 1;
+		}
+		fprintf(csv, "map,material,noise,bias_ratio,outcome,error_tol,"
+			     "relative_rmse,light_samples\n");
 	}
-	fprintf(csv, "map,material,noise,bias_ratio,outcome,error_tol,"
-		     "relative_rmse,light_samples\n");
 	for (int i = 0; i < nmaps; i++)
 		one_map(maps[i], mats, nmats, csv, &tally[i]);
-	fclose(csv);
+	if (csv)
+		fclose(csv);
 
 	printf("\n%-26s %6s %7s %7s %5s %7s %11s  %s\n", "map", "cases",
 	       "within", "flagged", "wrong", "refused", "bias median",
@@ -300,5 +339,15 @@ int main(int argc, char **argv)
 	       all, all ? 100.0 * tot[WITHIN] / all : 0,
 	       all ? 100.0 * tot[FLAGGED] / all : 0, tot[WRONG], tot[REFUSED],
 	       bench_peak_mib());
-	return 0;
+	if ((check || no_refusals) && tot[REFUSED]) {
+		printf("FAIL: %d correct photos refused\n", tot[REFUSED]);
+		return 1;
+	}
+	if (check && tot[WRONG]) {
+		printf("FAIL: %d fits outside the tolerances with intervals "
+		       "that miss the truth\n",
+		       tot[WRONG]);
+		return 1;
+	}
+	return all ? 0 : 1;
 }

@@ -1,0 +1,52 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_SIM_TABULATED_H
+#define GLINT_SIM_TABULATED_H
+
+/*
+ * Measured (tabulated) isotropic BRDFs for the reference renderer: spheres
+ * whose material is none of glint's models (issue 20).
+ *
+ * The table is the MERL BRDF database's layout (Matusik et al. 2003): RGB
+ * values on 90 x 90 x 180 bins of Rusinkiewicz's half/difference angles,
+ * theta_h on a square-root scale (fine near the mirror direction), theta_d
+ * and phi_d (0..pi, reciprocity) uniform; the .binary file is three int32
+ * dimensions then the red, green and blue planes as doubles, scaled by
+ * 1/1500, 1.15/1500 and 1.66/1500 on reading.  Values are looked up in
+ * their nearest bin, as the database's own reader does.  Negative values
+ * (the database's "not measured") read as 0.
+ */
+
+#include "fit/brdf/model.h"
+
+struct glint_brdf_table;
+
+/* Read a MERL .binary file; the dimensions must be 90 x 90 x 180 and the
+ * file exactly their size (the error names what was found). */
+int glint_brdf_table_read(const char *path, struct glint_brdf_table **out);
+/* Write one, atomically (the database's scaling applied). */
+int glint_brdf_table_write(const char *path, const struct glint_brdf_table *t);
+void glint_brdf_table_free(struct glint_brdf_table *t);
+
+/* A table sampled from f (RGB per steradian) at each bin's centre. */
+int glint_brdf_table_from(void (*f)(void *ctx, struct vec3 wo, struct vec3 wi,
+				    double rgb[3]),
+			  void *ctx, struct glint_brdf_table **out);
+
+/* The table's value for (wo, wi) in the local frame (normal +z). */
+void glint_brdf_table_eval(const struct glint_brdf_table *t, struct vec3 wo,
+			   struct vec3 wi, double rgb[3]);
+
+/*
+ * The table as a model for the reference renderer: three lobes, one per
+ * channel (lobe c's albedo is the unit vector of channel c, its value the
+ * table's channel c), sampled half by the cosine and half by a Beckmann
+ * lobe of roughness `proposal` about the mirror direction.  Its parameter
+ * vector is glint_tabulated_params.  The model reads t, which must outlive
+ * its use; one table at a time (a later call replaces it).  Not for
+ * fitting: nothing in it varies.
+ */
+const struct glint_model_ops *
+glint_tabulated_model(const struct glint_brdf_table *t, double proposal);
+extern const double glint_tabulated_params[9];
+
+#endif

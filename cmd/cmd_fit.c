@@ -362,6 +362,9 @@ static int fit_inputs(const struct cmd_args *a, const struct weights_list *wl,
 	in->n = 0;
 	for (int k = 0; k < a->argc; k++)
 		sessions &= is_dir(a->argv[k]);
+	/* one argument can only be a session: its own error says what is
+	 * wrong with it */
+	sessions |= a->argc == 1;
 	if (!sessions && (a->argc < 2 || a->argc % 2))
 		return cmd_usage_error("fit",
 				       "expected SCENE.json and PHOTO (or "

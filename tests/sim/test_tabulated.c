@@ -131,6 +131,9 @@ static void file_checks(struct glint_brdf_table *t, struct as_brdf *as,
 }
 
 struct map_fit {
+	struct glint_renderer r; /* kept for the joint fit */
+	int inited;
+	struct glint_image *photo, *weight;
 	struct glint_fit_result ts, chosen_fit;
 	int has_chosen;
 	const char *chosen;
@@ -159,10 +162,9 @@ static int disagreements(const struct map_fit *fits, int nmaps, int chosen)
 				off++;
 				printf("  %s %s: %.4f +- %.4f under map %d, "
 				       "%.4f +- %.4f under map %d\n",
-				       a->model->name,
-				       a->model->params[k].name, a->p[k],
-				       a->se[k], i + 1, b->p[k], b->se[k],
-				       j + 1);
+				       a->model->name, a->model->params[k].name,
+				       a->p[k], a->se[k], i + 1, b->p[k],
+				       b->se[k], j + 1);
 			}
 		}
 	return off;
@@ -172,33 +174,34 @@ static int fit_map(const char *map, const struct glint_model_ops *tm,
 		   struct map_fit *out)
 {
 	struct glint_scene sc;
-	struct glint_renderer r;
-	struct glint_image *weight = NULL;
+	struct glint_renderer *rr = &out->r;
 	struct glint_reference_opts ro;
 	struct glint_selection *sel = calloc(1, sizeof(*sel));
 	int ret;
 
 	sim_scene_192(&sc, map, -114);
-	if (!sel || glint_renderer_init(&r, &sc, 0, NULL) < 0) {
+	if (!sel || glint_renderer_init(rr, &sc, 0, NULL) < 0) {
 		free(sel);
 		return -1;
 	}
-	struct glint_image *photo = glint_image_new(192, 192);
+	out->inited = 1;
+	struct glint_image *photo = out->photo = glint_image_new(192, 192);
 	glint_reference_default_opts(&ro);
 	ro.spp = 4;
 	ro.samples = quick ? 32 : 128;
-	ret = photo ? glint_reference_render(&r.scene, r.env, tm,
+	ret = photo ? glint_reference_render(&rr->scene, rr->env, tm,
 					     glint_tabulated_params, &ro, photo)
 		    : -1;
 	if (!ret)
-		ret = bench_add_noise(photo, &weight, 0.1);
+		ret = bench_add_noise(photo, &out->weight, 0.1);
 	struct glint_fit_opts o;
 	glint_fit_default_opts(&o);
 	if (!ret)
-		ret = glint_select_model(&r, photo, weight, &o, !quick, sel);
+		ret = glint_select_model(rr, photo, out->weight, &o, !quick,
+					 sel);
 	if (!ret)
-		ret = glint_fit(&r, &glint_model_torrance_sparrow, photo,
-				weight, &o, &out->ts);
+		ret = glint_fit(rr, &glint_model_torrance_sparrow, photo,
+				out->weight, &o, &out->ts);
 	if (!ret) {
 		struct glint_fit_verdict v;
 		out->accepted = glint_fit_judge(&out->ts, 0, &v);
@@ -219,10 +222,50 @@ static int fit_map(const char *map, const struct glint_model_ops *tm,
 		fprintf(stderr, "%s: %s\n", map, glint_error_msg());
 	}
 	free(sel);
-	glint_image_free(photo);
-	glint_image_free(weight);
-	glint_renderer_release(&r);
 	return ret;
+}
+
+/* One torrance-sparrow material from every map's photo at once: each
+ * map's residual under it, and how far each map's own fit sits from it. */
+static void joint_fit(struct map_fit *fits, int nmaps)
+{
+	struct glint_fit_view v[8];
+	struct glint_fit_opts o;
+	struct glint_fit_result *res = malloc(sizeof(*res));
+	const struct glint_model_ops *m = &glint_model_torrance_sparrow;
+
+	for (int i = 0; i < nmaps; i++)
+		v[i] = (struct glint_fit_view){ &fits[i].r, fits[i].photo,
+						fits[i].weight };
+	glint_fit_default_opts(&o);
+	int ret = res ? glint_fit_views(v, nmaps, m, &o, res) : -ENOMEM;
+	CHECK(ret == 0, "joint fit: %s", glint_error_msg());
+	if (ret) {
+		free(res);
+		return;
+	}
+	printf("joint fit of the %d maps' photos: relative RMSE %.4f; per "
+	       "map",
+	       nmaps, res->rel_rmse);
+	for (int i = 0; i < nmaps; i++) {
+		struct glint_fit_verdict vd;
+		struct glint_fit_result one = *res;
+		one.rel_rmse = res->view[i].rel_rmse;
+		one.rmse = res->view[i].rmse;
+		one.backdrop_rel_rmse = res->view[i].backdrop_rel_rmse;
+		one.flat_rel_rmse = res->view[i].flat_rel_rmse;
+		one.noise_rmse = res->view[i].noise_rmse;
+		int ok = glint_fit_judge(&one, 0, &vd);
+		printf(" %.4f (alone %.4f)", res->view[i].rel_rmse,
+		       fits[i].rel);
+		CHECK(ok, "joint fit refused on map %d: %s", i + 1, vd.verdict);
+	}
+	printf("\n  ");
+	for (int k = 0; k < m->nparams; k++)
+		printf(" %s %.4f+-%.4f", m->params[k].name, res->p[k],
+		       res->se[k]);
+	printf("\n");
+	free(res);
 }
 
 int main(int argc, char **argv)
@@ -272,6 +315,14 @@ int main(int argc, char **argv)
 	      "neither the default model (%d pairs apart) nor the chosen one "
 	      "(%d) gives the same material under every map",
 	      off_ts, off_chosen);
+	if (nmaps > 1)
+		joint_fit(fits, nmaps);
+	for (int i = 0; i < nmaps; i++) {
+		if (fits[i].inited)
+			glint_renderer_release(&fits[i].r);
+		glint_image_free(fits[i].photo);
+		glint_image_free(fits[i].weight);
+	}
 	glint_brdf_table_free(t);
 	char cmd[600];
 	snprintf(cmd, sizeof(cmd), "rm -rf %s", dir);

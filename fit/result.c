@@ -31,10 +31,19 @@ static int param_index(const struct glint_model_ops *m, const char *name)
 }
 
 /* The roughness a pixel resolves on a sphere R pixels in radius: the
- * normal turns by 1 / R radians from one pixel to the next. */
+ * normal turns by 1 / R radians from one pixel to the next.  Of a joint
+ * fit, the finest photo's (the largest sphere). */
 static double footprint(const struct glint_fit_result *r)
 {
-	return r->interior > 0 ? 1 / sqrt(r->interior / M_PI) : 0;
+	int interior = r->interior;
+
+	if (r->nviews > 1) {
+		interior = 0;
+		for (int v = 0; v < r->nviews; v++)
+			if (r->view[v].interior > interior)
+				interior = r->view[v].interior;
+	}
+	return interior > 0 ? 1 / sqrt(interior / M_PI) : 0;
 }
 
 json_t *glint_fit_params_json(const struct glint_fit_result *r)

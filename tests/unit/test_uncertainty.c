@@ -173,6 +173,21 @@ static void findings(void)
 	      "ior: determined false");
 	json_decref(unc);
 	json_decref(params);
+
+	/* A joint fit of two photos: the footprint is the finer photo's
+	 * (R = 56 px), not that of their pixels together. */
+	res.nviews = 2;
+	res.interior = 10000 + 2500;
+	res.view[0].interior = 2500;
+	res.view[1].interior = 10000;
+	params = glint_fit_params_json(&res);
+	rough = json_array_get(params, 6);
+	CHECK(fabs(json_real_value(json_object_get(rough, "upper_bound")) -
+		   1 / sqrt(10000 / M_PI)) < 1e-9,
+	      "joint fit: upper bound %g at the finer photo's footprint %g",
+	      json_real_value(json_object_get(rough, "upper_bound")),
+	      1 / sqrt(10000 / M_PI));
+	json_decref(params);
 }
 
 static const double lo[2] = { -100, -100 }, hi[2] = { 100, 100 };

@@ -278,7 +278,7 @@ int main(int argc, char **argv)
 	int nmaps = (int)(sizeof(default_maps) / sizeof(*default_maps));
 	static struct map_tally tally[32];
 
-	for (; a < argc && argv[a][0] != '/' && argv[a][0] != '.'; a++) {
+	for (; a < argc; a++) {
 		if (!strcmp(argv[a], "quick"))
 			mats = quick_mats, nmats = 4;
 		else if (!strcmp(argv[a], "slice"))

@@ -11,6 +11,7 @@
 
 #include "core/error.h"
 #include "fit/render/render.h"
+#include "fit/scene/envmap.h"
 #include "sim/reference.h"
 #include "sim/sensor.h"
 
@@ -33,6 +34,38 @@ static inline void bench_scene_lens(struct glint_scene *s, int w,
 		 env ? env : GLINT_DATA_DIR "/env/venice_sunset_1k.hdr");
 	s->env_rotation[1] = -114;
 	s->env_scale = 1;
+}
+
+/* A w x w/2 lat-long map: a disc of radius_deg about d whose irradiance at
+ * normal incidence is pi (a Lambertian sphere of albedo a then shows
+ * a n.l), over a uniform sky of radiance `sky`. */
+static inline struct glint_image *bench_disc_map(struct vec3 d, int w,
+						 double radius_deg, double sky)
+{
+	const int h = w / 2;
+	const double cosr = cos(radius_deg * M_PI / 180);
+	struct glint_image *img = glint_image_new(w, h);
+	double solid = 0;
+
+	if (!img)
+		return NULL;
+	for (int pass = 0; pass < 2; pass++)
+		for (int j = 0; j < h; j++)
+			for (int i = 0; i < w; i++) {
+				struct vec3 t = glint_envmap_uv_to_dir(
+					(i + 0.5) / w, (j + 0.5) / h);
+				float *px = img->data + ((size_t)j * w + i) * 3;
+				int in = v3_dot(t, d) >= cosr;
+				if (pass == 0 && in)
+					solid += (2 * M_PI / w) * (M_PI / h) *
+						 sin((j + 0.5) * M_PI / h) *
+						 v3_dot(t, d);
+				if (pass == 1)
+					px[0] = px[1] = px[2] =
+						(float)(in ? M_PI / solid
+							   : sky);
+			}
+	return img;
 }
 
 static inline void bench_scene(struct glint_scene *s, int w, const char *env)

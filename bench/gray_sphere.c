@@ -29,6 +29,7 @@
  * Prints one row per light and model, then the spread of each parameter
  * across lights against the median reported standard error.
  */
+#include "captures.h"
 #include "core/error.h"
 #include "core/formats.h"
 #include "core/image.h"
@@ -108,35 +109,6 @@ static int mask_circle(double *cx, double *cy, double *r)
 	return 0;
 }
 
-/* A lat-long map, black but for a disc about d with irradiance pi. */
-static struct glint_image *light_map(struct vec3 d)
-{
-	const int w = 2048, h = 1024;
-	const double radius = 0.5 * M_PI / 180;
-	struct glint_image *img = glint_image_new(w, h);
-	double solid = 0, cosr = cos(radius);
-
-	if (!img)
-		return NULL;
-	for (int pass = 0; pass < 2; pass++)
-		for (int j = 0; j < h; j++)
-			for (int i = 0; i < w; i++) {
-				struct vec3 t = glint_envmap_uv_to_dir(
-					(i + 0.5) / w, (j + 0.5) / h);
-				if (v3_dot(t, d) < cosr)
-					continue;
-				double dw = (2 * M_PI / w) * (M_PI / h) *
-					    sin((j + 0.5) * M_PI / h);
-				float *px = img->data + ((size_t)j * w + i) * 3;
-				if (pass == 0)
-					solid += dw * v3_dot(t, d);
-				else
-					px[0] = px[1] = px[2] =
-						(float)(M_PI / solid);
-			}
-	return img;
-}
-
 struct row {
 	double p[GLINT_MAX_PARAMS], se[GLINT_MAX_PARAMS];
 	double rel_rmse, bic;
@@ -191,7 +163,7 @@ static int load_light(int li, struct vec3 ldir, double cx, double cy,
 					       &sc.sphere_centre);
 	sc.sphere_radius = R;
 	sc.env_scale = 1;
-	map = ret < 0 ? NULL : light_map(ldir);
+	map = ret < 0 ? NULL : bench_disc_map(ldir, 2048, 0.5, 0);
 	if (!ret && !map)
 		ret = -ENOMEM;
 	if (!ret)

@@ -1076,10 +1076,8 @@ static int make_selections(struct objective *ob, struct selections *sl)
 	ret = specular_mask(ob, sl->all, is_spec);
 	if (ret < 0)
 		goto out;
-	for (int s = 0, v = 0; s < d->n; s++) {
-		while (s >= ob->views[v].off + ob->views[v].n)
-			v++;
-		const struct view *vw = &ob->views[v];
+	for (int s = 0; s < d->n; s++) {
+		const struct view *vw = &ob->views[view_of(ob, s)];
 		int on_grid =
 			(d->xy[2 * s] + vw->frame_x) % (4 * vw->stride) == 0 &&
 			(d->xy[2 * s + 1] + vw->frame_y) % (4 * vw->stride) ==

@@ -835,24 +835,6 @@ static int joint_check(const struct glint_fit_job *job)
 	return 0;
 }
 
-/* res seen through photo k alone (its statistics), for judging it. */
-static void view_result(const struct glint_fit_result *res, int k,
-			struct glint_fit_result *out)
-{
-	const struct glint_fit_view_stats *st = &res->view[k];
-
-	*out = *res;
-	out->pixels = st->pixels;
-	out->interior = st->interior;
-	out->wcost = st->wcost;
-	out->rmse = st->rmse;
-	out->rel_rmse = st->rel_rmse;
-	out->backdrop_rel_rmse = st->backdrop_rel_rmse;
-	out->flat_rel_rmse = st->flat_rel_rmse;
-	out->noise_rmse = st->noise_rmse;
-	out->nviews = 1;
-}
-
 /* Trace photo k's scene into r. */
 static int trace_view(const struct glint_fit_job *job, int k, int nviews,
 		      struct glint_renderer *r)
@@ -924,7 +906,7 @@ static int judge(const struct glint_fit_job *job,
 		char name[32], cname[32];
 		if (!one)
 			continue;
-		view_result(res, k, one);
+		glint_fit_result_view(res, k, one);
 		int ok = glint_fit_judge(one, job->accept_rmse, &v);
 		if (!ok && accepted)
 			snprintf(why_refused, n,

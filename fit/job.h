@@ -149,6 +149,11 @@ struct glint_fit_verdict {
 	char verdict[320];
 };
 
+/* A joint fit's result as photo k alone sees it (its pixels, RMSE and
+ * baselines: res->view[k]; nviews 1), to judge that photo by. */
+void glint_fit_result_view(const struct glint_fit_result *res, int k,
+			   struct glint_fit_result *out);
+
 /* Fill v; returns v->accepted. */
 int glint_fit_judge(const struct glint_fit_result *r, double accept_rmse,
 		    struct glint_fit_verdict *v);

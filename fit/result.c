@@ -243,6 +243,23 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 		find, "combinations", comb, "seconds", r->unc_seconds);
 }
 
+void glint_fit_result_view(const struct glint_fit_result *res, int k,
+			   struct glint_fit_result *out)
+{
+	const struct glint_fit_view_stats *st = &res->view[k];
+
+	*out = *res;
+	out->pixels = st->pixels;
+	out->interior = st->interior;
+	out->wcost = st->wcost;
+	out->rmse = st->rmse;
+	out->rel_rmse = st->rel_rmse;
+	out->backdrop_rel_rmse = st->backdrop_rel_rmse;
+	out->flat_rel_rmse = st->flat_rel_rmse;
+	out->noise_rmse = st->noise_rmse;
+	out->nviews = 1;
+}
+
 int glint_fit_judge(const struct glint_fit_result *r, double accept_rmse,
 		    struct glint_fit_verdict *v)
 {

@@ -409,28 +409,27 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 int glint_shade_cache_join(struct glint_shade_cache **parts, int nparts,
 			   struct glint_shade_cache **out)
 {
-	struct glint_shade_cache *c = calloc(1, sizeof(*c));
-	int n = 0;
+	struct glint_shade_cache *c = NULL;
+	int n = 0, ret = 0;
 
 	*out = NULL;
 	for (int k = 0; k < nparts; k++)
 		n += parts[k]->n;
-	if (c) {
-		c->part_of = malloc((size_t)n * sizeof(*c->part_of));
-		c->part_off = malloc((size_t)nparts * sizeof(int));
-		c->parts = malloc((size_t)nparts * sizeof(*c->parts));
-	}
-	if (!c || !c->part_of || !c->part_off || !c->parts ||
-	    nparts > USHRT_MAX) {
+	if (nparts < 1 || nparts > USHRT_MAX)
+		ret = glint_error_set(EINVAL,
+				      "%d parts: a joint cache takes 1 "
+				      "to %d",
+				      nparts, USHRT_MAX);
+	else if (!(c = calloc(1, sizeof(*c))) ||
+		 !(c->part_of = malloc((size_t)n * sizeof(*c->part_of))) ||
+		 !(c->part_off = malloc((size_t)nparts * sizeof(int))) ||
+		 !(c->parts = malloc((size_t)nparts * sizeof(*c->parts))))
+		ret = glint_error_set(ENOMEM, "out of memory");
+	if (ret < 0) {
 		for (int k = 0; k < nparts; k++)
 			glint_shade_cache_free(parts[k]);
-		if (c) {
-			free(c->part_of);
-			free(c->part_off);
-			free(c->parts);
-			free(c);
-		}
-		return glint_error_set(ENOMEM, "out of memory");
+		glint_shade_cache_free(c); /* its own arrays: no parts yet */
+		return ret;
 	}
 	c->model = parts[0]->model;
 	c->nthreads = parts[0]->nthreads;

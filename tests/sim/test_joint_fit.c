@@ -37,36 +37,6 @@ struct shot {
 	struct glint_image *photo, *weight;
 };
 
-/* A lat-long map: a disc of 0.5 degrees about d with irradiance pi at
- * normal incidence, over a uniform sky of radiance `sky`. */
-static struct glint_image *disc_map(struct vec3 d, double sky)
-{
-	const int w = 1024, h = 512;
-	const double cosr = cos(0.5 * M_PI / 180);
-	struct glint_image *img = glint_image_new(w, h);
-	double solid = 0;
-
-	if (!img)
-		return NULL;
-	for (int pass = 0; pass < 2; pass++)
-		for (int j = 0; j < h; j++)
-			for (int i = 0; i < w; i++) {
-				struct vec3 t = glint_envmap_uv_to_dir(
-					(i + 0.5) / w, (j + 0.5) / h);
-				float *px = img->data + ((size_t)j * w + i) * 3;
-				int in = v3_dot(t, d) >= cosr;
-				if (pass == 0 && in)
-					solid += (2 * M_PI / w) * (M_PI / h) *
-						 sin((j + 0.5) * M_PI / h) *
-						 v3_dot(t, d);
-				if (pass == 1)
-					px[0] = px[1] = px[2] =
-						(float)(in ? M_PI / solid
-							   : sky);
-			}
-	return img;
-}
-
 /* The sphere lit from `deg` degrees off the view axis (about y). */
 static int shoot(double deg, const struct glint_model_ops *m,
 		 const double *truth, struct shot *s)
@@ -74,7 +44,8 @@ static int shoot(double deg, const struct glint_model_ops *m,
 	struct glint_scene sc;
 	struct glint_envmap *env = NULL;
 	double a = deg * M_PI / 180;
-	struct glint_image *map = disc_map(v3(sin(a), 0, cos(a)), 0.01);
+	struct glint_image *map =
+		bench_disc_map(v3(sin(a), 0, cos(a)), 1024, 0.5, 0.01);
 
 	memset(s, 0, sizeof(*s));
 	sim_scene_192(&sc, "disc light", 0);

@@ -18,8 +18,23 @@
 
 static const char *const role_names[GLINT_ROLE_COUNT] = {
 	"button",	 "lights",	     "led",	 "turntable_step",
-	"turntable_dir", "turntable_enable", "position",
+	"turntable_dir", "turntable_enable", "position", "lights[1]",
+	"lights[2]",	 "lights[3]",
 };
+
+enum glint_role glint_role_light(int k)
+{
+	return k <= 1 ? GLINT_ROLE_LIGHTS
+		      : (enum glint_role)(GLINT_ROLE_LIGHTS_2 + k - 2);
+}
+
+int glint_board_cfg_nlights(const struct glint_board_cfg *c)
+{
+	int n = 0;
+	while (n < GLINT_MAX_LIGHTS && c->lines[glint_role_light(n + 1)].used)
+		n++;
+	return n;
+}
 
 const char *glint_role_name(enum glint_role r)
 {
@@ -127,6 +142,15 @@ int glint_board_cfg_check(const char *file, const struct glint_board_cfg *c)
 					file, role_names[a], role_names[b],
 					l[a].chip, l[a].name,
 					l[a].name[0] ? 0 : l[a].offset);
+	for (int k = glint_board_cfg_nlights(c) + 2; k <= GLINT_MAX_LIGHTS; k++)
+		if (l[glint_role_light(k)].used)
+			return glint_error_set(
+				EINVAL,
+				"%s: board.lines.%s without "
+				"board.lines.%s: the lights are "
+				"numbered from 1, none missing",
+				file, role_names[glint_role_light(k)],
+				role_names[glint_role_light(k - 1)]);
 	if (c->tt_mode == GLINT_TT_STEPPER &&
 	    (!l[GLINT_ROLE_TT_STEP].used || !l[GLINT_ROLE_TT_DIR].used))
 		return glint_error_set(EINVAL,
@@ -298,7 +322,8 @@ void glint_board_safe(struct glint_board *b)
 {
 	if (!b)
 		return;
-	set_line(b, GLINT_ROLE_LIGHTS, 0);
+	for (int k = 1; k <= GLINT_MAX_LIGHTS; k++)
+		set_line(b, glint_role_light(k), 0);
 	set_line(b, GLINT_ROLE_TT_STEP, 0);
 	set_line(b, GLINT_ROLE_TT_ENABLE, 0);
 }
@@ -355,12 +380,40 @@ int glint_board_led(struct glint_board *b, enum glint_led pattern)
 	return 0;
 }
 
-int glint_board_lights(struct glint_board *b, int on)
+/* Light k on where mask has bit k - 1; the settle wait if any line
+ * moved. */
+static int lights_set(struct glint_board *b, unsigned mask)
 {
-	int ret = set_line(b, GLINT_ROLE_LIGHTS, on);
-	if (ret == 0 && b->cfg.lines[GLINT_ROLE_LIGHTS].used)
+	int ret = 0, any = 0;
+	/* off first: two lamps never on together by accident */
+	for (int pass = 0; pass < 2; pass++)
+		for (int k = 1; k <= GLINT_MAX_LIGHTS && ret == 0; k++) {
+			int on = (mask >> (k - 1)) & 1;
+			if (on != pass ||
+			    !b->cfg.lines[glint_role_light(k)].used)
+				continue;
+			ret = set_line(b, glint_role_light(k), on);
+			any = 1;
+		}
+	if (ret == 0 && any)
 		sleep_s(b->cfg.settle_s); /* lamps warm up */
 	return ret;
+}
+
+int glint_board_lights(struct glint_board *b, int on)
+{
+	return lights_set(b, on ? ~0u : 0);
+}
+
+int glint_board_light_only(struct glint_board *b, int k)
+{
+	int n = glint_board_cfg_nlights(&b->cfg);
+	if (k < 1 || k > n)
+		return glint_error_set(EINVAL,
+				       "light %d: the board has %d light "
+				       "line%s",
+				       k, n, n == 1 ? "" : "s");
+	return lights_set(b, 1u << (k - 1));
 }
 
 /* Edges come in while the line bounces; the press counts when the level

@@ -11,7 +11,9 @@
  * What the roles drive (board/board.c):
  *   button            input, both edges, debounced: a press is an edge to
  *                     1 that stays 1 for debounce_s
- *   lights            output, the lab lights' relay
+ *   lights            outputs, the lab lights' relays: one line, or up to
+ *                     GLINT_MAX_LIGHTS lines (one per lamp; light 1 is
+ *                     GLINT_ROLE_LIGHTS, the others GLINT_ROLE_LIGHTS_2..)
  *   led               output, the status LED, blinked in a pattern per
  *                     state by a thread (glint_board_led)
  *   turntable_step,   outputs of a stepper driver (step pulses at step_hz,
@@ -34,11 +36,19 @@ enum glint_role {
 	GLINT_ROLE_TT_DIR,
 	GLINT_ROLE_TT_ENABLE,
 	GLINT_ROLE_POSITION,
+	GLINT_ROLE_LIGHTS_2, /* "lights[1]": lamp 2, from the rig file's list */
+	GLINT_ROLE_LIGHTS_3,
+	GLINT_ROLE_LIGHTS_4,
 	GLINT_ROLE_COUNT
 };
 
-/* "button", "lights", ... as in rig files (static strings); NULL past
- * the end. */
+/* Lamps on lines of their own: the rig can capture under each. */
+#define GLINT_MAX_LIGHTS 4
+/* Light k (1..GLINT_MAX_LIGHTS)'s role. */
+enum glint_role glint_role_light(int k);
+
+/* "button", "lights", ..., "lights[1]" (lamp 2), ... as in rig files and
+ * messages (static strings); NULL past the end. */
 const char *glint_role_name(enum glint_role r);
 int glint_role_is_input(enum glint_role r);
 
@@ -147,7 +157,13 @@ int glint_board_has(const struct glint_board *b, enum glint_role r);
  * rig file's chip and line where the backend has none). */
 void glint_board_locate(const struct glint_board *b, enum glint_role r,
 			char *buf, size_t n);
+/* Every light on (1) or off (0). */
 int glint_board_lights(struct glint_board *b, int on);
+/* Light k (1..) on and every other light off; then the settle wait. */
+int glint_board_light_only(struct glint_board *b, int k);
+/* How many lights the configuration has lines for (0..GLINT_MAX_LIGHTS):
+ * the lights are lights, lights[1], ... in order, none missing. */
+int glint_board_cfg_nlights(const struct glint_board_cfg *c);
 int glint_board_led(struct glint_board *b, enum glint_led pattern);
 /* Turn the turntable to the probe (which = 0) or sample (1) position.
  * No-op without a turntable.  *cancel stops between steps (-ECANCELED). */

@@ -82,12 +82,15 @@ static int make_run_dir(const char *output, char *dir, size_t n)
 	return ret;
 }
 
-static int capture_step(const struct glint_rig *rig, int probe,
+/* A sample is lit by this run's last probe, captured under the same
+ * lamps. */
+static int capture_step(const struct glint_rig *rig, int probe, int light,
 			atomic_int *cancel, struct glint_rig_run *ro)
 {
 	struct glint_capture_result res;
-	int ret = glint_capture_run(&rig->capture, probe ? "probe" : "sample",
-				    ro->dir, NULL, cancel, &res);
+	int ret = glint_capture_run(
+		&rig->capture, probe ? "probe" : "sample", ro->dir,
+		!probe && ro->probe[0] ? ro->probe : NULL, cancel, &res);
 
 	snprintf(probe ? ro->probe : ro->sample, sizeof(ro->probe), "%s",
 		 res.session);
@@ -96,7 +99,13 @@ static int capture_step(const struct glint_rig *rig, int probe,
 		ret = glint_error_set(EINVAL,
 				      "the sample was captured but has no "
 				      "scene.json (see the warning above)");
-	return ret;
+	struct glint_run_samples *rs = &ro->samples;
+	if (ret < 0 || probe || rs->n == GLINT_RUN_MAX_SAMPLES)
+		return ret;
+	snprintf(rs->session[rs->n], sizeof(rs->session[0]), "%s", ro->sample);
+	rs->light[rs->n++] = light;
+	/* several: the run says which sessions belong together */
+	return rs->n > 1 ? glint_run_write(ro->dir, rs) : 0;
 }
 
 static int fit_step(const struct glint_rig *rig, const char *queue,
@@ -107,8 +116,15 @@ static int fit_step(const struct glint_rig *rig, const char *queue,
 				       "%s: sequence: \"fit\" before "
 				       "\"capture sample\"",
 				       rig->path);
-	int ret = glint_queue_add(queue, "fit", ro->sample, ro->job);
-	if (ret == 0)
+	int joint = ro->samples.n > 1;
+	snprintf(ro->fit_of, sizeof(ro->fit_of), "%s",
+		 joint ? ro->dir : ro->sample);
+	int ret = glint_queue_add(queue, "fit", ro->fit_of, ro->job);
+	if (ret == 0 && joint)
+		glint_log_info("fit queued: job %s, one material from the %d "
+			       "samples' photos",
+			       ro->job, ro->samples.n);
+	else if (ret == 0)
 		glint_log_info("fit queued: job %s", ro->job);
 	return ret;
 }
@@ -119,6 +135,7 @@ int glint_rig_run_sequence(const struct glint_rig *rig, struct glint_board *b,
 {
 	memset(ro, 0, sizeof(*ro));
 	int ret = make_run_dir(rig->output, ro->dir, sizeof(ro->dir));
+	int light = 0; /* the lamp that is on alone, 0: all or none */
 	if (ret < 0)
 		return ret;
 	glint_log_info("run %s", ro->dir);
@@ -131,7 +148,15 @@ int glint_rig_run_sequence(const struct glint_rig *rig, struct glint_board *b,
 		switch (s) {
 		case GLINT_RIG_LIGHTS_ON:
 		case GLINT_RIG_LIGHTS_OFF:
+			light = 0;
 			ret = glint_board_lights(b, s == GLINT_RIG_LIGHTS_ON);
+			break;
+		case GLINT_RIG_LIGHT_1:
+		case GLINT_RIG_LIGHT_2:
+		case GLINT_RIG_LIGHT_3:
+		case GLINT_RIG_LIGHT_4:
+			light = (int)(s - GLINT_RIG_LIGHT_1) + 1;
+			ret = glint_board_light_only(b, light);
 			break;
 		case GLINT_RIG_TURNTABLE_PROBE:
 		case GLINT_RIG_TURNTABLE_SAMPLE:
@@ -141,7 +166,7 @@ int glint_rig_run_sequence(const struct glint_rig *rig, struct glint_board *b,
 		case GLINT_RIG_CAPTURE_PROBE:
 		case GLINT_RIG_CAPTURE_SAMPLE:
 			ret = capture_step(rig, s == GLINT_RIG_CAPTURE_PROBE,
-					   cancel, ro);
+					   light, cancel, ro);
 			break;
 		case GLINT_RIG_FIT:
 			ret = fit_step(rig, queue, ro);
@@ -222,12 +247,12 @@ static int fit_written(const struct glint_rig *rig,
 	char path[GLINT_PATH_MAX];
 	struct stat st;
 	int ret = glint_path_fmt(path, sizeof(path), "%s/%s/params.json",
-				 ro->sample, GLINT_SESSION_FIT);
+				 ro->fit_of, GLINT_SESSION_FIT);
 	if (ret == 0 && stat(path, &st) < 0)
 		ret = glint_error_set(EIO,
 				      "the fit of %s failed (glint jobs "
 				      "--root %s says why)",
-				      ro->sample, rig->output);
+				      ro->fit_of, rig->output);
 	return ret;
 }
 

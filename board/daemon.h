@@ -12,15 +12,21 @@
 
 #include "board.h"
 #include "rig.h"
+#include "capture/session.h"
 
 #include <sys/types.h>
 
 /* One run's folders (empty strings for what it did not reach). */
 struct glint_rig_run {
 	char dir[GLINT_PATH_MAX];    /* OUTPUT/run-STAMP */
-	char probe[GLINT_PATH_MAX];  /* its probe session */
-	char sample[GLINT_PATH_MAX]; /* its sample session */
+	char probe[GLINT_PATH_MAX];  /* its last probe session */
+	char sample[GLINT_PATH_MAX]; /* its last sample session */
 	char job[64];		     /* the queued fit's id */
+	/* Every sample session, with the lamp it was lit by ("light K"
+	 * steps; 0: "lights on").  Several: RUN/run.json names them and
+	 * the fit is one joint fit of them all, into RUN/fit. */
+	struct glint_run_samples samples;
+	char fit_of[GLINT_PATH_MAX]; /* the queued fit writes fit_of/fit */
 };
 
 /* Check the rig's camera opens (before any output is touched); logs what

@@ -2,6 +2,8 @@
 #define _GNU_SOURCE /* flock, scandirat */
 #include "queue.h"
 
+#include "capture/session.h"
+
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/lockfile.h"
@@ -205,8 +207,36 @@ static int in_group(unsigned uid, gid_t gid)
 	return 0;
 }
 
+static int one_session_allowed(const char *queue, const struct glint_job *job,
+			       char *real, size_t n);
+
 int glint_job_session_allowed(const char *queue, const struct glint_job *job,
 			      char *real, size_t n)
+{
+	int ret = one_session_allowed(queue, job, real, n);
+	if (ret < 0)
+		return ret;
+	/* A rig run's joint fit: each of its samples too (a run.json could
+	 * name a link to someone else's session). */
+	struct glint_run_samples *rs = malloc(sizeof(*rs)); /* 64 KiB */
+	if (!rs)
+		return glint_error_set(ENOMEM, "out of memory");
+	ret = glint_run_read(real, rs);
+	for (int k = 0; ret > 0 && k < rs->n; k++) {
+		struct glint_job sub = *job;
+		char sreal[GLINT_PATH_MAX];
+		snprintf(sub.session, sizeof(sub.session), "%s",
+			 rs->session[k]);
+		int r = one_session_allowed(queue, &sub, sreal, sizeof(sreal));
+		if (r < 0)
+			ret = glint_error_prefix(r, "run %s", real);
+	}
+	free(rs);
+	return ret < 0 ? ret : 0;
+}
+
+static int one_session_allowed(const char *queue, const struct glint_job *job,
+			       char *real, size_t n)
 {
 	char root[GLINT_PATH_MAX], q[GLINT_PATH_MAX];
 	struct stat st;

@@ -21,6 +21,10 @@ const char *const glint_rig_step_names[GLINT_RIG_STEP_COUNT] = {
 	"capture probe",
 	"capture sample",
 	"fit",
+	"light 1",
+	"light 2",
+	"light 3",
+	"light 4",
 };
 
 static int load_line(const char *path, const char *where, json_t *o,
@@ -62,6 +66,28 @@ static int load_line(const char *path, const char *where, json_t *o,
 	return 0;
 }
 
+/* board.lines.lights as a list: one line per lamp, lamp 1 first. */
+static int load_light_list(const char *path, json_t *v,
+			   struct glint_board_cfg *c)
+{
+	size_t n = json_array_size(v);
+	if (n < 1 || n > GLINT_MAX_LIGHTS)
+		return glint_error_set(EINVAL,
+				       "%s: board.lines.lights: expected a "
+				       "line or a list of 1..%d lines (one "
+				       "per lamp)",
+				       path, GLINT_MAX_LIGHTS);
+	for (size_t k = 0; k < n; k++) {
+		char where[64];
+		snprintf(where, sizeof(where), "board.lines.lights[%zu]", k);
+		int ret = load_line(path, where, json_array_get(v, k),
+				    &c->lines[glint_role_light((int)k + 1)]);
+		if (ret)
+			return ret;
+	}
+	return 0;
+}
+
 /* board.lines: each key a role, each value a chip and line. */
 static int load_lines(const char *path, json_t *lines,
 		      struct glint_board_cfg *c)
@@ -72,14 +98,22 @@ static int load_lines(const char *path, json_t *lines,
 	json_object_foreach(lines, key, v)
 	{
 		int role = 0;
-		while (role < GLINT_ROLE_COUNT &&
+		/* lights[2].. come only from the lights list */
+		while (role < GLINT_ROLE_LIGHTS_2 &&
 		       strcmp(key, glint_role_name(role)))
 			role++;
-		if (role == GLINT_ROLE_COUNT)
+		if (role == GLINT_ROLE_LIGHTS && json_is_array(v)) {
+			int ret = load_light_list(path, v, c);
+			if (ret)
+				return ret;
+			continue;
+		}
+		if (role == GLINT_ROLE_LIGHTS_2)
 			return glint_error_set(EINVAL,
 					       "%s: board.lines.%s: unknown "
-					       "role; expected button, lights, "
-					       "led, turntable_step, "
+					       "role; expected button, lights "
+					       "(a line or a list), led, "
+					       "turntable_step, "
 					       "turntable_dir, "
 					       "turntable_enable or position",
 					       path, key);
@@ -207,22 +241,36 @@ static int load_board(const char *path, struct glint_rig *r)
 	return ret;
 }
 
-static int load_sequence(const char *path, struct glint_rig *r)
+/* The default: one lamp (or all on one line), or each lamp in turn. */
+static void default_sequence(struct glint_rig *r)
 {
-	json_t *seq = json_object_get(r->doc, "sequence");
-	static const enum glint_rig_step def[] = {
-		GLINT_RIG_LIGHTS_ON,
+	static const enum glint_rig_step one[] = {
 		GLINT_RIG_TURNTABLE_PROBE,
 		GLINT_RIG_CAPTURE_PROBE,
 		GLINT_RIG_TURNTABLE_SAMPLE,
 		GLINT_RIG_CAPTURE_SAMPLE,
-		GLINT_RIG_LIGHTS_OFF,
-		GLINT_RIG_FIT,
 	};
+	int nl = r->has_board ? glint_board_cfg_nlights(&r->board) : 0;
+
+	r->nsteps = 0;
+	for (int k = 1; k <= (nl > 1 ? nl : 1); k++) {
+		r->steps[r->nsteps++] = nl > 1 ? GLINT_RIG_LIGHT_1 + k - 1
+					       : GLINT_RIG_LIGHTS_ON;
+		for (size_t i = 0; i < sizeof(one) / sizeof(*one); i++)
+			r->steps[r->nsteps++] = one[i];
+	}
+	r->steps[r->nsteps++] = GLINT_RIG_LIGHTS_OFF;
+	r->steps[r->nsteps++] = GLINT_RIG_FIT;
+}
+
+static int load_sequence(const char *path, struct glint_rig *r)
+{
+	json_t *seq = json_object_get(r->doc, "sequence");
+	int nl = r->has_board ? glint_board_cfg_nlights(&r->board) : 0,
+	    samples = 0;
 
 	if (!seq) {
-		r->nsteps = (int)(sizeof(def) / sizeof(def[0]));
-		memcpy(r->steps, def, sizeof(def));
+		default_sequence(r);
 		return 0;
 	}
 	if (!json_is_array(seq) || json_array_size(seq) == 0 ||
@@ -241,10 +289,25 @@ static int load_sequence(const char *path, struct glint_rig *r)
 			return glint_error_set(
 				EINVAL,
 				"%s: sequence[%zu] = %s: expected one of "
-				"\"lights on\", \"lights off\", \"turntable "
-				"probe\", \"turntable sample\", \"capture "
-				"probe\", \"capture sample\", \"fit\"",
-				path, i, s ? s : "(not a string)");
+				"\"lights on\", \"lights off\", \"light "
+				"K\" (1..%d), \"turntable probe\", "
+				"\"turntable sample\", \"capture probe\", "
+				"\"capture sample\", \"fit\"",
+				path, i, s ? s : "(not a string)",
+				GLINT_MAX_LIGHTS);
+		if (k >= GLINT_RIG_LIGHT_1 && k - GLINT_RIG_LIGHT_1 >= nl)
+			return glint_error_set(
+				EINVAL,
+				"%s: sequence[%zu] = %s: the board has %d "
+				"light line%s (board.lines.lights: a list, "
+				"one line per lamp)",
+				path, i, s, nl, nl == 1 ? "" : "s");
+		if (k == GLINT_RIG_CAPTURE_SAMPLE &&
+		    ++samples > GLINT_RIG_MAX_SAMPLES)
+			return glint_error_set(EINVAL,
+					       "%s: sequence[%zu]: more than "
+					       "%d sample captures in a run",
+					       path, i, GLINT_RIG_MAX_SAMPLES);
 		r->steps[r->nsteps++] = k;
 	}
 	return 0;

@@ -4,6 +4,7 @@
 
 #include "board.h"
 #include "capture/run.h"
+#include "capture/session.h"
 #include "core/json.h"
 #include "core/path.h"
 
@@ -15,9 +16,15 @@ enum glint_rig_step {
 	GLINT_RIG_CAPTURE_PROBE,
 	GLINT_RIG_CAPTURE_SAMPLE,
 	GLINT_RIG_FIT,
+	GLINT_RIG_LIGHT_1, /* "light K": lamp K alone on (a rig with lights */
+	GLINT_RIG_LIGHT_2, /* on lines of their own, board.lines.lights a */
+	GLINT_RIG_LIGHT_3, /* list) */
+	GLINT_RIG_LIGHT_4,
 	GLINT_RIG_STEP_COUNT
 };
 #define GLINT_RIG_MAX_STEPS 32
+/* A run's sample captures: each lamp's, fitted jointly. */
+#define GLINT_RIG_MAX_SAMPLES GLINT_RUN_MAX_SAMPLES
 extern const char *const glint_rig_step_names[GLINT_RIG_STEP_COUNT];
 
 /* A loaded rig file; strings point into doc and live as long as it. */

@@ -391,3 +391,101 @@ json_t *glint_session_fit_params(const char *dir)
 	}
 	return json_load_file(path, 0, NULL);
 }
+
+int glint_run_write(const char *dir, const struct glint_run_samples *rs)
+{
+	char path[GLINT_PATH_MAX];
+	json_t *list = json_array(), *doc = json_pack("{s:o}", "samples", list);
+	int ret = doc ? 0 : glint_error_set(ENOMEM, "out of memory");
+
+	for (int k = 0; k < rs->n && ret == 0; k++) {
+		const char *name = strrchr(rs->session[k], '/');
+		name = name ? name + 1 : rs->session[k];
+		if (json_array_append_new(
+			    list, json_pack("{s:s, s:i}", "session", name,
+					    "light", rs->light[k])) < 0)
+			ret = glint_error_set(ENOMEM, "out of memory");
+	}
+	char *text = ret ? NULL : json_dumps(doc, JSON_INDENT(2));
+	if (ret == 0 && !text)
+		ret = glint_error_set(ENOMEM, "out of memory");
+	if (ret == 0)
+		ret = glint_path_join(path, sizeof(path), dir, GLINT_RUN_JSON);
+	if (ret == 0)
+		ret = glint_atomic_write_file(path, text, strlen(text));
+	free(text);
+	json_decref(doc);
+	return ret;
+}
+
+int glint_run_read(const char *dir, struct glint_run_samples *rs)
+{
+	char path[GLINT_PATH_MAX];
+	json_error_t err;
+	struct stat st;
+	int ret = glint_path_join(path, sizeof(path), dir, GLINT_RUN_JSON);
+
+	memset(rs, 0, sizeof(*rs));
+	if (ret < 0)
+		return ret;
+	if (lstat(path, &st) < 0)
+		return errno == ENOENT ? 0
+				       : glint_error_set(errno, "%s: %s", path,
+							 strerror(errno));
+	json_t *doc = json_load_file(path, 0, &err);
+	if (!doc)
+		return glint_error_set(EINVAL, "%s:%d: %s", path, err.line,
+				       err.text);
+	json_t *list = json_object_get(doc, "samples");
+	size_t n = json_array_size(list);
+	if (n < 1 || n > GLINT_RUN_MAX_SAMPLES)
+		ret = glint_error_set(EINVAL,
+				      "%s: samples: expected a list of 1..%d "
+				      "sample sessions",
+				      path, GLINT_RUN_MAX_SAMPLES);
+	for (size_t k = 0; k < n && ret == 0; k++) {
+		json_t *e = json_array_get(list, k);
+		const char *name =
+			json_string_value(json_object_get(e, "session"));
+		json_t *light = json_object_get(e, "light");
+		/* a plain folder name: a run names nothing outside itself */
+		if (!name || !name[0] || strchr(name, '/') ||
+		    !strcmp(name, ".") || !strcmp(name, "..") ||
+		    (light && !json_is_integer(light)))
+			ret = glint_error_set(EINVAL,
+					      "%s: samples[%zu]: expected "
+					      "{\"session\": a folder name in "
+					      "the run, \"light\": a lamp "
+					      "number}",
+					      path, k);
+		else
+			ret = glint_path_join(rs->session[k],
+					      sizeof(rs->session[k]), dir,
+					      name);
+		rs->light[k] = (int)json_integer_value(light);
+	}
+	json_decref(doc);
+	if (ret == 0)
+		ret = glint_path_join(rs->out, sizeof(rs->out), dir,
+				      GLINT_SESSION_FIT);
+	if (ret < 0)
+		return ret;
+	rs->n = (int)n;
+	return 1;
+}
+
+int glint_fit_target_check(const char *dir)
+{
+	struct glint_run_samples *rs = malloc(sizeof(*rs));
+	struct glint_session_fit *fs = malloc(sizeof(*fs));
+	int ret = rs && fs ? glint_run_read(dir, rs)
+			   : glint_error_set(ENOMEM, "out of memory");
+	if (ret == 0)
+		ret = glint_session_fit_inputs(dir, fs);
+	for (int k = 0; ret > 0 && k < rs->n; k++)
+		if (glint_session_fit_inputs(rs->session[k], fs) < 0)
+			ret = glint_error_prefix(-EINVAL, "run %s", dir);
+	free(rs);
+	free(fs);
+	return ret < 0 ? ret : 0;
+}

@@ -101,4 +101,28 @@ void glint_session_summarize(const char *dir, struct glint_session_summary *s);
  * none (or it cannot be read); the caller json_decref()s it. */
 json_t *glint_session_fit_params(const char *dir);
 
+/*
+ * A rig run (OUTPUT/run-STAMP) that captured the sample under several
+ * lamps, one sample session per lamp: RUN/run.json names them (plain
+ * folder names inside RUN, in capture order, with each one's lamp), and
+ * `glint fit RUN` fits one material to all of them into RUN/fit.
+ */
+#define GLINT_RUN_JSON	      "run.json"
+#define GLINT_RUN_MAX_SAMPLES 16
+struct glint_run_samples {
+	int n;
+	char session[GLINT_RUN_MAX_SAMPLES][GLINT_PATH_MAX]; /* RUN/NAME */
+	int light[GLINT_RUN_MAX_SAMPLES]; /* lamp 1.., 0: every lamp */
+	char out[GLINT_PATH_MAX];	  /* RUN/fit */
+};
+/* Write RUN/run.json whole (atomically): sessions are paths inside dir. */
+int glint_run_write(const char *dir, const struct glint_run_samples *rs);
+/* 1 and *rs when dir holds a run.json; 0 when it holds none; an error
+ * naming the file and the entry for a run.json that is not one (a name
+ * that is not a plain folder name in dir, too many, none). */
+int glint_run_read(const char *dir, struct glint_run_samples *rs);
+/* Can `glint fit DIR` fit it: a sample session (glint_session_fit_inputs)
+ * or a run whose every sample is one?  The error names what is not. */
+int glint_fit_target_check(const char *dir);
+
 #endif

@@ -27,6 +27,7 @@ static void fit_help_intro(void)
 	printf("usage: glint fit SCENE.json PHOTO.exr [SCENE2.json PHOTO2.exr "
 	       "...] [options]\n"
 	       "       glint fit SESSION [SESSION2 ...] [options]\n"
+	       "       glint fit RUN [options]\n"
 	       "\n"
 	       "Recover a material's parameters from one HDR image of the "
 	       "sphere (PHOTO, the\nscene camera's size, linear radiance) "
@@ -54,7 +55,9 @@ static void fit_help_intro(void)
 	       "--model, not auto, --select-model or --ladder.\nSeveral "
 	       "SESSIONs (the sample captured under each light, each with "
 	       "its probe) are\nfitted the same way, with their merges' "
-	       "weights, into -o DIR.\n"
+	       "weights, into -o DIR.  A rig RUN folder whose sequence "
+	       "captured the sample\nunder each lamp (its run.json names "
+	       "them) is fitted that way into RUN/fit.\n"
 	       "\n");
 }
 
@@ -371,6 +374,28 @@ static int fit_inputs(const struct cmd_args *a, const struct weights_list *wl,
 				       "several such pairs), or capture "
 				       "SESSIONs");
 	n = sessions ? a->argc : a->argc / 2;
+	/* a rig run: its samples, jointly, into RUN/fit */
+	_Static_assert(GLINT_RUN_MAX_SAMPLES <= GLINT_FIT_MAX_VIEWS,
+		       "a run's samples fit jointly");
+	static struct glint_run_samples rs;
+	int run = a->argc == 1 ? glint_run_read(a->argv[0], &rs) : 0;
+	if (run < 0)
+		return cmd_fail("fit");
+	if (run) {
+		char *dirs[GLINT_RUN_MAX_SAMPLES];
+		n = rs.n;
+		for (int k = 0; k < n; k++)
+			dirs[k] = rs.session[k];
+		if (wl->n && wl->n != n)
+			return cmd_usage_error("fit",
+					       "--weights given %d times for a "
+					       "run of %d samples",
+					       wl->n, n);
+		int ret = session_inputs(dirs, n, wait, wl, in);
+		if (ret == 0 && !*out_dir)
+			*out_dir = rs.out;
+		return ret;
+	}
 	if (n > GLINT_FIT_MAX_VIEWS)
 		return cmd_usage_error(
 			"fit", "%d photos: a joint fit takes at most %d", n,

@@ -224,8 +224,7 @@ int cmd_queue(int argc, char **argv)
 		/* What a fit of it needs, checked now rather than when
 		 * the job runs: a probe session, an incomplete one or one
 		 * without a scene is refused with the reason. */
-		struct glint_session_fit fs;
-		if (glint_session_fit_inputs(args[0], &fs) < 0)
+		if (glint_fit_target_check(args[0]) < 0)
 			return cmd_fail("queue");
 		if (glint_queue_add(q.queue, "fit", args[0], id) < 0)
 			return cmd_fail("queue");

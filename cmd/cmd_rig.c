@@ -105,24 +105,41 @@ static pid_t start_worker(const char *root, void *ctx)
 
 static void print_result(const struct glint_rig_run *ro, int json)
 {
-	json_t *doc = glint_session_fit_params(ro->sample);
+	const struct glint_run_samples *rs = &ro->samples;
+	json_t *doc =
+		ro->fit_of[0] ? glint_session_fit_params(ro->fit_of) : NULL;
 	if (json) {
-		cmd_print_json(json_pack("{s:s, s:s, s:s, s:s, s:o*}", "run",
-					 ro->dir, "probe", ro->probe, "sample",
-					 ro->sample, "job", ro->job, "fit",
-					 doc));
+		json_t *samples = json_array();
+		for (int k = 0; k < rs->n; k++)
+			json_array_append_new(samples,
+					      json_pack("{s:s, s:i}", "session",
+							rs->session[k], "light",
+							rs->light[k]));
+		cmd_print_json(json_pack("{s:s, s:s, s:s, s:o, s:s, s:o*}",
+					 "run", ro->dir, "probe", ro->probe,
+					 "sample", ro->sample, "samples",
+					 samples, "job", ro->job, "fit", doc));
 		return;
 	}
-	printf("rig: one press, run %s\n  probe:  %s\n  sample: %s\n", ro->dir,
-	       ro->probe, ro->sample);
+	printf("rig: one press, run %s\n", ro->dir);
+	if (rs->n > 1)
+		for (int k = 0; k < rs->n; k++)
+			printf("  sample under light %d: %s\n", rs->light[k],
+			       rs->session[k]);
+	else
+		printf("  probe:  %s\n  sample: %s\n", ro->probe, ro->sample);
 	if (doc) {
-		printf("  fit (job %s): relative RMSE %.4f\n", ro->job,
+		printf("  fit (job %s%s): relative RMSE %.4f\n", ro->job,
+		       rs->n > 1 ? ", one material from every light's photo"
+				 : "",
 		       json_real_value(json_object_get(doc, "relative_rmse")));
 		cmd_print_params(doc, NULL);
 		cmd_print_verdicts(doc);
 		printf("  results: %s/fit/params.json, render.exr, "
-		       "compare.png\n",
-		       ro->sample);
+		       "compare.png%s\n",
+		       ro->fit_of,
+		       rs->n > 1 ? " (render-K.exr, compare-K.png: photo K)"
+				 : "");
 		json_decref(doc);
 	}
 }

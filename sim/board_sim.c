@@ -123,8 +123,12 @@ static void update_world(struct sim_board *s)
 	struct glint_sim_world w;
 	const struct glint_board_cfg *c = &s->cfg;
 	glint_sim_world_get(&w);
-	w.lights = c->lines[GLINT_ROLE_LIGHTS].used ? s->out[GLINT_ROLE_LIGHTS]
-						    : 1;
+	/* no lights line: the lab's lamp is always on */
+	w.lights = c->lines[GLINT_ROLE_LIGHTS].used ? 0 : 1;
+	for (int k = 1; k <= GLINT_MAX_LIGHTS; k++)
+		if (c->lines[glint_role_light(k)].used &&
+		    s->out[glint_role_light(k)])
+			w.lights |= 1u << (k - 1);
 	w.turntable_deg = s->angle;
 	if (c->tt_mode == GLINT_TT_NONE)
 		w.view = GLINT_SIM_VIEW_PROBE;

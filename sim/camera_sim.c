@@ -23,7 +23,8 @@
  * 1: tests and demos run a 2 s exposure in 20 ms with 0.01), world
  * (scene=rig only: a file that says what is in view instead of the sim
  * board, for a rig whose board is real hardware: "LIGHTS DEGREES", the
- * lights 0 or 1 and the turntable's angle, 0 the probe and 180 the
+ * lamps on (0 none, 1 the one lamp, bit k - 1 lamp k of a rig with
+ * several) and the turntable's angle, 0 the probe and 180 the
  * sample; the file is read before each frame and replaced whole by its
  * writer; while it is missing the lab is dark).  It must come last: the
  * path runs to the end of the string.
@@ -51,6 +52,7 @@ struct sim_cam {
 	enum { SCENE_CARD, SCENE_PROBE, SCENE_SAMPLE, SCENE_RIG } scene;
 	/* scene=rig: what the board's world shows (sim/world.h) */
 	struct glint_image *probe_img, *sample_img;
+	unsigned lamps; /* the lamps they are lit by (sim/world.h) */
 	/* the lights-off or empty view, made on first need */
 	struct glint_image *scratch;
 	const struct glint_image *view; /* what the sensor sees */
@@ -166,7 +168,13 @@ static int parse_device(const char *dev, struct sim_cam *s)
 	return 0;
 }
 
-int glint_sim_rig_map(struct glint_image **out)
+double glint_sim_lamp_turn(int k)
+{
+	static const double turn[GLINT_MAX_LIGHTS] = { 0, 240, 120, 180 };
+	return k >= 1 && k <= GLINT_MAX_LIGHTS ? turn[k - 1] : 0;
+}
+
+int glint_sim_rig_map(unsigned lamps, struct glint_image **out)
 {
 	struct glint_image *src = NULL, *dst;
 	char path[GLINT_PATH_MAX];
@@ -182,26 +190,37 @@ int glint_sim_rig_map(struct glint_image **out)
 		glint_image_free(src);
 		return glint_error_set(ENOMEM, "out of memory");
 	}
-	/* A whole number of texel columns: a rotation about +Y that needs
-	 * no resampling. */
-	int w = src->width,
-	    shift = (int)lround(GLINT_SIM_RIG_MAP_TURN / 360.0 * w);
-	for (int y = 0; y < src->height; y++)
-		for (int x = 0; x < w; x++)
-			memcpy(glint_image_px(dst, x, y),
-			       glint_image_px(src, ((x + shift) % w + w) % w,
-					      y),
-			       3 * sizeof(float));
+	lamps &= (1u << GLINT_MAX_LIGHTS) - 1;
+	if (!lamps)
+		lamps = 1;
+	/* Each lamp's map turned by a whole number of texel columns: a
+	 * rotation about +Y that needs no resampling. */
+	int w = src->width;
+	for (int k = 1; k <= GLINT_MAX_LIGHTS; k++) {
+		if (!(lamps & (1u << (k - 1))))
+			continue;
+		double turn = GLINT_SIM_RIG_MAP_TURN + glint_sim_lamp_turn(k);
+		int shift = (int)lround(turn / 360.0 * w);
+		for (int y = 0; y < src->height; y++)
+			for (int x = 0; x < w; x++) {
+				float *d = glint_image_px(dst, x, y);
+				const float *p = glint_image_px(
+					src, ((x + shift) % w + w) % w, y);
+				for (int c = 0; c < 3; c++)
+					d[c] += p[c];
+			}
+	}
 	glint_image_free(src);
 	*out = dst;
 	return 0;
 }
 
-int glint_sim_probe_scene(int w, int h, struct glint_image **out)
+int glint_sim_probe_scene(int w, int h, unsigned lamps,
+			  struct glint_image **out)
 {
 	struct glint_image *env = NULL;
 	double n[3] = { 3.2, 3.2, 3.2 }, k[3] = { 3.3, 3.3, 3.3 };
-	int ret = glint_sim_rig_map(&env);
+	int ret = glint_sim_rig_map(lamps, &env);
 	*out = NULL;
 	if (ret < 0)
 		return glint_error_prefix(ret, "sim probe scene");
@@ -236,7 +255,7 @@ int glint_sim_sample_scene_def(int w, int h, struct glint_scene *sc)
 	return 0;
 }
 
-static int render_sample(int w, int h, const char *material,
+static int render_sample(int w, int h, const char *material, unsigned lamps,
 			 struct glint_image **out);
 
 /* The reference render takes seconds: the last one is kept for the
@@ -244,9 +263,10 @@ static int render_sample(int w, int h, const char *material,
 static struct {
 	pthread_mutex_t lock;
 	int w, h;
+	unsigned lamps;
 	char material[48];
 	struct glint_image *img;
-} sample_cache = { PTHREAD_MUTEX_INITIALIZER, 0, 0, "", NULL };
+} sample_cache = { PTHREAD_MUTEX_INITIALIZER, 0, 0, 0, "", NULL };
 
 static struct glint_image *image_copy(const struct glint_image *src)
 {
@@ -257,20 +277,22 @@ static struct glint_image *image_copy(const struct glint_image *src)
 	return d;
 }
 
-int glint_sim_sample_scene(int w, int h, const char *material,
+int glint_sim_sample_scene(int w, int h, const char *material, unsigned lamps,
 			   struct glint_image **out)
 {
 	int ret = 0;
 	pthread_mutex_lock(&sample_cache.lock);
 	if (!sample_cache.img || sample_cache.w != w || sample_cache.h != h ||
+	    sample_cache.lamps != lamps ||
 	    strcmp(sample_cache.material, material) != 0) {
 		struct glint_image *img = NULL;
-		ret = render_sample(w, h, material, &img);
+		ret = render_sample(w, h, material, lamps, &img);
 		if (ret == 0) {
 			glint_image_free(sample_cache.img);
 			sample_cache.img = img;
 			sample_cache.w = w;
 			sample_cache.h = h;
+			sample_cache.lamps = lamps;
 			snprintf(sample_cache.material,
 				 sizeof(sample_cache.material), "%s", material);
 		}
@@ -282,7 +304,7 @@ int glint_sim_sample_scene(int w, int h, const char *material,
 	return ret;
 }
 
-static int render_sample(int w, int h, const char *material,
+static int render_sample(int w, int h, const char *material, unsigned lamps,
 			 struct glint_image **out)
 {
 	struct glint_scene sc;
@@ -300,7 +322,7 @@ static int render_sample(int w, int h, const char *material,
 	if (!ret)
 		ret = glint_material_load(table, material, &model, p);
 	if (!ret)
-		ret = glint_sim_rig_map(&map);
+		ret = glint_sim_rig_map(lamps, &map);
 	if (!ret)
 		ret = glint_envmap_new(map, rot, 1, "sim rig map", &env);
 	if (!ret && !(*out = glint_image_new(w, h)))
@@ -388,19 +410,45 @@ static int upscale(struct glint_image **img, int w, int h, int k)
 	return 0;
 }
 
-/* A scene's radiance at the sensor's size, rendered at 1/scene_scale. */
+/* A scene's radiance at the sensor's size, rendered at 1/scene_scale,
+ * lit by s->lamps. */
 static int scene_image(const struct sim_cam *s, int sample,
 		       struct glint_image **out)
 {
 	int k = s->scene_scale > 1 ? s->scene_scale : 1;
 	int w = (s->width + k - 1) / k, h = (s->height + k - 1) / k;
-	int ret = sample ? glint_sim_sample_scene(w, h, s->material, out)
-			 : glint_sim_probe_scene(w, h, out);
+	int ret = sample ? glint_sim_sample_scene(w, h, s->material, s->lamps,
+						  out)
+			 : glint_sim_probe_scene(w, h, s->lamps, out);
 	if (ret == 0 && k > 1)
 		ret = upscale(out, s->width, s->height, k);
 	if (ret < 0) {
 		glint_image_free(*out);
 		*out = NULL;
+	}
+	return ret;
+}
+
+static void world_now(const struct sim_cam *s, struct glint_sim_world *w);
+
+/* scene=rig: its two views lit by the lamps on now (lamp 1 while none
+ * is); the sensor looks at one of them in place (a 12 MP view is
+ * 148 MB), a lights-off or empty one is made on first need (rig_view). */
+static int rig_scenes(struct sim_cam *s)
+{
+	struct glint_sim_world w;
+	world_now(s, &w);
+	glint_image_free(s->probe_img);
+	glint_image_free(s->sample_img);
+	s->sample_img = NULL;
+	s->lamps = w.lights ? w.lights : 1;
+	int ret = scene_image(s, 0, &s->probe_img);
+	if (!ret)
+		ret = scene_image(s, 1, &s->sample_img);
+	if (ret < 0) {
+		glint_image_free(s->probe_img);
+		glint_image_free(s->sample_img);
+		s->probe_img = s->sample_img = NULL;
 	}
 	return ret;
 }
@@ -435,21 +483,13 @@ static int sim_open(const char *device, const struct glint_clock *clock,
 		s->clock.sleep_until = scaled_sleep_until;
 		s->clock.ctx = s;
 	}
+	s->lamps = 1;
 	if (s->scene == SCENE_PROBE || s->scene == SCENE_SAMPLE)
 		ret = scene_image(s, s->scene == SCENE_SAMPLE, &s->radiance);
-	else if (s->scene == SCENE_RIG) {
-		/* Two views; the sensor looks at one of them in place (a
-		 * 12 MP view is 148 MB), a lights-off or empty one is made
-		 * on first need (rig_view). */
-		ret = scene_image(s, 0, &s->probe_img);
-		if (!ret)
-			ret = scene_image(s, 1, &s->sample_img);
-		if (ret < 0) {
-			glint_image_free(s->probe_img);
-			glint_image_free(s->sample_img);
-		}
-	} else if (!(s->radiance = glint_sim_test_card(s->width, s->height,
-						       s->decades)))
+	else if (s->scene == SCENE_RIG)
+		ret = rig_scenes(s);
+	else if (!(s->radiance = glint_sim_test_card(s->width, s->height,
+						     s->decades)))
 		ret = glint_error_set(ENOMEM, "out of memory");
 	if (ret < 0) {
 		free(s);
@@ -479,10 +519,9 @@ static void sim_close(void *priv)
 	free(s);
 }
 
-/* scene=rig: the radiance of what is in view, dimmed with the lights
- * off. */
-/* world=PATH: "LIGHTS DEGREES" as a board outside this process left them;
- * a view only within a degree of the probe (0) or the sample (180). */
+/* world=PATH: "LIGHTS DEGREES" as a board outside this process left them
+ * (LIGHTS: bit k - 1 for lamp k, so 1 is the one lamp on); a view only
+ * within a degree of the probe (0) or the sample (180). */
 static void world_from_file(const char *path, struct glint_sim_world *w)
 {
 	FILE *f = fopen(path, "r");
@@ -495,7 +534,9 @@ static void world_from_file(const char *path, struct glint_sim_world *w)
 		return;
 	if (fscanf(f, "%d %lf", &lights, &deg) == 2) {
 		double a = fabs(remainder(deg, 360.0));
-		w->lights = lights != 0;
+		w->lights = lights > 0 ? (unsigned)lights &
+						 ((1u << GLINT_MAX_LIGHTS) - 1)
+				       : 0;
 		w->turntable_deg = deg;
 		w->view = a < 1	    ? GLINT_SIM_VIEW_PROBE
 			  : a > 179 ? GLINT_SIM_VIEW_SAMPLE
@@ -504,13 +545,25 @@ static void world_from_file(const char *path, struct glint_sim_world *w)
 	fclose(f);
 }
 
+static void world_now(const struct sim_cam *s, struct glint_sim_world *w)
+{
+	if (s->world[0])
+		world_from_file(s->world, w);
+	else
+		glint_sim_world_get(w);
+}
+
+/* scene=rig: the radiance of what is in view, lit by the lamps on (the
+ * views re-rendered when other lamps came on), dimmed with none. */
 static int rig_view(struct sim_cam *s)
 {
 	struct glint_sim_world w;
-	if (s->world[0])
-		world_from_file(s->world, &w);
-	else
-		glint_sim_world_get(&w);
+	world_now(s, &w);
+	if (w.lights && w.lights != s->lamps) {
+		int ret = rig_scenes(s);
+		if (ret < 0)
+			return ret;
+	}
 	const struct glint_image *src =
 		w.view == GLINT_SIM_VIEW_PROBE	  ? s->probe_img
 		: w.view == GLINT_SIM_VIEW_SAMPLE ? s->sample_img

@@ -22,13 +22,22 @@ struct glint_image *glint_sim_test_card(int w, int h, double decades);
  * exactly: world column x = map column x + shift), so that the low sun
  * lights the sample from the camera's side. */
 #define GLINT_SIM_RIG_MAP_TURN 114.0
-int glint_sim_rig_map(struct glint_image **out);
+/* Lit by the lamps in `lamps` (bit k - 1: lamp k; 0 counts as lamp 1):
+ * the sum of the map turned by GLINT_SIM_RIG_MAP_TURN +
+ * glint_sim_lamp_turn(k) for each (0, 240, 120, 180 degrees): lamp 1's
+ * low sun lights the sample from the camera's left (its highlight near
+ * the left rim), lamp 2's from behind the sphere (a Fresnel glint on the
+ * right rim), lamp 3's from near the camera (the highlight near the
+ * centre). */
+int glint_sim_rig_map(unsigned lamps, struct glint_image **out);
+double glint_sim_lamp_turn(int k);
 
 /* Its "scene=probe": a chrome ball (n 3.2, k 3.3) reflecting the rig's
  * map (above), centred, 0.4 of the smaller side in radius,
  * seen by a pinhole of focal length glint_sim_probe_focal_px(w) looking
  * along -Z with +Y up (so an unwrap returns the map as it is). */
-int glint_sim_probe_scene(int w, int h, struct glint_image **out);
+int glint_sim_probe_scene(int w, int h, unsigned lamps,
+			  struct glint_image **out);
 double glint_sim_probe_focal_px(int w);
 
 /* Its "scene=sample": a 10 cm sphere of a Table-1 material under the same
@@ -37,7 +46,7 @@ double glint_sim_probe_focal_px(int w);
  * the map itself; rendered by the reference renderer (sim/reference.h).
  * _def gives the scene (ground truth for tests). */
 int glint_sim_sample_scene_def(int w, int h, struct glint_scene *sc);
-int glint_sim_sample_scene(int w, int h, const char *material,
+int glint_sim_sample_scene(int w, int h, const char *material, unsigned lamps,
 			   struct glint_image **out);
 
 #endif

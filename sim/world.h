@@ -7,7 +7,14 @@
  * board (which changes it: lights, turntable) and the sim camera's
  * "scene=rig" (which photographs it).  Without a sim board open, the
  * lights are on and the probe is in view.
+ *
+ * The lab has up to GLINT_MAX_LIGHTS lamps, each on its own relay; lamp k
+ * lights the scene with the rig's map turned about +Y by
+ * glint_sim_lamp_turn(k) degrees (sim/camera_sim.h), so each lamp's sun
+ * meets the sphere from its own side.
  */
+
+#include "board/board.h" /* GLINT_MAX_LIGHTS */
 
 enum glint_sim_view {
 	GLINT_SIM_VIEW_NONE,
@@ -16,7 +23,7 @@ enum glint_sim_view {
 };
 
 struct glint_sim_world {
-	int lights; /* 1 on */
+	unsigned lights; /* bit k - 1: lamp k on (1: the one lamp on) */
 	enum glint_sim_view view;
 	double turntable_deg;
 };

@@ -33,7 +33,7 @@ int main(int argc, char **argv)
 	if (argc != 5 || glint_image_read(argv[1], &env) < 0 ||
 	    glint_image_read(argv[2], &mask) < 0 ||
 	    (strcmp(argv[3], "sim-rig") ? glint_image_read(argv[3], &truth)
-					: glint_sim_rig_map(&truth)) < 0 ||
+					: glint_sim_rig_map(1, &truth)) < 0 ||
 	    glint_probe_convert(truth, GLINT_PROBE_LATLONG, GLINT_PROBE_LATLONG,
 				env->width, env->height, &t) < 0) {
 		fprintf(stderr, "check_env: %s\n", glint_error_msg());

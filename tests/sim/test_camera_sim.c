@@ -161,6 +161,20 @@ static void test_world_file(void)
 	double sample_dark = mean_signal(cam);
 	write_world(path, "1 90\n");
 	double between = mean_signal(cam);
+	/* a rig with lamps on lines of their own: bit k - 1 is lamp k */
+	write_world(path, "2 180\n");
+	double lamp2 = mean_signal(cam);
+	write_world(path, "3 180\n");
+	double both = mean_signal(cam);
+	printf("world file: the sample under lamp 1 %.2f, lamp 2 %.2f, both "
+	       "%.2f DN\n",
+	       sample, lamp2, both);
+	CHECK(lamp2 > 2 && fabs(lamp2 - sample) > 0.2 * sample,
+	      "lamp 2 lights the sample as lamp 1 does: %g, %g", lamp2,
+	      sample);
+	CHECK(fabs(both - (sample + lamp2)) < 0.05 * both,
+	      "two lamps are not the sum of each: %g vs %g + %g", both,
+	      sample, lamp2);
 	printf("world file: missing %.2f, probe %.2f, sample %.2f, sample "
 	       "lights off %.3f, turned 90 deg %.2f DN\n",
 	       missing, probe, sample, sample_dark, between);

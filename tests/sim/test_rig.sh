@@ -147,6 +147,64 @@ r['sequence'] = ['lights on', 'turntable sample', 'turntable probe', 'capture pr
 json.dump(r, open('$tmp/pos.json', 'w'))"
 check "position sensor agrees with the moves" run 0 "run complete" rig --config "$tmp/pos.json" --once
 
+# 1c. Two lamps on lines of their own: the default sequence captures the
+# probe and the sample under each alone and fits one material to both
+# photos (the sim's lamp 2 lights the sphere from behind: its Fresnel rim).
+rig lamps '{"at_s": 0.2}' 320 240
+python3 -c "
+import json
+r = json.load(open('$tmp/lamps.json'))
+r['board']['lines']['lights'] = [{'chip': 'gpiochip0', 'line': 22}, {'chip': 'gpiochip0', 'line': 26}]
+del r['sequence']
+json.dump(r, open('$tmp/lamps.json', 'w'))"
+check "two lamps: a run per lamp, one joint fit" run 0 "one material from the 2 samples" rig --config "$tmp/lamps.json" --once --json
+cp "$tmp/out" "$tmp/lamps.out"
+check "... run.json names both samples, each lit by its own probe" python3 -c "
+import json, os
+d = json.load(open('$tmp/lamps.out'))
+run = json.load(open(os.path.join(d['run'], 'run.json')))
+assert [s['light'] for s in run['samples']] == [1, 2], run
+probes = set()
+for s in run['samples']:
+    sc = json.load(open(os.path.join(d['run'], s['session'], 'scene.json')))
+    probes.add(json.dumps(sc['environment'] if 'environment' in sc else sc.get('env')))
+assert len(probes) == 2, probes
+assert [s['light'] for s in d['samples']] == [1, 2], d['samples']
+"
+check "... each lamp on alone, and never both" python3 -c "
+import json
+ev = [json.loads(l) for l in open('$tmp/lamps-board.log')]
+on = {'lights': 0, 'lights[1]': 0}
+seen = set()
+for e in ev:
+    if e['line'] in on:
+        on[e['line']] = e['value']
+        assert sum(on.values()) <= 1, ('both lamps on', e)
+        if e['value']:
+            seen.add(e['line'])
+assert seen == {'lights', 'lights[1]'}, seen
+assert on == {'lights': 0, 'lights[1]': 0}, on
+"
+check "... the joint fit: both photos, every 95 % interval holds the truth" python3 -c "
+import json, os
+d = json.load(open('$tmp/lamps.out'))
+r = json.load(open(os.path.join(d['run'], 'fit', 'params.json')))
+assert len(r['photos']) == 2 and all(p['acceptance']['accepted'] for p in r['photos'])
+truth = {'diffuse.r': 0.292, 'diffuse.g': 0.117, 'diffuse.b': 0.027, 'specular.r': 0.292, 'specular.g': 0.267, 'specular.b': 0.239, 'roughness': 0.039, 'ior': 1.43}
+for q in r['parameters']:
+    lo, hi = q['interval']
+    print('  %-10s %.4f [%.4f, %.4f] truth %.3f' % (q['name'], q['value'], lo, hi, truth[q['name']]))
+    assert lo <= truth[q['name']] <= hi, q['name']
+for f in ('render.exr', 'render-2.exr', 'compare.png', 'compare-2.png'):
+    assert os.path.getsize(os.path.join(d['run'], 'fit', f)) > 0, f
+"
+run_dir=$(ls -d "$tmp"/lamps/run-*)
+check "... glint fit RUN fits it again, into RUN/fit" run 0 "" fit "$run_dir" -q
+check "... glint queue add RUN takes it" run 0 "" queue add "$run_dir" --root "$tmp/lamps"
+mkdir -p "$tmp/lamps/bad-run"
+echo '{"samples": [{"session": "../one", "light": 1}]}' >"$tmp/lamps/bad-run/run.json"
+check "... a run.json naming a folder outside its run is refused" run 1 "samples[0]" fit "$tmp/lamps/bad-run"
+
 # 2. A second press during the run cancels it.
 # (In camera time: the probe's bracket takes seconds, so the second press
 # lands inside it however loaded the machine is.)
@@ -192,6 +250,10 @@ bad nocam "/dev/video9" "r['camera'] = {'backend': 'v4l2', 'device': '/dev/video
 bad nobutton "board.lines.button: missing" "del r['board']['lines']['button']"
 bad mode "turntable.mode" "r['board']['turntable']['mode'] = 'spin'"
 bad step "sequence[1]" "r['sequence'] = ['lights on', 'dance']"
+bad lamp "the board has 1 light line" "r['sequence'] = ['light 2', 'capture probe']"
+bad lampkey "board.lines.lights[1]: unknown role" "r['board']['lines']['lights[1]'] = {'chip': 'gpiochip0', 'line': 3}"
+bad lamps5 "a list of 1..4 lines" "r['board']['lines']['lights'] = [{'chip': 'gpiochip0', 'line': 30 + k} for k in range(5)]"
+bad lampsame "are the same line" "r['board']['lines']['lights'] = [{'chip': 'gpiochip0', 'line': 22}, {'chip': 'gpiochip0', 'line': 17}]"
 
 # 5. The queue: a worker killed mid-fit leaves its job re-runnable.
 sess=$(ls -d "$tmp"/one/run-*/sample-*)

@@ -13,6 +13,7 @@
 
 #include <jansson.h>
 #include <stdint.h>
+#include <sys/stat.h>
 
 static struct glint_frame make_frame(int w, int h, int ch, int bits)
 {
@@ -187,6 +188,47 @@ static void test_session(const char *dir)
 	glint_frame_release(&f);
 }
 
+/* run.json: written whole, read back; names outside the run refused. */
+static void test_run(const char *dir)
+{
+	static struct glint_run_samples rs, back;
+	char run[512], path[700];
+	snprintf(run, sizeof(run), "%s/run-1", dir);
+	CHECK(mkdir(run, 0777) == 0, "mkdir %s", run);
+	CHECK(glint_run_read(run, &back) == 0, "a folder without run.json "
+					       "is not a run");
+	rs.n = 2;
+	snprintf(rs.session[0], sizeof(rs.session[0]), "%s/sample-a", run);
+	snprintf(rs.session[1], sizeof(rs.session[1]), "%s/sample-b", run);
+	rs.light[0] = 1;
+	rs.light[1] = 2;
+	CHECK(glint_run_write(run, &rs) == 0, "%s", glint_error_msg());
+	CHECK(glint_run_read(run, &back) == 1 && back.n == 2 &&
+		      !strcmp(back.session[1], rs.session[1]) &&
+		      back.light[1] == 2,
+	      "read back: %s", glint_error_msg());
+	snprintf(path, sizeof(path), "%s/fit", run);
+	CHECK(!strcmp(back.out, path), "out %s", back.out);
+	static const char *const bad[] = {
+		"{\"samples\": [{\"session\": \"../x\"}]}",
+		"{\"samples\": [{\"session\": \"..\"}]}",
+		"{\"samples\": [{\"session\": \"\"}]}",
+		"{\"samples\": [{\"session\": \"a\", \"light\": \"1\"}]}",
+		"{\"samples\": []}",
+		"{\"samples\": [",
+	};
+	snprintf(path, sizeof(path), "%s/run.json", run);
+	for (size_t i = 0; i < sizeof(bad) / sizeof(*bad); i++) {
+		FILE *f = fopen(path, "w");
+		CHECK(f && fputs(bad[i], f) >= 0, "write %s", path);
+		if (f)
+			fclose(f);
+		CHECK(glint_run_read(run, &back) < 0 &&
+			      strstr(glint_error_msg(), "run.json"),
+		      "%s: accepted (%s)", bad[i], glint_error_msg());
+	}
+}
+
 int main(void)
 {
 	char dir[] = "/tmp/glint-capture-files-XXXXXX";
@@ -194,6 +236,7 @@ int main(void)
 		return 1;
 	RUN_ARG(test_frames, dir);
 	RUN_ARG(test_session, dir);
+	RUN_ARG(test_run, dir);
 	char cmd[600];
 	snprintf(cmd, sizeof(cmd), "rm -rf '%s'", dir);
 	if (system(cmd) != 0)

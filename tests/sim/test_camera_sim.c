@@ -170,11 +170,10 @@ static void test_world_file(void)
 	       "%.2f DN\n",
 	       sample, lamp2, both);
 	CHECK(lamp2 > 2 && fabs(lamp2 - sample) > 0.2 * sample,
-	      "lamp 2 lights the sample as lamp 1 does: %g, %g", lamp2,
-	      sample);
+	      "lamp 2 lights the sample as lamp 1 does: %g, %g", lamp2, sample);
 	CHECK(fabs(both - (sample + lamp2)) < 0.05 * both,
-	      "two lamps are not the sum of each: %g vs %g + %g", both,
-	      sample, lamp2);
+	      "two lamps are not the sum of each: %g vs %g + %g", both, sample,
+	      lamp2);
 	printf("world file: missing %.2f, probe %.2f, sample %.2f, sample "
 	       "lights off %.3f, turned 90 deg %.2f DN\n",
 	       missing, probe, sample, sample_dark, between);

@@ -378,6 +378,21 @@ void glint_session_summarize(const char *dir, struct glint_session_summary *s)
 	s->fitted = glint_path_join(path, sizeof(path), dir,
 				    GLINT_SESSION_FIT "/params.json") == 0 &&
 		    stat(path, &st) == 0;
+	/* one of its run's samples, fitted jointly? */
+	struct glint_run_samples *rs = malloc(sizeof(*rs));
+	char run[GLINT_PATH_MAX];
+	const char *slash = strrchr(dir, '/');
+	if (rs && slash &&
+	    glint_path_fmt(run, sizeof(run), "%.*s", (int)(slash - dir), dir) ==
+		    0 &&
+	    glint_run_read(run, rs) > 0 &&
+	    glint_path_join(path, sizeof(path), rs->out, "params.json") == 0 &&
+	    stat(path, &st) == 0)
+		for (int k = 0; k < rs->n; k++)
+			s->run_fitted |=
+				!strcmp(strrchr(rs->session[k], '/'), slash);
+	free(rs);
+	glint_error_clear();
 }
 
 json_t *glint_session_fit_params(const char *dir)

@@ -93,6 +93,8 @@ void glint_session_list_free(char **list, int n);
 struct glint_session_summary {
 	char kind[16], status[16];
 	int frames, fitted;
+	int run_fitted; /* a sample of a run (run.json) whose joint fit,
+			 * RUN/fit, is written */
 	char error[256];
 };
 void glint_session_summarize(const char *dir, struct glint_session_summary *s);

@@ -162,16 +162,20 @@ int cmd_sessions(int argc, char **argv)
 		glint_session_summarize(list[i], &ss);
 		if (q.json)
 			json_array_append_new(
-				arr, json_pack("{s:s, s:s, s:s, s:i, s:b, "
-					       "s:s*}",
-					       "session", list[i], "kind",
-					       ss.kind, "status", ss.status,
-					       "frames", ss.frames, "fitted",
-					       ss.fitted, "error",
-					       ss.error[0] ? ss.error : NULL));
+				arr,
+				json_pack("{s:s, s:s, s:s, s:i, s:b, "
+					  "s:b, s:s*}",
+					  "session", list[i], "kind", ss.kind,
+					  "status", ss.status, "frames",
+					  ss.frames, "fitted", ss.fitted,
+					  "run_fitted", ss.run_fitted, "error",
+					  ss.error[0] ? ss.error : NULL));
 		else
 			printf("%-9s %6d %-11s %-5s %s%s%s\n", ss.kind,
-			       ss.frames, ss.status, ss.fitted ? "yes" : "-",
+			       ss.frames, ss.status,
+			       ss.fitted       ? "yes"
+			       : ss.run_fitted ? "run"
+					       : "-",
 			       list[i], ss.error[0] ? "  -- " : "", ss.error);
 	}
 	glint_session_list_free(list, n);

@@ -198,6 +198,8 @@ for q in r['parameters']:
 for f in ('render.exr', 'render-2.exr', 'compare.png', 'compare-2.png'):
     assert os.path.getsize(os.path.join(d['run'], 'fit', f)) > 0, f
 "
+check "... sessions shows the samples fitted by their run" run 0 "" sessions --root "$tmp/lamps"
+check "... (FIT: run)" bash -c "test \$(grep -c '^sample .* complete *run ' '$tmp/out') = 2"
 run_dir=$(ls -d "$tmp"/lamps/run-*)
 check "... glint fit RUN fits it again, into RUN/fit" run 0 "" fit "$run_dir" -q
 check "... glint queue add RUN takes it" run 0 "" queue add "$run_dir" --root "$tmp/lamps"

@@ -902,26 +902,18 @@ static int new_cache(const struct objective *ob, uint32_t seed,
 		.seed = seed,
 		.nthreads = o->nthreads,
 	};
-	struct glint_shade_cache *parts[GLINT_FIT_MAX_VIEWS];
-	int ret = 0, v;
+	struct glint_fit_view in[GLINT_FIT_MAX_VIEWS];
+	struct fit_data_part parts[GLINT_FIT_MAX_VIEWS];
+	struct glint_shade_light *lights[GLINT_FIT_MAX_VIEWS];
 
-	for (v = 0; v < ob->nviews && ret == 0; v++) {
+	for (int v = 0; v < ob->nviews; v++) {
 		const struct view *vw = &ob->views[v];
-		co.light = vw->light;
-		ret = glint_shade_cache_new(&vw->r->gb, ob->d->pix + vw->off,
-					    vw->n, vw->r->env, ob->m, &co,
-					    &parts[v]);
+		in[v] = (struct glint_fit_view){ .r = vw->r };
+		parts[v] = (struct fit_data_part){ .off = vw->off, .n = vw->n };
+		lights[v] = vw->light;
 	}
-	if (ret < 0) {
-		for (int k = 0; k < v - 1; k++)
-			glint_shade_cache_free(parts[k]);
-		return ret;
-	}
-	if (ob->nviews == 1) {
-		*out = parts[0];
-		return 0;
-	}
-	return glint_shade_cache_join(parts, ob->nviews, out);
+	return fit_data_cache_new(in, ob->nviews, ob->d, parts, ob->m, &co,
+				  lights, out);
 }
 
 /* The objective over d at the start values: lobe buffers and the shade
@@ -1802,42 +1794,26 @@ static int eval_like_fit(struct objective *ob, struct fit_data *d,
 	return ret;
 }
 
-/*
- * Each photo's pixels (fit_data_prepare()), joined one after the other
- * into d, with where each lies in views[].
- */
+/* Each photo's pixels, joined into d, with where each lies in views[]. */
 static int prepare_views(const struct glint_fit_view *in, int nviews,
 			 const struct glint_fit_opts *o, struct fit_data *d,
 			 struct view *views)
 {
-	struct fit_data parts[GLINT_FIT_MAX_VIEWS];
-	int ret = 0, off = 0, v;
+	struct fit_data_part parts[GLINT_FIT_MAX_VIEWS];
+	int ret = fit_data_prepare_views(in, nviews, o, d, parts);
 
-	memset(parts, 0, sizeof(parts));
-	for (v = 0; v < nviews && ret == 0; v++) {
-		struct view *vw = &views[v];
-		memset(vw, 0, sizeof(*vw));
-		vw->r = in[v].r;
-		ret = fit_data_prepare(&in[v].r->gb, in[v].photo, in[v].weight,
-				       o, &parts[v], &vw->interior);
-		if (ret < 0 && nviews > 1)
-			ret = glint_error_prefix(-ret, "photo %d of %d", v + 1,
-						 nviews);
-		vw->off = off;
-		vw->n = parts[v].n;
-		vw->stride = parts[v].stride;
-		vw->frame_x = parts[v].frame_x;
-		vw->frame_y = parts[v].frame_y;
-		off += parts[v].n;
+	for (int v = 0; v < nviews; v++) {
+		memset(&views[v], 0, sizeof(views[v]));
+		views[v].r = in[v].r;
+		if (ret < 0)
+			continue;
+		views[v].off = parts[v].off;
+		views[v].n = parts[v].n;
+		views[v].interior = parts[v].interior;
+		views[v].stride = parts[v].stride;
+		views[v].frame_x = parts[v].frame_x;
+		views[v].frame_y = parts[v].frame_y;
 	}
-	if (ret == 0 && nviews == 1) {
-		*d = parts[0];
-		return 0;
-	}
-	if (ret == 0)
-		ret = fit_data_join(parts, nviews, d);
-	for (int k = 0; k < nviews; k++)
-		free_data(&parts[k]);
 	return ret;
 }
 

@@ -310,3 +310,67 @@ void fit_data_baselines(const struct fit_data *d, double *flat_rel,
 	*flat_rel = n && sy > 0 ? sqrt(se / n) / (sy / n) : INFINITY;
 	*noise_rmse = n && d->noise_model ? sqrt(sv / n) : NAN;
 }
+
+int fit_data_prepare_views(const struct glint_fit_view *in, int nviews,
+			   const struct glint_fit_opts *o, struct fit_data *d,
+			   struct fit_data_part *parts)
+{
+	struct fit_data one[GLINT_FIT_MAX_VIEWS];
+	int ret = 0, off = 0, v;
+
+	memset(one, 0, sizeof(one));
+	for (v = 0; v < nviews && ret == 0; v++) {
+		struct fit_data_part *pt = &parts[v];
+		memset(pt, 0, sizeof(*pt));
+		ret = fit_data_prepare(&in[v].r->gb, in[v].photo, in[v].weight,
+				       o, &one[v], &pt->interior);
+		if (ret < 0 && nviews > 1)
+			ret = glint_error_prefix(-ret, "photo %d of %d", v + 1,
+						 nviews);
+		pt->off = off;
+		pt->n = one[v].n;
+		pt->stride = one[v].stride;
+		pt->frame_x = one[v].frame_x;
+		pt->frame_y = one[v].frame_y;
+		off += one[v].n;
+	}
+	if (ret == 0 && nviews == 1) {
+		*d = one[0];
+		return 0;
+	}
+	if (ret == 0)
+		ret = fit_data_join(one, nviews, d);
+	for (int k = 0; k < nviews; k++)
+		free_data(&one[k]);
+	return ret;
+}
+
+int fit_data_cache_new(const struct glint_fit_view *in, int nviews,
+		       const struct fit_data *d,
+		       const struct fit_data_part *parts,
+		       const struct glint_model_ops *m,
+		       const struct glint_shade_cache_opts *co,
+		       struct glint_shade_light *const *lights,
+		       struct glint_shade_cache **out)
+{
+	struct glint_shade_cache *one[GLINT_FIT_MAX_VIEWS];
+	struct glint_shade_cache_opts c = *co;
+	int ret = 0, v;
+
+	for (v = 0; v < nviews && ret == 0; v++) {
+		c.light = lights ? lights[v] : NULL;
+		ret = glint_shade_cache_new(&in[v].r->gb, d->pix + parts[v].off,
+					    parts[v].n, in[v].r->env, m, &c,
+					    &one[v]);
+	}
+	if (ret < 0) {
+		for (int k = 0; k < v - 1; k++)
+			glint_shade_cache_free(one[k]);
+		return ret;
+	}
+	if (nviews == 1) {
+		*out = one[0];
+		return 0;
+	}
+	return glint_shade_cache_join(one, nviews, out);
+}

@@ -6,6 +6,7 @@
  * (fit_dielectric.c) fitters. */
 
 #include "fit.h"
+#include "render/shade_cache.h"
 
 /* The pixels of a fit ("universe") with their photo values and weights. */
 struct fit_data {
@@ -45,6 +46,31 @@ int fit_data_prepare(struct glint_gbuffer *gb, const struct glint_image *photo,
  * copies; stride and frame are parts[0]'s, noise_model is set when every
  * part has one. */
 int fit_data_join(const struct fit_data *parts, int nparts, struct fit_data *d);
+
+/* Where one photo's pixels lie in a joint fit_data (off, n) and how they
+ * were taken from it (fit_data_prepare()). */
+struct fit_data_part {
+	int off, n;
+	int interior, stride, frame_x, frame_y;
+};
+
+/* Each photo's pixels (fit_data_prepare()), joined one after the other
+ * into d (one photo: its own), with where each lies in parts[]; an error
+ * names the photo ("photo 2 of 3"). */
+int fit_data_prepare_views(const struct glint_fit_view *in, int nviews,
+			   const struct glint_fit_opts *o, struct fit_data *d,
+			   struct fit_data_part *parts);
+
+/* A shade cache of model m over every pixel of d: one per photo in its
+ * own scene, joined.  lights[v] (the array or an entry may be NULL) is
+ * what photo v's caches share (co->light is ignored). */
+int fit_data_cache_new(const struct glint_fit_view *in, int nviews,
+		       const struct fit_data *d,
+		       const struct fit_data_part *parts,
+		       const struct glint_model_ops *m,
+		       const struct glint_shade_cache_opts *co,
+		       struct glint_shade_light *const *lights,
+		       struct glint_shade_cache **out);
 
 /* Weights from the noise model at the predicted values pred (3 per
  * pixel), for values that have a weight (pred = y: unchanged). */

@@ -69,15 +69,13 @@ static int pick_model(struct glint_renderer *r, const struct glint_fit_job *job,
  * --select-model: the opaque candidates scored by BIC (fit/select.h); the
  * chosen one's fit is the result.
  */
-static int select_model(struct glint_renderer *r,
-			const struct glint_fit_job *job,
+static int select_model(const struct glint_fit_view *views, int nv,
 			const struct glint_fit_opts *o, int richer,
 			const struct glint_model_ops **model,
 			struct glint_fit_result *res, json_t **why)
 {
 	struct glint_selection *sel = calloc(1, sizeof(*sel));
-	int ret = sel ? glint_select_model(r, job->photo, job->weight, o,
-					   richer, sel)
+	int ret = sel ? glint_select_model_views(views, nv, o, richer, sel)
 		      : -ENOMEM;
 	if (ret < 0) {
 		free(sel);
@@ -87,8 +85,7 @@ static int select_model(struct glint_renderer *r,
 	if (sel->has_fit[sel->chosen]) {
 		*res = sel->fit[sel->chosen];
 	} else if (sel->chosen == GLINT_SEL_LAMBERT) {
-		ret = glint_fit(r, &glint_model_lambert, job->photo,
-				job->weight, o, res);
+		ret = glint_fit_views(views, nv, &glint_model_lambert, o, res);
 	} else {
 		/* Grey: the reduced model's values and standard errors
 		 * (select.c); the full fit's intervals and covariance do
@@ -107,14 +104,17 @@ static int select_model(struct glint_renderer *r,
 }
 
 /* The fit as the job asks: the model picked (--model auto) or selected
- * (--select-model), then through the fidelity ladder or plainly.  *why,
- * *selection and *fidelity get their JSON (or stay NULL). */
-static int run_fit(struct glint_renderer *r, const struct glint_fit_job *job,
-		   struct glint_fit_opts *o,
+ * (--select-model), then through the fidelity ladder or plainly, on the
+ * job's photo or jointly on several (views[0] is the job's; auto and the
+ * ladder take one: joint_check()).  *why, *selection and *fidelity get
+ * their JSON (or stay NULL). */
+static int run_fit(const struct glint_fit_view *views, int nv,
+		   const struct glint_fit_job *job, struct glint_fit_opts *o,
 		   const struct glint_model_ops **model,
 		   struct glint_fit_result *res, json_t **why,
 		   json_t **selection, json_t **fidelity)
 {
+	struct glint_renderer *r = views[0].r;
 	int ret = 0;
 
 	*model = job->model;
@@ -124,7 +124,7 @@ static int run_fit(struct glint_renderer *r, const struct glint_fit_job *job,
 			return ret;
 	}
 	if (job->select && !(*model)->transparent)
-		return select_model(r, job, o, 1, model, res, selection);
+		return select_model(views, nv, o, 1, model, res, selection);
 	if (job->ladder > 0 && !(*model)->transparent) {
 		struct glint_ladder_result *lr = calloc(1, sizeof(*lr));
 		ret = lr ? glint_ladder_run(&job->scene, *model, job->photo,
@@ -141,14 +141,14 @@ static int run_fit(struct glint_renderer *r, const struct glint_fit_job *job,
 		free(lr);
 		return ret;
 	}
-	ret = glint_fit(r, *model, job->photo, job->weight, o, res);
+	ret = glint_fit_views(views, nv, *model, o, res);
 	if (ret < 0 || job->no_auto_select || (*model)->transparent ||
 	    (*model)->nlobes < 2 || !glint_fit_needs_selection(res))
 		return ret;
-	glint_log_info("the photo does not determine every parameter of %s: "
+	glint_log_info("the photo%s not determine every parameter of %s: "
 		       "choosing the model by BIC (--select-model)",
-		       (*model)->name);
-	return select_model(r, job, o, 0, model, res, selection);
+		       nv > 1 ? "s do" : " does", (*model)->name);
+	return select_model(views, nv, o, 0, model, res, selection);
 }
 
 /* params.json for a fit (without the model choice, selection, fidelity
@@ -825,13 +825,11 @@ static int joint_check(const struct glint_fit_job *job)
 		return glint_error_set(EINVAL,
 				       "--model auto chooses from one photo: "
 				       "name the model for a joint fit");
-	if (job->select || job->ladder > 0)
+	if (job->ladder > 0)
 		return glint_error_set(EINVAL,
-				       "%s works on one photo: fit the photos "
-				       "one by one with it, or jointly "
-				       "without it",
-				       job->select ? "--select-model"
-						   : "the fidelity ladder");
+				       "the fidelity ladder works on one "
+				       "photo: fit the photos one by one with "
+				       "it, or jointly without it");
 	return 0;
 }
 
@@ -971,18 +969,12 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 	}
 	struct glint_fit_opts o = job->opts;
 	o.nthreads = job->nthreads;
-	if (nv == 1) {
-		ret = run_fit(&rs[0], job, &o, &model, &res, &why, &selection,
-			      &fidelity);
-	} else {
-		struct glint_fit_view views[GLINT_FIT_MAX_VIEWS];
-		for (int k = 0; k < nv; k++)
-			views[k] = (struct glint_fit_view){
-				&rs[k], outs[k].job->photo, outs[k].job->weight
-			};
-		model = job->model;
-		ret = glint_fit_views(views, nv, model, &o, &res);
-	}
+	struct glint_fit_view views[GLINT_FIT_MAX_VIEWS];
+	for (int k = 0; k < nv; k++)
+		views[k] = (struct glint_fit_view){ &rs[k], outs[k].job->photo,
+						    outs[k].job->weight };
+	ret = run_fit(views, nv, job, &o, &model, &res, &why, &selection,
+		      &fidelity);
 	if (o.progress)
 		o.progress(o.progress_ctx, NULL, 0,
 			   0); /* the passes are done */

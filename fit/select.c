@@ -16,6 +16,9 @@
 
 /* The pixels, their lobes at the current parameters, and scratch. */
 struct sel {
+	const struct glint_fit_view *views; /* the photos, each in its scene */
+	int nviews;
+	struct fit_data_part parts[GLINT_FIT_MAX_VIEWS];
 	struct fit_data d;
 	struct glint_shade_cache *cache;
 	const struct glint_model_ops *cache_model; /* the model of cache */
@@ -209,8 +212,7 @@ static int fit_grey(struct sel *s, const struct glint_model_ops *ts,
 
 /* A candidate at its own fit, its cost by the same sums as the others'
  * (its lobes from a cache of its model). */
-static int score_fitted(struct glint_renderer *r, struct sel *s,
-			const struct glint_shade_cache_opts *co,
+static int score_fitted(struct sel *s, const struct glint_shade_cache_opts *co,
 			const struct glint_fit_result *fit,
 			struct glint_select_candidate *c)
 {
@@ -218,8 +220,9 @@ static int score_fitted(struct glint_renderer *r, struct sel *s,
 	memcpy(c->p, fit->p, sizeof(c->p));
 	memcpy(c->se, fit->se, sizeof(c->se));
 	if (c->model != s->cache_model) {
-		int ret = glint_shade_cache_new(&r->gb, s->d.pix, s->d.n,
-						r->env, c->model, co, &cache);
+		int ret =
+			fit_data_cache_new(s->views, s->nviews, &s->d, s->parts,
+					   c->model, co, NULL, &cache);
 		if (ret < 0)
 			return ret;
 	}
@@ -267,10 +270,7 @@ static void choose(struct glint_selection *out, int n)
 }
 
 /* A candidate with a fit of its own: fit it, then score it. */
-static int fit_and_score(struct glint_renderer *r, struct sel *s,
-			 const struct glint_shade_cache_opts *co,
-			 const struct glint_image *photo,
-			 const struct glint_image *weight,
+static int fit_and_score(struct sel *s, const struct glint_shade_cache_opts *co,
 			 const struct glint_fit_opts *o,
 			 struct glint_selection *out, int k)
 {
@@ -282,12 +282,13 @@ static int fit_and_score(struct glint_renderer *r, struct sel *s,
 	 * roughness2 ran to its bound, cost 35188 against 24970). */
 	if (k > GLINT_SEL_LAMBERT)
 		oo.method = GLINT_FIT_VARPRO;
-	int ret = glint_fit(r, c->model, photo, weight, &oo, &out->fit[k]);
+	int ret = glint_fit_views(s->views, s->nviews, c->model, &oo,
+				  &out->fit[k]);
 
 	if (ret < 0)
 		return glint_error_prefix(ret, "fitting %s", c->model->name);
 	out->has_fit[k] = 1;
-	return score_fitted(r, s, co, &out->fit[k], c);
+	return score_fitted(s, co, &out->fit[k], c);
 }
 
 int glint_select_model(struct glint_renderer *r,
@@ -296,9 +297,17 @@ int glint_select_model(struct glint_renderer *r,
 		       const struct glint_fit_opts *o, int richer,
 		       struct glint_selection *out)
 {
+	struct glint_fit_view v = { r, photo, weight };
+	return glint_select_model_views(&v, 1, o, richer, out);
+}
+
+int glint_select_model_views(const struct glint_fit_view *views, int nviews,
+			     const struct glint_fit_opts *o, int richer,
+			     struct glint_selection *out)
+{
 	const struct glint_model_ops *ts = &glint_model_torrance_sparrow;
-	struct sel s = { 0 };
-	int interior, ret;
+	struct sel s = { .views = views, .nviews = nviews };
+	int ret;
 	double *rv = NULL;
 	static const struct {
 		int k, n;
@@ -326,7 +335,11 @@ int glint_select_model(struct glint_renderer *r,
 			.k = fitted[f].n,
 			.model = fitted[f].m,
 		};
-	ret = fit_data_prepare(&r->gb, photo, weight, o, &s.d, &interior);
+	if (nviews < 1 || nviews > GLINT_FIT_MAX_VIEWS)
+		return glint_error_set(EINVAL,
+				       "%d photos: a joint fit takes 1 to %d",
+				       nviews, GLINT_FIT_MAX_VIEWS);
+	ret = fit_data_prepare_views(views, nviews, o, &s.d, s.parts);
 	if (ret < 0)
 		return ret;
 	struct glint_shade_cache_opts co = {
@@ -335,8 +348,8 @@ int glint_select_model(struct glint_renderer *r,
 		.static_samples = o->static_samples,
 		.nthreads = o->nthreads,
 	};
-	ret = glint_shade_cache_new(&r->gb, s.d.pix, s.d.n, r->env, ts, &co,
-				    &s.cache);
+	ret = fit_data_cache_new(views, nviews, &s.d, s.parts, ts, &co, NULL,
+				 &s.cache);
 	s.cache_model = ts;
 	s.lobes = malloc((size_t)s.d.n * 9 * sizeof(double));
 	rv = malloc((size_t)s.d.n * 3 * sizeof(double));
@@ -351,7 +364,7 @@ int glint_select_model(struct glint_renderer *r,
 
 	/* RGB first: grey starts from it, and lambert and grey use the
 	 * torrance-sparrow lobes it leaves in s.lobes. */
-	ret = fit_and_score(r, &s, &co, photo, weight, o, out, GLINT_SEL_RGB);
+	ret = fit_and_score(&s, &co, o, out, GLINT_SEL_RGB);
 	if (ret < 0)
 		goto out;
 	struct glint_select_candidate *c = &out->c[GLINT_SEL_LAMBERT];
@@ -365,8 +378,7 @@ int glint_select_model(struct glint_renderer *r,
 	for (int k = GLINT_SEL_CONST_FRESNEL; k < GLINT_SEL_N && !ret; k++)
 		if (k == GLINT_SEL_CONST_FRESNEL ||
 		    (richer && k > GLINT_SEL_LAMBERT))
-			ret = fit_and_score(r, &s, &co, photo, weight, o, out,
-					    k);
+			ret = fit_and_score(&s, &co, o, out, k);
 	if (ret < 0)
 		goto out;
 	choose(out, n);

@@ -72,6 +72,13 @@ int glint_select_model(struct glint_renderer *r,
 		       const struct glint_fit_opts *o, int richer,
 		       struct glint_selection *out);
 
+/* The same over several photos of one material, each in its own scene
+ * (glint_fit_views()): every candidate fitted jointly, scored on every
+ * photo's pixels together. */
+int glint_select_model_views(const struct glint_fit_view *views, int nviews,
+			     const struct glint_fit_opts *o, int richer,
+			     struct glint_selection *out);
+
 /* Caller json_decref()s. */
 json_t *glint_selection_to_json(const struct glint_selection *s);
 

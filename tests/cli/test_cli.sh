@@ -268,6 +268,16 @@ assert abs(r['material']['diffuse'][0]-0.124)<0.02, r['material']
 for f in ['render-2.exr', 'compare-2.png', 'render.exr', 'compare.png']:
     assert os.path.getsize('$tmp/joint/' + f) > 0, f"
 check "a joint fit's folder is replaced by the next" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" "$tmp/fscene2.json" "$tmp/photo2.exr" -o "$tmp/joint" -q --max-pixels 256 --sample-sets 1
+check "--select-model on a joint fit" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" "$tmp/fscene2.json" "$tmp/photo2.exr" -o "$tmp/jointsel" --select-model --json -q
+check "... every candidate fitted to both photos, the chosen one's result per photo" python3 -c "
+import json; r=json.load(open('$tmp/jointsel/params.json'))
+sel=r['model_selection']
+assert len(sel['candidates'])==7 and 'BIC' in sel['why'], sel
+ph=r['photos']
+assert len(ph)==2 and all(p['acceptance']['accepted'] for p in ph), ph
+assert r['pixels']==sum(p['pixels'] for p in ph), r['pixels']
+print('  chosen', sel['chosen'], r['model'])"
+check "fit: --ladder refused for a joint fit" run 1 "the fidelity ladder works on one photo" fit "$tmp/fscene.json" "$tmp/photo.exr" "$tmp/fscene2.json" "$tmp/photo2.exr" --ladder -o "$tmp/jx"
 check "fit: an odd number of scene and photo arguments" run 2 "several such pairs" fit "$tmp/fscene.json" "$tmp/photo.exr" "$tmp/fscene2.json"
 check "fit: --weights once for two photos" run 2 "--weights given 1 times for 2 photos" fit "$tmp/fscene.json" "$tmp/photo.exr" "$tmp/fscene2.json" "$tmp/photo2.exr" --weights "$tmp/w.exr" -o "$tmp/jx"
 check "fit: --model auto refused for a joint fit" run 1 "name the model for a joint fit" fit "$tmp/fscene.json" "$tmp/photo.exr" "$tmp/fscene2.json" "$tmp/photo2.exr" --model auto -o "$tmp/jx"

@@ -21,7 +21,11 @@
  *      its bare backdrop and a flat disc;
  *   5. what cannot be fitted jointly is refused by name: no photos, a
  *      transparent model, --faithful, a photo of the wrong size (its
- *      number in the message).
+ *      number in the message);
+ *   6. model selection (glint_select_model_views(), what --select-model
+ *      and the automatic choice run): on front alone the BIC cannot
+ *      prefer a Fresnel with an ior to a constant one by much; front +
+ *      rim choose a model with an ior, by a clear margin.
  */
 #include "test.h"
 
@@ -30,6 +34,7 @@
 #include "core/log.h"
 #include "fit/brdf/model.h"
 #include "fit/fit.h"
+#include "fit/select.h"
 #include "sim_scene.h"
 
 struct shot {
@@ -228,6 +233,48 @@ int main(void)
 		      joint.view[v].backdrop_rel_rmse);
 	CHECK(joint.pixels == joint.view[0].pixels + joint.view[1].pixels,
 	      "pixels %d", joint.pixels);
+
+	/* 6. Model selection over both photos. */
+	struct glint_selection *sel1 = calloc(1, sizeof(*sel1)),
+			       *sel2 = calloc(1, sizeof(*sel2));
+	struct glint_fit_view v2[2] = {
+		{ &front.r, front.photo, front.weight },
+		{ &rim.r, rim.photo, rim.weight },
+	};
+	struct glint_fit_opts o;
+	glint_fit_default_opts(&o);
+	CHECK(sel1 && sel2 &&
+		      glint_select_model_views(v2, 1, &o, 0, sel1) == 0 &&
+		      glint_select_model_views(v2, 2, &o, 0, sel2) == 0,
+	      "select: %s", glint_error_msg());
+	if (sel1 && sel2 && !test_failures) {
+		const struct glint_selection *ss[2] = { sel1, sel2 };
+		double gap[2];
+		for (int k = 0; k < 2; k++) {
+			/* BIC of constant Fresnel above the better of the
+			 * two with an ior */
+			double with = fmin(ss[k]->c[GLINT_SEL_RGB].bic,
+					   ss[k]->c[GLINT_SEL_GREY].bic);
+			gap[k] = ss[k]->c[GLINT_SEL_CONST_FRESNEL].bic - with;
+			printf("select %-9s chosen %s; constant Fresnel's BIC "
+			       "%+.1f above the best with an ior\n  %s\n",
+			       k ? "front+rim" : "front",
+			       ss[k]->c[ss[k]->chosen].name, gap[k],
+			       ss[k]->why);
+		}
+		CHECK(sel2->chosen == GLINT_SEL_RGB ||
+			      sel2->chosen == GLINT_SEL_GREY,
+		      "front + rim chose %s", sel2->c[sel2->chosen].name);
+		CHECK(gap[1] > 10 && gap[1] > 3 * fabs(gap[0]),
+		      "front + rim: constant Fresnel only %+.1f above (front "
+		      "alone %+.1f)",
+		      gap[1], gap[0]);
+		CHECK(sel2->has_fit[GLINT_SEL_RGB] &&
+			      sel2->fit[GLINT_SEL_RGB].nviews == 2,
+		      "the candidates are fitted to both photos");
+	}
+	free(sel1);
+	free(sel2);
 
 	/* 5. Refusals. */
 	refusals(&front, m);

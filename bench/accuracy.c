@@ -2,8 +2,11 @@
 /*
  * The accuracy matrix: every shared light probe x every opaque Table-1
  * material, photos from the independent reference renderer (sim/) at
- * 256 px (4 jittered samples per pixel, 256 per technique: with 64 the
- * photo's own Monte Carlo noise moves roughness by 5-8 %), noise-free and
+ * 256 px (64 jittered samples per pixel, 16 per technique: 1024 a pixel,
+ * enough that the photo's own Monte Carlo noise does not move roughness;
+ * a camera's pixel integrates its area, and 4 samples per pixel (at 256
+ * per technique, before 2026-11-26) aliased a near-mirror's sun into
+ * a photo no camera takes), noise-free and
  * through the sensor model (mean at 10 % of the ADC range, 1/variance weights);
  * each fitted with glint's defaults.
  *
@@ -32,7 +35,9 @@
  * map.  For studies: ACCURACY_ONLY=MATERIAL, ACCURACY_SAMPLES=N (the
  * fit's light and lobe samples per set), ACCURACY_REF_SAMPLES=N and
  * ACCURACY_REF_SPP=N (the reference photos'), ACCURACY_SPP=N (the fitter's
- * primary samples per pixel), ACCURACY_DUMP=DIR (each clean reference photo
+ * primary samples per pixel), ACCURACY_NO_FOOTPRINT=1 (the fitter's hot
+ * texels on its hits alone, as before the footprint integral:
+ * shade_cache.h), ACCURACY_DUMP=DIR (each clean reference photo
  * written there as MAP-MATERIAL.exr, to fit again with glint fit: the
  * scene is bench/captures.h's bench_scene at 256 px).
  */
@@ -97,10 +102,10 @@ static struct glint_image *reference(const struct glint_renderer *r,
 
 	glint_reference_default_opts(&ro);
 	ro.spp = getenv("ACCURACY_REF_SPP") ? atoi(getenv("ACCURACY_REF_SPP"))
-					    : 4;
+					    : 64;
 	ro.samples = getenv("ACCURACY_REF_SAMPLES")
 			     ? atoi(getenv("ACCURACY_REF_SAMPLES"))
-			     : 256;
+			     : 16;
 	ro.seed = seed;
 	if (img &&
 	    glint_reference_render(&r->scene, r->env, m, p, &ro, img) < 0) {
@@ -207,6 +212,7 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 		if (getenv("ACCURACY_SAMPLES"))
 			o.light_samples = o.lobe_samples =
 				atoi(getenv("ACCURACY_SAMPLES"));
+		o.no_footprint = getenv("ACCURACY_NO_FOOTPRINT") != NULL;
 		double bias = NAN;
 		if (glint_fit_evaluate(&r, m, a, NULL, &o, truth, &ev) == 0)
 			bias = ev.rmse / noise;
@@ -224,6 +230,8 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			if (getenv("ACCURACY_SAMPLES"))
 				o.light_samples = o.lobe_samples =
 					atoi(getenv("ACCURACY_SAMPLES"));
+			o.no_footprint =
+				getenv("ACCURACY_NO_FOOTPRINT") != NULL;
 			struct glint_fit_verdict v = { 0 };
 			if (glint_fit(&r, m, photo, w, &o, &res) == 0 &&
 			    glint_fit_judge(&res, 0, &v))

@@ -899,6 +899,7 @@ static int new_cache(const struct objective *ob, uint32_t seed,
 		.light_samples = o->light_samples * ob->sample_scale,
 		.lobe_samples = o->lobe_samples * ob->sample_scale,
 		.static_samples = o->static_samples,
+		.no_footprint = o->no_footprint,
 		.seed = seed,
 		.nthreads = o->nthreads,
 	};

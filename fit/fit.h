@@ -69,6 +69,8 @@ struct glint_fit_opts {
 	int light_samples;     /* shade cache: env samples per hit */
 	int lobe_samples;      /* shade cache: lobe samples per hit */
 	int static_samples;    /* shade cache: for constant lobes */
+	int no_footprint;      /* shade cache: near-mirrors' hot texels on
+				* the hits, not over pixels (benchmarks) */
 	int max_iter;	       /* per LM pass */
 	enum glint_fit_optimizer optimizer;
 	uint64_t seed;	     /* annealing's random stream */

@@ -346,6 +346,7 @@ int glint_select_model_views(const struct glint_fit_view *views, int nviews,
 		.light_samples = o->light_samples,
 		.lobe_samples = o->lobe_samples,
 		.static_samples = o->static_samples,
+		.no_footprint = o->no_footprint,
 		.nthreads = o->nthreads,
 	};
 	ret = fit_data_cache_new(views, nviews, &s.d, s.parts, ts, &co, NULL,

@@ -77,6 +77,24 @@ static double ggx_lobe_extent(const double *p, int j)
 	return j == 1 && s < 1 ? 2 * asin(s) : -1;
 }
 
+/* GGX's core: D falls to half at tan t_h = a sqrt(sqrt(2) - 1) =
+ * 0.6436 a, the mirror direction's angle twice that, which a Gaussian
+ * reaches at 1.1774 sigma: sigma = 1.0932 a.  Widening keeps that core
+ * (its tails are not widened). */
+#define GGX_CORE 1.0932
+
+static double ggx_lobe_width(const double *p, int j)
+{
+	return j == 1 ? GGX_CORE * p[ROUGH] : -1;
+}
+
+static void ggx_lobe_widen(double *p, int j, double s)
+{
+	if (j == 1)
+		p[ROUGH] = sqrt(p[ROUGH] * p[ROUGH] +
+				s * s / (GGX_CORE * GGX_CORE));
+}
+
 const struct glint_model_ops glint_model_ggx = {
 	.name = "ggx",
 	.conventions =
@@ -101,4 +119,6 @@ const struct glint_model_ops glint_model_ggx = {
 	.sample_lobe = ggx_sample_lobe,
 	.pdf_lobe = ggx_pdf_lobe,
 	.lobe_extent = ggx_lobe_extent,
+	.lobe_width = ggx_lobe_width,
+	.lobe_widen = ggx_lobe_widen,
 };

@@ -86,6 +86,14 @@ struct glint_model_ops {
 	/* Angle (radians) from the mirror direction beyond which lobe j is
 	 * below 1e-12 of its peak, or <= 0 when it has no such bound. */
 	double (*lobe_extent)(const double *p, int j);
+	/* Lobe j's core width: the standard deviation (radians) of its
+	 * reflected directions about the mirror direction; and p with that
+	 * width widened to sqrt(width^2 + s^2) in place, as if a Gaussian
+	 * of s were convolved into the lobe (the spread of a light's
+	 * quadrature points).  NULL: the fitter does not integrate lobe j's
+	 * hot texels over pixel footprints (fit/render/shade_cache.c). */
+	double (*lobe_width)(const double *p, int j);
+	void (*lobe_widen)(double *p, int j, double s);
 	/* A transparent sphere (fit/dielectric.h): no BRDF (eval, sample
 	 * and pdf are NULL); rendered and fitted by following its paths. */
 	int transparent;

@@ -79,6 +79,18 @@ static double on_lobe_extent(const double *p, int j)
 	return j == 1 ? 2 * atan(p[ROUGH] * sqrt(27.6)) : -1;
 }
 
+/* The specular lobe is torrance_sparrow.c's: sqrt(2) m. */
+static double on_lobe_width(const double *p, int j)
+{
+	return j == 1 ? 1.4142135623730951 * p[ROUGH] : -1;
+}
+
+static void on_lobe_widen(double *p, int j, double s)
+{
+	if (j == 1)
+		p[ROUGH] = sqrt(p[ROUGH] * p[ROUGH] + s * s / 2);
+}
+
 const struct glint_model_ops glint_model_oren_nayar = {
 	.name = "oren-nayar",
 	.conventions =
@@ -104,4 +116,6 @@ const struct glint_model_ops glint_model_oren_nayar = {
 	.sample_lobe = on_sample_lobe,
 	.pdf_lobe = on_pdf_lobe,
 	.lobe_extent = on_lobe_extent,
+	.lobe_width = on_lobe_width,
+	.lobe_widen = on_lobe_widen,
 };

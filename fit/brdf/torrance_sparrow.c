@@ -152,6 +152,19 @@ static double ts_lobe_extent(const double *p, int j)
 	return j == 1 ? 2 * atan(p[ROUGH] * sqrt(27.6)) : -1;
 }
 
+/* Beckmann's half-vector angle has variance m^2/2 per axis, the mirror
+ * direction twice the angle: standard deviation sqrt(2) m. */
+static double ts_lobe_width(const double *p, int j)
+{
+	return j == 1 ? 1.4142135623730951 * p[ROUGH] : -1;
+}
+
+static void ts_lobe_widen(double *p, int j, double s)
+{
+	if (j == 1)
+		p[ROUGH] = sqrt(p[ROUGH] * p[ROUGH] + s * s / 2);
+}
+
 const struct glint_model_ops glint_model_torrance_sparrow = {
 	.name = "torrance-sparrow",
 	.conventions =
@@ -177,6 +190,8 @@ const struct glint_model_ops glint_model_torrance_sparrow = {
 	.lobe_geometry = glint_beckmann_geometry,
 	.lobe_from_geometry = ts_lobe_from_geometry,
 	.lobe_extent = ts_lobe_extent,
+	.lobe_width = ts_lobe_width,
+	.lobe_widen = ts_lobe_widen,
 };
 
 /*
@@ -254,4 +269,6 @@ const struct glint_model_ops glint_model_ts_constant_fresnel = {
 	.lobe_geometry = glint_beckmann_geometry,
 	.lobe_from_geometry = nf_lobe_from_geometry,
 	.lobe_extent = ts_lobe_extent,
+	.lobe_width = ts_lobe_width,
+	.lobe_widen = ts_lobe_widen,
 };

@@ -86,6 +86,20 @@ static double two_lobe_extent(const double *p, int j)
 	return j > 0 ? 2 * atan(lobe_m(p, j) * sqrt(27.6)) : -1;
 }
 
+/* Each lobe Beckmann (torrance_sparrow.c): sqrt(2) m. */
+static double two_lobe_width(const double *p, int j)
+{
+	return j > 0 ? 1.4142135623730951 * lobe_m(p, j) : -1;
+}
+
+static void two_lobe_widen(double *p, int j, double s)
+{
+	if (j > 0) {
+		double *m = j == 1 ? &p[ROUGH] : &p[ROUGH2];
+		*m = sqrt(*m * *m + s * s / 2);
+	}
+}
+
 const struct glint_model_ops glint_model_two_lobe = {
 	.name = "two-lobe",
 	.conventions =
@@ -108,4 +122,6 @@ const struct glint_model_ops glint_model_two_lobe = {
 	.sample_lobe = two_sample_lobe,
 	.pdf_lobe = two_pdf_lobe,
 	.lobe_extent = two_lobe_extent,
+	.lobe_width = two_lobe_width,
+	.lobe_widen = two_lobe_widen,
 };

@@ -28,6 +28,21 @@ struct cache_hit {
 	uint32_t seed;
 };
 
+/*
+ * A pixel's footprint: its normal and ray direction as affine functions
+ * of the position (u, v) in the pixel (centre 0, edges +-1/2), fitted to
+ * its primary hits by least squares, and how fast its mirror direction
+ * turns across it.  The hot texels of a lobe narrower than that are
+ * integrated over the pixel on a grid (hot_footprint()): a sun seen in a
+ * near-mirror covers part of a pixel, which a few point samples alias.
+ */
+struct cache_foot {
+	float n[3], nu[3], nv[3];
+	float d[3], du[3], dv[3];
+	float r[3]; /* mirror direction at the centre */
+	float turn; /* radians per pixel (largest of u and v); 0: no fit */
+};
+
 struct glint_shade_cache {
 	const struct glint_model_ops *model;
 	const struct glint_envmap *env;
@@ -37,9 +52,10 @@ struct glint_shade_cache {
 	const struct glint_env_hot *hot;     /* light->hot */
 	struct glint_shade_light *own_light; /* when not shared */
 	int lambert[GLINT_MAX_PARAMS];	     /* lobe j is the constant 1/pi */
-	int n, spp, nl, nb, nthreads;
+	int n, spp, nl, nb, nthreads, no_footprint;
 	int32_t *pix;
 	struct cache_hit *hits;	 /* n * spp */
+	struct cache_foot *feet; /* n */
 	struct env_sample *envs; /* n * spp * nl */
 	double (*lobe_u)[2];	 /* nb fixed uniforms, shifted per hit */
 	double *static_lobes;	 /* n * nlobes * 3, constant lobes only */
@@ -110,7 +126,7 @@ static void hot_quadrature(const struct glint_shade_cache *c,
 static void lobe_at_hit(const struct glint_shade_cache *c,
 			const struct cache_hit *h, const struct env_sample *es,
 			int nl, int nb, const double (*u)[2], const double *p,
-			int j, double out[3])
+			int j, int with_hot, double out[3])
 {
 	const struct glint_model_ops *m = c->model;
 	struct vec3 wo = fv(h->wo);
@@ -120,7 +136,8 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 	int geom = m->lobe_from_geometry && m->lobe_varies[j];
 
 	out[0] = out[1] = out[2] = 0;
-	hot_quadrature(c, h, p, j, 0, out);
+	if (with_hot)
+		hot_quadrature(c, h, p, j, 0, out);
 	for (int k = 0; k < nl; k++) {
 		const struct env_sample *e = &es[k];
 		struct vec3 wi = fv(e->wi);
@@ -156,6 +173,199 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 		for (int ch = 0; ch < 3; ch++)
 			out[ch] += w * l[ch];
 	}
+}
+
+/* Pixel i's normal and ray direction at (u, v) in it, and the mirror
+ * direction there. */
+static void foot_at(const struct cache_foot *f, double u, double v,
+		    struct vec3 *n, struct vec3 *d, struct vec3 *r)
+{
+	*n = v3_norm(v3_add(fv(f->n), v3_add(v3_scale(fv(f->nu), u),
+					     v3_scale(fv(f->nv), v))));
+	*d = v3_norm(v3_add(fv(f->d), v3_add(v3_scale(fv(f->du), u),
+					     v3_scale(fv(f->dv), v))));
+	*r = v3_sub(*d, v3_scale(*n, 2 * v3_dot(*d, *n)));
+}
+
+static double angle(struct vec3 a, struct vec3 b)
+{
+	return acos(fmin(1, fmax(-1, v3_dot(a, b) / (v3_len(a) * v3_len(b)))));
+}
+
+/*
+ * Fit pixel pix's footprint to its spp hits g (least squares over their
+ * positions in the pixel; glint_pixel_sample() places them as the tracer
+ * did).  Fewer than 3 hits, or hits in a line: no footprint (turn 0).
+ */
+static void foot_fit(const struct glint_gbuffer *gb, int32_t pix,
+		     const struct glint_hit *g, struct cache_foot *f)
+{
+	uint32_t fp = glint_gbuffer_frame_pixel(gb, (size_t)pix);
+	int fw = gb->frame_width ? gb->frame_width : gb->width;
+	double m[3][3] = { { 0 } }, rhs[6][3] = { { 0 } }, inv[3][3];
+
+	memset(f, 0, sizeof(*f));
+	if (gb->spp < 3)
+		return;
+	for (int s = 0; s < gb->spp; s++) {
+		double pos[2], lens[2];
+		glint_pixel_sample((int)(fp % (uint32_t)fw),
+				   (int)(fp / (uint32_t)fw), s, gb->spp, pos,
+				   lens);
+		double b[3] = { 1, pos[0] - 0.5, pos[1] - 0.5 };
+		for (int a = 0; a < 3; a++) {
+			for (int e = 0; e < 3; e++)
+				m[a][e] += b[a] * b[e];
+			for (int k = 0; k < 3; k++) {
+				rhs[k][a] += b[a] * g[s].n[k];
+				rhs[3 + k][a] += b[a] * g[s].d[k];
+			}
+		}
+	}
+	double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+		     m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+		     m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+	if (!(fabs(det) > 1e-9 * gb->spp * gb->spp * gb->spp))
+		return;
+	for (int a = 0; a < 3; a++)
+		for (int e = 0; e < 3; e++) {
+			int a1 = (e + 1) % 3, a2 = (e + 2) % 3;
+			int e1 = (a + 1) % 3, e2 = (a + 2) % 3;
+			inv[a][e] = (m[a1][e1] * m[a2][e2] -
+				     m[a1][e2] * m[a2][e1]) /
+				    det;
+		}
+	float *dst[6][3] = {
+		{ &f->n[0], &f->nu[0], &f->nv[0] },
+		{ &f->n[1], &f->nu[1], &f->nv[1] },
+		{ &f->n[2], &f->nu[2], &f->nv[2] },
+		{ &f->d[0], &f->du[0], &f->dv[0] },
+		{ &f->d[1], &f->du[1], &f->dv[1] },
+		{ &f->d[2], &f->du[2], &f->dv[2] },
+	};
+	for (int k = 0; k < 6; k++)
+		for (int a = 0; a < 3; a++) {
+			double x = 0;
+			for (int e = 0; e < 3; e++)
+				x += inv[a][e] * rhs[k][e];
+			*dst[k][a] = (float)x;
+		}
+	struct vec3 n, d, r, r0, r1;
+	foot_at(f, 0, 0, &n, &d, &r);
+	f->r[0] = (float)r.x;
+	f->r[1] = (float)r.y;
+	f->r[2] = (float)r.z;
+	foot_at(f, -0.5, 0, &n, &d, &r0);
+	foot_at(f, 0.5, 0, &n, &d, &r1);
+	double tu = angle(r0, r1);
+	foot_at(f, 0, -0.5, &n, &d, &r0);
+	foot_at(f, 0, 0.5, &n, &d, &r1);
+	f->turn = (float)fmax(tu, angle(r0, r1));
+}
+
+/* Lobe j's hot part, the mean over pixel i's footprint on a k x k grid;
+ * only hot points within ext of a point's mirror direction count. */
+static void hot_grid(const struct glint_shade_cache *c,
+		     const struct cache_foot *f, const double *p, int j, int k,
+		     double ext, double out[3])
+{
+	const struct glint_env_hot *hot = c->hot;
+	const struct glint_model_ops *m = c->model;
+	double cos_ext = cos(fmin(ext, M_PI));
+
+	out[0] = out[1] = out[2] = 0;
+	for (int a = 0; a < k; a++)
+		for (int e = 0; e < k; e++) {
+			struct vec3 n, d, r, t, b;
+			foot_at(f, (a + 0.5) / k - 0.5, (e + 0.5) / k - 0.5, &n,
+				&d, &r);
+			v3_frame(n, &t, &b);
+			struct vec3 wo =
+				v3(-v3_dot(d, t), -v3_dot(d, b), -v3_dot(d, n));
+			if (!(wo.z > 0))
+				continue;
+			r = v3_norm(r);
+			for (int q = 0; q < hot->npart; q++) {
+				const float *pt = hot->part + 6 * (size_t)q;
+				struct vec3 l = v3(pt[0], pt[1], pt[2]);
+				if (v3_dot(l, r) < cos_ext)
+					continue;
+				struct vec3 wi = v3(v3_dot(l, t), v3_dot(l, b),
+						    v3_dot(l, n));
+				if (!(wi.z > 0))
+					continue;
+				double bj = glint_lobe_value_pdf(m, p, j, wo,
+								 wi, NULL);
+				if (bj <= 0)
+					continue;
+				for (int ch = 0; ch < 3; ch++)
+					out[ch] += bj * wi.z * pt[3 + ch];
+			}
+		}
+	for (int ch = 0; ch < 3; ch++)
+		out[ch] /= (double)k * k;
+}
+
+/* Lobe j's hot part, the mean over pixel i's hits. */
+static void hot_hits(const struct glint_shade_cache *c, int i, const double *p,
+		     int j, double out[3])
+{
+	out[0] = out[1] = out[2] = 0;
+	for (int s = 0; s < c->spp; s++) {
+		double a[3] = { 0, 0, 0 };
+		hot_quadrature(c, &c->hits[(size_t)i * c->spp + s], p, j, 0, a);
+		for (int ch = 0; ch < 3; ch++)
+			out[ch] += a[ch] / c->spp;
+	}
+}
+
+/*
+ * Lobe j's hot part over pixel i where the lobe is narrow against the
+ * pixel's turn of mirror direction: a near-mirror's sun covers part of a
+ * pixel, which the hits' few points alias.  The lobe is widened by the
+ * spread of the hot texels' quadrature points (so that they integrate
+ * the texels' area, not points of light) and integrated on a grid whose
+ * cells turn by at most its width, blending two levels so that the
+ * result stays continuous in the parameters.  Returns 0 (out untouched)
+ * when the lobe is wide enough for the hits' own points
+ * (hot_quadrature()).
+ */
+static int hot_footprint(const struct glint_shade_cache *c, int i,
+			 const double *p, int j, double out[3])
+{
+	const struct cache_foot *f = &c->feet[i];
+	const struct glint_model_ops *m = c->model;
+	double pw[GLINT_MAX_PARAMS];
+
+	if (c->no_footprint || !m->lobe_width || !m->lobe_widen ||
+	    !(f->turn > 0) || !c->hot->npart)
+		return 0;
+	memcpy(pw, p, (size_t)m->nparams * sizeof(*p));
+	m->lobe_widen(pw, j, c->light->spread);
+	double sd = m->lobe_width(pw, j);
+	double lv = sd > 0 ? log2(f->turn / sd) : 0;
+	if (!(lv > 0))
+		return 0;
+	/* Where a lobe has no bound (GGX's tails), 40 widths hold its
+	 * core; its tails there are the hits'. */
+	double ext = m->lobe_extent ? m->lobe_extent(pw, j) : -1;
+	if (!(ext > 0))
+		ext = 40 * sd;
+	out[0] = out[1] = out[2] = 0;
+	if (angle(fv(f->r), c->hot->axis) - c->hot->radius > ext + f->turn)
+		return 1;
+	lv = fmin(lv, 3);
+	int lo = (int)lv;
+	double w = lv - lo, a[3], b[3] = { 0, 0, 0 };
+	if (lo)
+		hot_grid(c, f, pw, j, 2 << lo, ext, a);
+	else
+		hot_hits(c, i, p, j, a);
+	if (w > 0)
+		hot_grid(c, f, pw, j, 4 << lo, ext, b);
+	for (int ch = 0; ch < 3; ch++)
+		out[ch] = (1 - w) * a[ch] + w * b[ch];
+	return 1;
 }
 
 static void draw_env_samples(const struct glint_envmap *env,
@@ -246,7 +456,7 @@ static void setup_pixels(void *ctx, int i0, int i1, int thread)
 							ns, 0x1b873593u, tmp);
 					drawn = 1;
 					lobe_at_hit(c, h, tmp, ns, ns, u,
-						    job->p0, j, a);
+						    job->p0, j, 1, a);
 				}
 				double *dst = c->static_lobes +
 					      ((size_t)i * m->nlobes + j) * 3;
@@ -261,7 +471,7 @@ out:
 }
 
 /* Hot texels: within 1 % of the brightest, if at most 64 of them;
- * 2 x 2 points each. */
+ * 2 x 2 points each (spread: half their spacing in latitude). */
 int glint_shade_light_new(const struct glint_envmap *env,
 			  const struct glint_shade_cache_opts *opts,
 			  struct glint_shade_light **out)
@@ -273,6 +483,7 @@ int glint_shade_light_new(const struct glint_envmap *env,
 	if (!l)
 		return glint_error_set(ENOMEM, "out of memory");
 	ret = glint_env_hot_new(env, 0.01, opts->no_hot ? 0 : 64, 2, &l->hot);
+	l->spread = M_PI / env->img->height / 2 / 2;
 	if (ret == 0)
 		ret = glint_irradiance_build(env, l->hot->is_hot, 64,
 					     opts->nthreads, &l->irr);
@@ -320,13 +531,16 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 	c->nl = opts->light_samples;
 	c->nb = opts->lobe_samples;
 	c->nthreads = opts->nthreads;
+	c->no_footprint = opts->no_footprint;
 	c->pix = malloc((size_t)n * sizeof(*c->pix));
 	c->hits = calloc((size_t)n * gb->spp, sizeof(*c->hits));
+	c->feet = calloc((size_t)n, sizeof(*c->feet));
 	c->envs = calloc((size_t)n * gb->spp * (c->nl ? c->nl : 1),
 			 sizeof(*c->envs));
 	c->lobe_u = malloc((size_t)(c->nb ? c->nb : 1) * sizeof(*c->lobe_u));
 	c->static_lobes = calloc((size_t)n * model->nlobes * 3, sizeof(double));
-	if (!c->pix || !c->hits || !c->envs || !c->lobe_u || !c->static_lobes) {
+	if (!c->pix || !c->hits || !c->feet || !c->envs || !c->lobe_u ||
+	    !c->static_lobes) {
 		glint_shade_cache_free(c);
 		return glint_error_set(ENOMEM,
 				       "out of memory for the shade cache of "
@@ -395,6 +609,8 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 				 (uint32_t)s) ^
 				0x85ebca6bu ^ glint_hash32(opts->seed));
 		}
+		foot_fit(gb, pix[i], glint_gbuffer_pixel(gb, (size_t)pix[i]),
+			 &c->feet[i]);
 	}
 	struct setup_job job = { c, opts->static_samples, p0, 0 };
 	glint_parallel_for(n, 64, opts->nthreads, setup_pixels, &job);
@@ -456,6 +672,7 @@ void glint_shade_cache_free(struct glint_shade_cache *c)
 	free(c->part_off);
 	free(c->pix);
 	free(c->hits);
+	free(c->feet);
 	free(c->envs);
 	free(c->lobe_u);
 	free(c->static_lobes);
@@ -492,13 +709,18 @@ static void lobes_pixels(void *ctx, int i0, int i1, int thread)
 		for (int j = 0; j < nj; j++) {
 			if (!m->lobe_varies[j])
 				continue;
+			double hot[3];
+			int foot = hot_footprint(c, i, job->p, j, hot);
+			if (foot)
+				for (int ch = 0; ch < 3; ch++)
+					dst[j * 3 + ch] += hot[ch];
 			for (int s = 0; s < c->spp; s++) {
 				size_t hi = (size_t)i * c->spp + s;
 				double a[3];
 				lobe_at_hit(c, &c->hits[hi],
 					    c->envs + hi * c->nl, c->nl, c->nb,
 					    (const double(*)[2])c->lobe_u,
-					    job->p, j, a);
+					    job->p, j, !foot, a);
 				for (int ch = 0; ch < 3; ch++)
 					dst[j * 3 + ch] += a[ch] / c->spp;
 			}

@@ -21,6 +21,10 @@
  * sampled but integrated for every hit on fixed points, skipped where the
  * lobe cannot reach them: the highlight, which carries most of what the
  * photo says about roughness, is then exact rather than the noisiest part.
+ * Where a lobe is narrower than a pixel's turn of mirror direction (a
+ * near-mirror), the hot texels are integrated over the pixel's footprint
+ * on a grid instead, the lobe widened by their quadrature points'
+ * spacing: a sun covers part of such a pixel, which the hits alias.
  *
  * The cache holds a chosen set of pixels (e.g. the sphere's interior, or a
  * coarse subset of it).
@@ -38,6 +42,10 @@ struct glint_shade_cache_opts {
 	int lobe_samples;   /* fixed lobe samples per hit (varying lobes) */
 	int static_samples; /* per hit and technique for constant lobes */
 	int no_hot;	    /* sample the env map's brightest texels too */
+	/* Hot texels on the hits' points even where the lobe is narrower
+	 * than a pixel's turn of mirror direction (the footprint integral
+	 * off: benchmarks' previous path). */
+	int no_footprint;
 	/* Sample-set seed: caches with different seeds are independent
 	 * Monte Carlo estimates of the same integrals (0: glint's fixed
 	 * sets). */
@@ -53,6 +61,9 @@ struct glint_shade_cache_opts {
 struct glint_shade_light {
 	struct glint_env_hot *hot;
 	struct glint_irradiance irr;
+	/* Half the spacing of the hot texels' quadrature points (radians):
+	 * the Gaussian that makes them integrate the texels' area. */
+	double spread;
 };
 int glint_shade_light_new(const struct glint_envmap *env,
 			  const struct glint_shade_cache_opts *opts,

@@ -230,6 +230,80 @@ static void test_reciprocity_and_lobes(void)
 	}
 }
 
+/* Lobe j's value at normal incidence, the light theta from the normal
+ * (the mirror direction). */
+static double lobe_at(const struct glint_model_ops *m, const double *p, int j,
+		      double theta)
+{
+	double b[GLINT_MAX_PARAMS];
+	m->eval_lobes(p, v3(0, 0, 1), v3(sin(theta), 0, cos(theta)), b);
+	return b[j];
+}
+
+/* The angle from the mirror direction where lobe j falls to half. */
+static double half_max(const struct glint_model_ops *m, const double *p, int j)
+{
+	double peak = lobe_at(m, p, j, 0), lo = 0, hi = 1;
+	for (int it = 0; it < 60; it++) {
+		double mid = (lo + hi) / 2;
+		if (lobe_at(m, p, j, mid) > peak / 2)
+			lo = mid;
+		else
+			hi = mid;
+	}
+	return lo;
+}
+
+/*
+ * lobe_width is the standard deviation of the Gaussian with the lobe's
+ * half-maximum (a Gaussian halves at 1.1774 sigma), and lobe_widen
+ * convolves a Gaussian of s into it: the widened lobe's width is
+ * sqrt(width^2 + s^2) and its half-maximum that of the Gaussian of that
+ * width (the footprint integral of shade_cache.c relies on both), for
+ * near-mirror lobes (roughness 0.003 to 0.027: small angles).
+ */
+static void test_lobe_width(void)
+{
+	int tested = 0;
+	for (int k = 0; k < NSAMPLED; k++) {
+		const struct glint_model_ops *m = sampled[k].m;
+		if (!m->lobe_width)
+			continue;
+		CHECK(m->lobe_widen != NULL, "%s: width without widen",
+		      m->name);
+		for (int j = 0; j < m->nlobes; j++)
+			for (double r = 0.003; r < 0.03; r *= 3) {
+				double p[GLINT_MAX_PARAMS],
+					pw[GLINT_MAX_PARAMS];
+				memcpy(p, sampled[k].p, sizeof(p));
+				if (m->roughness_param >= 0)
+					p[m->roughness_param] = r;
+				if (m == &glint_model_two_lobe)
+					p[11] = 2 * r;
+				double w = m->lobe_width(p, j);
+				if (!(w > 0))
+					continue;
+				tested++;
+				double h = half_max(m, p, j);
+				CHECK(fabs(h / (1.1774 * w) - 1) < 0.05,
+				      "%s lobe %d at %g: half-max %.5f, width "
+				      "%.5f (%.3f)",
+				      m->name, j, r, h, w, h / (1.1774 * w));
+				memcpy(pw, p, sizeof(pw));
+				m->lobe_widen(pw, j, 2 * w);
+				double ww = m->lobe_width(pw, j);
+				CHECK_NEAR(ww, sqrt(5) * w, 1e-9 * w,
+					   "widened width");
+				double hw = half_max(m, pw, j);
+				CHECK(fabs(hw / (1.1774 * ww) - 1) < 0.05,
+				      "%s lobe %d widened: half-max %.5f, "
+				      "width %.5f",
+				      m->name, j, hw, ww);
+			}
+	}
+	CHECK(tested >= 6 * 3, "%d lobes tested", tested);
+}
+
 /* The fitter's shared-work lobe ops agree with eval_lobes, pdf_lobe and
  * sample_lobe, at roughnesses from near-mirror to rough. */
 static void test_lobe_value_ops(void)
@@ -630,6 +704,7 @@ int main(void)
 	RUN(test_pdf_and_sampling);
 	RUN(test_reciprocity_and_lobes);
 	RUN(test_lobe_value_ops);
+	RUN(test_lobe_width);
 	RUN(test_lambert);
 	RUN(test_constant_fresnel);
 	RUN(test_ts_energy);

@@ -121,6 +121,12 @@ int glint_render_factor(double q1, double pair_s, double budget_s,
 double glint_render_first_factor(double q_pilot, double pair_s, double budget_s,
 				 const char **limited_by);
 
+/* The upper bound glint reports for a roughness below the photo's pixel
+ * footprint (its interval's top or the footprint, the larger), or NAN
+ * when the roughness is reported as a value (params.json's
+ * "upper_bound"; docs/fitting.md, "What one image determines"). */
+double glint_fit_roughness_bound(const struct glint_fit_result *r);
+
 /* params.json's "parameters" (name, value, stderr, at_bound, bounds) and
  * "passes" arrays for a result; new references. */
 json_t *glint_fit_params_json(const struct glint_fit_result *r);

@@ -46,6 +46,15 @@ static double footprint(const struct glint_fit_result *r)
 	return interior > 0 ? 1 / sqrt(interior / M_PI) : 0;
 }
 
+double glint_fit_roughness_bound(const struct glint_fit_result *r)
+{
+	int rk = r->model->roughness_param;
+
+	if (rk < 0 || !r->unc.n || !(r->unc.hi[rk] < footprint(r)))
+		return NAN;
+	return fmax(r->unc.hi[rk], footprint(r));
+}
+
 json_t *glint_fit_params_json(const struct glint_fit_result *r)
 {
 	const struct glint_model_ops *m = r->model;
@@ -65,10 +74,10 @@ json_t *glint_fit_params_json(const struct glint_fit_result *r)
 			json_object_set_new(o, "determined",
 					    json_boolean(!undetermined(r, k)));
 		}
-		if (k == rk && r->unc.n && r->unc.hi[k] < footprint(r))
+		if (k == rk && isfinite(glint_fit_roughness_bound(r)))
 			json_object_set_new(
 				o, "upper_bound",
-				json_real(fmax(r->unc.hi[k], footprint(r))));
+				json_real(glint_fit_roughness_bound(r)));
 		json_array_append_new(list, o);
 	}
 	return list;

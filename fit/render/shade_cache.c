@@ -117,6 +117,75 @@ static void hot_quadrature(const struct glint_shade_cache *c,
 	}
 }
 
+/* Pixel i's normal and ray direction at (u, v) in it, and the mirror
+ * direction there. */
+static void foot_at(const struct cache_foot *f, double u, double v,
+		    struct vec3 *n, struct vec3 *d, struct vec3 *r)
+{
+	*n = v3_norm(v3_add(fv(f->n), v3_add(v3_scale(fv(f->nu), u),
+					     v3_scale(fv(f->nv), v))));
+	*d = v3_norm(v3_add(fv(f->d), v3_add(v3_scale(fv(f->du), u),
+					     v3_scale(fv(f->dv), v))));
+	*r = v3_sub(*d, v3_scale(*n, 2 * v3_dot(*d, *n)));
+}
+
+/*
+ * A near-mirror's lobe samples spread over the pixel (lobes_pixels()):
+ * lobe sample k of hit s is taken at the footprint's point q = k spp + s
+ * of a stratified set of spp nb points, weight w (the rest, 1 - w, at the
+ * hit itself).
+ */
+struct spread {
+	const struct cache_foot *f;
+	double w, shift[2];
+	int s;
+};
+
+/* The hit seen at point at (centred) of footprint f: its frame and view
+ * direction; 0 where the view grazes away. */
+static int hit_at(const struct cache_foot *f, const double at[2],
+		  struct cache_hit *h)
+{
+	struct vec3 n, d, r, t, b;
+
+	foot_at(f, at[0], at[1], &n, &d, &r);
+	v3_frame(n, &t, &b);
+	struct vec3 wo = v3(-v3_dot(d, t), -v3_dot(d, b), -v3_dot(d, n));
+	if (!(wo.z > 0))
+		return 0;
+	h->t[0] = (float)t.x, h->t[1] = (float)t.y, h->t[2] = (float)t.z;
+	h->b[0] = (float)b.x, h->b[1] = (float)b.y, h->b[2] = (float)b.z;
+	h->n[0] = (float)n.x, h->n[1] = (float)n.y, h->n[2] = (float)n.z;
+	h->wo[0] = (float)wo.x, h->wo[1] = (float)wo.y, h->wo[2] = (float)wo.z;
+	return 1;
+}
+
+/* One lobe sample (uniforms uu) at hit h, weighted by the balance
+ * heuristic against nl env samples and by w, added to out. */
+static void lobe_sample(const struct glint_shade_cache *c,
+			const struct cache_hit *h, const double *p, int j,
+			int nl, int nb, const double uu[2], double w,
+			double out[3])
+{
+	const struct glint_model_ops *m = c->model;
+	struct vec3 wi;
+	double bj;
+
+	double pb = glint_lobe_sample_value(m, p, j, fv(h->wo), uu, &wi, &bj);
+	if (!(pb > 0) || bj <= 0)
+		return;
+	struct vec3 ww = local_to_world(h, wi);
+	double l[3], ps = 0;
+	/* The rest's radiance, continuous across the hot texels' edges
+	 * (their part is hot_quadrature()'s). */
+	glint_env_query(c->hot, ww, l, &ps);
+	if (!nl)
+		ps = 0;
+	w *= bj * wi.z / (nl * ps + nb * pb);
+	for (int ch = 0; ch < 3; ch++)
+		out[ch] += w * l[ch];
+}
+
 /*
  * Estimate lobe j's integral at one hit: nl env samples, nb lobe samples
  * (uniform pairs u[k] shifted by the hit's seed), balance-heuristic
@@ -126,7 +195,8 @@ static void hot_quadrature(const struct glint_shade_cache *c,
 static void lobe_at_hit(const struct glint_shade_cache *c,
 			const struct cache_hit *h, const struct env_sample *es,
 			int nl, int nb, const double (*u)[2], const double *p,
-			int j, int with_hot, double out[3])
+			int j, int with_hot, const struct spread *sp,
+			double out[3])
 {
 	const struct glint_model_ops *m = c->model;
 	struct vec3 wo = fv(h->wo);
@@ -153,38 +223,26 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 		for (int ch = 0; ch < 3; ch++)
 			out[ch] += w * e->l[ch];
 	}
+	double w_hit = sp ? 1 - sp->w : 1;
 	for (int k = 0; k < nb; k++) {
 		double uu[2] = { u[k][0] + sx, u[k][1] + sy };
-		struct vec3 wi;
 		uu[0] -= uu[0] >= 1;
 		uu[1] -= uu[1] >= 1;
-		double bj;
-		double pb = glint_lobe_sample_value(m, p, j, wo, uu, &wi, &bj);
-		if (!(pb > 0) || bj <= 0)
-			continue;
-		struct vec3 ww = local_to_world(h, wi);
-		double l[3], ps = 0;
-		/* The rest's radiance, continuous across the hot texels'
-		 * edges (their part is hot_quadrature()'s). */
-		glint_env_query(c->hot, ww, l, &ps);
-		if (!nl)
-			ps = 0;
-		double w = bj * wi.z / (nl * ps + nb * pb);
-		for (int ch = 0; ch < 3; ch++)
-			out[ch] += w * l[ch];
+		if (w_hit > 0)
+			lobe_sample(c, h, p, j, nl, nb, uu, w_hit, out);
+		if (sp && sp->w > 0) {
+			/* Point q of a (0, 2)-set over the pixel, shifted. */
+			uint32_t q = (uint32_t)(k * c->spp + sp->s);
+			double x = (q + 0.5) / (nb * c->spp) + sp->shift[0];
+			double y = glint_radical2(q) + sp->shift[1];
+			double at[2] = { x - (x >= 1) - 0.5,
+					 y - (y >= 1) - 0.5 };
+			struct cache_hit hq;
+			if (hit_at(sp->f, at, &hq))
+				lobe_sample(c, &hq, p, j, nl, nb, uu, sp->w,
+					    out);
+		}
 	}
-}
-
-/* Pixel i's normal and ray direction at (u, v) in it, and the mirror
- * direction there. */
-static void foot_at(const struct cache_foot *f, double u, double v,
-		    struct vec3 *n, struct vec3 *d, struct vec3 *r)
-{
-	*n = v3_norm(v3_add(fv(f->n), v3_add(v3_scale(fv(f->nu), u),
-					     v3_scale(fv(f->nv), v))));
-	*d = v3_norm(v3_add(fv(f->d), v3_add(v3_scale(fv(f->du), u),
-					     v3_scale(fv(f->dv), v))));
-	*r = v3_sub(*d, v3_scale(*n, 2 * v3_dot(*d, *n)));
 }
 
 static double angle(struct vec3 a, struct vec3 b)
@@ -317,6 +375,19 @@ static void hot_hits(const struct glint_shade_cache *c, int i, const double *p,
 		for (int ch = 0; ch < 3; ch++)
 			out[ch] += a[ch] / c->spp;
 	}
+}
+
+/* How many times (log2) pixel i's mirror direction turns across it by
+ * lobe j's width at p; -1 without a footprint. */
+static double foot_level(const struct glint_shade_cache *c, int i,
+			 const double *p, int j)
+{
+	const struct glint_model_ops *m = c->model;
+	double sd = m->lobe_width ? m->lobe_width(p, j) : -1;
+
+	if (c->no_footprint || !(sd > 0) || !(c->feet[i].turn > 0))
+		return -1;
+	return log2(c->feet[i].turn / sd);
 }
 
 /*
@@ -456,7 +527,7 @@ static void setup_pixels(void *ctx, int i0, int i1, int thread)
 							ns, 0x1b873593u, tmp);
 					drawn = 1;
 					lobe_at_hit(c, h, tmp, ns, ns, u,
-						    job->p0, j, 1, a);
+						    job->p0, j, 1, NULL, a);
 				}
 				double *dst = c->static_lobes +
 					      ((size_t)i * m->nlobes + j) * 3;
@@ -714,13 +785,23 @@ static void lobes_pixels(void *ctx, int i0, int i1, int thread)
 			if (foot)
 				for (int ch = 0; ch < 3; ch++)
 					dst[j * 3 + ch] += hot[ch];
+			struct spread sp = { &c->feet[i], 0, { 0, 0 }, 0 };
+			sp.w = fmin(1, fmax(0, foot_level(c, i, job->p, j)));
+			sp.shift[0] = glint_u01(
+				glint_hash32(c->hits[(size_t)i * c->spp].seed ^
+					     0x7f4a7c15u));
+			sp.shift[1] = glint_u01(
+				glint_hash32(c->hits[(size_t)i * c->spp].seed ^
+					     0x94d049bbu));
 			for (int s = 0; s < c->spp; s++) {
 				size_t hi = (size_t)i * c->spp + s;
 				double a[3];
+				sp.s = s;
 				lobe_at_hit(c, &c->hits[hi],
 					    c->envs + hi * c->nl, c->nl, c->nb,
 					    (const double(*)[2])c->lobe_u,
-					    job->p, j, !foot, a);
+					    job->p, j, !foot,
+					    sp.w > 0 ? &sp : NULL, a);
 				for (int ch = 0; ch < 3; ch++)
 					dst[j * 3 + ch] += a[ch] / c->spp;
 			}

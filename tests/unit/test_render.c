@@ -453,9 +453,10 @@ static void test_render_factor(void)
 	CHECK(g == 1 && !why, "first factor %g", g);
 }
 
-/* A 2048 x 1024 map: sky 0.05 and a sun of 0.008 rad radius towards
- * (0.3, 0.4, 1), 20 000 times brighter. */
-static struct glint_envmap *sun_env(void)
+/* A 2048 x 1024 map: sky 0.05 and, towards (0.3, 0.4, 1), a sun of
+ * 0.008 rad radius, 20 000 times brighter (box 0), or a softbox 0.3 rad
+ * square, 400 times brighter (box 1: too large for hot texels). */
+static struct glint_envmap *sun_env(int box)
 {
 	struct glint_image *img = glint_image_new(2048, 1024);
 	struct glint_envmap *env = NULL;
@@ -465,7 +466,14 @@ static struct glint_envmap *sun_env(void)
 		for (int x = 0; x < 2048; x++) {
 			struct vec3 d = glint_envmap_uv_to_dir(
 				(x + 0.5) / 2048, (y + 0.5) / 1024);
+			struct vec3 e =
+				v3_sub(d, v3_scale(sun, v3_dot(d, sun)));
 			float l = v3_dot(d, sun) > cos(0.008) ? 1000 : 0.05f;
+			if (box)
+				l = v3_dot(d, sun) > 0 && fabs(e.x) < 0.15 &&
+						    fabs(e.y) < 0.15
+					    ? 20
+					    : 0.05f;
 			float *px = glint_image_px(img, x, y);
 			px[0] = px[1] = px[2] = l;
 		}
@@ -482,6 +490,8 @@ static void near_mirror_lobe(const struct glint_envmap *env, int spp,
 	struct setup s;
 	struct glint_shade_cache *c = NULL;
 	struct glint_shade_cache_opts o = { .static_samples = 4,
+					    .light_samples = 8,
+					    .lobe_samples = 8,
 					    .no_footprint = no_footprint,
 					    .nthreads = 2 };
 	double *lobes = calloc((size_t)n * 2 * 3, sizeof(double));
@@ -512,7 +522,7 @@ static void near_mirror_lobe(const struct glint_envmap *env, int spp,
  */
 static void test_footprint(void)
 {
-	struct glint_envmap *env = sun_env();
+	struct glint_envmap *env = sun_env(0);
 	int32_t pix[48 * 48];
 	int n = 0;
 
@@ -581,10 +591,58 @@ static void test_footprint(void)
 	glint_envmap_free(env);
 }
 
+/* Pixel values fp (n of them) against the reference rp: the sum of
+ * absolute errors over the sum of the reference. */
+static double l1_error(const double *fp, const double *rp, int n)
+{
+	double tot = 0, e = 0;
+	for (int i = 0; i < n; i++) {
+		tot += rp[i];
+		e += fabs(fp[i] - rp[i]);
+	}
+	return e / tot;
+}
+
+/*
+ * The rest of the map (here a softbox too large for hot texels) seen in
+ * a near-mirror: its edges cross pixels, which 4 hits alias; the lobe
+ * samples spread over the footprint must come closer to 256 hits a pixel.
+ */
+static void test_footprint_rest(void)
+{
+	struct glint_envmap *env = sun_env(1);
+	int32_t pix[48 * 48];
+	int n = 0;
+
+	for (int y = 0; y < 48; y++)
+		for (int x = 0; x < 48; x++) {
+			double dx = x + 0.5 - 24, dy = y + 0.5 - 24;
+			if (dx * dx + dy * dy < 17 * 17)
+				pix[n++] = y * 48 + x;
+		}
+	double m = 0.004;
+	double *ref = calloc((size_t)n, sizeof(double));
+	double *foot = calloc((size_t)n, sizeof(double));
+	double *hits = calloc((size_t)n, sizeof(double));
+	near_mirror_lobe(env, 256, 1, pix, n, &m, 1, ref);
+	near_mirror_lobe(env, 4, 0, pix, n, &m, 1, foot);
+	near_mirror_lobe(env, 4, 1, pix, n, &m, 1, hits);
+	double efoot = l1_error(foot, ref, n), ehits = l1_error(hits, ref, n);
+	printf("  near-mirror under a softbox: error over the footprint "
+	       "%.3f, on 4 hits %.3f\n",
+	       efoot, ehits);
+	CHECK(efoot < 0.6 * ehits, "footprint %.3f, 4 hits %.3f", efoot, ehits);
+	free(ref);
+	free(foot);
+	free(hits);
+	glint_envmap_free(env);
+}
+
 int main(void)
 {
 	RUN(test_render_factor);
 	RUN(test_footprint);
+	RUN(test_footprint_rest);
 	RUN(test_sample_pattern);
 	RUN(test_furnace_lambert);
 	RUN(test_furnace_ts);

@@ -27,24 +27,34 @@ static inline void sim_scene_192(struct glint_scene *s, const char *map,
 	s->env_scale = 1;
 }
 
-/* The reference photo of (m, p) in r's scene; NULL on failure. */
-static inline struct glint_image *sim_photo(const struct glint_renderer *r,
-					    const struct glint_model_ops *m,
-					    const double *p)
+/* The reference photo of (m, p) in r's scene with spp samples per pixel
+ * and `samples` per technique; NULL on failure. */
+static inline struct glint_image *sim_photo_spp(const struct glint_renderer *r,
+						const struct glint_model_ops *m,
+						const double *p, int spp,
+						int samples)
 {
 	struct glint_image *photo =
 		glint_image_new(r->scene.cam.width, r->scene.cam.height);
 	struct glint_reference_opts ro;
 
 	glint_reference_default_opts(&ro);
-	ro.spp = 4;
-	ro.samples = 64;
+	ro.spp = spp;
+	ro.samples = samples;
 	if (photo &&
 	    glint_reference_render(&r->scene, r->env, m, p, &ro, photo) < 0) {
 		glint_image_free(photo);
 		photo = NULL;
 	}
 	return photo;
+}
+
+/* The same at 4 samples per pixel, 64 per technique. */
+static inline struct glint_image *sim_photo(const struct glint_renderer *r,
+					    const struct glint_model_ops *m,
+					    const double *p)
+{
+	return sim_photo_spp(r, m, p, 4, 64);
 }
 
 #endif

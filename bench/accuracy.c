@@ -24,6 +24,9 @@
  *            the truth or the parameter is reported undetermined;
  *   refused  the fit failed (no answer at all);
  *   wrong    outside the tolerances, and the interval misses the truth.
+ * and the truth's cost over the fit's on the fit's own objective (below 1:
+ * the fit stopped short of the truth's basin; above: the fitter's model
+ * or the photo's noise prefers the fit).
  *
  *   bench/accuracy [quick|slice] [--check|--no-refusals] [MAP...]
  * No maps: every map in ../shared/data/probes (lat-long) and data/env.
@@ -262,11 +265,29 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 					 lv ? "noisy" : "clean");
 			}
 			int smp = out == REFUSED ? 0 : res.light_samples;
+			/* The truth on the fit's own objective (weights at
+			 * the fit's prediction): above 1, the fit found a
+			 * lower cost than the truth's (the model or the photo
+			 * biases it); below, it stopped short of it. */
+			double ratio = NAN;
+			struct glint_fit_result at_truth;
+			o.weights_at = res.p;
+			if (out != REFUSED) {
+				o.light_samples = res.light_samples;
+				o.lobe_samples = res.lobe_samples;
+			}
+			if (out != REFUSED &&
+			    glint_fit_evaluate(&r, m, photo, w, &o, truth,
+					       &at_truth) == 0)
+				ratio = at_truth.wcost / res.wcost;
+			o.weights_at = NULL;
 			printf("%-26s %-17s %-5s bias %5.2f  %-8s err %6.2f "
-			       "tol  rel.rmse %.3f  %2d smp %5.1f s",
+			       "tol  rel.rmse %.3f  truth/fit cost %5.2f  %2d "
+			       "smp "
+			       "%5.1f s",
 			       base(map), mats[i], lv ? "noisy" : "clean", bias,
 			       bound ? "within<" : outcome_names[out], err,
-			       out == REFUSED ? NAN : res.rel_rmse, smp,
+			       out == REFUSED ? NAN : res.rel_rmse, ratio, smp,
 			       glint_now() - t0);
 			if (out == REFUSED)
 				printf("  (%s)", v.verdict[0]

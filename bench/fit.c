@@ -37,21 +37,25 @@ struct variant {
 	enum glint_fit_method method;
 	int coarse, faithful;
 	int samples, pixels; /* 0: the defaults (8 + 8, 4096) */
+	int no_footprint;    /* the previous path (shade_cache.h) */
 };
 
 static const struct variant variants[] = {
 	{ "three-pass, coarse-to-fine (default)", GLINT_FIT_THREE_PASS, 1, 0, 0,
-	  0 },
-	{ "three-pass, full resolution", GLINT_FIT_THREE_PASS, 0, 0, 0, 0 },
-	{ "naive single pass, coarse-to-fine", GLINT_FIT_NAIVE, 1, 0, 0, 0 },
-	{ "variable projection, coarse-to-fine", GLINT_FIT_VARPRO, 1, 0, 0, 0 },
-	{ "three-pass, 4 + 4 samples", GLINT_FIT_THREE_PASS, 1, 0, 4, 0 },
-	{ "three-pass, 16 + 16 samples", GLINT_FIT_THREE_PASS, 1, 0, 16, 0 },
-	{ "three-pass, 2048 pixels", GLINT_FIT_THREE_PASS, 1, 0, 0, 2048 },
-	{ "three-pass, 2048 pixels, 4 + 4 samples", GLINT_FIT_THREE_PASS, 1, 0,
-	  4, 2048 },
-	{ "three-pass, paper-faithful (re-render)", GLINT_FIT_THREE_PASS, 0, 1,
 	  0, 0 },
+	{ "default, no footprint integral (before 2026-11-26)",
+	  GLINT_FIT_THREE_PASS, 1, 0, 0, 0, 1 },
+	{ "three-pass, full resolution", GLINT_FIT_THREE_PASS, 0, 0, 0, 0, 0 },
+	{ "naive single pass, coarse-to-fine", GLINT_FIT_NAIVE, 1, 0, 0, 0, 0 },
+	{ "variable projection, coarse-to-fine", GLINT_FIT_VARPRO, 1, 0, 0, 0,
+	  0 },
+	{ "three-pass, 4 + 4 samples", GLINT_FIT_THREE_PASS, 1, 0, 4, 0, 0 },
+	{ "three-pass, 16 + 16 samples", GLINT_FIT_THREE_PASS, 1, 0, 16, 0, 0 },
+	{ "three-pass, 2048 pixels", GLINT_FIT_THREE_PASS, 1, 0, 0, 2048, 0 },
+	{ "three-pass, 2048 pixels, 4 + 4 samples", GLINT_FIT_THREE_PASS, 1, 0,
+	  4, 2048, 0 },
+	{ "three-pass, paper-faithful (re-render)", GLINT_FIT_THREE_PASS, 0, 1,
+	  0, 0, 0 },
 };
 #define NV ((int)(sizeof(variants) / sizeof(variants[0])))
 
@@ -275,6 +279,7 @@ int main(int argc, char **argv)
 					variants[v].samples;
 			if (variants[v].pixels)
 				o.max_pixels = variants[v].pixels;
+			o.no_footprint = variants[v].no_footprint;
 			if (o.faithful)
 				o.max_iter = 30;
 			double t0 = glint_now();

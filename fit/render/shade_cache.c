@@ -33,8 +33,10 @@ struct cache_hit {
  * of the position (u, v) in the pixel (centre 0, edges +-1/2), fitted to
  * its primary hits by least squares, and how fast its mirror direction
  * turns across it.  The hot texels of a lobe narrower than that are
- * integrated over the pixel on a grid (hot_footprint()): a sun seen in a
- * near-mirror covers part of a pixel, which a few point samples alias.
+ * integrated over the pixel on a grid (hot_footprint()), and its lobe
+ * samples spread over the pixel (struct spread): a sun or a softbox's
+ * edge seen in a near-mirror covers part of a pixel, which a few point
+ * samples alias.
  */
 struct cache_foot {
 	float n[3], nu[3], nv[3];

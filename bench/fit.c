@@ -43,8 +43,8 @@ struct variant {
 static const struct variant variants[] = {
 	{ "three-pass, coarse-to-fine (default)", GLINT_FIT_THREE_PASS, 1, 0, 0,
 	  0, 0 },
-	{ "default, no footprint integral (before 2026-11-26)",
-	  GLINT_FIT_THREE_PASS, 1, 0, 0, 0, 1 },
+	{ "default without footprint integral", GLINT_FIT_THREE_PASS, 1, 0, 0,
+	  0, 1 },
 	{ "three-pass, full resolution", GLINT_FIT_THREE_PASS, 0, 0, 0, 0, 0 },
 	{ "naive single pass, coarse-to-fine", GLINT_FIT_NAIVE, 1, 0, 0, 0, 0 },
 	{ "variable projection, coarse-to-fine", GLINT_FIT_VARPRO, 1, 0, 0, 0,

@@ -470,7 +470,6 @@ static int scan_range(struct objective *ob, const int *sel, int nsel, double lo,
 		      double hi)
 {
 	const struct glint_model_ops *m = ob->m;
-	const struct glint_param *pr = &m->params[m->roughness_param];
 	/* The other nonlinear parameter (ior), if one: its start and four
 	 * values across its bounds, for specular x F(ior) trades off and LM
 	 * stays where it starts (naive from ior 4.86). */
@@ -480,7 +479,6 @@ static int scan_range(struct objective *ob, const int *sel, int nsel, double lo,
 			other = k;
 			nother++;
 		}
-	(void)pr;
 	if (nother != 1)
 		return rescan_roughness(ob, sel, nsel, lo, hi, 8);
 	static const double frac[3] = { 0.1, 0.3, 0.6 };

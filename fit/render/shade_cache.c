@@ -789,12 +789,13 @@ static void lobes_pixels(void *ctx, int i0, int i1, int thread)
 					dst[j * 3 + ch] += hot[ch];
 			struct spread sp = { &c->feet[i], 0, { 0, 0 }, 0 };
 			sp.w = fmin(1, fmax(0, foot_level(c, i, job->p, j)));
-			sp.shift[0] = glint_u01(
-				glint_hash32(c->hits[(size_t)i * c->spp].seed ^
-					     0x7f4a7c15u));
-			sp.shift[1] = glint_u01(
-				glint_hash32(c->hits[(size_t)i * c->spp].seed ^
-					     0x94d049bbu));
+			if (sp.w > 0) {
+				uint32_t sd = c->hits[(size_t)i * c->spp].seed;
+				sp.shift[0] = glint_u01(
+					glint_hash32(sd ^ 0x7f4a7c15u));
+				sp.shift[1] = glint_u01(
+					glint_hash32(sd ^ 0x94d049bbu));
+			}
 			for (int s = 0; s < c->spp; s++) {
 				size_t hi = (size_t)i * c->spp + s;
 				double a[3];

@@ -512,6 +512,20 @@ static void near_mirror_lobe(const struct glint_envmap *env, int spp,
 	teardown(&s);
 }
 
+/* The 48 x 48 frame's sphere interior, 2 px in from its outline: pixel
+ * indices into pix, their count returned. */
+static int sphere_interior(int32_t *pix)
+{
+	int n = 0;
+	for (int y = 0; y < 48; y++)
+		for (int x = 0; x < 48; x++) {
+			double dx = x + 0.5 - 24, dy = y + 0.5 - 24;
+			if (dx * dx + dy * dy < 17 * 17)
+				pix[n++] = y * 48 + x;
+		}
+	return n;
+}
+
 /*
  * A near-mirror's sun covers part of a pixel: the fitter's 4 hits alias
  * it, the footprint integral (shade_cache.c) must match 256 hits a pixel
@@ -524,15 +538,7 @@ static void test_footprint(void)
 {
 	struct glint_envmap *env = sun_env(0);
 	int32_t pix[48 * 48];
-	int n = 0;
-
-	/* The sphere's interior, 2 px in from its outline. */
-	for (int y = 0; y < 48; y++)
-		for (int x = 0; x < 48; x++) {
-			double dx = x + 0.5 - 24, dy = y + 0.5 - 24;
-			if (dx * dx + dy * dy < 17 * 17)
-				pix[n++] = y * 48 + x;
-		}
+	int n = sphere_interior(pix);
 	double m = 0.004;
 	double *ref = calloc((size_t)n, sizeof(double));
 	double *foot = calloc((size_t)n, sizeof(double));
@@ -612,14 +618,7 @@ static void test_footprint_rest(void)
 {
 	struct glint_envmap *env = sun_env(1);
 	int32_t pix[48 * 48];
-	int n = 0;
-
-	for (int y = 0; y < 48; y++)
-		for (int x = 0; x < 48; x++) {
-			double dx = x + 0.5 - 24, dy = y + 0.5 - 24;
-			if (dx * dx + dy * dy < 17 * 17)
-				pix[n++] = y * 48 + x;
-		}
+	int n = sphere_interior(pix);
 	double m = 0.004;
 	double *ref = calloc((size_t)n, sizeof(double));
 	double *foot = calloc((size_t)n, sizeof(double));

@@ -239,6 +239,8 @@ static int keep(struct planner *p, struct glint_frame *f)
 		if (ret > 0)
 			ret = -EIO;
 	}
+	if (p->o->release_pixels)
+		glint_frame_release(&b->frames[b->n - 1]);
 	return ret;
 }
 

@@ -38,6 +38,10 @@ struct glint_bracket_opts {
 	 * bracket with that error. */
 	int (*on_frame)(const struct glint_frame *f, int index, void *ctx);
 	void *ctx;
+	/* Each kept frame's pixels are released once on_frame has had them
+	 * (only its metadata stays in the bracket): for a caller that
+	 * streams them to disk and into a merge. */
+	int release_pixels;
 	/* Set (e.g. from a signal handler) to stop: -ECANCELED. */
 	atomic_int *cancel;
 };

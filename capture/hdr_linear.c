@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 #include "hdr_linear.h"
+#include "hdr_linear_priv.h"
 
 #include "core/error.h"
 #include "core/parallel.h"
@@ -25,48 +26,55 @@ void glint_raw_hdr_release(struct glint_raw_hdr *h)
 	memset(h, 0, sizeof(*h));
 }
 
+int glint_hdr_check_frame(const struct glint_frame *f, int i,
+			  const struct glint_frame *f0)
+{
+	if (!f->linear || f->channels != 1)
+		return glint_error_set(
+			EINVAL,
+			"HDR merge: frame %d is %s, %d channel(s)%s: "
+			"the linear merge takes raw Bayer or mono "
+			"frames (camera-encoded ones need a response "
+			"curve)",
+			i, f->format, f->channels,
+			f->linear ? "" : ", camera-encoded");
+	if (f0 && (f->width != f0->width || f->height != f0->height ||
+		   strcmp(f->format, f0->format) != 0 ||
+		   f->bit_depth != f0->bit_depth))
+		return glint_error_set(
+			EINVAL,
+			"HDR merge: frame %d is %dx%d %s %d-bit, "
+			"frame 0 %dx%d %s %d-bit: a bracket's "
+			"frames must match",
+			i, f->width, f->height, f->format, f->bit_depth,
+			f0->width, f0->height, f0->format, f0->bit_depth);
+	if (!(f->exposure_s > 0) || !isfinite(f->exposure_s) ||
+	    !(f->gain > 0) || !isfinite(f->gain))
+		return glint_error_set(EINVAL,
+				       "HDR merge: frame %d has exposure "
+				       "%g s, gain %g: expected positive "
+				       "finite values",
+				       i, f->exposure_s, f->gain);
+	if (f->bit_depth < 1 || f->bit_depth > 16 || !(f->black_level >= 0) ||
+	    f->black_level >= (1 << f->bit_depth) - 1)
+		return glint_error_set(EINVAL,
+				       "HDR merge: frame %d: black level "
+				       "%g for %d bits",
+				       i, f->black_level, f->bit_depth);
+	if (!f->data)
+		return glint_error_set(EINVAL,
+				       "HDR merge: frame %d has no pixels", i);
+	return 0;
+}
+
 static int check_frames(const struct glint_frame *f, int n)
 {
 	if (n < 1)
 		return glint_error_set(EINVAL, "HDR merge: no frames");
 	for (int i = 0; i < n; i++) {
-		if (!f[i].linear || f[i].channels != 1)
-			return glint_error_set(
-				EINVAL,
-				"HDR merge: frame %d is %s, %d channel(s)%s: "
-				"the linear merge takes raw Bayer or mono "
-				"frames (camera-encoded ones need a response "
-				"curve)",
-				i, f[i].format, f[i].channels,
-				f[i].linear ? "" : ", camera-encoded");
-		if (f[i].width != f[0].width || f[i].height != f[0].height ||
-		    strcmp(f[i].format, f[0].format) != 0 ||
-		    f[i].bit_depth != f[0].bit_depth)
-			return glint_error_set(
-				EINVAL,
-				"HDR merge: frame %d is %dx%d %s %d-bit, frame "
-				"0 "
-				"%dx%d %s %d-bit: a bracket's frames must "
-				"match",
-				i, f[i].width, f[i].height, f[i].format,
-				f[i].bit_depth, f[0].width, f[0].height,
-				f[0].format, f[0].bit_depth);
-		if (!(f[i].exposure_s > 0) || !isfinite(f[i].exposure_s) ||
-		    !(f[i].gain > 0) || !isfinite(f[i].gain))
-			return glint_error_set(
-				EINVAL,
-				"HDR merge: frame %d has exposure "
-				"%g s, gain %g: expected positive "
-				"finite values",
-				i, f[i].exposure_s, f[i].gain);
-		if (f[i].bit_depth < 1 || f[i].bit_depth > 16 ||
-		    !(f[i].black_level >= 0) ||
-		    f[i].black_level >= (1 << f[i].bit_depth) - 1)
-			return glint_error_set(
-				EINVAL,
-				"HDR merge: frame %d: black level "
-				"%g for %d bits",
-				i, f[i].black_level, f[i].bit_depth);
+		int ret = glint_hdr_check_frame(&f[i], i, i ? &f[0] : NULL);
+		if (ret < 0)
+			return ret;
 	}
 	return 0;
 }
@@ -79,19 +87,10 @@ static int by_exposure(const void *a, const void *b)
 	return (ex > ey) - (ex < ey);
 }
 
-/* What every site needs of one frame, computed once per merge. */
-struct merge_frame {
-	const uint16_t *data;
-	double black, sat, top; /* DN: black level, clipping, full scale */
-	double tg;		/* exposure x gain */
-	double gc;		/* DN per electron at this gain */
-	double floor_var;	/* read noise and quantisation, DN^2 */
-	double inv_tg2;
-};
-
-static void merge_frame_init(struct merge_frame *k, const struct glint_frame *f,
-			     const struct glint_noise_model *m, double top)
+void glint_merge_frame_init(struct merge_frame *k, const struct glint_frame *f,
+			    const struct glint_noise_model *m)
 {
+	double top = (1 << f->bit_depth) - 1;
 	k->data = f->data;
 	k->black = f->black_level;
 	k->top = top;
@@ -105,10 +104,17 @@ static void merge_frame_init(struct merge_frame *k, const struct glint_frame *f,
 	k->inv_tg2 = 1 / (k->tg * k->tg);
 }
 
-/* Variance of x = (DN - black) / (t g) when the expected signal is d DN. */
-static double var_x(const struct merge_frame *k, double d)
+int glint_merge_pair_z(const struct merge_frame *a, const struct merge_frame *b,
+		       size_t s, double xhat, double *z)
 {
-	return (k->gc * fmax(d, 0) + k->floor_var) * k->inv_tg2;
+	double da = a->data[s] - a->black, db = b->data[s] - b->black;
+	double ra = a->top - a->black, rb = b->top - b->black;
+	if (da < 0.02 * ra || da > 0.9 * ra || db < 0.02 * rb || db > 0.9 * rb)
+		return 0;
+	double v = glint_merge_var_x(a, xhat * a->tg) +
+		   glint_merge_var_x(b, xhat * b->tg);
+	*z = (da / a->tg - db / b->tg) / sqrt(v);
+	return 1;
 }
 
 /*
@@ -131,7 +137,8 @@ static int merge_site(const struct merge_frame *f, int n, size_t s,
 			if (dn >= k->sat)
 				continue;
 			double d = dn - k->black;
-			double v = var_x(k, pass ? *xhat * k->tg : d);
+			double v =
+				glint_merge_var_x(k, pass ? *xhat * k->tg : d);
 			sw += 1 / v;
 			swx += d / k->tg / v;
 		}
@@ -149,14 +156,9 @@ static void motion_check(const struct merge_frame *f, int n, size_t s,
 			 double xhat, struct glint_hdr_report *rep)
 {
 	for (int i = 0; i + 1 < n && i < 32; i++) {
-		const struct merge_frame *a = &f[i], *b = &f[i + 1];
-		double da = a->data[s] - a->black, db = b->data[s] - b->black;
-		double ra = a->top - a->black, rb = b->top - b->black;
-		if (da < 0.02 * ra || da > 0.9 * ra || db < 0.02 * rb ||
-		    db > 0.9 * rb)
+		double z;
+		if (!glint_merge_pair_z(&f[i], &f[i + 1], s, xhat, &z))
 			continue;
-		double v = var_x(a, xhat * a->tg) + var_x(b, xhat * b->tg);
-		double z = (da / a->tg - db / b->tg) / sqrt(v);
 		rep->compared[i]++;
 		if (fabs(z) > 5)
 			rep->disagree[i] += 1;
@@ -236,9 +238,8 @@ int glint_hdr_merge_raw(const struct glint_frame *frames, int n,
 	out->height = frames[0].height;
 	snprintf(out->format, sizeof(out->format), "%s", frames[0].format);
 
-	double top = (1 << frames[0].bit_depth) - 1;
 	for (int i = 0; i < n; i++)
-		merge_frame_init(&mf[i], f[i], noise, top);
+		glint_merge_frame_init(&mf[i], f[i], noise);
 	rep->frames = n;
 	rep->sites = (long)ns;
 	rep->pairs = n - 1 < 32 ? n - 1 : 32;
@@ -254,22 +255,29 @@ int glint_hdr_merge_raw(const struct glint_frame *frames, int n,
 			rep->disagree[i] += part[t].disagree[i];
 		}
 	}
+	double shortest_tg = mf[0].tg;
+	free(f);
+	free(mf);
+	free(part);
+	return glint_hdr_report_finish(rep, out, shortest_tg);
+}
+
+int glint_hdr_report_finish(struct glint_hdr_report *rep,
+			    struct glint_raw_hdr *out, double shortest_tg)
+{
 	for (int i = 0; i < rep->pairs; i++) {
 		if (rep->compared[i])
 			rep->disagree[i] /= (double)rep->compared[i];
 		if (rep->compared[i] > 100 && rep->disagree[i] > 0.01)
 			rep->moved = 1;
 	}
-	free(f);
-	free(mf);
-	free(part);
 	if (rep->invalid_sites == rep->sites) {
 		glint_raw_hdr_release(out);
 		return glint_error_set(ERANGE,
 				       "HDR merge: every frame is clipped "
-				       "everywhere (shortest %g s): nothing to "
-				       "merge",
-				       frames[0].exposure_s);
+				       "everywhere (shortest exposure x gain "
+				       "%g s): nothing to merge",
+				       shortest_tg);
 	}
 	if (rep->dark_sites + rep->invalid_sites == rep->sites) {
 		glint_raw_hdr_release(out);
@@ -281,51 +289,41 @@ int glint_hdr_merge_raw(const struct glint_frame *frames, int n,
 	return 0;
 }
 
-/* Colour (0 R, 1 G, 2 B) of site (x, y) in a Bayer layout, -1 for mono. */
-static int cfa_colour(const char *format, int x, int y)
+/* Colour (0 R, 1 G, 2 B) of the 2x2 cell's sites, -1 each for mono. */
+static void cfa_cell(const char *format, int colour[4])
 {
-	if (!strncmp(format, "MONO", 4))
-		return -1;
-	char c = format[(y & 1) * 2 + (x & 1)];
-	return c == 'R' ? 0 : c == 'G' ? 1 : 2;
+	for (int i = 0; i < 4; i++) {
+		char c = format[i];
+		colour[i] = !strncmp(format, "MONO", 4) ? -1
+			    : c == 'R'			? 0
+			    : c == 'G'			? 1
+							: 2;
+	}
 }
 
-int glint_hdr_demosaic(const struct glint_raw_hdr *raw,
-		       struct glint_image **radiance,
-		       struct glint_image **variance,
-		       struct glint_image **valid)
-{
-	int w = raw->width, h = raw->height;
-	const char *fmt = raw->format;
+struct demosaic_job {
+	const struct glint_raw_hdr *raw;
+	int colour[4];
+	struct glint_image *r, *v, *m;
+};
 
-	*radiance = *variance = *valid = NULL;
-	if (strcmp(fmt, "RGGB16") && strcmp(fmt, "GRBG16") &&
-	    strcmp(fmt, "GBRG16") && strcmp(fmt, "BGGR16") &&
-	    strcmp(fmt, "MONO16"))
-		return glint_error_set(EINVAL,
-				       "demosaic: layout '%s': expected "
-				       "RGGB16, GRBG16, GBRG16, BGGR16 or "
-				       "MONO16",
-				       fmt);
-	struct glint_image *r = glint_image_new(w, h),
-			   *v = glint_image_new(w, h),
-			   *m = glint_image_new(w, h);
-	if (!r || !v || !m) {
-		glint_image_free(r);
-		glint_image_free(v);
-		glint_image_free(m);
-		return glint_error_set(ENOMEM, "demosaic: out of memory");
-	}
-	for (int y = 0; y < h; y++)
+static void demosaic_rows(void *ctx, int begin, int end, int thread)
+{
+	const struct demosaic_job *j = ctx;
+	const struct glint_raw_hdr *raw = j->raw;
+	int w = raw->width, h = raw->height;
+	(void)thread;
+
+	for (int y = begin; y < end; y++)
 		for (int x = 0; x < w; x++) {
-			float *pr = glint_image_px(r, x, y),
-			      *pv = glint_image_px(v, x, y),
-			      *pm = glint_image_px(m, x, y);
+			float *pr = glint_image_px(j->r, x, y),
+			      *pv = glint_image_px(j->v, x, y),
+			      *pm = glint_image_px(j->m, x, y);
 			int ok = 1;
+			int own = j->colour[(y & 1) * 2 + (x & 1)];
 			for (int c = 0; c < 3; c++) {
 				double sx = 0, sv = 0;
 				int k = 0;
-				int own = cfa_colour(fmt, x, y);
 				int radius = own == c || own < 0 ? 0 : 1;
 				for (int dy = -radius; dy <= radius; dy++)
 					for (int dx = -radius; dx <= radius;
@@ -335,7 +333,8 @@ int glint_hdr_demosaic(const struct glint_raw_hdr *raw,
 						    xx >= w || yy >= h)
 							continue;
 						int cc =
-							cfa_colour(fmt, xx, yy);
+							j->colour[(yy & 1) * 2 +
+								  (xx & 1)];
 						size_t s = (size_t)yy * w + xx;
 						if ((cc >= 0 && cc != c) ||
 						    !raw->valid[s])
@@ -359,8 +358,41 @@ int glint_hdr_demosaic(const struct glint_raw_hdr *raw,
 				pv[0] = pv[1] = pv[2] = 0;
 			pm[0] = pm[1] = pm[2] = (float)ok;
 		}
-	*radiance = r;
-	*variance = v;
-	*valid = m;
+}
+
+int glint_hdr_demosaic(const struct glint_raw_hdr *raw,
+		       struct glint_image **radiance,
+		       struct glint_image **variance,
+		       struct glint_image **valid)
+{
+	int w = raw->width, h = raw->height;
+	const char *fmt = raw->format;
+
+	*radiance = *variance = *valid = NULL;
+	if (strcmp(fmt, "RGGB16") && strcmp(fmt, "GRBG16") &&
+	    strcmp(fmt, "GBRG16") && strcmp(fmt, "BGGR16") &&
+	    strcmp(fmt, "MONO16"))
+		return glint_error_set(EINVAL,
+				       "demosaic: layout '%s': expected "
+				       "RGGB16, GRBG16, GBRG16, BGGR16 or "
+				       "MONO16",
+				       fmt);
+	struct demosaic_job job = { raw,
+				    { 0 },
+				    glint_image_new(w, h),
+				    glint_image_new(w, h),
+				    glint_image_new(w, h) };
+	if (!job.r || !job.v || !job.m) {
+		glint_image_free(job.r);
+		glint_image_free(job.v);
+		glint_image_free(job.m);
+		return glint_error_set(ENOMEM, "demosaic: out of memory");
+	}
+	cfa_cell(fmt, job.colour);
+	/* Rows to every thread: each output pixel reads only the sites. */
+	glint_parallel_for(h, 8, glint_cpu_count(), demosaic_rows, &job);
+	*radiance = job.r;
+	*variance = job.v;
+	*valid = job.m;
 	return 0;
 }

@@ -62,6 +62,36 @@ int glint_hdr_merge_raw(const struct glint_frame *frames, int n,
 void glint_raw_hdr_release(struct glint_raw_hdr *h);
 
 /*
+ * The same merge folded in frame by frame as a bracket arrives, in any
+ * order: memory of the accumulators (12 bytes a site) and one frame held
+ * back, where glint_hdr_merge_raw() needs every frame at once (a 12 MP
+ * bracket of 22 frames is 540 MB).  Each frame's weight is its variance at
+ * an estimate its own noise is not in: the frames folded before it and the
+ * one after it (the frame is held back until the next arrives; the last
+ * one uses those before it).  The merged variance is evaluated at the
+ * final estimate over the frames unclipped at the site, as the batch
+ * merge's second pass.  The motion check compares frames adjacent in
+ * arrival order (a bracket going up in exposure: adjacent in exposure).
+ * At most GLINT_HDR_STREAM_MAX frames.
+ */
+#define GLINT_HDR_STREAM_MAX 32
+struct glint_hdr_stream;
+
+int glint_hdr_stream_new(const struct glint_noise_model *noise,
+			 struct glint_hdr_stream **out);
+/* Fold frame f in (its pixels are copied: the caller keeps f).  An error
+ * leaves the stream unusable but still to be freed. */
+int glint_hdr_stream_add(struct glint_hdr_stream *s,
+			 const struct glint_frame *f);
+/* The merged bracket (*out is the caller's, as glint_hdr_merge_raw's);
+ * the stream's accumulators become out's images, so the stream is empty
+ * afterwards (free it). */
+int glint_hdr_stream_finish(struct glint_hdr_stream *s,
+			    struct glint_raw_hdr *out,
+			    struct glint_hdr_report *report);
+void glint_hdr_stream_free(struct glint_hdr_stream *s);
+
+/*
  * Demosaic to RGB (bilinear per channel: a site's own colour is kept, the
  * other two are the mean of the nearest valid sites of that colour in its
  * 3x3 neighbourhood) with variances propagated (the mean of k sites has

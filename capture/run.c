@@ -86,13 +86,26 @@ static int sample_scene(const char *dir, const char *root, const char *probe,
 
 struct frame_ctx {
 	struct glint_session *session;
+	struct glint_hdr_stream *hdr; /* raw frames: the merge, as they come */
 	struct glint_progress progress;
 };
 
+/* Each frame to disk, then folded into the merge (a raw bracket): the
+ * merged image is ready moments after the last frame, and no more than
+ * one frame is held (a 12 MP bracket is 540 MB). */
 static int save_frame(const struct glint_frame *f, int index, void *ctx)
 {
 	struct frame_ctx *c = ctx;
 	int ret = glint_session_add_frame(c->session, f, index);
+	if (ret == 0 && index == 0 && f->linear && f->channels == 1) {
+		struct glint_noise_model nm;
+		glint_noise_default(&nm);
+		ret = glint_session_noise(glint_session_dir(c->session), &nm);
+		if (ret == 0)
+			ret = glint_hdr_stream_new(&nm, &c->hdr);
+	}
+	if (ret == 0 && c->hdr)
+		ret = glint_hdr_stream_add(c->hdr, f);
 	glint_progress_add(&c->progress, 1);
 	return ret;
 }
@@ -102,7 +115,7 @@ static int save_frame(const struct glint_frame *f, int index, void *ctx)
 static int bracket_into(struct glint_camera *cam,
 			const struct glint_capture_setup *s, const char *kind,
 			struct glint_session *session, atomic_int *cancel,
-			struct glint_bracket *b)
+			struct glint_bracket *b, struct glint_hdr_stream **hdr)
 {
 	struct glint_bracket_opts opts = s->bracket;
 	struct frame_ctx fc = { .session = session };
@@ -111,6 +124,7 @@ static int bracket_into(struct glint_camera *cam,
 	opts.on_frame = save_frame;
 	opts.ctx = &fc;
 	opts.cancel = cancel;
+	opts.release_pixels = 1;
 	glint_progress_start(&fc.progress, "frames", opts.max_frames);
 	int ret =
 		glint_bracket_capture(cam, &s->roi[strcmp(kind, "probe") != 0],
@@ -119,6 +133,7 @@ static int bracket_into(struct glint_camera *cam,
 	snprintf(err, sizeof(err), "%s", glint_error_msg());
 	snprintf(dir, sizeof(dir), "%s", glint_session_dir(session));
 	int r2 = glint_session_finish(session, b, ret < 0 ? err : NULL);
+	*hdr = fc.hdr;
 	if (ret < 0)
 		return glint_error_set(-ret, "%s (session %s kept, incomplete)",
 				       err, dir);
@@ -130,7 +145,7 @@ static int bracket_into(struct glint_camera *cam,
  * probe's unwrap or the sample's scene. */
 static int merge_session(const struct glint_capture_setup *s, const char *kind,
 			 const char *out, const char *probe,
-			 struct glint_bracket *b,
+			 struct glint_hdr_stream *hdr,
 			 struct glint_capture_result *res)
 {
 	static const char *const suffix[5] = { ".exr", "-variance.exr",
@@ -139,8 +154,8 @@ static int merge_session(const struct glint_capture_setup *s, const char *kind,
 	const char *dir = res->session;
 	char names[5][64];
 	const char *np[5];
-	struct glint_noise_model nm;
 	struct glint_hdr_report rep;
+	struct glint_raw_hdr raw;
 	struct glint_image *rad = NULL;
 	long valid_px;
 	int w, h, ret;
@@ -149,11 +164,9 @@ static int merge_session(const struct glint_capture_setup *s, const char *kind,
 		snprintf(names[i], sizeof(names[i]), "%s%s", kind, suffix[i]);
 		np[i] = names[i];
 	}
-	glint_noise_default(&nm);
-	ret = glint_session_noise(dir, &nm);
+	ret = glint_hdr_stream_finish(hdr, &raw, &rep);
 	if (ret == 0)
-		ret = glint_hdr_merge_write(b->frames, b->n, &nm, dir, np, &rep,
-					    &w, &h, &valid_px, &rad);
+		ret = glint_hdr_write(&raw, dir, np, &w, &h, &valid_px, &rad);
 	if (ret == 0 && rep.moved)
 		glint_log_warn("the bracket's frames disagree (moved rig or "
 			       "scene?); run glint hdr on the session for "
@@ -201,6 +214,7 @@ int glint_capture_run(const struct glint_capture_setup *s, const char *kind,
 	struct glint_camera_info info;
 	struct glint_session *session = NULL;
 	struct glint_bracket b = { 0 };
+	struct glint_hdr_stream *hdr = NULL;
 	int ret;
 
 	memset(res, 0, sizeof(*res));
@@ -215,15 +229,16 @@ int glint_capture_run(const struct glint_capture_setup *s, const char *kind,
 		 glint_session_dir(session));
 	glint_log_info("capturing the %s with %s (%s) into %s", kind, info.name,
 		       info.backend, res->session);
-	ret = bracket_into(cam, s, kind, session, cancel, &b);
+	ret = bracket_into(cam, s, kind, session, cancel, &b, &hdr);
 	if (ret < 0)
 		goto err_bracket;
-	if (b.n > 0 && b.frames[0].linear && b.frames[0].channels == 1)
-		ret = merge_session(s, kind, out, probe, &b, res);
+	if (hdr)
+		ret = merge_session(s, kind, out, probe, hdr, res);
 	if (ret == 0 && !(res->summary = summary(kind, &b, res)))
 		ret = glint_error_set(ENOMEM, "out of memory");
 err_bracket:
 	/* The frames are released on every path (they are on disk). */
+	glint_hdr_stream_free(hdr);
 	glint_bracket_release(&b);
 err_session:
 	glint_camera_close(cam);

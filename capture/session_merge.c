@@ -97,10 +97,14 @@ static int frame_in_place(const char *path, const char *name,
 	return 0;
 }
 
-int glint_session_load_frames(const char *dir, struct glint_frame **frames,
-			      int *n)
+/* Each frame session.json lists, read and checked in order, to fn (which
+ * owns it); fn's error or the first bad frame stops it. */
+typedef int (*frame_fn)(struct glint_frame *f, int i, int n, void *ctx);
+
+static int each_frame(const char *dir, frame_fn fn, void *ctx)
 {
 	char path[GLINT_PATH_MAX];
+	struct glint_frame prev = { 0 };
 	json_t *doc, *list;
 	int ret;
 
@@ -115,13 +119,9 @@ int glint_session_load_frames(const char *dir, struct glint_frame **frames,
 		json_decref(doc);
 		return glint_error_set(EINVAL, "%s: no frames listed", path);
 	}
-	*n = (int)json_array_size(list);
-	*frames = calloc((size_t)*n, sizeof(**frames));
-	if (!*frames) {
-		json_decref(doc);
-		return glint_error_set(ENOMEM, "out of memory");
-	}
-	for (int i = 0; i < *n && ret == 0; i++) {
+	int n = (int)json_array_size(list);
+	for (int i = 0; i < n && ret == 0; i++) {
+		struct glint_frame f = { 0 };
 		const char *name = json_string_value(json_object_get(
 			json_array_get(list, (size_t)i), "file"));
 		if (!name || strchr(name, '/')) {
@@ -133,11 +133,45 @@ int glint_session_load_frames(const char *dir, struct glint_frame **frames,
 		}
 		ret = glint_path_join(path, sizeof(path), dir, name);
 		if (!ret)
-			ret = frame_in_place(
-				path, name, json_array_get(list, (size_t)i),
-				&(*frames)[i], i ? &(*frames)[i - 1] : NULL);
+			ret = frame_in_place(path, name,
+					     json_array_get(list, (size_t)i),
+					     &f, i ? &prev : NULL);
+		if (ret < 0) {
+			glint_frame_release(&f);
+			break;
+		}
+		prev = f;
+		prev.data = NULL;
+		ret = fn(&f, i, n, ctx);
 	}
 	json_decref(doc);
+	return ret;
+}
+
+struct load_ctx {
+	struct glint_frame *frames;
+	int n;
+};
+
+static int load_one(struct glint_frame *f, int i, int n, void *ctx)
+{
+	struct load_ctx *c = ctx;
+	if (!c->frames && !(c->frames = calloc((size_t)n, sizeof(*f)))) {
+		glint_frame_release(f);
+		return glint_error_set(ENOMEM, "out of memory");
+	}
+	c->frames[i] = *f;
+	c->n = i + 1;
+	return 0;
+}
+
+int glint_session_load_frames(const char *dir, struct glint_frame **frames,
+			      int *n)
+{
+	struct load_ctx c = { NULL, 0 };
+	int ret = each_frame(dir, load_one, &c);
+	*frames = c.frames;
+	*n = c.n;
 	return ret;
 }
 
@@ -148,22 +182,15 @@ void glint_frames_free(struct glint_frame *f, int n)
 	free(f);
 }
 
-int glint_hdr_merge_write(struct glint_frame *frames, int n,
-			  const struct glint_noise_model *nm, const char *out,
-			  const char *const names[5],
-			  struct glint_hdr_report *rep, int *width, int *height,
-			  long *valid_px, struct glint_image **radiance)
+int glint_hdr_write(struct glint_raw_hdr *raw, const char *out,
+		    const char *const names[5], int *width, int *height,
+		    long *valid_px, struct glint_image **radiance)
 {
-	struct glint_raw_hdr raw;
 	struct glint_image *rad = NULL, *var = NULL, *valid = NULL;
 	char path[GLINT_PATH_MAX];
-	int ret = glint_hdr_merge_raw(frames, n, nm, &raw, rep);
+	int ret = glint_hdr_demosaic(raw, &rad, &var, &valid);
 
-	for (int i = 0; i < n; i++)
-		glint_frame_release(&frames[i]);
-	if (ret == 0)
-		ret = glint_hdr_demosaic(&raw, &rad, &var, &valid);
-	glint_raw_hdr_release(&raw);
+	glint_raw_hdr_release(raw);
 	if (ret == 0 && mkdir(out, 0777) < 0 && errno != EEXIST)
 		ret = glint_error_set(errno, "%s: %s", out, strerror(errno));
 	*valid_px = 0;
@@ -204,6 +231,61 @@ int glint_hdr_merge_write(struct glint_frame *frames, int n,
 	glint_image_free(var);
 	glint_image_free(valid);
 	return ret;
+}
+
+int glint_hdr_merge_write(struct glint_frame *frames, int n,
+			  const struct glint_noise_model *nm, const char *out,
+			  const char *const names[5],
+			  struct glint_hdr_report *rep, int *width, int *height,
+			  long *valid_px, struct glint_image **radiance)
+{
+	struct glint_hdr_stream *st;
+	struct glint_raw_hdr raw;
+	int ret = glint_hdr_stream_new(nm, &st);
+
+	if (n < 1 && ret == 0)
+		ret = glint_error_set(EINVAL, "HDR merge: no frames");
+	for (int i = 0; i < n; i++) {
+		if (ret == 0)
+			ret = glint_hdr_stream_add(st, &frames[i]);
+		glint_frame_release(&frames[i]);
+	}
+	if (ret == 0)
+		ret = glint_hdr_stream_finish(st, &raw, rep);
+	glint_hdr_stream_free(st);
+	if (ret < 0)
+		return ret;
+	return glint_hdr_write(&raw, out, names, width, height, valid_px,
+			       radiance);
+}
+
+static int fold_one(struct glint_frame *f, int i, int n, void *ctx)
+{
+	(void)i;
+	(void)n;
+	int ret = glint_hdr_stream_add(ctx, f);
+	glint_frame_release(f);
+	return ret;
+}
+
+int glint_session_merge_write(const char *dir,
+			      const struct glint_noise_model *nm,
+			      const char *out, const char *const names[5],
+			      struct glint_hdr_report *rep, int *width,
+			      int *height, long *valid_px)
+{
+	struct glint_hdr_stream *st;
+	struct glint_raw_hdr raw;
+	int ret = glint_hdr_stream_new(nm, &st);
+
+	if (ret == 0)
+		ret = each_frame(dir, fold_one, st);
+	if (ret == 0)
+		ret = glint_hdr_stream_finish(st, &raw, rep);
+	glint_hdr_stream_free(st);
+	if (ret < 0)
+		return ret;
+	return glint_hdr_write(&raw, out, names, width, height, valid_px, NULL);
 }
 
 int glint_session_fit_inputs(const char *dir, struct glint_session_fit *fs)

@@ -172,8 +172,6 @@ int cmd_hdr(int argc, char **argv)
 		argc == 1 && !(stat(argv[0], &st) == 0 && S_ISREG(st.st_mode));
 	if (is_session) {
 		ret = glint_session_noise(argv[0], &nm);
-		if (ret == 0)
-			ret = glint_session_load_frames(argv[0], &frames, &n);
 		if (!out)
 			out = argv[0];
 	} else {
@@ -189,10 +187,19 @@ int cmd_hdr(int argc, char **argv)
 		nm.read_noise_e = rn;
 	if (!isnan(sat))
 		nm.saturation_dn = sat;
-	if (ret == 0)
+	/* A session is folded in one frame at a time, as the rig merged it
+	 * (the same bits); frame files are read first (named: checked
+	 * before any work). */
+	if (ret == 0 && is_session)
+		ret = glint_session_merge_write(argv[0], &nm, out, hdr_names,
+						&rep, &width, &height,
+						&valid_px);
+	else if (ret == 0)
 		ret = glint_hdr_merge_write(frames, n, &nm, out, hdr_names,
 					    &rep, &width, &height, &valid_px,
 					    NULL);
+	if (ret == 0)
+		n = rep.frames;
 	json_t *res = NULL;
 	if (ret == 0)
 		ret = glint_hdr_report_write(out, n, width, height, valid_px,

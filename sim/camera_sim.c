@@ -41,10 +41,12 @@
 #include "core/path.h"
 
 #include <math.h>
+#include <errno.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 struct sim_cam {
 	struct glint_clock clock, outer;
@@ -453,6 +455,27 @@ static int rig_scenes(struct sim_cam *s)
 	return ret;
 }
 
+/* scene=rig at open: what its views need is there (the map, the
+ * material); they are rendered for the first frame (rig_view), so that
+ * opening the camera to check a rig costs nothing. */
+static int rig_check(const struct sim_cam *s)
+{
+	char path[GLINT_PATH_MAX];
+	const struct glint_model_ops *model;
+	double p[GLINT_MAX_PARAMS];
+	struct stat st;
+	int ret =
+		glint_data_path(path, sizeof(path), "env/venice_sunset_1k.hdr");
+	if (ret == 0 && stat(path, &st) < 0)
+		ret = glint_error_set(errno, "sim rig scene: %s: %s", path,
+				      strerror(errno));
+	if (ret == 0)
+		ret = glint_data_path(path, sizeof(path), "paper-table1.json");
+	if (ret == 0)
+		ret = glint_material_load(path, s->material, &model, p);
+	return ret;
+}
+
 static int sim_open(const char *device, const struct glint_clock *clock,
 		    void **priv)
 {
@@ -487,7 +510,7 @@ static int sim_open(const char *device, const struct glint_clock *clock,
 	if (s->scene == SCENE_PROBE || s->scene == SCENE_SAMPLE)
 		ret = scene_image(s, s->scene == SCENE_SAMPLE, &s->radiance);
 	else if (s->scene == SCENE_RIG)
-		ret = rig_scenes(s);
+		ret = rig_check(s);
 	else if (!(s->radiance = glint_sim_test_card(s->width, s->height,
 						     s->decades)))
 		ret = glint_error_set(ENOMEM, "out of memory");
@@ -559,7 +582,7 @@ static int rig_view(struct sim_cam *s)
 {
 	struct glint_sim_world w;
 	world_now(s, &w);
-	if (w.lights && w.lights != s->lamps) {
+	if (!s->probe_img || (w.lights && w.lights != s->lamps)) {
 		int ret = rig_scenes(s);
 		if (ret < 0)
 			return ret;

@@ -78,6 +78,10 @@ sess=$(only_session "$tmp/caps")
 check "hdr of the session" run 0 "" hdr "$sess" --json
 check "... writes radiance, variance, weights, mask" \
 	bash -c "cd '$sess' && test -s hdr.exr && test -s variance.exr && test -s weights.exr && test -s mask.png && test -s hdr.json"
+# The capture folded each frame into the merge as it arrived; glint hdr
+# reads them back one at a time in the same order: the same bits.
+check "... the capture's own merge, bit for bit" cmp "$sess/hdr.exr" "$sess/sample.exr"
+check "... and its variance" cmp "$sess/variance.exr" "$sess/sample-variance.exr"
 check "... still bracket, all valid" python3 -c "import json,sys; d=json.load(open('$tmp/out')); sys.exit(d['moved'] or d['valid_pixels'] != 96*64)"
 # Raw frames are DNGs that raw tools open: dcraw and LibRaw decode glint's
 # numbers bit for bit, with its exposure time, ISO and CFA pattern.

@@ -175,6 +175,16 @@ static void expect_error(struct glint_frame *f, int n, const char *frag)
 	CHECK(glint_hdr_merge_raw(f, n, &nm, &h, NULL) < 0 && !h.x,
 	      "merged a bad bracket (%s)", frag);
 	CHECK_MSG(glint_error_msg(), frag);
+	/* The streaming merge: the same error, at the frame or at the end. */
+	struct glint_hdr_stream *st;
+	int ret = glint_hdr_stream_new(&nm, &st);
+	for (int i = 0; i < n && ret == 0; i++)
+		ret = glint_hdr_stream_add(st, &f[i]);
+	if (ret == 0)
+		ret = glint_hdr_stream_finish(st, &h, NULL);
+	CHECK(ret < 0 && !h.x, "the stream merged a bad bracket (%s)", frag);
+	CHECK_MSG(glint_error_msg(), frag);
+	glint_hdr_stream_free(st);
 }
 
 static void test_bad_brackets(void)
@@ -204,10 +214,154 @@ static void test_bad_brackets(void)
 	glint_frame_release(&f[1]);
 }
 
+/* z-scores of a merge against the card's truth. */
+static void zstats(const struct glint_raw_hdr *h,
+		   const struct glint_image *card, double *mean, double *sd,
+		   long *tail, long *n)
+{
+	double sz = 0, szz = 0;
+	*tail = *n = 0;
+	for (int y = 0; y < H; y++)
+		for (int x = 0; x < W; x++) {
+			size_t s = (size_t)y * W + x;
+			if (!h->valid[s])
+				continue;
+			double z =
+				(h->x[s] - truth(card, x, y)) / sqrt(h->var[s]);
+			sz += z;
+			szz += z * z;
+			*tail += fabs(z) > 4;
+			(*n)++;
+		}
+	*mean = sz / *n;
+	*sd = sqrt(szz / *n - *mean * *mean);
+}
+
+static int stream_merge(struct glint_frame *f, int n, const int *order,
+			const struct glint_noise_model *nm,
+			struct glint_raw_hdr *h, struct glint_hdr_report *rep)
+{
+	struct glint_hdr_stream *st;
+	int ret = glint_hdr_stream_new(nm, &st);
+	for (int i = 0; i < n && ret == 0; i++)
+		ret = glint_hdr_stream_add(st, &f[order ? order[i] : i]);
+	if (ret == 0)
+		ret = glint_hdr_stream_finish(st, h, rep);
+	glint_hdr_stream_free(st);
+	return ret;
+}
+
+/*
+ * The streaming merge (frames folded in as they come, one held back)
+ * against the truth as the batch merge is, and against the batch merge
+ * itself: each frame's weight from an estimate its own noise is not in.
+ * In the bracket's order (going up) and backwards.
+ */
+static void test_stream(void)
+{
+	struct glint_bracket b;
+	struct glint_raw_hdr hb, hs;
+	struct glint_hdr_report rb, rs;
+	struct glint_noise_model nm;
+	char dev[96];
+	int order[GLINT_BRACKET_MAX];
+
+	/* More sites than the round trip: the z statistics' own noise. */
+	snprintf(dev, sizeof(dev), "sim:width=%d,height=%d,seed=11", W, H);
+	CHECK(bracket(dev, &b) == 0, "%s", glint_error_msg());
+	glint_noise_default(&nm);
+	CHECK(glint_hdr_merge_raw(b.frames, b.n, &nm, &hb, &rb) == 0, "%s",
+	      glint_error_msg());
+	struct glint_image *card = glint_sim_test_card(W, H, 6);
+	for (int pass = 0; pass < 2 && hb.x; pass++) {
+		for (int i = 0; i < b.n; i++)
+			order[i] = pass ? b.n - 1 - i : i;
+		CHECK(stream_merge(b.frames, b.n, order, &nm, &hs, &rs) == 0,
+		      "%s", glint_error_msg());
+		if (!hs.x)
+			break;
+		double mean, sd, bmean, bsd;
+		long tail, n, btail, bn;
+		zstats(&hs, card, &mean, &sd, &tail, &n);
+		zstats(&hb, card, &bmean, &bsd, &btail, &bn);
+		/* Against the batch merge, in units of its sigma. */
+		double dmax = 0, dsum = 0, vr_lo = 1, vr_hi = 1, vr_sum = 0;
+		long nd = 0;
+		for (size_t s = 0; s < (size_t)W * H; s++) {
+			if (!hb.valid[s] || !hs.valid[s])
+				continue;
+			double d = fabs(hs.x[s] - hb.x[s]) / sqrt(hb.var[s]);
+			dmax = fmax(dmax, d);
+			dsum += d;
+			nd++;
+			vr_lo = fmin(vr_lo, hs.var[s] / hb.var[s]);
+			vr_hi = fmax(vr_hi, hs.var[s] / hb.var[s]);
+			vr_sum += hs.var[s] / hb.var[s];
+		}
+		printf("stream %s: z mean %+.3f sd %.3f (batch %+.3f, %.3f), "
+		       "%ld beyond 4 sigma; against the batch: mean %.4f, "
+		       "worst %.3f sigma, variance ratio %.3f..%.3f (mean "
+		       "%.4f); "
+		       "invalid %ld (%ld), dark %ld (%ld)\n",
+		       pass ? "backwards" : "going up", mean, sd, bmean, bsd,
+		       tail, dsum / nd, dmax, vr_lo, vr_hi, vr_sum / nd,
+		       rs.invalid_sites, rb.invalid_sites, rs.dark_sites,
+		       rb.dark_sites);
+		CHECK(n == bn && rs.invalid_sites == rb.invalid_sites,
+		      "valid sites %ld, batch %ld", n, bn);
+		CHECK(fabs(mean) < 0.05, "z mean %g: the stream is biased",
+		      mean);
+		CHECK(sd > 0.9 && sd < 1.1, "z spread %g", sd);
+		CHECK(tail < 0.002 * n, "%ld of %ld beyond 4 sigma", tail, n);
+		CHECK(dsum / nd < 0.05,
+		      "mean difference from the batch %g "
+		      "sigma",
+		      dsum / nd);
+		/* Evaluated at its own estimate: where a dark site's estimate
+		 * differs, so does its shot noise (the z spread above says
+		 * both are honest). */
+		CHECK(fabs(vr_sum / nd - 1) < 0.02 && vr_lo > 0.6 &&
+			      vr_hi < 1.6,
+		      "variance %g..%g of the batch's (mean %g)", vr_lo, vr_hi,
+		      vr_sum / nd);
+		CHECK(rs.frames == b.n && rs.pairs == b.n - 1 && !rs.moved,
+		      "report: %d frames, %d pairs, moved %d", rs.frames,
+		      rs.pairs, rs.moved);
+		glint_raw_hdr_release(&hs);
+	}
+
+	/* A bumped frame is flagged, as by the batch merge. */
+	int mid = b.n / 2;
+	uint16_t *d = b.frames[mid].data;
+	memmove(d + 2, d, ((size_t)W * H - 2) * sizeof(uint16_t));
+	CHECK(stream_merge(b.frames, b.n, NULL, &nm, &hs, &rs) == 0, "%s",
+	      glint_error_msg());
+	CHECK(rs.moved, "the stream missed a frame shifted by 2 px");
+	glint_raw_hdr_release(&hs);
+
+	/* No more frames than the mask has bits; none after a failure. */
+	struct glint_hdr_stream *st;
+	int ret = glint_hdr_stream_new(&nm, &st);
+	for (int i = 0; i <= GLINT_HDR_STREAM_MAX && ret == 0; i++)
+		ret = glint_hdr_stream_add(st, &b.frames[i % b.n]);
+	CHECK(ret < 0, "a %d-frame stream was accepted",
+	      GLINT_HDR_STREAM_MAX + 1);
+	CHECK_MSG(glint_error_msg(), "at most 32 frames");
+	CHECK(glint_hdr_stream_add(st, &b.frames[0]) < 0,
+	      "a frame added after a failure");
+	CHECK(glint_hdr_stream_finish(st, &hs, NULL) < 0 && !hs.x,
+	      "a failed stream finished");
+	glint_hdr_stream_free(st);
+	glint_raw_hdr_release(&hb);
+	glint_image_free(card);
+	glint_bracket_release(&b);
+}
+
 int main(void)
 {
 	glint_backends_register();
 	RUN(test_round_trip);
+	RUN(test_stream);
 	RUN(test_bad_brackets);
 	return test_result();
 }

@@ -301,11 +301,35 @@ static void cfa_cell(const char *format, int colour[4])
 	}
 }
 
+/* Per cell position (y & 1) * 2 + (x & 1) and output channel, the sites
+ * whose mean it is: the site itself for its own colour (and for mono), else
+ * the sites of that colour in its 3x3 neighbourhood, row by row. */
 struct demosaic_job {
 	const struct glint_raw_hdr *raw;
-	int colour[4];
+	int ntap[4][3];
+	signed char dx[4][3][9], dy[4][3][9];
 	struct glint_image *r, *v, *m;
 };
+
+static void demosaic_taps(struct demosaic_job *j, const int colour[4])
+{
+	for (int cell = 0; cell < 4; cell++) {
+		int own = colour[cell], cy = cell >> 1, cx = cell & 1;
+		for (int c = 0; c < 3; c++) {
+			int radius = own == c || own < 0 ? 0 : 1, n = 0;
+			for (int dy = -radius; dy <= radius; dy++)
+				for (int dx = -radius; dx <= radius; dx++) {
+					int cc = colour[((cy + dy) & 1) * 2 +
+							((cx + dx) & 1)];
+					if (cc >= 0 && cc != c)
+						continue;
+					j->dx[cell][c][n] = (signed char)dx;
+					j->dy[cell][c][n++] = (signed char)dy;
+				}
+			j->ntap[cell][c] = n;
+		}
+	}
+}
 
 static void demosaic_rows(void *ctx, int begin, int end, int thread)
 {
@@ -319,35 +343,30 @@ static void demosaic_rows(void *ctx, int begin, int end, int thread)
 			float *pr = glint_image_px(j->r, x, y),
 			      *pv = glint_image_px(j->v, x, y),
 			      *pm = glint_image_px(j->m, x, y);
-			int ok = 1;
-			int own = j->colour[(y & 1) * 2 + (x & 1)];
+			int ok = 1, cell = (y & 1) * 2 + (x & 1);
+			int inside = x > 0 && y > 0 && x < w - 1 && y < h - 1;
+			size_t site = (size_t)y * w + x;
 			for (int c = 0; c < 3; c++) {
+				const signed char *tx = j->dx[cell][c],
+						  *ty = j->dy[cell][c];
 				double sx = 0, sv = 0;
 				int k = 0;
-				int radius = own == c || own < 0 ? 0 : 1;
-				for (int dy = -radius; dy <= radius; dy++)
-					for (int dx = -radius; dx <= radius;
-					     dx++) {
-						int xx = x + dx, yy = y + dy;
-						if (xx < 0 || yy < 0 ||
-						    xx >= w || yy >= h)
-							continue;
-						int cc =
-							j->colour[(yy & 1) * 2 +
-								  (xx & 1)];
-						size_t s = (size_t)yy * w + xx;
-						if ((cc >= 0 && cc != c) ||
-						    !raw->valid[s])
-							continue;
-						sx += raw->x[s];
-						sv += raw->var[s];
-						k++;
-					}
+				for (int t = 0; t < j->ntap[cell][c]; t++) {
+					int xx = x + tx[t], yy = y + ty[t];
+					if (!inside && (xx < 0 || yy < 0 ||
+							xx >= w || yy >= h))
+						continue;
+					size_t s = (size_t)yy * w + xx;
+					if (!raw->valid[s])
+						continue;
+					sx += raw->x[s];
+					sv += raw->var[s];
+					k++;
+				}
 				if (k == 0) {
 					ok = 0;
 					/* Best available: the site itself. */
-					size_t s = (size_t)y * w + x;
-					pr[c] = raw->x[s];
+					pr[c] = raw->x[site];
 					pv[c] = 0;
 					continue;
 				}
@@ -378,7 +397,9 @@ int glint_hdr_demosaic(const struct glint_raw_hdr *raw,
 				       "MONO16",
 				       fmt);
 	struct demosaic_job job = { raw,
-				    { 0 },
+				    { { 0 } },
+				    { { { 0 } } },
+				    { { { 0 } } },
 				    glint_image_new(w, h),
 				    glint_image_new(w, h),
 				    glint_image_new(w, h) };
@@ -388,7 +409,9 @@ int glint_hdr_demosaic(const struct glint_raw_hdr *raw,
 		glint_image_free(job.m);
 		return glint_error_set(ENOMEM, "demosaic: out of memory");
 	}
-	cfa_cell(fmt, job.colour);
+	int colour[4];
+	cfa_cell(fmt, colour);
+	demosaic_taps(&job, colour);
 	/* Rows to every thread: each output pixel reads only the sites. */
 	glint_parallel_for(h, 8, glint_cpu_count(), demosaic_rows, &job);
 	*radiance = job.r;

@@ -72,60 +72,62 @@ struct fold_job {
 	int width;
 };
 
+/* Site i of the held frame into the sums. */
+static inline void fold_site(const struct fold_job *j, size_t i,
+			     struct glint_hdr_report *rep)
+{
+	const struct merge_frame *h = j->held, *nx = j->next;
+	struct glint_hdr_stream *s = j->s;
+	double w0 = s->sw[i], wx0 = s->swx[i];
+	/* The estimate without the held frame's noise: the frames folded
+	 * before it and the next one. */
+	double sw = w0, swx = wx0;
+	if (nx && nx->data[i] < nx->sat) {
+		double d = nx->data[i] - nx->black;
+		double x = w0 > 0 ? wx0 / w0 : d / nx->tg;
+		double v = glint_merge_var_x(nx, x * nx->tg);
+		sw += 1 / v;
+		swx += d / nx->tg / v;
+	}
+	double dn = h->data[i], d = dn - h->black;
+	double xref = sw > 0 ? swx / sw : d / h->tg;
+	if (dn < h->sat) {
+		double v = glint_merge_var_x(h, xref * h->tg);
+		s->sw[i] = (float)(w0 + 1 / v);
+		s->swx[i] = (float)(wx0 + d / h->tg / v);
+		s->mask[i] |= j->bit;
+	}
+	double z;
+	if (j->pair >= 0 && glint_merge_pair_z(h, nx, i, xref, &z)) {
+		rep->compared[j->pair]++;
+		if (fabs(z) > 5)
+			rep->disagree[j->pair] += 1;
+	}
+}
+
 static void fold_rows(void *ctx, int begin, int end, int thread)
 {
 	const struct fold_job *j = ctx;
-	const struct merge_frame *h = j->held, *nx = j->next;
-	struct glint_hdr_stream *s = j->s;
-	struct glint_hdr_report *rep = &j->part[thread];
 
 	for (size_t i = (size_t)begin * j->width; i < (size_t)end * j->width;
-	     i++) {
-		double w0 = s->sw[i], wx0 = s->swx[i];
-		/* The estimate without the held frame's noise: the frames
-		 * folded before it and the next one. */
-		double sw = w0, swx = wx0;
-		if (nx && nx->data[i] < nx->sat) {
-			double d = nx->data[i] - nx->black;
-			double x = w0 > 0 ? wx0 / w0 : d / nx->tg;
-			double v = glint_merge_var_x(nx, x * nx->tg);
-			sw += 1 / v;
-			swx += d / nx->tg / v;
-		}
-		double dn = h->data[i], d = dn - h->black;
-		double xref = sw > 0 ? swx / sw : d / h->tg;
-		if (dn < h->sat) {
-			double v = glint_merge_var_x(h, xref * h->tg);
-			s->sw[i] = (float)(w0 + 1 / v);
-			s->swx[i] = (float)(wx0 + d / h->tg / v);
-			s->mask[i] |= j->bit;
-		}
-		double z;
-		if (j->pair >= 0 && glint_merge_pair_z(h, nx, i, xref, &z)) {
-			rep->compared[j->pair]++;
-			if (fabs(z) > 5)
-				rep->disagree[j->pair] += 1;
-		}
-	}
+	     i++)
+		fold_site(j, i, &j->part[thread]);
 }
 
 static int fold_held(struct glint_hdr_stream *s, const struct merge_frame *next)
 {
 	int nthreads = glint_cpu_count();
-	int idx = s->n - 1 - (next != NULL); /* the held frame's index */
+	int idx = s->n - 2; /* the held frame's index */
 	struct merge_frame held = s->k[idx];
 	struct glint_hdr_report *part = calloc((size_t)nthreads, sizeof(*part));
 
 	if (!part)
 		return glint_error_set(ENOMEM, "HDR merge: out of memory");
 	held.data = s->held;
-	struct fold_job job = { s,
-				&held,
-				next,
-				1u << idx,
-				next && idx < 32 ? idx : -1,
-				part,
-				s->first.width };
+	struct fold_job job = {
+		s,    &held,	     next, 1u << idx, idx < 32 ? idx : -1,
+		part, s->first.width
+	};
 	glint_parallel_for(s->first.height, 8, nthreads, fold_rows, &job);
 	for (int t = 0; job.pair >= 0 && t < nthreads; t++) {
 		s->rep.compared[idx] += part[t].compared[idx];
@@ -193,23 +195,23 @@ int glint_hdr_stream_add(struct glint_hdr_stream *s,
 	return 0;
 }
 
-/* The merged value and variance per site, in place of the sums. */
+/* The last frame folded in and the merged value and variance per site,
+ * in place of the sums: one pass. */
 struct finish_job {
-	struct glint_hdr_stream *s;
+	struct fold_job fold; /* the last frame, no next */
 	uint8_t *valid;
-	struct glint_hdr_report *part;
-	int width;
 };
 
 static void finish_rows(void *ctx, int begin, int end, int thread)
 {
 	const struct finish_job *j = ctx;
-	struct glint_hdr_stream *s = j->s;
-	struct glint_hdr_report *rep = &j->part[thread];
+	struct glint_hdr_stream *s = j->fold.s;
+	struct glint_hdr_report *rep = &j->fold.part[thread];
 	const struct merge_frame *k0 = &s->k[s->shortest];
+	size_t w = (size_t)j->fold.width;
 
-	for (size_t i = (size_t)begin * j->width; i < (size_t)end * j->width;
-	     i++) {
+	for (size_t i = (size_t)begin * w; i < (size_t)end * w; i++) {
+		fold_site(&j->fold, i, rep);
 		uint32_t m = s->mask[i];
 		if (!m) {
 			/* Clipped in every frame: a lower bound, no weight. */
@@ -239,7 +241,6 @@ int glint_hdr_stream_finish(struct glint_hdr_stream *s,
 {
 	struct glint_hdr_report local;
 	int nthreads = glint_cpu_count();
-	int ret = 0;
 
 	memset(out, 0, sizeof(*out));
 	if (!rep)
@@ -250,18 +251,20 @@ int glint_hdr_stream_finish(struct glint_hdr_stream *s,
 					       "nothing merged");
 	if (s->n < 1)
 		return glint_error_set(EINVAL, "HDR merge: no frames");
-	ret = fold_held(s, NULL);
-	uint8_t *valid = ret < 0 ? NULL : malloc(s->sites);
+	uint8_t *valid = malloc(s->sites);
 	struct glint_hdr_report *part = calloc((size_t)nthreads, sizeof(*part));
-	if (ret == 0 && (!valid || !part))
-		ret = glint_error_set(ENOMEM, "HDR merge: out of memory");
-	if (ret < 0) {
+	if (!valid || !part) {
 		free(valid);
 		free(part);
 		s->failed = 1;
-		return ret;
+		return glint_error_set(ENOMEM, "HDR merge: out of memory");
 	}
-	struct finish_job job = { s, valid, part, s->first.width };
+	int last = s->n - 1;
+	struct merge_frame held = s->k[last];
+	held.data = s->held;
+	struct finish_job job = {
+		{ s, &held, NULL, 1u << last, -1, part, s->first.width }, valid
+	};
 	glint_parallel_for(s->first.height, 8, nthreads, finish_rows, &job);
 	*rep = s->rep;
 	rep->frames = s->n;

@@ -359,6 +359,13 @@ int fit_data_cache_new(const struct glint_fit_view *in, int nviews,
 
 	for (v = 0; v < nviews && ret == 0; v++) {
 		c.light = lights ? lights[v] : NULL;
+		/* The pixel footprint is an affine model of the normal and
+		 * ray over the pixel: through a lens of finite aperture a
+		 * pixel's hits also spread over the circle of confusion,
+		 * which it does not model (copper through f/4 at 512 px:
+		 * roughness 0.094 for 0.005 with it, 0.0041 without). */
+		c.no_footprint = co->no_footprint ||
+				 in[v].r->scene.cam.aperture_radius > 0;
 		ret = glint_shade_cache_new(&in[v].r->gb, d->pix + parts[v].off,
 					    parts[v].n, in[v].r->env, m, &c,
 					    &one[v]);

@@ -282,24 +282,27 @@ static void test_dropped(void)
 	int seq = -1;
 	if (!cam)
 		return;
-	/* 25 %: vivid's 3840x2160 runs at 2 frames/s, and at 50 % a run of
-	 * five drops (1 in 32) outlasts the backend's 2.5 s wait, which is
-	 * right for a real camera. */
-	set_ctrl("Percentage of Dropped Buffers", 25);
+	/* 10 %: vivid's 3840x2160 runs at 2 frames/s under the emulated
+	 * CPU (slower when the host is loaded), and a run of five drops
+	 * outlasts the backend's 2.5 s wait, which is right for a real
+	 * camera: at 50 % that is 1 in 32 windows, at 25 % 1 in 1024 (a
+	 * CI run failed so, its host busier than usual), at 10 % 1 in
+	 * 100,000. */
+	set_ctrl("Percentage of Dropped Buffers", 10);
 	grab_run(cam, 4, &seq); /* made before the control: the queue */
-	/* No drop in 16 frames happens 1 % of the time (0.75^16): up to
-	 * 64 frames (1e-8) before saying vivid dropped none. */
+	/* No drop in 128 frames happens 1.4e-6 of the time (0.9^128); the
+	 * first comes after 10 frames on average. */
 	long gaps = 0;
 	int frames = 0;
-	while (gaps < 1 && frames < 64) {
+	while (gaps < 1 && frames < 128) {
 		gaps += grab_run(cam, 16, &seq);
 		frames += 16;
 	}
 	set_ctrl("Percentage of Dropped Buffers", 0);
-	printf("25%% dropped: %d whole frames, %ld sequence numbers never "
+	printf("10%% dropped: %d whole frames, %ld sequence numbers never "
 	       "delivered\n",
 	       frames, gaps);
-	CHECK(gaps >= 1, "no frame dropped at 25%%");
+	CHECK(gaps >= 1, "no frame dropped at 10%%");
 	glint_camera_v4l2_ops.close(cam);
 }
 

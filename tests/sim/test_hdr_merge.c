@@ -357,11 +357,104 @@ static void test_stream(void)
 	glint_bracket_release(&b);
 }
 
+/* The demosaic as its header states it, site by site: the reference the
+ * library's precomputed taps must match to the bit. */
+static int colour_at(const char *fmt, int x, int y)
+{
+	if (!strncmp(fmt, "MONO", 4))
+		return -1;
+	char c = fmt[(y & 1) * 2 + (x & 1)];
+	return c == 'R' ? 0 : c == 'G' ? 1 : 2;
+}
+
+static void test_demosaic_reference(void)
+{
+	static const char *const fmts[] = { "RGGB16", "GBRG16", "BGGR16",
+					    "MONO16" };
+	const int w = 37, h = 23; /* odd: both parities at every edge */
+	struct glint_raw_hdr r = { .width = w, .height = h };
+	r.x = malloc((size_t)w * h * sizeof(float));
+	r.var = malloc((size_t)w * h * sizeof(float));
+	r.valid = malloc((size_t)w * h);
+	srand(3);
+	for (int i = 0; i < w * h; i++) {
+		r.x[i] = (float)rand() / 7;
+		r.var[i] = (float)rand() / 9;
+		r.valid[i] = rand() % 5 != 0;
+	}
+	for (int f = 0; f < 4; f++) {
+		struct glint_image *rgb, *var, *valid;
+		long wrong = 0;
+		snprintf(r.format, sizeof(r.format), "%s", fmts[f]);
+		CHECK(glint_hdr_demosaic(&r, &rgb, &var, &valid) == 0, "%s",
+		      glint_error_msg());
+		if (!rgb)
+			continue;
+		for (int y = 0; y < h; y++)
+			for (int x = 0; x < w; x++) {
+				int own = colour_at(fmts[f], x, y), ok = 1;
+				float er[3], ev[3];
+				for (int c = 0; c < 3; c++) {
+					int rad = own == c || own < 0 ? 0 : 1,
+					    k = 0;
+					double sx = 0, sv = 0;
+					for (int dy = -rad; dy <= rad; dy++)
+						for (int dx = -rad; dx <= rad;
+						     dx++) {
+							int xx = x + dx,
+							    yy = y + dy;
+							if (xx < 0 || yy < 0 ||
+							    xx >= w || yy >= h)
+								continue;
+							int cc = colour_at(
+								fmts[f], xx,
+								yy);
+							size_t s =
+								(size_t)yy * w +
+								xx;
+							if ((cc >= 0 &&
+							     cc != c) ||
+							    !r.valid[s])
+								continue;
+							sx += r.x[s];
+							sv += r.var[s];
+							k++;
+						}
+					if (!k) {
+						ok = 0;
+						er[c] = r.x[y * w + x];
+						ev[c] = 0;
+						continue;
+					}
+					er[c] = (float)(sx / k);
+					ev[c] = (float)(sv / ((double)k * k));
+				}
+				for (int c = 0; c < 3; c++) {
+					float v = ok ? ev[c] : 0;
+					wrong += glint_image_px(rgb, x, y)[c] !=
+							 er[c] ||
+						 glint_image_px(var, x, y)[c] !=
+							 v ||
+						 glint_image_px(valid, x,
+								y)[c] !=
+							 (float)ok;
+				}
+			}
+		CHECK(wrong == 0, "%s: %ld values differ from the reference",
+		      fmts[f], wrong);
+		glint_image_free(rgb);
+		glint_image_free(var);
+		glint_image_free(valid);
+	}
+	glint_raw_hdr_release(&r);
+}
+
 int main(void)
 {
 	glint_backends_register();
 	RUN(test_round_trip);
 	RUN(test_stream);
+	RUN(test_demosaic_reference);
 	RUN(test_bad_brackets);
 	return test_result();
 }

@@ -256,13 +256,19 @@ void cmd_print_params(const json_t *doc, const double *truth)
 	}
 	if (!json_is_object(unc))
 		return;
+	int regions = (int)json_integer_value(
+		json_object_get(unc, "model_error_regions"));
 	printf("  intervals: %.0f %%: noise over %d blocks of pixels "
-	       "(chi2/dof %.3g), %d sample sets,\n  and the render's "
-	       "systematic accuracy (docs/fitting.md, \"Uncertainty\")\n",
+	       "(chi2/dof %.3g), %d sample sets,\n",
 	       100 * level,
 	       (int)json_integer_value(json_object_get(unc, "blocks")),
 	       json_real_value(json_object_get(unc, "chi2_dof")),
 	       (int)json_integer_value(json_object_get(unc, "sample_sets")));
+	if (regions)
+		printf("  the model error over %d regions of the sphere,\n",
+		       regions);
+	printf("  and the render's systematic accuracy (docs/fitting.md, "
+	       "\"Uncertainty\")\n");
 	json_array_foreach(json_object_get(unc, "findings"), i, p)
 		printf("  note: %s\n", json_string_value(p));
 }

@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 #include "fit.h"
 #include "fit_data.h"
+#include "misfit.h"
 #include "fit/optim/anneal.h"
 
 #include "core/error.h"
@@ -1616,6 +1617,104 @@ static void systematic(const struct glint_model_ops *m, const double *p,
 	}
 }
 
+/*
+ * The regions of the model-error jackknife (fit/optim/uncertainty.h) for
+ * the residuals r (3 per fitted pixel) when they show structure, as
+ * fit/misfit.h judges it (a band of either angle more than 5 standard
+ * errors off zero, and with a real noise model a chi^2 above 1.5); each
+ * pixel's region is its band of the angle from the mirror direction to
+ * the brightest light and its third of the view angle (0-30, 30-60,
+ * 60-90 degrees), per photo.  Returns the number of regions, 0 when the
+ * residual shows no structure (region untouched).
+ */
+static int misfit_regions(const struct objective *ob,
+			  const struct selections *sl, const double *r,
+			  int *region)
+{
+	enum { B = GLINT_MISFIT_BANDS, R = 3 * B };
+	const struct fit_data *d = ob->d;
+	double s[2][B] = { { 0 } }, s2[2][B] = { { 0 } }, c2 = 0;
+	long cnt[2][B] = { { 0 } };
+	int ids[GLINT_FIT_MAX_VIEWS * R], nr = 0;
+	struct vec3 light[GLINT_FIT_MAX_VIEWS];
+
+	for (int v = 0; v < ob->nviews; v++)
+		light[v] = glint_misfit_light(ob->views[v].r->env);
+	for (int k = 0; k < ob->nviews * R; k++)
+		ids[k] = -1;
+	for (int t = 0; t < sl->nall; t++) {
+		int px = sl->all[t], v = view_of(ob, px), kv, km;
+		const struct glint_gbuffer *gb = &ob->views[v].r->gb;
+		const struct glint_hit *hs =
+			glint_gbuffer_pixel(gb, (size_t)d->pix[px]);
+		double z = (r[3 * t] + r[3 * t + 1] + r[3 * t + 2]) / 3;
+		for (int c = 0; c < 3; c++)
+			c2 += r[3 * t + c] * r[3 * t + c];
+		if (!hs) {
+			region[3 * t] = region[3 * t + 1] = region[3 * t + 2] =
+				-1;
+			continue;
+		}
+		glint_misfit_bands(hs, gb->spp, light[v], &kv, &km);
+		int b[2] = { kv, km };
+		for (int a = 0; a < 2; a++) {
+			s[a][b[a]] += z;
+			s2[a][b[a]] += z * z;
+			cnt[a][b[a]]++;
+		}
+		int g = v * R + km * 3 + kv / 3;
+		if (ids[g] < 0)
+			ids[g] = nr++;
+		for (int c = 0; c < 3; c++)
+			region[3 * t + c] = ids[g];
+	}
+	double zmax = 0;
+	for (int a = 0; a < 2; a++)
+		for (int k = 0; k < B; k++) {
+			long n = cnt[a][k];
+			if (n < 20)
+				continue;
+			double mean = s[a][k] / n,
+			       var = (s2[a][k] - s[a][k] * mean) / (n - 1);
+			if (var > 0)
+				zmax = fmax(zmax, fabs(mean) / sqrt(var / n));
+		}
+	int noisy = !d->noise_model || c2 / (3.0 * sl->nall) > 1.5;
+	return zmax > 5 && noisy ? nr : 0;
+}
+
+/* The covariance at the optimum from the residuals r, their Jacobian,
+ * each sample set's residuals and the blocks and regions. */
+static int covariance(struct objective *ob, const struct selections *sl,
+		      int nsets, const double *lo, const double *hi,
+		      const double *each, const double *r, const double *jac,
+		      int *block, const int *region, int nregions,
+		      struct glint_fit_result *res)
+{
+	const struct glint_model_ops *m = ob->m;
+	double sys[GLINT_MAX_PARAMS];
+
+	systematic(m, ob->p, sys);
+	struct glint_unc_problem pr = {
+		.n = m->nparams,
+		.m = 3 * sl->nall,
+		.jac = jac,
+		.r = r,
+		.block = block,
+		.nblocks = pixel_blocks(ob, sl->all, sl->nall, block),
+		.p = ob->p,
+		.lo = lo,
+		.hi = hi,
+		.draws = nsets > 1 ? each : NULL,
+		.ndraws = nsets > 1 ? nsets : 0,
+		.sys = ob->o->no_systematic ? NULL : sys,
+		.level = ob->o->level,
+		.region = nregions ? region : NULL,
+		.nregions = nregions,
+	};
+	return glint_uncertainty_compute(&pr, &res->unc);
+}
+
 /* One round of the uncertainty stage: reweight, the sample sets, the
  * polish on their mean, the Jacobian and the covariance. */
 static int estimate_on_sets(struct objective *ob, struct fit_data *d,
@@ -1624,8 +1723,7 @@ static int estimate_on_sets(struct objective *ob, struct fit_data *d,
 			    double *r, double *jac, int *block,
 			    struct glint_fit_result *res)
 {
-	const struct glint_model_ops *m = ob->m;
-	int n = m->nparams, rows = 3 * sl->nall, ret;
+	int ret;
 
 	if (ob->cache) {
 		ret = reweight(ob, d, r);
@@ -1641,24 +1739,8 @@ static int estimate_on_sets(struct objective *ob, struct fit_data *d,
 	}
 	if (ret < 0)
 		return ret;
-	double sys[GLINT_MAX_PARAMS];
-	systematic(m, ob->p, sys);
-	struct glint_unc_problem pr = {
-		.n = n,
-		.m = rows,
-		.jac = jac,
-		.r = r,
-		.block = block,
-		.nblocks = pixel_blocks(ob, sl->all, sl->nall, block),
-		.p = ob->p,
-		.lo = lo,
-		.hi = hi,
-		.draws = nsets > 1 ? each : NULL,
-		.ndraws = nsets > 1 ? nsets : 0,
-		.sys = ob->o->no_systematic ? NULL : sys,
-		.level = ob->o->level,
-	};
-	return glint_uncertainty_compute(&pr, &res->unc);
+	return covariance(ob, sl, nsets, lo, hi, each, r, jac, block, NULL, 0,
+			  res);
 }
 
 /*
@@ -1743,7 +1825,7 @@ static int uncertainty(struct objective *ob, struct fit_data *d,
 	double *jac = malloc((size_t)rows * n * sizeof(double));
 	double *r = malloc((size_t)rows * sizeof(double));
 	double *each, lo[GLINT_MAX_PARAMS], hi[GLINT_MAX_PARAMS];
-	int *block = malloc((size_t)rows * sizeof(int));
+	int *block = malloc((size_t)rows * sizeof(int)), *region = NULL;
 
 	if (nsets > MAX_SETS)
 		nsets = MAX_SETS;
@@ -1762,6 +1844,19 @@ static int uncertainty(struct objective *ob, struct fit_data *d,
 				       block, res);
 	while (ret == 0 &&
 	       (ret = more_samples(ob, &res->unc, each, r, rows)) > 0);
+	if (ret < 0)
+		goto out;
+	/* A structured residual: the model-error jackknife over regions. */
+	region = malloc((size_t)rows * sizeof(int));
+	if (!region) {
+		ret = glint_error_set(ENOMEM, "out of memory");
+		goto out;
+	}
+	int nregions =
+		ob->o->no_model_error ? 0 : misfit_regions(ob, sl, r, region);
+	if (nregions >= 3)
+		ret = covariance(ob, sl, nsets, lo, hi, each, r, jac, block,
+				 region, nregions, res);
 	if (ret < 0)
 		goto out;
 	res->light_samples = ob->o->light_samples * ob->sample_scale;
@@ -1787,6 +1882,7 @@ out:
 	free(r);
 	free(each);
 	free(block);
+	free(region);
 	return ret;
 }
 

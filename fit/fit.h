@@ -88,6 +88,9 @@ struct glint_fit_opts {
 	/* leave out the systematic term (the fast render's accuracy against
 	 * the reference renderer: fit.c, systematic()) */
 	int no_systematic;
+	/* leave out the model-error jackknife a structured residual adds
+	 * (fit/optim/uncertainty.h) */
+	int no_model_error;
 	/* glint_fit_evaluate(): the weights from the noise model at these
 	 * parameters' prediction (a fit's result: its own objective at
 	 * other parameters); NULL: at the evaluated parameters */

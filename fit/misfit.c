@@ -24,7 +24,7 @@ struct acc {
 
 /* The map's brightest direction: the texel of most power (radiance x
  * solid angle). */
-static struct vec3 brightest(const struct glint_envmap *env)
+struct vec3 glint_misfit_light(const struct glint_envmap *env)
 {
 	const struct glint_image *img = env->img;
 	double best = -1;
@@ -69,6 +69,20 @@ static void pixel_geometry(const struct glint_hit *hs, int spp, struct vec3 *n,
 	}
 	*n = v3_norm(sn);
 	*wo = v3_scale(v3_norm(sd), -1);
+}
+
+void glint_misfit_bands(const struct glint_hit *hs, int spp, struct vec3 light,
+			int *view_band, int *mirror_band)
+{
+	struct vec3 n, wo;
+
+	pixel_geometry(hs, spp, &n, &wo);
+	double cv = fmin(1, fmax(-1, v3_dot(n, wo)));
+	struct vec3 refl = v3_sub(v3_scale(n, 2 * cv), wo);
+	*view_band = band_of(view_edges, acos(cv) * 180 / M_PI);
+	*mirror_band = band_of(mirror_edges,
+			       acos(fmin(1, fmax(-1, v3_dot(refl, light)))) *
+				       180 / M_PI);
 }
 
 static void finish_bands(const struct acc *a, const double *edges, int weighted,
@@ -195,7 +209,7 @@ int glint_misfit_analyse(const struct glint_gbuffer *gb,
 		return glint_error_set(EINVAL, "misfit: no lit pixel wholly "
 					       "on the sphere");
 	level /= np;
-	struct vec3 light = brightest(env);
+	struct vec3 light = glint_misfit_light(env);
 	m->light[0] = light.x;
 	m->light[1] = light.y;
 	m->light[2] = light.z;
@@ -225,19 +239,14 @@ int glint_misfit_analyse(const struct glint_gbuffer *gb,
 		if (!used)
 			continue;
 		r /= used;
-		struct vec3 n, wo;
 		if ((int)(i / (size_t)w) != row_y) {
 			row_y = (int)(i / (size_t)w);
 			row = glint_gbuffer_row(gb, row_y, buf);
 		}
-		pixel_geometry(row + i % (size_t)w * gb->spp, gb->spp, &n, &wo);
-		double cv = fmin(1, fmax(-1, v3_dot(n, wo)));
-		struct vec3 refl = v3_sub(v3_scale(n, 2 * cv), wo);
-		double a_view = acos(cv) * 180 / M_PI;
-		double a_mir = acos(fmin(1, fmax(-1, v3_dot(refl, light)))) *
-			       180 / M_PI;
-		struct acc *bv = &av[band_of(view_edges, a_view)];
-		struct acc *bm = &am[band_of(mirror_edges, a_mir)];
+		int kv, km;
+		glint_misfit_bands(row + i % (size_t)w * gb->spp, gb->spp,
+				   light, &kv, &km);
+		struct acc *bv = &av[kv], *bm = &am[km];
 		bv->s += r;
 		bv->s2 += r * r;
 		bv->c2 += rr * 3.0 / used;

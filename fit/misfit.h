@@ -58,6 +58,15 @@ int glint_misfit_analyse(const struct glint_gbuffer *gb,
 			 const struct glint_image *weight,
 			 const struct glint_image *cov, struct glint_misfit *m);
 
+/* The map's brightest direction (world): the texel of most power
+ * (radiance x solid angle), the mirror angle's reference. */
+struct vec3 glint_misfit_light(const struct glint_envmap *env);
+
+/* The view and mirror band (0 .. GLINT_MISFIT_BANDS - 1) of a pixel from
+ * its spp hits hs, as glint_misfit_analyse() bins it. */
+void glint_misfit_bands(const struct glint_hit *hs, int spp, struct vec3 light,
+			int *view_band, int *mirror_band);
+
 /* params.json's "misfit": the verdict, the light direction and both band
  * tables.  A new reference. */
 json_t *glint_misfit_json(const struct glint_misfit *m);

@@ -194,7 +194,7 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 	const struct glint_model_ops *m = r->model;
 	const struct glint_uncertainty *u = &r->unc;
 	int n = u->n, rk = m->roughness_param;
-	json_t *find, *comb, *tb, *sys;
+	json_t *find, *comb, *tb, *sys, *me;
 	char msg[256];
 
 	if (!n)
@@ -203,6 +203,16 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 	comb = json_array();
 	tb = json_array();
 	sys = json_array();
+	me = json_array();
+	if (u->nregions) {
+		snprintf(msg, sizeof(msg),
+			 "the residual is structured (the model is too simple "
+			 "for this material): the intervals include how far "
+			 "the answer moves between %d regions of the sphere "
+			 "that see the light differently",
+			 u->nregions);
+		json_array_append_new(find, json_string(msg));
+	}
 	specular_fresnel(r, find, comb);
 	if (rk >= 0 && u->hi[rk] < footprint(r)) {
 		snprintf(msg, sizeof(msg),
@@ -215,6 +225,9 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 		json_array_append_new(
 			tb, glint_json_real_or_null(u->se_textbook[k]));
 		json_array_append_new(sys, json_real(u->sys[k]));
+		json_array_append_new(
+			me,
+			json_real(sqrt(fmax(0, u->cov_regions[k * n + k]))));
 		if (undetermined(r, k) &&
 		    strcmp(m->params[k].name, "ior") != 0) {
 			snprintf(msg, sizeof(msg),
@@ -240,15 +253,19 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 		}
 	}
 	return json_pack(
-		"{s:s,s:f,s:f,s:i,s:i,s:o,s:o,s:o,s:o,s:o,s:o,s:f}", "method",
+		"{s:s,s:f,s:f,s:i,s:i,s:i,s:o,s:o,s:o,s:o,s:o,s:o,s:o,s:f}",
+		"method",
 		"cluster-robust covariance over spatial blocks (not below "
-		"chi2/dof-scaled) plus the spread over independent sample "
+		"chi2/dof-scaled, nor, when the residual is structured, below "
+		"a delete-one-region jackknife over regions that see the "
+		"light differently) plus the spread over independent sample "
 		"sets plus the fast render's systematic accuracy; Student t at "
 		"Welch-Satterthwaite degrees of freedom",
 		"level", u->level, "chi2_dof", u->chi2_dof, "blocks",
-		u->nblocks, "sample_sets", u->ndraws, "covariance",
-		matrix_json(u->cov, n), "correlation", matrix_json(u->corr, n),
-		"textbook_stderr", tb, "systematic_stderr", sys, "findings",
+		u->nblocks, "sample_sets", u->ndraws, "model_error_regions",
+		u->nregions, "covariance", matrix_json(u->cov, n),
+		"correlation", matrix_json(u->corr, n), "textbook_stderr", tb,
+		"systematic_stderr", sys, "model_error_stderr", me, "findings",
 		find, "combinations", comb, "seconds", r->unc_seconds);
 }
 

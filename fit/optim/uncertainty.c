@@ -137,6 +137,76 @@ static int block_covariance(const struct glint_unc_problem *pr,
 	return used;
 }
 
+/* The delete-one-region jackknife, linearised (uncertainty.h); returns
+ * the number of regions holding residuals. */
+static int region_covariance(const struct glint_unc_problem *pr,
+			     const double *a, double *out)
+{
+	int n = pr->n, g = pr->nregions, used = 0, ret = 0;
+	double *ag = calloc((size_t)g * n * n, sizeof(double));
+	double *sg = calloc((size_t)g * n, sizeof(double));
+	double *d = calloc((size_t)g * n, sizeof(double));
+	double mean[N] = { 0 };
+
+	memset(out, 0, sizeof(double) * (size_t)(n * n));
+	if (!ag || !sg || !d) {
+		ret = glint_error_set(ENOMEM, "out of memory");
+		goto out;
+	}
+	for (int i = 0; i < pr->m; i++) {
+		int b = pr->region[i];
+		if (b < 0 || b >= g)
+			continue;
+		const double *ji = pr->jac + (size_t)i * n;
+		for (int k = 0; k < n; k++) {
+			sg[(size_t)b * n + k] += ji[k] * pr->r[i];
+			for (int l = 0; l < n; l++)
+				ag[((size_t)b * n + k) * n + l] +=
+					ji[k] * ji[l];
+		}
+	}
+	for (int b = 0; b < g; b++) {
+		double rest[N * N], rinv[N * N];
+		int unseen[N], any = 0;
+		for (int k = 0; k < n; k++)
+			any |= ag[((size_t)b * n + k) * n + k] != 0;
+		if (!any)
+			continue;
+		for (int k = 0; k < n * n; k++)
+			rest[k] = a[k] - ag[(size_t)b * n * n + k];
+		ret = normal_inverse(rest, n, rinv, unseen);
+		if (ret < 0)
+			goto out;
+		double *db = d + (size_t)used * n;
+		for (int k = 0; k < n; k++) {
+			for (int l = 0; l < n; l++)
+				db[k] +=
+					rinv[k * n + l] * sg[(size_t)b * n + l];
+			/* clamped to the bounds, as a refit would be */
+			db[k] = fmin(pr->hi[k],
+				     fmax(pr->lo[k], pr->p[k] + db[k])) -
+				pr->p[k];
+		}
+		used++;
+	}
+	for (int b = 0; b < used; b++)
+		for (int k = 0; k < n; k++)
+			mean[k] += d[(size_t)b * n + k] / used;
+	for (int b = 0; used > 2 && b < used; b++)
+		for (int i = 0; i < n; i++)
+			for (int j = 0; j < n; j++)
+				out[i * n + j] +=
+					(used - 1.0) / used *
+					(d[(size_t)b * n + i] - mean[i]) *
+					(d[(size_t)b * n + j] - mean[j]);
+	ret = used > 2 ? used : 0;
+out:
+	free(ag);
+	free(sg);
+	free(d);
+	return ret;
+}
+
 /* The Monte Carlo covariance of the optimum of the sample sets' mean:
  * the sample covariance of each set's Gauss-Newton step over K. */
 static void mc_covariance(const struct glint_unc_problem *pr,
@@ -209,12 +279,23 @@ int glint_uncertainty_compute(const struct glint_unc_problem *pr,
 			return ret;
 		u->nblocks = ret;
 	}
-	/* The noise part never below the textbook one: scale each
-	 * parameter's row and column up (keeps it positive semi-definite). */
+	if (pr->region && pr->nregions >= 3) {
+		ret = region_covariance(pr, a, u->cov_regions);
+		if (ret < 0)
+			return ret;
+		u->nregions = ret;
+	}
+	/* The noise part never below the textbook one nor the regions'
+	 * jackknife: scale each parameter's row and column up (keeps it
+	 * positive semi-definite). */
 	double sc[N];
+	int by_regions[N];
 	for (int k = 0; k < n; k++) {
 		double b = u->cov_blocks[k * n + k],
-		       t = u->cov_textbook[k * n + k];
+		       t = u->cov_textbook[k * n + k],
+		       g = u->cov_regions[k * n + k];
+		by_regions[k] = g > t && g > b;
+		t = fmax(t, g);
 		sc[k] = b > 0 && t > b ? sqrt(t / b) : 1;
 	}
 	mc_covariance(pr, ainv, u->cov_mc);
@@ -231,7 +312,9 @@ int glint_uncertainty_compute(const struct glint_unc_problem *pr,
 		double vb = sc[k] * sc[k] * u->cov_blocks[k * n + k],
 		       vm = u->cov_mc[k * n + k],
 		       v = vb + vm + u->sys[k] * u->sys[k];
-		double nb = u->nblocks > 1 ? u->nblocks - 1.0 : m - n;
+		double nb = by_regions[k]    ? u->nregions - 1.0
+			    : u->nblocks > 1 ? u->nblocks - 1.0
+					     : m - n;
 		double den =
 			(vb > 0 ? vb * vb / nb : 0) +
 			(vm > 0 && u->ndraws > 1 ? vm * vm / (u->ndraws - 1)

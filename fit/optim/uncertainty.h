@@ -24,6 +24,18 @@
  *     covariance of the d_k over K is the Monte Carlo covariance of the
  *     optimum of their average.
  *
+ *   model error (optional, when the model misses the photo with
+ *     structure): a delete-one-region jackknife over regions of the
+ *     sphere that see the light differently (bands of the angle from the
+ *     mirror direction to the brightest light and from the view
+ *     direction: fit/misfit.h).  Dropping region g moves the optimum by
+ *     d_g = (A - A_g)^-1 J_g^T r_g (linearised); the covariance
+ *     (G - 1) / G sum_g (d_g - d)(d_g - d)^T is how much the answer
+ *     depends on which light and geometry the pixels see, which for a
+ *     model too small for the material is how much it would move under
+ *     another light.  The noise part is never below it either (G - 1
+ *     degrees of freedom where it is the larger).
+ *
  *   systematic (optional): a standard uncertainty per parameter that the
  *     fit's residuals and sample sets cannot show, known from validation
  *     (the fast render against an independent renderer), added to the
@@ -56,6 +68,10 @@ struct glint_unc_problem {
 	/* n systematic standard uncertainties, or NULL */
 	const double *sys;
 	double level; /* of the intervals, e.g. 0.95 */
+	/* region of each residual, 0 .. nregions - 1 (-1: none), for the
+	 * model-error jackknife; NULL or nregions < 3: no such part */
+	const int *region;
+	int nregions;
 };
 
 struct glint_uncertainty {
@@ -65,6 +81,8 @@ struct glint_uncertainty {
 	double cov_textbook[GLINT_UNC_MAX_N * GLINT_UNC_MAX_N]; /* s^2 A^-1 */
 	double cov_blocks[GLINT_UNC_MAX_N * GLINT_UNC_MAX_N];	/* sandwich */
 	double cov_mc[GLINT_UNC_MAX_N * GLINT_UNC_MAX_N]; /* sample sets */
+	/* the regions' jackknife (0 without regions) */
+	double cov_regions[GLINT_UNC_MAX_N * GLINT_UNC_MAX_N];
 	double sys[GLINT_UNC_MAX_N]; /* systematic standard uncertainties */
 	double corr[GLINT_UNC_MAX_N * GLINT_UNC_MAX_N];
 	double se[GLINT_UNC_MAX_N]; /* sqrt(diag cov); INFINITY: unseen */
@@ -74,7 +92,7 @@ struct glint_uncertainty {
 	double t[GLINT_UNC_MAX_N];			 /* the quantile used */
 	double chi2_dof;				 /* |r|^2 / (m - n) */
 	double level;
-	int nblocks, ndraws;
+	int nblocks, ndraws, nregions;
 };
 
 /* Fill u from pr.  Returns 0 or a negative errno with the message set

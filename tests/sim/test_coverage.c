@@ -25,7 +25,8 @@
  * per set, COVERAGE_SETS=K on K sample sets (1: one fixed set, no
  * polish), COVERAGE_SPP=N with N primary samples per pixel,
  * COVERAGE_REF_SAMPLES=N photos with N samples per technique (256),
- * COVERAGE_VERBOSE=1 prints each fit's value and error parts.
+ * COVERAGE_VERBOSE=1 prints each fit's value and error parts,
+ * COVERAGE_NO_MODEL_ERROR=1 leaves out the model-error jackknife.
  */
 #include "test.h"
 
@@ -162,6 +163,7 @@ static void one_case(const char *map, const char *material, int placement,
 			o.mc_draws = atoi(getenv("COVERAGE_SETS")) - 1;
 		if (getenv("COVERAGE_START_TRUTH"))
 			o.start = truth;
+		o.no_model_error = getenv("COVERAGE_NO_MODEL_ERROR") != NULL;
 		if (getenv("COVERAGE_SAMPLES"))
 			o.light_samples = o.lobe_samples =
 				atoi(getenv("COVERAGE_SAMPLES"));
@@ -225,9 +227,9 @@ static void one_case(const char *map, const char *material, int placement,
 		}
 		if (getenv("COVERAGE_VERBOSE"))
 			printf("\n    cost %.6g, at the truth %.6g; %d + %d "
-			       "samples",
+			       "samples; model-error regions %d",
 			       res.wcost, at_truth.wcost, res.light_samples,
-			       res.lobe_samples);
+			       res.lobe_samples, res.unc.nregions);
 		for (int q = 0; getenv("COVERAGE_VERBOSE") && q < res.npasses;
 		     q++)
 			printf("\n    pass %-16s %5d px %3d it %9.6g -> %9.6g",
@@ -238,13 +240,15 @@ static void one_case(const char *map, const char *material, int placement,
 			for (int k = 0; k < m->nparams; k++) {
 				int n = res.unc.n;
 				printf("\n    %-10s %.4f fit %.4f se %.5f = "
-				       "blocks %.5f + mc %.5f (textbook %.5f) "
-				       "t %.2f",
+				       "blocks %.5f + mc %.5f (textbook %.5f, "
+				       "regions %.5f) t %.2f",
 				       m->params[k].name, truth[k], res.p[k],
 				       res.se[k],
 				       sqrt(res.unc.cov_blocks[k * n + k]),
 				       sqrt(res.unc.cov_mc[k * n + k]),
-				       res.unc.se_textbook[k], res.unc.t[k]);
+				       res.unc.se_textbook[k],
+				       sqrt(res.unc.cov_regions[k * n + k]),
+				       res.unc.t[k]);
 			}
 		printf("\n");
 	}

@@ -48,4 +48,20 @@ worst = max(abs(b['mean_residual']) / b['standard_error'] for b in m['by_view_an
 assert worst > 5, worst
 "
 check "... and the text output says so" grep -q '^  residual: structured residual' lam.txt
+check "... its intervals take the model error over regions" python3 -c "
+import json
+d = json.load(open('lam/params.json'))
+u = d['uncertainty']
+print('   regions', u['model_error_regions'], 'stderr', u['model_error_stderr'])
+assert u['model_error_regions'] >= 3, u['model_error_regions']
+for p, e in zip(d['parameters'], u['model_error_stderr']):
+    assert e > 0 and p['stderr'] >= e * (1 - 1e-9), (p, e)
+assert any('model is too simple' in f for f in u['findings']), u['findings']
+"
+check "... and the text output names them" grep -q '^  the model error over [0-9]* regions' lam.txt
+check "the true model's fit has no model-error term" python3 -c "
+import json
+u = json.load(open('d/fit/params.json'))['uncertainty']
+assert u['model_error_regions'] == 0 and not any(u['model_error_stderr']), u
+"
 [ "$fails" -eq 0 ] || { echo "$fails check(s) failed"; exit 1; }

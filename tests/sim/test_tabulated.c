@@ -217,6 +217,11 @@ static int fit_map(const char *map, const struct glint_model_ops *tm,
 			printf(" %s %.4f+-%.4f",
 			       glint_model_torrance_sparrow.params[k].name,
 			       out->ts.p[k], out->ts.se[k]);
+		printf("\n   model-error jackknife over %d regions:",
+		       out->ts.unc.nregions);
+		for (int k = 0; out->ts.unc.nregions && k < 8; k++)
+			printf(" %.4f",
+			       sqrt(out->ts.unc.cov_regions[k * 8 + k]));
 		printf("\n");
 	} else {
 		fprintf(stderr, "%s: %s\n", map, glint_error_msg());

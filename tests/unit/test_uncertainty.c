@@ -10,6 +10,11 @@
  *     block intervals within 90-98 %;
  *   - sample sets: residual draws that differ by a known shift give the
  *     Monte Carlo covariance of their mean, and it enters the intervals;
+ *   - the model-error jackknife over regions: on a line fitted to a
+ *     parabola (a model too simple) it equals the jackknife of exact
+ *     refits without each region, and it enters the intervals with its
+ *     degrees of freedom; on a true line it stays near the textbook
+ *     variance;
  *   - a column of zeros (a parameter the data cannot see) gets an
  *     infinite standard error and its whole bound range;
  *   - the delta method on a product of two parameters;
@@ -203,8 +208,9 @@ static void coverage(double sigma, double shared, double *glint,
 		double p[2];
 		struct glint_uncertainty u;
 		line(sigma, shared, jac, r, block, p);
-		struct glint_unc_problem pr = { 2,  M,	jac,  r, block, NB,  p,
-						lo, hi, NULL, 0, NULL,	0.95 };
+		struct glint_unc_problem pr = { 2,  M,	  jac,	r,    block,
+						NB, p,	  lo,	hi,   NULL,
+						0,  NULL, 0.95, NULL, 0 };
 		if (glint_uncertainty_compute(&pr, &u) < 0) {
 			CHECK(0, "compute failed");
 			return;
@@ -215,6 +221,100 @@ static void coverage(double sigma, double shared, double *glint,
 	}
 	*glint = (double)in / trials;
 	*textbook = (double)in_tb / trials;
+}
+
+/* The least-squares line through the points of x, y not in region
+ * `skip` (-1: all). */
+static void line_fit(const double *x, const double *y, const int *region,
+		     int skip, double p[2])
+{
+	double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+	for (int i = 0; i < M; i++) {
+		if (region[i] == skip)
+			continue;
+		n++;
+		sx += x[i];
+		sy += y[i];
+		sxx += x[i] * x[i];
+		sxy += x[i] * y[i];
+	}
+	p[1] = (n * sxy - sx * sy) / (n * sxx - sx * sx);
+	p[0] = (sy - p[1] * sx) / n;
+}
+
+/* The regions' jackknife (uncertainty.h, "model error"). */
+static void regions(void)
+{
+	enum { G = 10 };
+	static double jac[2 * M], r[M], x[M], y[M];
+	static int block[M], region[M];
+	struct glint_uncertainty u;
+	double p[2], q[G][2], mean[2] = { 0, 0 };
+
+	/* A line through a parabola: the linearised jackknife is exact for
+	 * a linear model, so it must equal refits without each region. */
+	for (int i = 0; i < M; i++) {
+		x[i] = (double)i / M;
+		y[i] = 1 + 2 * x[i] + 3 * (x[i] - 0.5) * (x[i] - 0.5) +
+		       0.01 * gauss();
+		region[i] = i * G / M;
+		block[i] = i * NB / M;
+	}
+	line_fit(x, y, region, -1, p);
+	for (int i = 0; i < M; i++) {
+		jac[2 * i] = 1;
+		jac[2 * i + 1] = x[i];
+		r[i] = p[0] + p[1] * x[i] - y[i];
+	}
+	for (int g = 0; g < G; g++) {
+		line_fit(x, y, region, g, q[g]);
+		mean[0] += q[g][0] / G;
+		mean[1] += q[g][1] / G;
+	}
+	double v[4] = { 0, 0, 0, 0 };
+	for (int g = 0; g < G; g++)
+		for (int a = 0; a < 2; a++)
+			for (int b = 0; b < 2; b++)
+				v[a * 2 + b] += (G - 1.0) / G *
+						(q[g][a] - mean[a]) *
+						(q[g][b] - mean[b]);
+	struct glint_unc_problem pr = { 2,  M,	  jac,	r,	block,
+					NB, p,	  lo,	hi,	NULL,
+					0,  NULL, 0.95, region, G };
+	CHECK(glint_uncertainty_compute(&pr, &u) == 0, "compute");
+	CHECK(u.nregions == G, "%d regions", u.nregions);
+	for (int k = 0; k < 4; k++)
+		CHECK(fabs(u.cov_regions[k] - v[k]) <= 1e-9 * fabs(v[3]),
+		      "jackknife element %d: %.9g, refits %.9g", k,
+		      u.cov_regions[k], v[k]);
+	CHECK(u.cov_regions[3] > 4 * u.cov_textbook[3],
+	      "the misfit widens the slope's variance: %g vs textbook %g",
+	      u.cov_regions[3], u.cov_textbook[3]);
+	CHECK(u.se[1] * u.se[1] >= u.cov_regions[3] * (1 - 1e-9) &&
+		      u.dof[1] == G - 1,
+	      "it enters the interval: se^2 %g, dof %g", u.se[1] * u.se[1],
+	      u.dof[1]);
+	pr.nregions = 2;
+	CHECK(glint_uncertainty_compute(&pr, &u) == 0 && u.nregions == 0 &&
+		      u.cov_regions[3] == 0,
+	      "fewer than 3 regions: no jackknife");
+
+	/* A true line with independent noise: the jackknife estimates the
+	 * noise's variance, on average a little above the textbook one (as
+	 * a jackknife does: dropping an end region, of high leverage, moves
+	 * the slope more than its share). */
+	double ratio = 0;
+	int trials = 500;
+	for (int t = 0; t < trials; t++) {
+		line(0.1, 0, jac, r, block, p);
+		pr.nregions = G;
+		CHECK(glint_uncertainty_compute(&pr, &u) == 0, "compute");
+		ratio += u.cov_regions[3] / u.cov_textbook[3] / trials;
+	}
+	printf("true line: jackknife / textbook variance of the slope %.3f "
+	       "on average\n",
+	       ratio);
+	CHECK(ratio > 0.9 && ratio < 1.5, "jackknife/textbook %.3f", ratio);
 }
 
 /* The acceptance rule and its verdicts (fit/result.c). */
@@ -271,8 +371,8 @@ int main(void)
 
 	/* The textbook covariance of a line. */
 	line(0.1, 0, jac, r, block, p);
-	struct glint_unc_problem pr = { 2,  M,	jac,  r, block, NB,  p,
-					lo, hi, NULL, 0, NULL,	0.95 };
+	struct glint_unc_problem pr = { 2,  M,	  jac, r,    block, NB,	  p, lo,
+					hi, NULL, 0,   NULL, 0.95,  NULL, 0 };
 	CHECK(glint_uncertainty_compute(&pr, &u) == 0, "compute");
 	double sx = 0, sxx = 0, s2 = 0;
 	for (int i = 0; i < M; i++) {
@@ -305,8 +405,9 @@ int main(void)
 	for (int k = 0; k < 4; k++)
 		for (int i = 0; i < M; i++)
 			draws[k * M + i] = r[i] + sign[k] * d * jac[2 * i + 1];
-	struct glint_unc_problem pm = { 2,  M,	jac,   r, block, NB,  p,
-					lo, hi, draws, 4, NULL,	 0.95 };
+	struct glint_unc_problem pm = { 2,  M,	  jac,	r,    block,
+					NB, p,	  lo,	hi,   draws,
+					4,  NULL, 0.95, NULL, 0 };
 	CHECK(glint_uncertainty_compute(&pm, &u) == 0, "compute");
 	/* steps -+d: sample variance 4/3 d^2, over K = 4 */
 	double vmc = 4.0 / 3 * d * d / 4;
@@ -343,6 +444,7 @@ int main(void)
 	      "delta method");
 
 	findings();
+	RUN(regions);
 
 	/* Bad sizes. */
 	struct glint_unc_problem bad = pr;

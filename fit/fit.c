@@ -55,6 +55,7 @@ void glint_fit_default_opts(struct glint_fit_opts *o)
 	o->seed = 1;
 	o->anneal_evals = 150;
 	o->mc_draws = 2;
+	o->polish_iter = 4;
 	o->level = 0.95;
 }
 
@@ -1514,7 +1515,7 @@ static int refine_on_sets(struct objective *ob,
 			n, rows, lo, hi, sets_residuals, sets_jacobian, &so,
 		};
 		so.jac_last = malloc(sizeof(double) * (size_t)rows * n);
-		objective_lm_opts(&lo_opts, 4, &pc);
+		objective_lm_opts(&lo_opts, ob->o->polish_iter, &pc);
 		ret = glint_lm_solve(&pr, &lo_opts, q, &lr);
 		if (ret < 0)
 			goto out;
@@ -1573,17 +1574,46 @@ static int reweight(struct objective *ob, struct fit_data *d, double *r)
 		ret = obj_residuals(ob, ob->p, r);
 	for (int i = 0; i < 3 * d->n && ret == 0; i++)
 		pred[i] = d->y[i];
+	/* Within 3 standard deviations of the noise model at the
+	 * prediction, not of the photo's own weight: a value that came out
+	 * dark by chance has a small variance of its own and so a large
+	 * weighted residual, and leaving it on its own weight kept the very
+	 * bias this removes (every albedo low at 1 000 electrons). */
 	for (int t = 0; t < ob->nsel && ret == 0; t++)
 		for (int c = 0; c < 3; c++) {
 			int i = 3 * ob->sel[t] + c;
-			double z = r[3 * t + c];
-			if (d->sw[i] > 0 && fabs(z) < 3)
-				pred[i] += z / d->sw[i];
+			if (!(d->sw[i] > 0))
+				continue;
+			double e = r[3 * t + c] / d->sw[i],
+			       v = d->va[i] + d->vb[i] * fmax(0, d->y[i] + e);
+			if (v > 0 && e * e < 9 * v)
+				pred[i] += e;
 		}
 	if (ret == 0)
 		fit_data_reweight(d, pred);
 	ob->memo_valid = 0;
 	free(pred);
+	return ret;
+}
+
+/* Weights from the noise model at the coarse result's prediction
+ * before the fine pass, so that its iterations, not only the short
+ * polish, go to the optimum on them: at 1 000 electrons the polish alone
+ * left matte paint's diffuse 2-6 % low, 3.5 % above the truth's cost. */
+static int reweight_all(struct objective *ob, struct fit_data *d,
+			const struct selections *sl)
+{
+	double *r;
+	int ret;
+
+	if (!d->noise_model || !ob->cache)
+		return 0;
+	r = malloc((size_t)3 * (sl->nall > 0 ? sl->nall : 1) * sizeof(double));
+	if (!r)
+		return glint_error_set(ENOMEM, "out of memory");
+	select_all(ob, sl);
+	ret = reweight(ob, d, r);
+	free(r);
 	return ret;
 }
 
@@ -2020,6 +2050,8 @@ static int fit_or_eval(const struct glint_fit_view *in, int nviews,
 	if (sl.ncoarse < sl.nall)
 		ob.rough_lo = coarse_rough_lo;
 	ret = coarse_passes(&ob, &sl, res);
+	if (ret == 0)
+		ret = reweight_all(&ob, &d, &sl);
 	if (ret == 0)
 		ret = fine_pass(&ob, &sl, coarse_rough_lo, res);
 	if (ret == 0)

@@ -164,6 +164,8 @@ static void one_case(const char *map, const char *material, int placement,
 		if (getenv("COVERAGE_START_TRUTH"))
 			o.start = truth;
 		o.no_model_error = getenv("COVERAGE_NO_MODEL_ERROR") != NULL;
+		if (getenv("COVERAGE_POLISH"))
+			o.polish_iter = atoi(getenv("COVERAGE_POLISH"));
 		if (getenv("COVERAGE_SAMPLES"))
 			o.light_samples = o.lobe_samples =
 				atoi(getenv("COVERAGE_SAMPLES"));

@@ -266,13 +266,22 @@ static void test_buffer_error(void)
 	int seq = -1;
 	if (!cam)
 		return;
-	long before = grab_run(cam, 6, &seq);
-	set_ctrl("Inject V4L2_BUF_FLAG_ERROR", 1);
-	long after = grab_run(cam, 8, &seq);
-	printf("buffer error: gaps %ld in 6 frames before, %ld in 8 after\n",
-	       before, after);
+	long before = grab_run(cam, 6, &seq), after = 0;
+	/* vivid flags the buffer its next tick fills; on a busy host the
+	 * tick can find none queued and the injection is lost (seen once in
+	 * CI), so up to three injections: a backend that returned flagged
+	 * buffers would show no gap after any of them. */
+	for (int k = 0; k < 3 && after == 0; k++) {
+		set_ctrl("Inject V4L2_BUF_FLAG_ERROR", 1);
+		after = grab_run(cam, 8, &seq);
+		printf("buffer error %d: gaps %ld in 6 frames before, %ld in "
+		       "8 after\n",
+		       k + 1, before, after);
+		if (after < 0)
+			break;
+	}
 	/* The flagged buffer was given back, not returned. */
-	CHECK(after >= 1, "no frame was skipped after the injected error");
+	CHECK(after >= 1, "no frame was skipped after three injected errors");
 	glint_camera_v4l2_ops.close(cam);
 }
 

@@ -1654,8 +1654,8 @@ static void systematic(const struct glint_model_ops *m, const double *p,
  * errors off zero, and with a real noise model a chi^2 above 1.5); each
  * pixel's region is its band of the angle from the mirror direction to
  * the brightest light and its third of the view angle (0-30, 30-60,
- * 60-90 degrees), per photo.  Returns the number of regions, 0 when the
- * residual shows no structure (region untouched).
+ * 60-90 degrees), per photo (-1: no hits).  Returns the number of
+ * regions, or 0 when the residual shows no structure.
  */
 static int misfit_regions(const struct objective *ob,
 			  const struct selections *sl, const double *r,

@@ -1585,7 +1585,7 @@ static int reweight(struct objective *ob, struct fit_data *d, double *r)
 			if (!(d->sw[i] > 0))
 				continue;
 			double e = r[3 * t + c] / d->sw[i],
-			       v = d->va[i] + d->vb[i] * fmax(0, d->y[i] + e);
+			       v = fit_data_variance(d, i, d->y[i] + e);
 			if (v > 0 && e * e < 9 * v)
 				pred[i] += e;
 		}

@@ -122,7 +122,7 @@ void fit_data_reweight(struct fit_data *d, const double *pred)
 	for (int i = 0; i < 3 * d->n; i++) {
 		if (!(d->sw[i] > 0))
 			continue;
-		double v = d->va[i] + d->vb[i] * fmax(0, pred[i]);
+		double v = fit_data_variance(d, i, pred[i]);
 		if (v > 0)
 			d->sw[i] = 1 / sqrt(v);
 	}

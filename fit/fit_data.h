@@ -72,6 +72,14 @@ int fit_data_cache_new(const struct glint_fit_view *in, int nviews,
 		       struct glint_shade_light *const *lights,
 		       struct glint_shade_cache **out);
 
+/* The noise model's variance of value i (of 3 per pixel) whose
+ * noise-free signal is v. */
+static inline double fit_data_variance(const struct fit_data *d, int i,
+				       double v)
+{
+	return d->va[i] + d->vb[i] * (v > 0 ? v : 0);
+}
+
 /* Weights from the noise model at the predicted values pred (3 per
  * pixel), for values that have a weight (pred = y: unchanged). */
 void fit_data_reweight(struct fit_data *d, const double *pred);

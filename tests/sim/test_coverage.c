@@ -27,7 +27,8 @@
  * polish), COVERAGE_SPP=N with N primary samples per pixel,
  * COVERAGE_REF_SAMPLES=N photos with N samples per technique (256),
  * COVERAGE_VERBOSE=1 prints each fit's value and error parts,
- * COVERAGE_NO_MODEL_ERROR=1 leaves out the model-error jackknife.
+ * COVERAGE_NO_MODEL_ERROR=1 leaves out the model-error jackknife,
+ * COVERAGE_POLISH=N gives the polish on the sample sets N iterations.
  */
 #include "test.h"
 

@@ -56,13 +56,31 @@ static double gauss(void)
 	return sqrt(-2 * log(u)) * cos(2 * M_PI * v);
 }
 
+/* The least-squares line through the points of x, y not in region
+ * `skip` (-1: all). */
+static void line_fit(const double *x, const double *y, const int *region,
+		     int skip, double p[2])
+{
+	double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+	for (int i = 0; i < M; i++) {
+		if (region[i] == skip)
+			continue;
+		n++;
+		sx += x[i];
+		sy += y[i];
+		sxx += x[i] * x[i];
+		sxy += x[i] * y[i];
+	}
+	p[1] = (n * sxy - sx * sy) / (n * sxx - sx * sx);
+	p[0] = (sy - p[1] * sx) / n;
+}
+
 /* y = a + b x + noise on x in [0, 1); the least-squares line into p and
  * its problem (residuals model - y, Jacobian [1, x]). */
 static void line(double sigma, double shared, double *jac, double *r,
 		 int *block, double p[2])
 {
 	double y[M], x[M], blk[NB];
-	double sx = 0, sy = 0, sxx = 0, sxy = 0;
 
 	for (int b = 0; b < NB; b++)
 		blk[b] = shared * gauss();
@@ -70,13 +88,8 @@ static void line(double sigma, double shared, double *jac, double *r,
 		x[i] = (double)i / M;
 		block[i] = i * NB / M;
 		y[i] = 1 + 2 * x[i] + sigma * gauss() + blk[block[i]];
-		sx += x[i];
-		sy += y[i];
-		sxx += x[i] * x[i];
-		sxy += x[i] * y[i];
 	}
-	p[1] = (M * sxy - sx * sy) / (M * sxx - sx * sx);
-	p[0] = (sy - p[1] * sx) / M;
+	line_fit(x, y, block, -1, p);
 	for (int i = 0; i < M; i++) {
 		jac[2 * i] = 1;
 		jac[2 * i + 1] = x[i];
@@ -221,25 +234,6 @@ static void coverage(double sigma, double shared, double *glint,
 	}
 	*glint = (double)in / trials;
 	*textbook = (double)in_tb / trials;
-}
-
-/* The least-squares line through the points of x, y not in region
- * `skip` (-1: all). */
-static void line_fit(const double *x, const double *y, const int *region,
-		     int skip, double p[2])
-{
-	double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
-	for (int i = 0; i < M; i++) {
-		if (region[i] == skip)
-			continue;
-		n++;
-		sx += x[i];
-		sy += y[i];
-		sxx += x[i] * x[i];
-		sxy += x[i] * y[i];
-	}
-	p[1] = (n * sxy - sx * sy) / (n * sxx - sx * sx);
-	p[0] = (sy - p[1] * sx) / n;
 }
 
 /* The regions' jackknife (uncertainty.h, "model error"). */

@@ -23,7 +23,10 @@
  *   flagged  outside them, but glint itself said so: the interval holds
  *            the truth or the parameter is reported undetermined;
  *   refused  the fit failed (no answer at all);
- *   wrong    outside the tolerances, and the interval misses the truth.
+ *   wrong    outside the tolerances, and the interval misses the truth;
+ *   ideal    the chance that an unbiased fitter at the photo's noise (the
+ *            noise part of glint's covariance) lands within: what the
+ *            photo allows any fitter (ideal_within()).
  * and the truth's cost over the fit's on the fit's own objective (below 1:
  * the fit stopped short of the truth's basin; above: the fitter's model
  * or the photo's noise prefers the fit).
@@ -56,6 +59,10 @@
 #include "fit/fit.h"
 #include "fit/job.h"
 #include "sim/reference.h"
+
+#include <gsl/gsl_eigen.h>
+#include <gsl/gsl_randist.h>
+#include <gsl/gsl_rng.h>
 
 #include <math.h>
 #include <stdio.h>
@@ -96,6 +103,7 @@ struct map_tally {
 	char worst_case[96];
 	double bias[64];
 	int nbias;
+	double ideal; /* expected within count of an ideal fitter */
 };
 
 /* Reference photo of (m, p) with a given seed. */
@@ -143,6 +151,76 @@ static double mc_noise(const struct glint_renderer *r,
 				s += (pa[c] - pb[c]) * (pa[c] - pb[c]);
 		}
 	return n ? sqrt(s / n / 2) : NAN;
+}
+
+/* The chance that an ideal fitter (unbiased, at the photo's noise) lands
+ * within every tolerance: the fraction of draws from N(truth, C) inside
+ * the tolerance box, C the noise part of the fit's covariance (the
+ * cluster-robust one; not the fitter's own sampling, the systematic term
+ * or the model error, which are the fitter's, not the photo's).  A
+ * parameter the photo cannot see gives 0; roughness is left out where
+ * glint reports an upper bound that holds the truth (judge() counts such
+ * a fit within on the other parameters).  What the photo's noise allows
+ * any fitter: the ceiling of the within fraction.  (For a clean photo
+ * the noise is the reference render's Monte Carlo noise, with the fast
+ * render's bias, if any, counted as noise too.) */
+static double ideal_within(const struct glint_model_ops *m, const double *truth,
+			   const struct glint_fit_result *res)
+{
+	int n = m->nparams, box[GLINT_MAX_PARAMS], nb = 0;
+	double tol[GLINT_MAX_PARAMS];
+
+	if (res->unc.n != n)
+		return NAN;
+	for (int k = 0; k < n; k++) {
+		if (k == 6 && truth[6] <= glint_fit_roughness_bound(res))
+			continue;
+		if (!isfinite(res->unc.se[k]))
+			return 0;
+		tol[nb] = k < 6 ? 0.01 : k == 6 ? 0.05 * truth[6] : 0.05;
+		box[nb++] = k;
+	}
+	gsl_matrix *c = gsl_matrix_alloc(nb, nb), *v = gsl_matrix_alloc(nb, nb);
+	gsl_vector *l = gsl_vector_alloc(nb);
+	gsl_eigen_symmv_workspace *w = gsl_eigen_symmv_alloc(nb);
+	gsl_rng *rng = gsl_rng_alloc(gsl_rng_mt19937);
+	/* As fit/optim/uncertainty.c: the cluster-robust part, never
+	 * below the textbook one. */
+	double sc[GLINT_MAX_PARAMS];
+	for (int i = 0; i < nb; i++) {
+		double b = res->unc.cov_blocks[box[i] * n + box[i]],
+		       t = res->unc.cov_textbook[box[i] * n + box[i]];
+		sc[i] = b > 0 && t > b ? sqrt(t / b) : 1;
+	}
+	for (int i = 0; i < nb; i++)
+		for (int j = 0; j < nb; j++)
+			gsl_matrix_set(c, i, j,
+				       sc[i] * sc[j] *
+					       res->unc.cov_blocks[box[i] * n +
+								   box[j]]);
+	gsl_eigen_symmv(c, l, v, w);
+	enum { DRAWS = 20000 };
+	int in = 0;
+	for (int d = 0; d < DRAWS; d++) {
+		double z[GLINT_MAX_PARAMS];
+		for (int j = 0; j < nb; j++)
+			z[j] = gsl_ran_ugaussian(rng) *
+			       sqrt(fmax(0, gsl_vector_get(l, j)));
+		int ok = 1;
+		for (int i = 0; i < nb && ok; i++) {
+			double x = 0;
+			for (int j = 0; j < nb; j++)
+				x += gsl_matrix_get(v, i, j) * z[j];
+			ok = fabs(x) <= tol[i];
+		}
+		in += ok;
+	}
+	gsl_rng_free(rng);
+	gsl_eigen_symmv_free(w);
+	gsl_vector_free(l);
+	gsl_matrix_free(v);
+	gsl_matrix_free(c);
+	return (double)in / DRAWS;
 }
 
 /* Outcome of a fit against the truth. */
@@ -258,6 +336,11 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 				out = judge(m, truth, &res, &err, &bound);
 			t->n[out]++;
 			t->bound += bound;
+			double ideal = out == REFUSED
+					       ? NAN
+					       : ideal_within(m, truth, &res);
+			if (isfinite(ideal))
+				t->ideal += ideal;
 			if (err > t->worst || out == REFUSED) {
 				t->worst = out == REFUSED ? INFINITY : err;
 				snprintf(t->worst_case, sizeof(t->worst_case),
@@ -282,13 +365,13 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 				ratio = at_truth.wcost / res.wcost;
 			o.weights_at = NULL;
 			printf("%-26s %-17s %-5s bias %5.2f  %-8s err %6.2f "
-			       "tol  rel.rmse %.3f  truth/fit cost %5.2f  %2d "
-			       "smp "
-			       "%5.1f s",
+			       "tol  rel.rmse %.3f  truth/fit cost %5.2f  "
+			       "ideal "
+			       "%.2f  %2d smp %5.1f s",
 			       base(map), mats[i], lv ? "noisy" : "clean", bias,
 			       bound ? "within<" : outcome_names[out], err,
-			       out == REFUSED ? NAN : res.rel_rmse, ratio, smp,
-			       glint_now() - t0);
+			       out == REFUSED ? NAN : res.rel_rmse, ratio,
+			       ideal, smp, glint_now() - t0);
 			if (out == REFUSED)
 				printf("  (%s)", v.verdict[0]
 							 ? v.verdict
@@ -301,14 +384,15 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			printf("\n");
 			fflush(stdout);
 			if (csv)
-				fprintf(csv, "%s,%s,%s,%.4f,%s,%.4f,%.5f,%d\n",
+				fprintf(csv,
+					"%s,%s,%s,%.4f,%s,%.4f,%.5f,%d,%.3f\n",
 					base(map), mats[i],
 					lv ? "noisy" : "clean", bias,
 					bound ? "within-bound"
 					      : outcome_names[out],
 					err,
 					out == REFUSED ? NAN : res.rel_rmse,
-					smp);
+					smp, ideal);
 		next:
 			glint_image_free(photo);
 			glint_image_free(w);
@@ -360,17 +444,18 @@ int main(int argc, char **argv)
 			return 1;
 		}
 		fprintf(csv, "map,material,noise,bias_ratio,outcome,error_tol,"
-			     "relative_rmse,light_samples\n");
+			     "relative_rmse,light_samples,ideal_within\n");
 	}
 	for (int i = 0; i < nmaps; i++)
 		one_map(maps[i], mats, nmats, csv, &tally[i]);
 	if (csv)
 		fclose(csv);
 
-	printf("\n%-26s %6s %7s %7s %7s %5s %7s %11s  %s\n", "map", "cases",
-	       "within", "(bound)", "flagged", "wrong", "refused",
+	printf("\n%-26s %6s %7s %7s %6s %7s %5s %7s %11s  %s\n", "map", "cases",
+	       "within", "(bound)", "ideal", "flagged", "wrong", "refused",
 	       "bias median", "worst case (tolerance units)");
 	int tot[NOUT] = { 0 }, tot_bound = 0;
+	double tot_ideal = 0;
 	for (int i = 0; i < nmaps; i++) {
 		struct map_tally *t = &tally[i];
 		int n = 0;
@@ -380,18 +465,21 @@ int main(int argc, char **argv)
 		}
 		double med = t->nbias ? bench_median(t->bias, t->nbias) : NAN;
 		tot_bound += t->bound;
-		printf("%-26s %6d %7d %7d %7d %5d %7d %11.2f  %s (%.1f)\n",
-		       base(maps[i]), n, t->n[WITHIN], t->bound, t->n[FLAGGED],
-		       t->n[WRONG], t->n[REFUSED], med, t->worst_case,
-		       t->worst);
+		tot_ideal += t->ideal;
+		printf("%-26s %6d %7d %7d %6.1f %7d %5d %7d %11.2f  %s "
+		       "(%.1f)\n",
+		       base(maps[i]), n, t->n[WITHIN], t->bound, t->ideal,
+		       t->n[FLAGGED], t->n[WRONG], t->n[REFUSED], med,
+		       t->worst_case, t->worst);
 	}
 	int all = tot[0] + tot[1] + tot[2] + tot[3];
 	printf("all: %d cases, %.1f %% within tolerance (%d of them with "
 	       "roughness under glint's upper bound), %.1f %% flagged by "
-	       "glint, %d wrong, %d refused; peak memory %.0f MiB\n",
+	       "glint, %d wrong, %d refused; an ideal fitter at the photos' "
+	       "noise: %.1f %% within; peak memory %.0f MiB\n",
 	       all, all ? 100.0 * tot[WITHIN] / all : 0, tot_bound,
 	       all ? 100.0 * tot[FLAGGED] / all : 0, tot[WRONG], tot[REFUSED],
-	       bench_peak_mib());
+	       all ? 100.0 * tot_ideal / all : 0, bench_peak_mib());
 	if ((check || no_refusals) && tot[REFUSED]) {
 		printf("FAIL: %d correct photos refused\n", tot[REFUSED]);
 		return 1;

@@ -41,7 +41,8 @@
  * case is refused (the slow suite's `accuracy-matrix`: no correct photo
  * may be refused).  Either writes no CSV.
  * Writes bench-out/accuracy.csv; prints a line per case and a table per
- * map.  For studies: ACCURACY_ONLY=MATERIAL, ACCURACY_SAMPLES=N (the
+ * map.  For studies: ACCURACY_ONLY=MATERIAL[,MATERIAL...] (those of the
+ * list alone), ACCURACY_SAMPLES=N (the
  * fit's light and lobe samples per set), ACCURACY_REF_SAMPLES=N and
  * ACCURACY_REF_SPP=N (the reference photos'), ACCURACY_SPP=N (the fitter's
  * primary samples per pixel), ACCURACY_NO_FOOTPRINT=1 (the fitter's hot
@@ -258,6 +259,22 @@ static int judge(const struct glint_model_ops *m, const double *truth,
 	return FLAGGED;
 }
 
+/* Whether material is in the comma-separated list (NULL: all). */
+static int selected(const char *list, const char *material)
+{
+	size_t n = strlen(material);
+
+	if (!list)
+		return 1;
+	for (const char *s = list; *s;) {
+		size_t k = strcspn(s, ",");
+		if (k == n && !strncmp(s, material, n))
+			return 1;
+		s += k + (s[k] == ',');
+	}
+	return 0;
+}
+
 static const char *base(const char *path)
 {
 	const char *s = strrchr(path, '/');
@@ -281,8 +298,7 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 	for (int i = 0; i < nmats; i++) {
 		const struct glint_model_ops *m;
 		double truth[GLINT_MAX_PARAMS];
-		if (getenv("ACCURACY_ONLY") &&
-		    strcmp(getenv("ACCURACY_ONLY"), mats[i]))
+		if (!selected(getenv("ACCURACY_ONLY"), mats[i]))
 			continue;
 		if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
 					mats[i], &m, truth) < 0)

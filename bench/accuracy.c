@@ -44,7 +44,9 @@
  * map.  For studies: ACCURACY_ONLY=MATERIAL[,MATERIAL...] (those of the
  * list alone), ACCURACY_SAMPLES=N (the
  * fit's light and lobe samples per set), ACCURACY_REF_SAMPLES=N and
- * ACCURACY_REF_SPP=N (the reference photos'), ACCURACY_SPP=N (the fitter's
+ * ACCURACY_REF_SPP=N (the reference photos'), ACCURACY_CACHE=DIR (the
+ * reference photos kept there and read back on the next run: reference()),
+ * ACCURACY_SPP=N (the fitter's
  * primary samples per pixel), ACCURACY_NO_FOOTPRINT=1 (the fitter's hot
  * texels on its hits alone, as before the footprint integral:
  * shade_cache.h), ACCURACY_DUMP=DIR (each clean reference photo
@@ -69,6 +71,7 @@
 #include <stdio.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 static const char *const all_mats[] = {
 	"satin-paint",	  "semi-gloss-paint", "matte-paint",
@@ -107,14 +110,26 @@ struct map_tally {
 	double ideal; /* expected within count of an ideal fitter */
 };
 
-/* Reference photo of (m, p) with a given seed. */
+static const char *base(const char *path)
+{
+	const char *s = strrchr(path, '/');
+	return s ? s + 1 : path;
+}
+
+/* Reference photo of material (m, p) under map with a given seed; with
+ * ACCURACY_CACHE=DIR read from DIR when an earlier run wrote it there
+ * (named by map, material, seed and the reference's samples), else
+ * rendered and written there: the renders are most of a run's time, and
+ * a study of the fitter needs the same photos again. */
 static struct glint_image *reference(const struct glint_renderer *r,
+				     const char *map, const char *material,
 				     const struct glint_model_ops *m,
 				     const double *p, uint32_t seed)
 {
-	struct glint_image *img =
-		glint_image_new(r->scene.cam.width, r->scene.cam.height);
+	struct glint_image *img = NULL;
 	struct glint_reference_opts ro;
+	const char *dir = getenv("ACCURACY_CACHE");
+	char path[1024];
 
 	glint_reference_default_opts(&ro);
 	ro.spp = getenv("ACCURACY_REF_SPP") ? atoi(getenv("ACCURACY_REF_SPP"))
@@ -123,8 +138,30 @@ static struct glint_image *reference(const struct glint_renderer *r,
 			     ? atoi(getenv("ACCURACY_REF_SAMPLES"))
 			     : 16;
 	ro.seed = seed;
+	if (dir) {
+		snprintf(path, sizeof(path), "%s/%s-%s-%u-%dx%d.exr", dir,
+			 base(map), material, (unsigned)seed, ro.spp,
+			 ro.samples);
+		if (access(path, R_OK) == 0) {
+			if (glint_image_read(path, &img) < 0)
+				return NULL;
+			if (img->width == r->scene.cam.width &&
+			    img->height == r->scene.cam.height)
+				return img;
+			glint_image_free(img);
+			glint_error_set(EINVAL, "%s: not %dx%d", path,
+					r->scene.cam.width,
+					r->scene.cam.height);
+			return NULL;
+		}
+	}
+	img = glint_image_new(r->scene.cam.width, r->scene.cam.height);
 	if (img &&
 	    glint_reference_render(&r->scene, r->env, m, p, &ro, img) < 0) {
+		glint_image_free(img);
+		img = NULL;
+	}
+	if (img && dir && glint_image_write(path, img, NULL) < 0) {
 		glint_image_free(img);
 		img = NULL;
 	}
@@ -275,12 +312,6 @@ static int selected(const char *list, const char *material)
 	return 0;
 }
 
-static const char *base(const char *path)
-{
-	const char *s = strrchr(path, '/');
-	return s ? s + 1 : path;
-}
-
 static void one_map(const char *map, const char *const *mats, int nmats,
 		    FILE *csv, struct map_tally *t)
 {
@@ -303,8 +334,10 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 		if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
 					mats[i], &m, truth) < 0)
 			continue;
-		struct glint_image *a = reference(&r, m, truth, 1);
-		struct glint_image *b = reference(&r, m, truth, 2);
+		struct glint_image *a =
+			reference(&r, map, mats[i], m, truth, 1);
+		struct glint_image *b =
+			reference(&r, map, mats[i], m, truth, 2);
 		if (!a || !b) {
 			fprintf(stderr, "%s\n", glint_error_msg());
 			glint_image_free(a);

@@ -46,7 +46,9 @@
  * fit's light and lobe samples per set), ACCURACY_REF_SAMPLES=N and
  * ACCURACY_REF_SPP=N (the reference photos'), ACCURACY_CACHE=DIR (the
  * reference photos kept there and read back on the next run: reference()),
- * ACCURACY_SPP=N (the fitter's
+ * ACCURACY_PASSES=1 (each fit's passes and costs), ACCURACY_PROFILE=1
+ * (the fit's objective along roughness, 1e-4 to 0.03, at the fit's and
+ * at the truth's other parameters), ACCURACY_SPP=N (the fitter's
  * primary samples per pixel), ACCURACY_NO_FOOTPRINT=1 (the fitter's hot
  * texels on its hits alone, as before the footprint integral:
  * shade_cache.h), ACCURACY_DUMP=DIR (each clean reference photo
@@ -421,6 +423,32 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			       bound ? "within<" : outcome_names[out], err,
 			       out == REFUSED ? NAN : res.rel_rmse, ratio,
 			       ideal, smp, glint_now() - t0);
+			if (getenv("ACCURACY_PROFILE") && out != REFUSED)
+				for (int g = 0; g < 13; g++) {
+					double q[GLINT_MAX_PARAMS];
+					struct glint_fit_result e1, e2;
+					memcpy(q, res.p, sizeof(q));
+					q[6] = 1e-4 * pow(300, g / 12.0);
+					glint_fit_evaluate(&r, m, photo, w, &o,
+							   q, &e1);
+					memcpy(q, truth, sizeof(q));
+					q[6] = 1e-4 * pow(300, g / 12.0);
+					glint_fit_evaluate(&r, m, photo, w, &o,
+							   q, &e2);
+					printf("\n  rough %.5f  at fit %.5g  "
+					       "at "
+					       "truth %.5g",
+					       q[6], e1.wcost, e2.wcost);
+				}
+			if (getenv("ACCURACY_PASSES"))
+				for (int k = 0; k < res.npasses; k++)
+					printf("\n    %-16s %6d px %3d it cost "
+					       "%.6g -> %.6g",
+					       res.passes[k].name,
+					       res.passes[k].pixels,
+					       res.passes[k].iterations,
+					       res.passes[k].cost0,
+					       res.passes[k].cost);
 			if (out == REFUSED)
 				printf("  (%s)", v.verdict[0]
 							 ? v.verdict

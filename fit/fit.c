@@ -1294,8 +1294,40 @@ static int coarse_passes(struct objective *ob, struct selections *sl,
  * exactly for each), start from the best, and polish everything on the
  * full pixel set.
  */
+/*
+ * Below the pixel footprint a near-mirror's cost flattens into a plateau
+ * toward roughness 0 (every lobe there is narrower than a pixel sees),
+ * and LM can step onto it from the basin near the truth and stall on it
+ * (copper under Poly Haven's royal esplanade, clean: 0.0001, where 0.0045
+ * cost half as much).  So where the fine pass ends below the footprint,
+ * roughness is scanned from its bound to twice the footprint (albedos
+ * solved for each) and the pass runs again from the best scan point when
+ * it beats the end; otherwise the end stands untouched.
+ */
+static int leave_plateau(struct objective *ob, const struct selections *sl,
+			 double footprint, const int *freev, int vp,
+			 struct glint_fit_result *res)
+{
+	int rk = ob->m->roughness_param;
+	double keep[GLINT_MAX_PARAMS];
+	struct glint_lm_result lr;
+
+	memcpy(keep, ob->p, sizeof(keep));
+	int ret = rescan_roughness(ob, sl->all, sl->nall,
+				   fmax(ob->m->params[rk].lo, 1e-4),
+				   2 * footprint, 10);
+	if (ret < 0 || ob->p[rk] != keep[rk]) /* a lower point: go on */
+		return ret < 0 ? ret
+			       : run_pass(ob, "fine, off the plateau", sl->all,
+					  sl->nall, freev, vp, res, &lr);
+	memcpy(ob->p, keep, sizeof(keep));
+	ob->memo_valid = 0;
+	return 0;
+}
+
 static int fine_pass(struct objective *ob, const struct selections *sl,
-		     double coarse_rough_lo, struct glint_fit_result *res)
+		     double coarse_rough_lo, double footprint,
+		     struct glint_fit_result *res)
 {
 	const struct glint_model_ops *model = ob->m;
 	struct glint_lm_result lr;
@@ -1325,7 +1357,12 @@ static int fine_pass(struct objective *ob, const struct selections *sl,
 	int vp = methods[ob->o->method].linear_fine;
 	for (int k = 0; k < model->nparams; k++)
 		freev[k] = vp ? ob->lobe_of[k] < 0 : 1;
-	return run_pass(ob, "fine", sl->all, sl->nall, freev, vp, res, &lr);
+	ret = run_pass(ob, "fine", sl->all, sl->nall, freev, vp, res, &lr);
+	int rk = model->roughness_param;
+	if (ret == 0 && rk >= 0 && ob->cache && !ob->o->no_start_scan &&
+	    ob->p[rk] < footprint)
+		ret = leave_plateau(ob, sl, footprint, freev, vp, res);
+	return ret;
 }
 
 /* The Jacobian of the residuals by forward differences of obj_residuals
@@ -2042,18 +2079,21 @@ static int fit_or_eval(const struct glint_fit_view *in, int nviews,
 	 * roughness above that (the largest over the photos); the fine pass
 	 * is free.
 	 */
-	double coarse_rough_lo = 0;
-	for (int v = 0; v < nviews; v++)
-		coarse_rough_lo = fmax(coarse_rough_lo,
-				       4.0 * views[v].stride /
-					       sqrt(views[v].interior / M_PI));
+	double coarse_rough_lo = 0, footprint = INFINITY;
+	for (int v = 0; v < nviews; v++) {
+		double radius = sqrt(views[v].interior / M_PI);
+		coarse_rough_lo =
+			fmax(coarse_rough_lo, 4.0 * views[v].stride / radius);
+		/* the finest photo's (fit/result.c) */
+		footprint = fmin(footprint, 1 / radius);
+	}
 	if (sl.ncoarse < sl.nall)
 		ob.rough_lo = coarse_rough_lo;
 	ret = coarse_passes(&ob, &sl, res);
 	if (ret == 0)
 		ret = reweight_all(&ob, &d, &sl);
 	if (ret == 0)
-		ret = fine_pass(&ob, &sl, coarse_rough_lo, res);
+		ret = fine_pass(&ob, &sl, coarse_rough_lo, footprint, res);
 	if (ret == 0)
 		ret = uncertainty(&ob, &d, &sl, res);
 	if (ret < 0)

@@ -31,15 +31,17 @@
  * the fit stopped short of the truth's basin; above: the fitter's model
  * or the photo's noise prefers the fit).
  *
- *   bench/accuracy [quick|slice] [--check|--no-refusals] [MAP...]
+ *   bench/accuracy [quick|slice] [--check|--no-refusals|--within] [MAP...]
  * No maps: every map in ../shared/data/probes (lat-long) and data/env.
  * quick: four materials (yellow plastic, nylon, silver, copper); slice:
  * silver (the sim suite's `accuracy-slice`: a map with a sun, where the
  * fit raises its samples; yellow plastic is bench/fit's and the sim
  * fits' material already).
+ * --within: exit 1 unless every case is within the tolerances (a case
+ * known to be reachable, as the sim suite's `accuracy-plateau`);
  * --check: exit 1 when a case is refused or wrong; --no-refusals: when a
  * case is refused (the slow suite's `accuracy-matrix`: no correct photo
- * may be refused).  Either writes no CSV.
+ * may be refused).  These three write no CSV.
  * Writes bench-out/accuracy.csv; prints a line per case and a table per
  * map.  For studies: ACCURACY_ONLY=MATERIAL[,MATERIAL...] (those of the
  * list alone), ACCURACY_SAMPLES=N (the
@@ -483,7 +485,7 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 int main(int argc, char **argv)
 {
 	const char *const *mats = all_mats;
-	int nmats = 11, check = 0, no_refusals = 0, a = 1;
+	int nmats = 11, check = 0, no_refusals = 0, within = 0, a = 1;
 	const char *const *maps = default_maps;
 	int nmaps = (int)(sizeof(default_maps) / sizeof(*default_maps));
 	static struct map_tally tally[32];
@@ -495,6 +497,8 @@ int main(int argc, char **argv)
 			mats = slice_mats, nmats = 1;
 		else if (!strcmp(argv[a], "--check"))
 			check = 1;
+		else if (!strcmp(argv[a], "--within"))
+			within = 1;
 		else if (!strcmp(argv[a], "--no-refusals"))
 			no_refusals = 1;
 		else
@@ -513,7 +517,7 @@ int main(int argc, char **argv)
 	}
 	glint_log_set_mode(GLINT_LOG_QUIET);
 	FILE *csv = NULL;
-	if (!check && !no_refusals) {
+	if (!check && !no_refusals && !within) {
 		mkdir("bench-out", 0777);
 		csv = fopen("bench-out/accuracy.csv", "w");
 		if (!csv) {
@@ -559,6 +563,11 @@ int main(int argc, char **argv)
 	       all ? 100.0 * tot_ideal / all : 0, bench_peak_mib());
 	if ((check || no_refusals) && tot[REFUSED]) {
 		printf("FAIL: %d correct photos refused\n", tot[REFUSED]);
+		return 1;
+	}
+	if (within && tot[WITHIN] < all) {
+		printf("FAIL: %d of %d cases outside the tolerances\n",
+		       all - tot[WITHIN], all);
 		return 1;
 	}
 	if (check && tot[WRONG]) {

@@ -265,9 +265,11 @@ static double ideal_within(const struct glint_model_ops *m, const double *truth,
 	return (double)in / DRAWS;
 }
 
-/* Outcome of a fit against the truth. */
+/* Outcome of a fit against the truth; why: for a wrong one, the
+ * parameter whose interval misses. */
 static int judge(const struct glint_model_ops *m, const double *truth,
-		 const struct glint_fit_result *res, double *err, int *bound)
+		 const struct glint_fit_result *res, double *err, int *bound,
+		 char *why, size_t nwhy)
 {
 	*err = bench_tolerance_error(res->p, truth);
 	*bound = 0;
@@ -294,8 +296,12 @@ static int judge(const struct glint_model_ops *m, const double *truth,
 				    0.5 * (m->params[k].hi - m->params[k].lo);
 		int covered = res->unc.n && truth[k] >= res->unc.lo[k] &&
 			      truth[k] <= res->unc.hi[k];
-		if (!undet && !covered)
+		if (!undet && !covered) {
+			snprintf(why, nwhy, "  (%s %.4f outside %.4f .. %.4f)",
+				 m->params[k].name, truth[k], res->unc.lo[k],
+				 res->unc.hi[k]);
 			return WRONG;
+		}
 	}
 	return FLAGGED;
 }
@@ -379,6 +385,7 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			struct glint_fit_result res;
 			double err = INFINITY, t0 = glint_now();
 			int out = REFUSED, bound = 0;
+			char why[128] = "";
 			if (lv && bench_add_noise(photo, &w, 0.1) < 0)
 				goto next;
 			glint_fit_default_opts(&o);
@@ -390,7 +397,8 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			struct glint_fit_verdict v = { 0 };
 			if (glint_fit(&r, m, photo, w, &o, &res) == 0 &&
 			    glint_fit_judge(&res, 0, &v))
-				out = judge(m, truth, &res, &err, &bound);
+				out = judge(m, truth, &res, &err, &bound, why,
+					    sizeof(why));
 			t->n[out]++;
 			t->bound += bound;
 			double ideal = out == REFUSED
@@ -464,6 +472,7 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 					printf(" %s %.4f/%.4f",
 					       m->params[k].name, res.p[k],
 					       truth[k]);
+			printf("%s", why);
 			printf("\n");
 			fflush(stdout);
 			if (csv)

@@ -1288,13 +1288,6 @@ static int coarse_passes(struct objective *ob, struct selections *sl,
 }
 
 /*
- * Coarse to fine: the coarse level could not see lobes below its spacing,
- * so before polishing, compare the coarse result with sharper lobes at
- * full resolution (log-spaced down to the model's bound, albedos solved
- * exactly for each), start from the best, and polish everything on the
- * full pixel set.
- */
-/*
  * Below the pixel footprint a near-mirror's cost flattens into a plateau
  * toward roughness 0 (every lobe there is narrower than a pixel sees),
  * and LM can step onto it from the basin near the truth and stall on it
@@ -1325,6 +1318,13 @@ static int leave_plateau(struct objective *ob, const struct selections *sl,
 	return 0;
 }
 
+/*
+ * Coarse to fine: the coarse level could not see lobes below its spacing,
+ * so before polishing, compare the coarse result with sharper lobes at
+ * full resolution (log-spaced down to the model's bound, albedos solved
+ * exactly for each), start from the best, and polish everything on the
+ * full pixel set.
+ */
 static int fine_pass(struct objective *ob, const struct selections *sl,
 		     double coarse_rough_lo, double footprint,
 		     struct glint_fit_result *res)

@@ -203,9 +203,9 @@ static double mc_noise(const struct glint_renderer *r,
  * parameter the photo cannot see gives 0; roughness is left out where
  * glint reports an upper bound that holds the truth (judge() counts such
  * a fit within on the other parameters).  What the photo's noise allows
- * any fitter: the ceiling of the within fraction.  (For a clean photo
- * the noise is the reference render's Monte Carlo noise, with the fast
- * render's bias, if any, counted as noise too.) */
+ * any fitter: the within fraction such a fitter reaches on average.
+ * (For a clean photo the noise is the reference render's Monte Carlo
+ * noise, with the fast render's bias, if any, counted as noise too.) */
 static double ideal_within(const struct glint_model_ops *m, const double *truth,
 			   const struct glint_fit_result *res)
 {

@@ -100,6 +100,9 @@ static const char *const default_maps[] = {
 	GLINT_SHARED_DATA "/probes/probulator_small/wells.hdr",
 };
 
+/* The sensor photo: the image's mean at this fraction of the ADC range. */
+#define SENSOR_LEVEL 0.1
+
 enum { WITHIN, FLAGGED, WRONG, REFUSED, NOUT };
 static const char *const outcome_names[NOUT] = { "within", "flagged", "wrong",
 						 "refused" };
@@ -172,10 +175,11 @@ static struct glint_image *reference(const struct glint_renderer *r,
 	return img;
 }
 
-/* The photo's own Monte Carlo noise: rms(a - b) / sqrt 2 over the sphere's
- * interior (2 px in from its outline). */
-static double mc_noise(const struct glint_renderer *r,
-		       const struct glint_image *a, const struct glint_image *b)
+/* Over the sphere's interior (2 px in from its outline): the mean of
+ * a's values, or with b the rms of a - b. */
+static double sphere_stat(const struct glint_renderer *r,
+			  const struct glint_image *a,
+			  const struct glint_image *b)
 {
 	const struct glint_scene *sc = &r->scene;
 	double rad = sc->cam.fpx * sc->sphere_radius / -sc->sphere_centre.z - 2;
@@ -188,11 +192,33 @@ static double mc_noise(const struct glint_renderer *r,
 			if (dx * dx + dy * dy > rad * rad)
 				continue;
 			const float *pa = glint_image_px(a, x, y);
-			const float *pb = glint_image_px(b, x, y);
+			const float *pb = b ? glint_image_px(b, x, y) : NULL;
 			for (int c = 0; c < 3; c++, n++)
-				s += (pa[c] - pb[c]) * (pa[c] - pb[c]);
+				s += pb ? (pa[c] - pb[c]) * (pa[c] - pb[c])
+					: pa[c];
 		}
-	return n ? sqrt(s / n / 2) : NAN;
+	return !n ? NAN : b ? sqrt(s / n) : s / n;
+}
+
+/* The photo's own Monte Carlo noise: rms(a - b) / sqrt 2 on the sphere. */
+static double mc_noise(const struct glint_renderer *r,
+		       const struct glint_image *a, const struct glint_image *b)
+{
+	return sphere_stat(r, a, b) / sqrt(2);
+}
+
+/* Where the sensor photo's exposure puts the sphere: its mean as a
+ * fraction of the ADC range, bench_add_noise() putting the whole image's
+ * mean at `level` (a map whose bright lights are in view leaves the
+ * sphere far below it). */
+static double sphere_level(const struct glint_renderer *r,
+			   const struct glint_image *a, double level)
+{
+	double mean = 0;
+	for (int i = 0; i < a->width * a->height * 3; i++)
+		mean += a->data[i];
+	mean /= a->width * a->height * 3.0;
+	return level * sphere_stat(r, a, NULL) / mean;
 }
 
 /* The chance that an ideal fitter (unbiased, at the photo's noise) lands
@@ -386,7 +412,7 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			double err = INFINITY, t0 = glint_now();
 			int out = REFUSED, bound = 0;
 			char why[128] = "";
-			if (lv && bench_add_noise(photo, &w, 0.1) < 0)
+			if (lv && bench_add_noise(photo, &w, SENSOR_LEVEL) < 0)
 				goto next;
 			glint_fit_default_opts(&o);
 			if (getenv("ACCURACY_SAMPLES"))
@@ -441,18 +467,25 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 				for (int g = 0; g < 13; g++) {
 					double q[GLINT_MAX_PARAMS];
 					struct glint_fit_result e1, e2;
+					double rough =
+						1e-4 * pow(300, g / 12.0);
 					memcpy(q, res.p, sizeof(q));
-					q[6] = 1e-4 * pow(300, g / 12.0);
-					glint_fit_evaluate(&r, m, photo, w, &o,
-							   q, &e1);
+					q[6] = rough;
+					double c1 = glint_fit_evaluate(
+							    &r, m, photo, w, &o,
+							    q, &e1) == 0
+							    ? e1.wcost
+							    : NAN;
 					memcpy(q, truth, sizeof(q));
-					q[6] = 1e-4 * pow(300, g / 12.0);
-					glint_fit_evaluate(&r, m, photo, w, &o,
-							   q, &e2);
+					q[6] = rough;
+					double c2 = glint_fit_evaluate(
+							    &r, m, photo, w, &o,
+							    q, &e2) == 0
+							    ? e2.wcost
+							    : NAN;
 					printf("\n  rough %.5f  at fit %.5g  "
-					       "at "
-					       "truth %.5g",
-					       q[6], e1.wcost, e2.wcost);
+					       "at truth %.5g",
+					       rough, c1, c2);
 				}
 			if (getenv("ACCURACY_PASSES"))
 				for (int k = 0; k < res.npasses; k++)
@@ -472,8 +505,10 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 					printf(" %s %.4f/%.4f",
 					       m->params[k].name, res.p[k],
 					       truth[k]);
-			printf("%s", why);
-			printf("\n");
+			if (lv)
+				printf("  sphere at %.2f %% of the ADC range",
+				       100 * sphere_level(&r, a, SENSOR_LEVEL));
+			printf("%s\n", why);
 			fflush(stdout);
 			if (csv)
 				fprintf(csv,

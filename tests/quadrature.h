@@ -5,9 +5,11 @@
 /*
  * Independent numerical integration of a BRDF for the furnace tests:
  * directional albedo a(wo) = integral of f(wo, wi) cos(theta_i) dwi, by the
- * midpoint rule over half-vector space (dwi = 4 |wo.h| dwh), with theta_h
- * steps fine enough for a lobe of RMS slope 0.05.  It shares no code with
- * the renderer's Monte Carlo estimator.
+ * midpoint rule over half-vector space (dwi = 4 |wo.h| dwh).  Every lobe
+ * peaks at theta_h = 0, so theta_h = (pi/2) u^2 spends the steps there: a
+ * lobe of RMS slope 0.05 spans 110 of the 600 steps in u (64 of 2000
+ * uniform ones).  It shares no code with the renderer's Monte Carlo
+ * estimator.
  */
 
 #include "fit/brdf/model.h"
@@ -16,10 +18,11 @@ static inline void albedo_quadrature(const struct glint_model_ops *m,
 				     const double *p, struct vec3 wo,
 				     double out[3])
 {
-	const int nt = 2000, np = 180;
+	const int nt = 600, np = 180;
 	out[0] = out[1] = out[2] = 0;
 	for (int j = 0; j < nt; j++) {
-		double th = (j + 0.5) * (M_PI / 2) / nt;
+		double u = (j + 0.5) / nt, th = (M_PI / 2) * u * u;
+		double dth = M_PI * u / nt; /* d theta / du times du */
 		double st = sin(th), ct = cos(th);
 		for (int i = 0; i < np; i++) {
 			double ph = (i + 0.5) * 2 * M_PI / np;
@@ -32,8 +35,7 @@ static inline void albedo_quadrature(const struct glint_model_ops *m,
 				continue;
 			double f[3];
 			m->eval(p, wo, wi, f);
-			double w = wi.z * 4 * oh * st * (M_PI / 2 / nt) *
-				   (2 * M_PI / np);
+			double w = wi.z * 4 * oh * st * dth * (2 * M_PI / np);
 			for (int c = 0; c < 3; c++)
 				out[c] += f[c] * w;
 		}

@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 static int test_failures;
@@ -38,20 +39,35 @@ static int test_checks;
 	CHECK(strstr((msg), (frag)) != NULL, "message '%s' lacks '%s'", (msg), \
 	      (frag))
 
+/* Seconds of wall time since an arbitrary start, for RUN's report. */
+static inline double test_now(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Each test's verdict and wall time: the unit suite is meant to stay fast,
+ * and CI runs it under qemu-user and the sanitizers too. */
+#define RUN_REPORT(name, before, t0)                                           \
+	fprintf(stderr, "%s %s (%.2f s)\n",                                    \
+		test_failures == (before) ? "ok  " : "FAIL", name,             \
+		test_now() - (t0))
+
 #define RUN(fn)                                                                \
 	do {                                                                   \
 		int before = test_failures;                                    \
+		double t0 = test_now();                                        \
 		fn();                                                          \
-		fprintf(stderr, "%s %s\n",                                     \
-			test_failures == before ? "ok  " : "FAIL", #fn);       \
+		RUN_REPORT(#fn, before, t0);                                   \
 	} while (0)
 
 #define RUN_ARG(fn, arg)                                                       \
 	do {                                                                   \
 		int before = test_failures;                                    \
+		double t0 = test_now();                                        \
 		fn(arg);                                                       \
-		fprintf(stderr, "%s %s\n",                                     \
-			test_failures == before ? "ok  " : "FAIL", #fn);       \
+		RUN_REPORT(#fn, before, t0);                                   \
 	} while (0)
 
 static inline int test_result(void)

@@ -125,7 +125,8 @@ static const char *base(const char *path)
 
 /* Reference photo of material (m, p) under map with a given seed; with
  * ACCURACY_CACHE=DIR read from DIR when an earlier run wrote it there
- * (named by map, material, seed and the reference's samples), else
+ * (named by map, material, seed, the reference's samples and its
+ * renderer's GLINT_REFERENCE_VERSION), else
  * rendered and written there: the renders are most of a run's time, and
  * a study of the fitter needs the same photos again. */
 static struct glint_image *reference(const struct glint_renderer *r,
@@ -146,9 +147,9 @@ static struct glint_image *reference(const struct glint_renderer *r,
 			     : 16;
 	ro.seed = seed;
 	if (dir) {
-		snprintf(path, sizeof(path), "%s/%s-%s-%u-%dx%d.exr", dir,
+		snprintf(path, sizeof(path), "%s/%s-%s-%u-%dx%d-v%d.exr", dir,
 			 base(map), material, (unsigned)seed, ro.spp,
-			 ro.samples);
+			 ro.samples, GLINT_REFERENCE_VERSION);
 		if (access(path, R_OK) == 0) {
 			if (glint_image_read(path, &img) < 0)
 				return NULL;

@@ -6,7 +6,7 @@
  * Ground-truth renders for the simulated rig, made independently of the
  * fitter's fast path so that fitting them is no "inverse crime":
  *   - its own analytic ray-sphere intersection (no Embree, no G-buffer),
- *     with many randomly jittered samples per pixel;
+ *     with many jittered samples per pixel, stratified over its area;
  *   - every lobe by independent pseudo-random sampling (no fixed sample
  *     sets, no hot-texel quadrature, no irradiance map), env map and lobe,
  *     combined with the power heuristic and the true pdfs; env-map
@@ -22,6 +22,11 @@
 #include "core/image.h"
 
 #include <stdint.h>
+
+/* Raised whenever the same options come to render another image (2:
+ * pixel positions stratified): renders kept on disk name it, so that an
+ * older renderer's are never read as this one's. */
+#define GLINT_REFERENCE_VERSION 2
 
 struct glint_reference_opts {
 	int spp;	  /* jittered primary samples per pixel */

@@ -1,0 +1,149 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * Where the fitter's objective differs from a photo: the shade cache's
+ * image of a material (the fitter's own estimate, its default samples)
+ * against a reference photo, pixel by pixel over the sphere's interior.
+ *
+ *   bench/residual MAP MATERIAL PHOTO.exr [ROUGHNESS...]
+ *
+ * PHOTO is bench_scene's 256 px view of MATERIAL under MAP (as
+ * bench/accuracy's ACCURACY_DUMP or ACCURACY_CACHE writes it).  For the
+ * truth's roughness and each ROUGHNESS given (the truth's other
+ * parameters), prints the sum of squared differences over the interior,
+ * split between the highlight (photo above 4x the interior's median) and
+ * the rest, the highlight's total against the photo's, and the five
+ * pixels that differ most.  RESIDUAL_NO_FOOTPRINT=1, RESIDUAL_SAMPLES=N
+ * and RESIDUAL_SPP=N change the fast path as bench/accuracy's options.
+ */
+#define _DEFAULT_SOURCE
+#include "bench.h"
+#include "captures.h"
+
+#include "core/error.h"
+#include "fit/brdf/model.h"
+#include "fit/render/render.h"
+#include "fit/render/shade_cache.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct px {
+	int x, y;
+	double photo, fast;
+};
+
+static int by_diff(const void *a, const void *b)
+{
+	const struct px *p = a, *q = b;
+	double dp = fabs(p->fast - p->photo), dq = fabs(q->fast - q->photo);
+	return (dq > dp) - (dq < dp);
+}
+
+int main(int argc, char **argv)
+{
+	if (argc < 4) {
+		fprintf(stderr, "usage: bench/residual MAP MATERIAL PHOTO.exr "
+				"[ROUGHNESS...]\n");
+		return 2;
+	}
+	const struct glint_model_ops *m;
+	double truth[GLINT_MAX_PARAMS];
+	struct glint_image *photo = NULL;
+	if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json", argv[2],
+				&m, truth) < 0 ||
+	    glint_image_read(argv[3], &photo) < 0) {
+		fprintf(stderr, "residual: %s\n", glint_error_msg());
+		return 1;
+	}
+	struct glint_scene sc;
+	struct glint_renderer r;
+	bench_scene(&sc, 256, argv[1]);
+	if (getenv("RESIDUAL_SPP"))
+		sc.spp = atoi(getenv("RESIDUAL_SPP"));
+	if (glint_renderer_init(&r, &sc, 0, NULL) < 0) {
+		fprintf(stderr, "residual: %s\n", glint_error_msg());
+		return 1;
+	}
+	/* The interior: pixels whose every hit is on the sphere. */
+	const struct glint_gbuffer *gb = &r.gb;
+	int npix = gb->width * gb->height, n = 0;
+	int32_t *pix = malloc((size_t)npix * sizeof(*pix));
+	for (int i = 0; i < npix; i++) {
+		const struct glint_hit *h = glint_gbuffer_pixel(gb, (size_t)i);
+		int all = 1;
+		for (int s = 0; s < gb->spp; s++)
+			all &= h[s].geom >= 0;
+		if (all)
+			pix[n++] = i;
+	}
+	struct glint_shade_cache_opts co = {
+		.light_samples = 8,
+		.lobe_samples = 8,
+		.static_samples = 128,
+		.no_footprint = getenv("RESIDUAL_NO_FOOTPRINT") != NULL
+	};
+	if (getenv("RESIDUAL_SAMPLES"))
+		co.light_samples = co.lobe_samples =
+			atoi(getenv("RESIDUAL_SAMPLES"));
+	struct glint_shade_cache *c = NULL;
+	if (glint_shade_cache_new(gb, pix, n, r.env, m, &co, &c) < 0) {
+		fprintf(stderr, "residual: %s\n", glint_error_msg());
+		return 1;
+	}
+	double *lobes = malloc((size_t)n * m->nlobes * 3 * sizeof(double));
+	struct px *px = malloc((size_t)n * sizeof(*px));
+	double *vals = malloc((size_t)n * sizeof(double));
+	int nr = argc - 3;
+	for (int k = 0; k < nr; k++) {
+		double p[GLINT_MAX_PARAMS];
+		memcpy(p, truth, sizeof(p));
+		if (k)
+			p[m->roughness_param] = atof(argv[3 + k]);
+		glint_shade_cache_lobes(c, p, lobes);
+		for (int i = 0; i < n; i++) {
+			px[i].x = pix[i] % gb->width;
+			px[i].y = pix[i] / gb->width;
+			const float *ph =
+				glint_image_px(photo, px[i].x, px[i].y);
+			double f = 0;
+			for (int j = 0; j < m->nlobes; j++)
+				f += p[m->lobe_param[j]] *
+				     lobes[((size_t)i * m->nlobes + j) * 3];
+			px[i].fast = f;
+			px[i].photo = ph[0];
+			vals[i] = ph[0];
+		}
+		double med = bench_median(vals, n);
+		double ssd_hi = 0, ssd_lo = 0, sum_f = 0, sum_p = 0;
+		int nhi = 0;
+		for (int i = 0; i < n; i++) {
+			double d = px[i].fast - px[i].photo;
+			if (px[i].photo > 4 * med) {
+				ssd_hi += d * d;
+				sum_f += px[i].fast;
+				sum_p += px[i].photo;
+				nhi++;
+			} else {
+				ssd_lo += d * d;
+			}
+		}
+		printf("roughness %.5f: red channel, SSD highlight %.4g "
+		       "(%d px, total fast/photo %.4f) rest %.4g\n",
+		       p[m->roughness_param], ssd_hi, nhi, sum_f / sum_p,
+		       ssd_lo);
+		qsort(px, (size_t)n, sizeof(*px), by_diff);
+		for (int i = 0; i < 5; i++)
+			printf("  (%3d, %3d) photo %.4f fast %.4f\n", px[i].x,
+			       px[i].y, px[i].photo, px[i].fast);
+	}
+	free(vals);
+	free(px);
+	free(lobes);
+	free(pix);
+	glint_shade_cache_free(c);
+	glint_image_free(photo);
+	glint_renderer_release(&r);
+	return 0;
+}

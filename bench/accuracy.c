@@ -32,7 +32,8 @@
  * or the photo's noise prefers the fit).
  *
  *   bench/accuracy [quick|slice] [--check|--no-refusals|--within] [MAP...]
- * No maps: every map in ../shared/data/probes (lat-long) and data/env.
+ * No maps: every map in ../shared/data/probes and data/env (the angular
+ * campus probe converted to lat-long: load_map()).
  * quick: four materials (yellow plastic, nylon, silver, copper); slice:
  * silver (the sim suite's `accuracy-slice`: a map with a sun, where the
  * fit raises its samples; yellow plastic is bench/fit's and the sim
@@ -62,6 +63,7 @@
 #include "captures.h"
 
 #include "core/error.h"
+#include "capture/probe.h"
 #include "core/log.h"
 #include "fit/fit.h"
 #include "fit/job.h"
@@ -98,6 +100,7 @@ static const char *const default_maps[] = {
 	GLINT_SHARED_DATA "/probes/probulator_small/pisa.hdr",
 	GLINT_SHARED_DATA "/probes/probulator_small/ennis.hdr",
 	GLINT_SHARED_DATA "/probes/probulator_small/wells.hdr",
+	GLINT_SHARED_DATA "/probes/campus_probe.hdr",
 };
 
 /* The sensor photo: the image's mean at this fraction of the ADC range. */
@@ -333,6 +336,30 @@ static int judge(const struct glint_model_ops *m, const double *truth,
 	return FLAGGED;
 }
 
+/*
+ * The scene's map: a lat-long one as it is; a square one is an angular
+ * light probe (Debevec's format, as the shared campus probe), converted
+ * to lat-long at its angular resolution (capture/probe.h) as
+ * `glint probe convert` would, in memory.
+ */
+static int load_map(const char *map, const struct glint_scene *sc,
+		    struct glint_envmap **env)
+{
+	struct glint_image *img = NULL, *ll = NULL;
+
+	if (glint_image_read(map, &img) < 0)
+		return -1;
+	if (img->width == img->height) {
+		int ret = glint_probe_convert(img, GLINT_PROBE_ANGULAR,
+					      GLINT_PROBE_LATLONG, 0, 0, &ll);
+		glint_image_free(img);
+		if (ret < 0)
+			return ret;
+		img = ll;
+	}
+	return glint_envmap_new(img, sc->env_rotation, sc->env_scale, map, env);
+}
+
 /* Whether material is in the comma-separated list (NULL: all). */
 static int selected(const char *list, const char *material)
 {
@@ -357,11 +384,14 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 	struct glint_scene sc;
 	struct glint_renderer r;
 
+	struct glint_envmap *env = NULL;
+
 	memset(t, 0, sizeof(*t));
 	bench_scene(&sc, 256, map);
 	if (getenv("ACCURACY_SPP"))
 		sc.spp = atoi(getenv("ACCURACY_SPP"));
-	if (glint_renderer_init(&r, &sc, 0, NULL) < 0) {
+	if (load_map(map, &sc, &env) < 0 ||
+	    glint_renderer_init_env(&r, &sc, env, 0, NULL) < 0) {
 		fprintf(stderr, "%s: %s\n", map, glint_error_msg());
 		return;
 	}

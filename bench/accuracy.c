@@ -449,6 +449,9 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			if (getenv("ACCURACY_SAMPLES"))
 				o.light_samples = o.lobe_samples =
 					atoi(getenv("ACCURACY_SAMPLES"));
+			if (getenv("ACCURACY_MAX_SAMPLES"))
+				o.max_samples =
+					atoi(getenv("ACCURACY_MAX_SAMPLES"));
 			o.no_footprint =
 				getenv("ACCURACY_NO_FOOTPRINT") != NULL;
 			struct glint_fit_verdict v = { 0 };

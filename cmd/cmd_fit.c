@@ -161,6 +161,11 @@ void cmd_fit_help(void)
 	       "                        default 4096)\n"
 	       "  --samples N           fixed env and lobe samples per hit "
 	       "(default 8 each)\n"
+	       "  --max-samples N       where its own sampling noise limits "
+	       "the "
+	       "answer, the fit\n"
+	       "                        raises --samples up to N (default 64; "
+	       "docs/fitting.md)\n"
 	       "  --sample-sets K       final polish and Monte Carlo error on "
 	       "the mean of K\n"
 	       "                        independent sample sets (default 3; "
@@ -517,6 +522,7 @@ int cmd_fit(int argc, char **argv)
 		CMD_REAL("mask-threshold", &job.opts.mask_threshold, 0, 1e6),
 		CMD_INT("max-pixels", &job.opts.max_pixels, 64, 1 << 24),
 		CMD_INT("samples", &samples, 1, 4096),
+		CMD_INT("max-samples", &job.opts.max_samples, 1, 4096),
 		CMD_INT("sample-sets", &sets, 1, 16),
 		CMD_REAL("level", &job.opts.level, 0.51, 0.999),
 		CMD_REAL("accept-rmse", &job.accept_rmse, 1e-9, 1e9),

@@ -50,6 +50,7 @@ void glint_fit_default_opts(struct glint_fit_opts *o)
 	o->light_samples = 8;
 	o->lobe_samples = 8;
 	o->static_samples = 128;
+	o->max_samples = 64;
 	o->max_iter = 60;
 	o->optimizer = GLINT_OPT_AUTO;
 	o->seed = 1;
@@ -1822,13 +1823,15 @@ static int estimate_on_sets(struct objective *ob, struct fit_data *d,
  * 192 px, 0.36 at 8 + 8 and roughness 9 % low, within 5 % at 16 + 16),
  * which the first cannot see.  Over 1, or over 0.25 (the model's noise
  * above half the residual's), the caches are rebuilt with 2x the samples
- * (4x when four times over), up to 64 + 64, and the stage runs again.
+ * (4x when four times over), up to max_samples (64 + 64 by default),
+ * and the stage runs again.
  * Returns 1 to go again, 0 when done, or a negative errno.
  */
 static int more_samples(struct objective *ob, const struct glint_uncertainty *u,
 			const double *each, const double *r, int rows)
 {
 	int n = u->n, base = ob->o->light_samples, nsets = ob->nsets;
+	int cap = ob->o->max_samples;
 	double worst = 0, vm = 0, vr = 0;
 
 	if (!ob->cache || nsets < 2 || !(u->ndraws > 1))
@@ -1853,9 +1856,9 @@ static int more_samples(struct objective *ob, const struct glint_uncertainty *u,
 	double vals = vr > 0 ? vm / vr : 0;
 	ob->mc_over_noise = worst;
 	ob->model_noise = vals;
-	if (!(worst > 1 || vals > 0.25) || base * ob->sample_scale * 2 > 64)
+	if (!(worst > 1 || vals > 0.25) || base * ob->sample_scale * 2 > cap)
 		return 0;
-	int f = (worst > 4 || vals > 1) && base * ob->sample_scale * 4 <= 64
+	int f = (worst > 4 || vals > 1) && base * ob->sample_scale * 4 <= cap
 			? 4
 			: 2;
 	glint_log_info(

@@ -69,6 +69,9 @@ struct glint_fit_opts {
 	int light_samples;     /* shade cache: env samples per hit */
 	int lobe_samples;      /* shade cache: lobe samples per hit */
 	int static_samples;    /* shade cache: for constant lobes */
+	int max_samples;       /* ... light (and lobe) samples the fit may
+				* raise them to where its own sampling noise
+				* limits the answer (fit.c, more_samples()) */
 	int no_footprint;      /* shade cache: near-mirrors' hot texels on
 				* the hits, not over pixels (benchmarks) */
 	int max_iter;	       /* per LM pass */

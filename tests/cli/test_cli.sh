@@ -236,6 +236,11 @@ assert r['final']['effect_se'] < 1 and r['threshold_se']==0.5, r['final']
 for k in r['knobs']:
     assert k['why'] and k['chosen'] in [l['value'] for l in k['levels']], k
 assert [d['name'] for d in r['decided']]==['bounce depth','stand'], r['decided']"
+check "fit --max-samples caps the samples it raises" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fitcap" --samples 4 --max-samples 4 -q
+check "--max-samples 4: params.json states 4 + 4 samples" python3 -c "
+import json; m=json.load(open('$tmp/fitcap/params.json'))['method']
+assert m['light_samples']==4 and m['lobe_samples']==4, m"
+check "--max-samples out of range" run 2 "--max-samples '0'" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/x" --max-samples 0
 check "--ladder-limit out of range" run 2 "--ladder-limit" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/x" --ladder-limit 0
 check "--ladder-knobs unknown" run 2 "expected knobs among dof" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/x" --ladder-knobs env,focus
 

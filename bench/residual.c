@@ -21,6 +21,7 @@
 
 #include "core/error.h"
 #include "fit/brdf/model.h"
+#include "fit/fit.h"
 #include "fit/render/render.h"
 #include "fit/render/shade_cache.h"
 
@@ -68,6 +69,13 @@ int main(int argc, char **argv)
 	}
 	/* The interior: pixels whose every hit is on the sphere. */
 	const struct glint_gbuffer *gb = &r.gb;
+	if (photo->width != gb->width || photo->height != gb->height) {
+		fprintf(stderr,
+			"residual: %s is %dx%d, not the scene's %dx%d\n",
+			argv[3], photo->width, photo->height, gb->width,
+			gb->height);
+		return 1;
+	}
 	int npix = gb->width * gb->height, n = 0;
 	int32_t *pix = malloc((size_t)npix * sizeof(*pix));
 	for (int i = 0; i < npix; i++) {
@@ -78,11 +86,14 @@ int main(int argc, char **argv)
 		if (all)
 			pix[n++] = i;
 	}
+	/* The fit's own samples (its defaults, before it raises them). */
+	struct glint_fit_opts fo;
+	glint_fit_default_opts(&fo);
 	struct glint_shade_cache_opts co = {
-		.light_samples = 8,
-		.lobe_samples = 8,
-		.static_samples = 128,
-		.no_footprint = getenv("RESIDUAL_NO_FOOTPRINT") != NULL
+		.light_samples = fo.light_samples,
+		.lobe_samples = fo.lobe_samples,
+		.static_samples = fo.static_samples,
+		.no_footprint = getenv("RESIDUAL_NO_FOOTPRINT") != NULL,
 	};
 	if (getenv("RESIDUAL_SAMPLES"))
 		co.light_samples = co.lobe_samples =

@@ -360,6 +360,23 @@ static int load_map(const char *map, const struct glint_scene *sc,
 	return glint_envmap_new(img, sc->env_rotation, sc->env_scale, map, env);
 }
 
+/* The fit's objective (weighted cost) at parameters p with roughness
+ * set to rough: ACCURACY_PROFILE's points; NAN where it fails. */
+static double cost_at(struct glint_renderer *r, const struct glint_model_ops *m,
+		      const struct glint_image *photo,
+		      const struct glint_image *w,
+		      const struct glint_fit_opts *o, const double *p,
+		      double rough)
+{
+	double q[GLINT_MAX_PARAMS];
+	struct glint_fit_result e;
+
+	memcpy(q, p, sizeof(q));
+	q[6] = rough;
+	return glint_fit_evaluate(r, m, photo, w, o, q, &e) == 0 ? e.wcost
+								 : NAN;
+}
+
 /* Whether material is in the comma-separated list (NULL: all). */
 static int selected(const char *list, const char *material)
 {
@@ -499,24 +516,12 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			       ideal, smp, glint_now() - t0);
 			if (getenv("ACCURACY_PROFILE") && out != REFUSED)
 				for (int g = 0; g < 13; g++) {
-					double q[GLINT_MAX_PARAMS];
-					struct glint_fit_result e1, e2;
 					double rough =
 						1e-4 * pow(300, g / 12.0);
-					memcpy(q, res.p, sizeof(q));
-					q[6] = rough;
-					double c1 = glint_fit_evaluate(
-							    &r, m, photo, w, &o,
-							    q, &e1) == 0
-							    ? e1.wcost
-							    : NAN;
-					memcpy(q, truth, sizeof(q));
-					q[6] = rough;
-					double c2 = glint_fit_evaluate(
-							    &r, m, photo, w, &o,
-							    q, &e2) == 0
-							    ? e2.wcost
-							    : NAN;
+					double c1 = cost_at(&r, m, photo, w, &o,
+							    res.p, rough);
+					double c2 = cost_at(&r, m, photo, w, &o,
+							    truth, rough);
 					printf("\n  rough %.5f  at fit %.5g  "
 					       "at truth %.5g",
 					       rough, c1, c2);

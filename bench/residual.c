@@ -13,7 +13,10 @@
  * split between the highlight (photo above 4x the interior's median) and
  * the rest, the highlight's total against the photo's, and the five
  * pixels that differ most.  RESIDUAL_NO_FOOTPRINT=1, RESIDUAL_SAMPLES=N
- * and RESIDUAL_SPP=N change the fast path as bench/accuracy's options.
+ * and RESIDUAL_SPP=N change the fast path as bench/accuracy's options;
+ * RESIDUAL_OTHER=PHOTO2.exr (the same scene rendered with another seed)
+ * prints the photo's own Monte Carlo noise on the same terms: half the
+ * squared differences of the two photos over the interior.
  */
 #define _DEFAULT_SOURCE
 #include "bench.h"
@@ -107,6 +110,34 @@ int main(int argc, char **argv)
 	struct px *px = malloc((size_t)n * sizeof(*px));
 	double *vals = malloc((size_t)n * sizeof(double));
 	int nr = argc - 3;
+	if (nr > 1 && m->roughness_param < 0) {
+		fprintf(stderr, "residual: %s has no roughness\n", m->name);
+		return 1;
+	}
+	const char *other_path = getenv("RESIDUAL_OTHER");
+	if (other_path) {
+		struct glint_image *other = NULL;
+		if (glint_image_read(other_path, &other) < 0 ||
+		    other->width != photo->width ||
+		    other->height != photo->height) {
+			fprintf(stderr, "residual: %s: %s\n", other_path,
+				other ? "not the photo's size"
+				      : glint_error_msg());
+			glint_image_free(other);
+			return 1;
+		}
+		double ssd = 0;
+		for (int i = 0; i < n; i++) {
+			int x = pix[i] % gb->width, y = pix[i] / gb->width;
+			double d = glint_image_px(photo, x, y)[0] -
+				   glint_image_px(other, x, y)[0];
+			ssd += d * d;
+		}
+		printf("the photo's own noise: red channel, SSD %.4g "
+		       "(half that of the two photos)\n",
+		       ssd / 2);
+		glint_image_free(other);
+	}
 	for (int k = 0; k < nr; k++) {
 		double p[GLINT_MAX_PARAMS];
 		memcpy(p, truth, sizeof(p));

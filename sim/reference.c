@@ -213,7 +213,7 @@ static void shade_dielectric(const struct ref_job *job, struct vec3 pos,
  * rows' order shuffled (Latin hypercube; perm holds that order).  A
  * near-mirror's sun covers part of a pixel: 64 independent positions put
  * a highlight pixel's value 15-25 % from its integral (copper under
- * Venice), the strata about 1 %.
+ * Venice), the strata 1-4 %.
  */
 static void pixel_position(int s, int spp, int k, const int *perm,
 			   struct rng *rng, double *px, double *py)

@@ -13,7 +13,9 @@
  * split between the highlight (photo above 4x the interior's median) and
  * the rest, the highlight's total against the photo's, and the five
  * pixels that differ most.  RESIDUAL_NO_FOOTPRINT=1, RESIDUAL_SAMPLES=N
- * and RESIDUAL_SPP=N change the fast path as bench/accuracy's options;
+ * and RESIDUAL_SPP=N change the fast path as bench/accuracy's options
+ * (RESIDUAL_LIGHT_SAMPLES=N the light samples alone: 0 leaves the lobe
+ * samples' estimate by itself);
  * RESIDUAL_OTHER=PHOTO2.exr (the same scene rendered with another seed)
  * prints the photo's own Monte Carlo noise on the same terms: half the
  * squared differences of the two photos over the interior.
@@ -101,6 +103,8 @@ int main(int argc, char **argv)
 	if (getenv("RESIDUAL_SAMPLES"))
 		co.light_samples = co.lobe_samples =
 			atoi(getenv("RESIDUAL_SAMPLES"));
+	if (getenv("RESIDUAL_LIGHT_SAMPLES"))
+		co.light_samples = atoi(getenv("RESIDUAL_LIGHT_SAMPLES"));
 	struct glint_shade_cache *c = NULL;
 	if (glint_shade_cache_new(gb, pix, n, r.env, m, &co, &c) < 0) {
 		fprintf(stderr, "residual: %s\n", glint_error_msg());

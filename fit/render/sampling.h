@@ -40,6 +40,39 @@ static inline double glint_radical2(uint32_t i)
 }
 
 /*
+ * Element i of a pseudo-random permutation of [0, n), one per seed: a
+ * bijection of the next power of two (xor-shifts, odd multipliers and
+ * seeded additions, each invertible modulo 2^b), walked until it lands
+ * below n.  Pairs the points of two stratified sets without the
+ * correlation of pairing them by index.
+ */
+static inline uint32_t glint_permute(uint32_t i, uint32_t n, uint32_t seed)
+{
+	uint32_t mask = n - 1, shift;
+
+	mask |= mask >> 1;
+	mask |= mask >> 2;
+	mask |= mask >> 4;
+	mask |= mask >> 8;
+	mask |= mask >> 16;
+	shift = 1;
+	while ((mask >> shift) > 1 && shift < 4)
+		shift++;
+	do {
+		i ^= seed;
+		i = (i * 0xe170893dU) & mask;
+		i ^= (i & mask) >> shift;
+		i = (i + (seed >> 16)) & mask;
+		i = (i * 0x0929eb3fU) & mask;
+		i ^= (i & mask) >> (shift + 1);
+		i = (i * 0x6935fa69U) & mask;
+		i ^= (seed >> 8) & mask;
+		i = (i * 0x74dcb303U) & mask;
+	} while (i >= n);
+	return i;
+}
+
+/*
  * Point k of n of a 2-D Hammersley set, toroidally shifted by a per-sequence
  * random offset (Cranley-Patterson rotation) seeded by `seed`.
  */

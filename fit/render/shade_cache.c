@@ -140,6 +140,7 @@ static void foot_at(const struct cache_foot *f, double u, double v,
 struct spread {
 	const struct cache_foot *f;
 	double w, shift[2];
+	uint32_t perm;
 	int s;
 };
 
@@ -233,8 +234,13 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 		if (w_hit > 0)
 			lobe_sample(c, h, p, j, nl, nb, uu, w_hit, out);
 		if (sp && sp->w > 0) {
-			/* Point q of a (0, 2)-set over the pixel, shifted. */
-			uint32_t q = (uint32_t)(k * c->spp + sp->s);
+			/* Point q of a (0, 2)-set over the pixel, shifted;
+			 * the points shuffled among the samples (by index,
+			 * x would follow the lobe sample's own first
+			 * uniform: one slice of the pixel x lobe domain). */
+			uint32_t q = glint_permute(
+				(uint32_t)(k * c->spp + sp->s),
+				(uint32_t)(nb * c->spp), sp->perm);
 			double x = (q + 0.5) / (nb * c->spp) + sp->shift[0];
 			double y = glint_radical2(q) + sp->shift[1];
 			double at[2] = { x - (x >= 1) - 0.5,
@@ -787,7 +793,7 @@ static void lobes_pixels(void *ctx, int i0, int i1, int thread)
 			if (foot)
 				for (int ch = 0; ch < 3; ch++)
 					dst[j * 3 + ch] += hot[ch];
-			struct spread sp = { &c->feet[i], 0, { 0, 0 }, 0 };
+			struct spread sp = { &c->feet[i], 0, { 0, 0 }, 0, 0 };
 			sp.w = fmin(1, fmax(0, foot_level(c, i, job->p, j)));
 			if (sp.w > 0) {
 				uint32_t sd = c->hits[(size_t)i * c->spp].seed;
@@ -795,6 +801,7 @@ static void lobes_pixels(void *ctx, int i0, int i1, int thread)
 					glint_hash32(sd ^ 0x7f4a7c15u));
 				sp.shift[1] = glint_u01(
 					glint_hash32(sd ^ 0x94d049bbu));
+				sp.perm = glint_hash32(sd ^ 0x5bd1e995u);
 			}
 			for (int s = 0; s < c->spp; s++) {
 				size_t hi = (size_t)i * c->spp + s;

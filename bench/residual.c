@@ -103,6 +103,8 @@ int main(int argc, char **argv)
 	if (getenv("RESIDUAL_SAMPLES"))
 		co.light_samples = co.lobe_samples =
 			atoi(getenv("RESIDUAL_SAMPLES"));
+	if (getenv("RESIDUAL_SEED"))
+		co.seed = (uint32_t)atoi(getenv("RESIDUAL_SEED"));
 	if (getenv("RESIDUAL_LIGHT_SAMPLES"))
 		co.light_samples = atoi(getenv("RESIDUAL_LIGHT_SAMPLES"));
 	struct glint_shade_cache *c = NULL;

@@ -40,6 +40,28 @@ static inline double glint_radical2(uint32_t i)
 }
 
 /*
+ * Point i of the 2-D Sobol (0, 2)-sequence (van der Corput; the Pascal
+ * matrix mod 2), digitally shifted (xor) by the two words of seed's
+ * hashes.  Every block of 2^m points from a multiple of 2^m is a
+ * (0, m, 2)-net, and the xor keeps it one: the pixel's hits take
+ * consecutive blocks, each its own stratified set, together a larger
+ * one.
+ */
+static inline void glint_sobol2(uint32_t i, uint32_t seed, double u[2])
+{
+	uint32_t a = 0, b = 0, v = 1U << 31;
+
+	for (uint32_t k = i; k; k >>= 1, v ^= v >> 1)
+		if (k & 1)
+			b ^= v;
+	a = (uint32_t)(glint_radical2(i) * 4294967296.0);
+	a ^= glint_hash32(seed ^ 0x68e31da4U);
+	b ^= glint_hash32(seed ^ 0xb5297a4dU);
+	u[0] = a * (1.0 / 4294967296.0);
+	u[1] = b * (1.0 / 4294967296.0);
+}
+
+/*
  * Element i of a pseudo-random permutation of [0, n), one per seed: a
  * bijection of the next power of two (xor-shifts, odd multipliers and
  * seeded additions, each invertible modulo 2^b), walked until it lands

@@ -47,18 +47,32 @@ static inline double glint_radical2(uint32_t i)
  * consecutive blocks, each its own stratified set, together a larger
  * one.
  */
-static inline void glint_sobol2(uint32_t i, uint32_t seed, double u[2])
+static inline void glint_sobol2_bits(uint32_t i, uint32_t bits[2])
 {
-	uint32_t a = 0, b = 0, v = 1U << 31;
+	uint32_t b = 0, v = 1U << 31;
 
 	for (uint32_t k = i; k; k >>= 1, v ^= v >> 1)
 		if (k & 1)
 			b ^= v;
-	a = (uint32_t)(glint_radical2(i) * 4294967296.0);
-	a ^= glint_hash32(seed ^ 0x68e31da4U);
-	b ^= glint_hash32(seed ^ 0xb5297a4dU);
-	u[0] = a * (1.0 / 4294967296.0);
-	u[1] = b * (1.0 / 4294967296.0);
+	bits[0] = (uint32_t)(glint_radical2(i) * 4294967296.0);
+	bits[1] = b;
+}
+
+/* The digital shift of seed (glint_sobol2()): xor it with the bits. */
+static inline void glint_sobol2_shift(uint32_t seed, uint32_t shift[2])
+{
+	shift[0] = glint_hash32(seed ^ 0x68e31da4U);
+	shift[1] = glint_hash32(seed ^ 0xb5297a4dU);
+}
+
+static inline void glint_sobol2(uint32_t i, uint32_t seed, double u[2])
+{
+	uint32_t bits[2], shift[2];
+
+	glint_sobol2_bits(i, bits);
+	glint_sobol2_shift(seed, shift);
+	u[0] = (bits[0] ^ shift[0]) * (1.0 / 4294967296.0);
+	u[1] = (bits[1] ^ shift[1]) * (1.0 / 4294967296.0);
 }
 
 /*

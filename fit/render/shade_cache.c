@@ -56,11 +56,12 @@ struct glint_shade_cache {
 	int lambert[GLINT_MAX_PARAMS];	     /* lobe j is the constant 1/pi */
 	int n, spp, nl, nb, nthreads, no_footprint;
 	int32_t *pix;
-	struct cache_hit *hits;	 /* n * spp */
-	struct cache_foot *feet; /* n */
-	struct env_sample *envs; /* n * spp * nl */
-	double (*lobe_u)[2];	 /* nb fixed uniforms, shifted per hit */
-	double *static_lobes;	 /* n * nlobes * 3, constant lobes only */
+	struct cache_hit *hits;	   /* n * spp */
+	struct cache_foot *feet;   /* n */
+	struct env_sample *envs;   /* n * spp * nl */
+	double (*lobe_u)[2];	   /* nb fixed uniforms, shifted per hit */
+	uint32_t (*lobe_sobol)[2]; /* spp nb Sobol points, unshifted */
+	double *static_lobes;	   /* n * nlobes * 3, constant lobes only */
 	/* A joint cache (glint_shade_cache_join()): its pixels are the
 	 * parts' in order; part_of[i] is pixel i's part, part_off[k] part
 	 * k's first pixel.  None of the fields above is set. */
@@ -205,9 +206,12 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 {
 	const struct glint_model_ops *m = c->model;
 	struct vec3 wo = fv(h->wo);
-	uint32_t sd = hs >= 0 ? pseed : h->seed;
-	double sx = glint_u01(glint_hash32(sd ^ 0x2545f491u));
-	double sy = glint_u01(glint_hash32(sd ^ 0x9e3779b9u));
+	double sx = glint_u01(glint_hash32(h->seed ^ 0x2545f491u));
+	double sy = glint_u01(glint_hash32(h->seed ^ 0x9e3779b9u));
+	uint32_t shift[2] = { 0, 0 };
+
+	if (hs >= 0)
+		glint_sobol2_shift(pseed, shift);
 
 	int geom = m->lobe_from_geometry && m->lobe_varies[j];
 
@@ -232,8 +236,11 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 	double w_hit = sp ? 1 - sp->w : 1;
 	for (int k = 0; k < nb; k++) {
 		double uu[2] = { u[k][0] + sx, u[k][1] + sy };
-		if (hs >= 0)
-			glint_sobol2((uint32_t)(hs * nb + k), pseed, uu);
+		if (hs >= 0) {
+			const uint32_t *q = c->lobe_sobol[hs * nb + k];
+			uu[0] = (q[0] ^ shift[0]) * (1.0 / 4294967296.0);
+			uu[1] = (q[1] ^ shift[1]) * (1.0 / 4294967296.0);
+		}
 		uu[0] -= uu[0] >= 1;
 		uu[1] -= uu[1] >= 1;
 		if (w_hit > 0)
@@ -632,9 +639,11 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 	c->envs = calloc((size_t)n * gb->spp * (c->nl ? c->nl : 1),
 			 sizeof(*c->envs));
 	c->lobe_u = malloc((size_t)(c->nb ? c->nb : 1) * sizeof(*c->lobe_u));
+	c->lobe_sobol = malloc((size_t)(c->nb ? c->nb : 1) * gb->spp *
+			       sizeof(*c->lobe_sobol));
 	c->static_lobes = calloc((size_t)n * model->nlobes * 3, sizeof(double));
 	if (!c->pix || !c->hits || !c->feet || !c->envs || !c->lobe_u ||
-	    !c->static_lobes) {
+	    !c->lobe_sobol || !c->static_lobes) {
 		glint_shade_cache_free(c);
 		return glint_error_set(ENOMEM,
 				       "out of memory for the shade cache of "
@@ -666,6 +675,9 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 	for (int k = 0; k < c->nb; k++) {
 		c->lobe_u[k][0] = (k + 0.5) / c->nb;
 		c->lobe_u[k][1] = glint_radical2((uint32_t)k);
+	}
+	for (int k = 0; k < c->nb * gb->spp; k++) {
+		glint_sobol2_bits((uint32_t)k, c->lobe_sobol[k]);
 	}
 	for (int i = 0; i < n; i++) {
 		for (int s = 0; s < gb->spp; s++) {
@@ -769,6 +781,7 @@ void glint_shade_cache_free(struct glint_shade_cache *c)
 	free(c->feet);
 	free(c->envs);
 	free(c->lobe_u);
+	free(c->lobe_sobol);
 	free(c->static_lobes);
 	glint_shade_light_free(c->own_light);
 	free(c);

@@ -2,7 +2,9 @@
 /*
  * Where the fitter's objective differs from a photo: the shade cache's
  * image of a material (the fitter's own estimate, its default samples)
- * against a reference photo, pixel by pixel over the sphere's interior.
+ * against a reference photo, pixel by pixel over the sphere's interior
+ * as the fit takes it (before stop 41: every pixel whose own hits all
+ * hit, rim pixels part backdrop among them).
  *
  *   bench/residual MAP MATERIAL PHOTO.exr [ROUGHNESS...]
  *
@@ -16,6 +18,10 @@
  * and RESIDUAL_SPP=N change the fast path as bench/accuracy's options
  * (RESIDUAL_LIGHT_SAMPLES=N the light samples alone: 0 leaves the lobe
  * samples' estimate by itself);
+ * RESIDUAL_SEED=N the fast path's sample seed; RESIDUAL_AT=P1,P2,... one
+ * more row at every parameter given (a fit's answer against the truth),
+ * each row also split by the view's angle to the normal (all three
+ * channels).
  * RESIDUAL_OTHER=PHOTO2.exr (the same scene rendered with another seed)
  * prints the photo's own Monte Carlo noise on the same terms: half the
  * squared differences of the two photos over the interior.
@@ -72,7 +78,9 @@ int main(int argc, char **argv)
 		fprintf(stderr, "residual: %s\n", glint_error_msg());
 		return 1;
 	}
-	/* The interior: pixels whose every hit is on the sphere. */
+	/* The interior as the fit takes it (fit_data.c): pixels whose
+	 * whole 3 x 3 neighbourhood has every hit on the sphere (one whose
+	 * own hits all hit can still be part backdrop between them). */
 	const struct glint_gbuffer *gb = &r.gb;
 	if (photo->width != gb->width || photo->height != gb->height) {
 		fprintf(stderr,
@@ -84,10 +92,15 @@ int main(int argc, char **argv)
 	int npix = gb->width * gb->height, n = 0;
 	int32_t *pix = malloc((size_t)npix * sizeof(*pix));
 	for (int i = 0; i < npix; i++) {
-		const struct glint_hit *h = glint_gbuffer_pixel(gb, (size_t)i);
-		int all = 1;
-		for (int s = 0; s < gb->spp; s++)
-			all &= h[s].geom >= 0;
+		int x = i % gb->width, y = i / gb->width, all = 1;
+		for (int dy = -1; dy <= 1 && all; dy++)
+			for (int dx = -1; dx <= 1 && all; dx++) {
+				int xx = x + dx, yy = y + dy;
+				all = xx >= 0 && yy >= 0 && xx < gb->width &&
+				      yy < gb->height &&
+				      gb->cover[(size_t)yy * gb->width + xx] ==
+					      gb->spp;
+			}
 		if (all)
 			pix[n++] = i;
 	}
@@ -144,10 +157,30 @@ int main(int argc, char **argv)
 		       ssd / 2);
 		glint_image_free(other);
 	}
+	/* RESIDUAL_AT: one more row at every parameter given. */
+	double at[GLINT_MAX_PARAMS];
+	const char *at_s = getenv("RESIDUAL_AT");
+	if (at_s) {
+		char *end = (char *)at_s;
+		for (int k = 0; k < m->nparams; k++) {
+			at[k] = strtod(end, &end);
+			if (*end != (k + 1 < m->nparams ? ',' : '\0')) {
+				fprintf(stderr,
+					"residual: RESIDUAL_AT needs %d values "
+					"separated by commas\n",
+					m->nparams);
+				return 1;
+			}
+			end += k + 1 < m->nparams;
+		}
+		nr++;
+	}
 	for (int k = 0; k < nr; k++) {
 		double p[GLINT_MAX_PARAMS];
 		memcpy(p, truth, sizeof(p));
-		if (k)
+		if (at_s && k == nr - 1)
+			memcpy(p, at, sizeof(p));
+		else if (k)
 			p[m->roughness_param] = atof(argv[3 + k]);
 		glint_shade_cache_lobes(c, p, lobes);
 		for (int i = 0; i < n; i++) {
@@ -181,6 +214,34 @@ int main(int argc, char **argv)
 		       "(%d px, total fast/photo %.4f) rest %.4g\n",
 		       p[m->roughness_param], ssd_hi, nhi, sum_f / sum_p,
 		       ssd_lo);
+		/* All three channels by the view's angle to the normal:
+		 * Fresnel shows at grazing, the specular-ior ridge there. */
+		double band[4] = { 0, 0, 0, 0 };
+		glint_shade_cache_lobes(c, p, lobes);
+		for (int i = 0; i < n; i++) {
+			const struct glint_hit *h =
+				glint_gbuffer_pixel(gb, (size_t)pix[i]);
+			double cs = -(h->n[0] * h->d[0] + h->n[1] * h->d[1] +
+				      h->n[2] * h->d[2]);
+			int b = cs > 0.75   ? 0
+				: cs > 0.5  ? 1
+				: cs > 0.25 ? 2
+					    : 3;
+			const float *ph = glint_image_px(
+				photo, pix[i] % gb->width, pix[i] / gb->width);
+			for (int ch = 0; ch < 3; ch++) {
+				double f = 0;
+				for (int j = 0; j < m->nlobes; j++)
+					f += p[m->lobe_param[j] + ch] *
+					     lobes[((size_t)i * m->nlobes + j) *
+							   3 +
+						   ch];
+				band[b] += (f - ph[ch]) * (f - ph[ch]);
+			}
+		}
+		printf("  RGB SSD by cos(view, normal) > 0.75, 0.5, 0.25, "
+		       "below: %.4g %.4g %.4g %.4g\n",
+		       band[0], band[1], band[2], band[3]);
 		qsort(px, (size_t)n, sizeof(*px), by_diff);
 		for (int i = 0; i < 5; i++)
 			printf("  (%3d, %3d) photo %.4f fast %.4f\n", px[i].x,

@@ -9,7 +9,10 @@
  * mask, then the lobe on the specular mask, and ends at a cost over 4x
  * lower with a roughness near the truth.  Numbers seen when this test was
  * written: naive cost 45.7, roughness 0.0001; three-pass cost 10.55,
- * roughness 0.0195 (true 0.023).
+ * roughness 0.0195 (true 0.023).  Since a pixel's hits share one sample
+ * sequence (stop 41) the naive pass stops short of the bound, in another
+ * valley just as wrong: cost 23.2 against 3.53, roughness 0.0158,
+ * specular red 0.166 (true 0.510).
  * The naive pass is run as the paper describes it, LM straight from the
  * initial values (no_start_scan); glint's naive method, which starts LM
  * from the best of a roughness and ior scan (fit.c, scan_start), must
@@ -69,9 +72,11 @@ int main(void)
 	CHECK(res[0].wcost > 2 * res[1].wcost,
 	      "naive cost %.4g should be far above three-pass %.4g",
 	      res[0].wcost, res[1].wcost);
-	CHECK(res[0].p[6] < 0.25 * truth[6],
-	      "naive roughness %.4f: expected the collapse to a mirror",
-	      res[0].p[6]);
+	CHECK(res[0].p[6] < 0.75 * truth[6] &&
+		      fabs(res[0].p[3] / truth[3] - 1) > 0.5,
+	      "naive roughness %.4f, specular red %.3f: expected it stuck "
+	      "toward a mirror, its specular far off",
+	      res[0].p[6], res[0].p[3]);
 	CHECK(res[2].wcost < 1.01 * res[1].wcost,
 	      "naive with the start scan: cost %.4g, three-pass %.4g",
 	      res[2].wcost, res[1].wcost);

@@ -59,7 +59,6 @@ struct glint_shade_cache {
 	struct cache_hit *hits;	   /* n * spp */
 	struct cache_foot *feet;   /* n */
 	struct env_sample *envs;   /* n * spp * nl */
-	double (*lobe_u)[2];	   /* nb fixed uniforms, shifted per hit */
 	uint32_t (*lobe_sobol)[2]; /* spp nb Sobol points, unshifted */
 	double *static_lobes;	   /* n * nlobes * 3, constant lobes only */
 	/* A joint cache (glint_shade_cache_join()): its pixels are the
@@ -191,12 +190,12 @@ static void lobe_sample(const struct glint_shade_cache *c,
 }
 
 /*
- * Estimate lobe j's integral at one hit: nl env samples, nb lobe samples
- * (uniform pairs u[k] shifted by the hit's seed; or, for hit hs >= 0 of
- * its pixel, block hs of a Sobol sequence shifted by the pixel's seed
- * pseed, as draw_env_samples()), balance-heuristic weights with the smooth
- * light pdf.  env samples come from `es`, or are drawn afresh when es is
- * NULL (constant lobes at set-up).
+ * Estimate lobe j's integral at one hit: nl env samples, nb lobe samples,
+ * balance-heuristic weights with the smooth light pdf.  The lobe samples'
+ * uniforms: for hit hs >= 0 of its pixel, block hs of a Sobol sequence
+ * shifted by the pixel's seed pseed (as draw_env_samples()); for hs < 0
+ * (constant lobes at set-up), the pairs u[k] shifted by the hit's seed.
+ * env samples come from `es`, or are drawn afresh when es is NULL.
  */
 static void lobe_at_hit(const struct glint_shade_cache *c,
 			const struct cache_hit *h, const struct env_sample *es,
@@ -235,14 +234,17 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 	}
 	double w_hit = sp ? 1 - sp->w : 1;
 	for (int k = 0; k < nb; k++) {
-		double uu[2] = { u[k][0] + sx, u[k][1] + sy };
+		double uu[2];
 		if (hs >= 0) {
 			const uint32_t *q = c->lobe_sobol[hs * nb + k];
 			uu[0] = (q[0] ^ shift[0]) * (1.0 / 4294967296.0);
 			uu[1] = (q[1] ^ shift[1]) * (1.0 / 4294967296.0);
+		} else {
+			uu[0] = u[k][0] + sx;
+			uu[1] = u[k][1] + sy;
+			uu[0] -= uu[0] >= 1;
+			uu[1] -= uu[1] >= 1;
 		}
-		uu[0] -= uu[0] >= 1;
-		uu[1] -= uu[1] >= 1;
 		if (w_hit > 0)
 			lobe_sample(c, h, p, j, nl, nb, uu, w_hit, out);
 		if (sp && sp->w > 0) {
@@ -638,12 +640,11 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 	c->feet = calloc((size_t)n, sizeof(*c->feet));
 	c->envs = calloc((size_t)n * gb->spp * (c->nl ? c->nl : 1),
 			 sizeof(*c->envs));
-	c->lobe_u = malloc((size_t)(c->nb ? c->nb : 1) * sizeof(*c->lobe_u));
 	c->lobe_sobol = malloc((size_t)(c->nb ? c->nb : 1) * gb->spp *
 			       sizeof(*c->lobe_sobol));
 	c->static_lobes = calloc((size_t)n * model->nlobes * 3, sizeof(double));
-	if (!c->pix || !c->hits || !c->feet || !c->envs || !c->lobe_u ||
-	    !c->lobe_sobol || !c->static_lobes) {
+	if (!c->pix || !c->hits || !c->feet || !c->envs || !c->lobe_sobol ||
+	    !c->static_lobes) {
 		glint_shade_cache_free(c);
 		return glint_error_set(ENOMEM,
 				       "out of memory for the shade cache of "
@@ -672,13 +673,8 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 		c->lambert[j] =
 			!model->lobe_varies[j] && fabs(b[j] - 1 / M_PI) < 1e-12;
 	}
-	for (int k = 0; k < c->nb; k++) {
-		c->lobe_u[k][0] = (k + 0.5) / c->nb;
-		c->lobe_u[k][1] = glint_radical2((uint32_t)k);
-	}
-	for (int k = 0; k < c->nb * gb->spp; k++) {
+	for (int k = 0; k < c->nb * gb->spp; k++)
 		glint_sobol2_bits((uint32_t)k, c->lobe_sobol[k]);
-	}
 	for (int i = 0; i < n; i++) {
 		for (int s = 0; s < gb->spp; s++) {
 			const struct glint_hit *g =
@@ -780,7 +776,6 @@ void glint_shade_cache_free(struct glint_shade_cache *c)
 	free(c->hits);
 	free(c->feet);
 	free(c->envs);
-	free(c->lobe_u);
 	free(c->lobe_sobol);
 	free(c->static_lobes);
 	glint_shade_light_free(c->own_light);
@@ -837,9 +832,8 @@ static void lobes_pixels(void *ctx, int i0, int i1, int thread)
 				sp.s = s;
 				lobe_at_hit(
 					c, &c->hits[hi], c->envs + hi * c->nl,
-					c->nl, c->nb,
-					(const double(*)[2])c->lobe_u, job->p,
-					j, !foot, sp.w > 0 ? &sp : NULL, s,
+					c->nl, c->nb, NULL, job->p, j, !foot,
+					sp.w > 0 ? &sp : NULL, s,
 					c->hits[(size_t)i * c->spp].seed, a);
 				for (int ch = 0; ch < 3; ch++)
 					dst[j * 3 + ch] += a[ch] / c->spp;

@@ -18,7 +18,8 @@
  * and RESIDUAL_SPP=N change the fast path as bench/accuracy's options
  * (RESIDUAL_LIGHT_SAMPLES=N the light samples alone: 0 leaves the lobe
  * samples' estimate by itself);
- * RESIDUAL_SEED=N the fast path's sample seed; RESIDUAL_AT=P1,P2,... one
+ * RESIDUAL_SEED=N the fast path's sample seed; RESIDUAL_NO_HOT=1 no hot
+ * texels (the whole map sampled); RESIDUAL_AT=P1,P2,... one
  * more row at every parameter given (a fit's answer against the truth),
  * each row also split by the view's angle to the normal (all three
  * channels).
@@ -116,6 +117,7 @@ int main(int argc, char **argv)
 	if (getenv("RESIDUAL_SAMPLES"))
 		co.light_samples = co.lobe_samples =
 			atoi(getenv("RESIDUAL_SAMPLES"));
+	co.no_hot = getenv("RESIDUAL_NO_HOT") != NULL;
 	if (getenv("RESIDUAL_SEED"))
 		co.seed = (uint32_t)atoi(getenv("RESIDUAL_SEED"));
 	if (getenv("RESIDUAL_LIGHT_SAMPLES"))

@@ -34,6 +34,7 @@
 #include "core/error.h"
 #include "fit/brdf/model.h"
 #include "fit/fit.h"
+#include "fit/fit_data.h"
 #include "fit/render/render.h"
 #include "fit/render/shade_cache.h"
 
@@ -79,9 +80,7 @@ int main(int argc, char **argv)
 		fprintf(stderr, "residual: %s\n", glint_error_msg());
 		return 1;
 	}
-	/* The interior as the fit takes it (fit_data.c): pixels whose
-	 * whole 3 x 3 neighbourhood has every hit on the sphere (one whose
-	 * own hits all hit can still be part backdrop between them). */
+	/* The interior as the fit takes it (fit_data_interior()). */
 	const struct glint_gbuffer *gb = &r.gb;
 	if (photo->width != gb->width || photo->height != gb->height) {
 		fprintf(stderr,
@@ -92,19 +91,9 @@ int main(int argc, char **argv)
 	}
 	int npix = gb->width * gb->height, n = 0;
 	int32_t *pix = malloc((size_t)npix * sizeof(*pix));
-	for (int i = 0; i < npix; i++) {
-		int x = i % gb->width, y = i / gb->width, all = 1;
-		for (int dy = -1; dy <= 1 && all; dy++)
-			for (int dx = -1; dx <= 1 && all; dx++) {
-				int xx = x + dx, yy = y + dy;
-				all = xx >= 0 && yy >= 0 && xx < gb->width &&
-				      yy < gb->height &&
-				      gb->cover[(size_t)yy * gb->width + xx] ==
-					      gb->spp;
-			}
-		if (all)
+	for (int i = 0; i < npix; i++)
+		if (fit_data_interior(gb, i % gb->width, i / gb->width))
 			pix[n++] = i;
-	}
 	/* The fit's own samples (its defaults, before it raises them). */
 	struct glint_fit_opts fo;
 	glint_fit_default_opts(&fo);
@@ -165,8 +154,10 @@ int main(int argc, char **argv)
 	if (at_s) {
 		char *end = (char *)at_s;
 		for (int k = 0; k < m->nparams; k++) {
-			at[k] = strtod(end, &end);
-			if (*end != (k + 1 < m->nparams ? ',' : '\0')) {
+			char *from = end;
+			at[k] = strtod(from, &end);
+			if (end == from ||
+			    *end != (k + 1 < m->nparams ? ',' : '\0')) {
 				fprintf(stderr,
 					"residual: RESIDUAL_AT needs %d values "
 					"separated by commas\n",
@@ -219,7 +210,6 @@ int main(int argc, char **argv)
 		/* All three channels by the view's angle to the normal:
 		 * Fresnel shows at grazing, the specular-ior ridge there. */
 		double band[4] = { 0, 0, 0, 0 };
-		glint_shade_cache_lobes(c, p, lobes);
 		for (int i = 0; i < n; i++) {
 			const struct glint_hit *h =
 				glint_gbuffer_pixel(gb, (size_t)pix[i]);

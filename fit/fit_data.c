@@ -14,11 +14,20 @@ static int covered(const struct glint_gbuffer *gb, int x, int y)
 	return gb->cover[(size_t)y * gb->width + x] == gb->spp;
 }
 
+int fit_data_interior(const struct glint_gbuffer *gb, int x, int y)
+{
+	for (int dy = -1; dy <= 1; dy++)
+		for (int dx = -1; dx <= 1; dx++)
+			if (!covered(gb, x + dx, y + dy))
+				return 0;
+	return 1;
+}
+
 /*
  * Pixels wholly on the sphere, every `stride`-th row and column.  A pixel
  * whose primary samples all hit can still be partly background between
  * them, which mixes the backdrop into the photo's value: only pixels whose
- * whole 3x3 neighbourhood is covered are used.
+ * whole 3x3 neighbourhood is covered are used (fit_data_interior()).
  */
 static int collect_pixels(const struct glint_gbuffer *gb, int stride,
 			  const struct glint_image *photo,
@@ -39,11 +48,7 @@ static int collect_pixels(const struct glint_gbuffer *gb, int stride,
 	for (int y = 0; y < gb->height; y++)
 		for (int x = 0; x < gb->width; x++) {
 			size_t i = (size_t)y * gb->width + x;
-			int on = 1;
-			for (int dy = -1; dy <= 1 && on; dy++)
-				for (int dx = -1; dx <= 1 && on; dx++)
-					on = covered(gb, x + dx, y + dy);
-			if (!on)
+			if (!fit_data_interior(gb, x, y))
 				continue;
 			(*interior)++;
 			if ((x + gb->frame_x) % stride ||

@@ -29,6 +29,11 @@ struct fit_data {
 
 void free_data(struct fit_data *d);
 
+/* Is pixel (x, y) wholly on the sphere as a fit takes it: every hit of
+ * its whole 3 x 3 neighbourhood on it (a pixel whose own hits all hit
+ * can still be part backdrop between them)? */
+int fit_data_interior(const struct glint_gbuffer *gb, int x, int y);
+
 /*
  * Check photo and weight against the camera, collect the pixels wholly on
  * the sphere (every stride-th, about o->max_pixels of them) with their

@@ -205,12 +205,15 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 {
 	const struct glint_model_ops *m = c->model;
 	struct vec3 wo = fv(h->wo);
-	double sx = glint_u01(glint_hash32(h->seed ^ 0x2545f491u));
-	double sy = glint_u01(glint_hash32(h->seed ^ 0x9e3779b9u));
+	double sx = 0, sy = 0;
 	uint32_t shift[2] = { 0, 0 };
 
-	if (hs >= 0)
+	if (hs >= 0) {
 		glint_sobol2_shift(pseed, shift);
+	} else {
+		sx = glint_u01(glint_hash32(h->seed ^ 0x2545f491u));
+		sy = glint_u01(glint_hash32(h->seed ^ 0x9e3779b9u));
+	}
 
 	int geom = m->lobe_from_geometry && m->lobe_varies[j];
 

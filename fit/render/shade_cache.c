@@ -591,7 +591,7 @@ int glint_shade_light_new(const struct glint_envmap *env,
 	ret = glint_env_hot_new(env, 0.01, opts->no_hot ? 0 : 64, 2, &l->hot);
 	l->spread = M_PI / env->img->height / 2 / 2;
 	if (ret == 0)
-		ret = glint_irradiance_build(env, l->hot->is_hot, 64,
+		ret = glint_irradiance_build(env, l->hot->is_hot, 128,
 					     opts->nthreads, &l->irr);
 	if (ret < 0) {
 		glint_shade_light_free(l);

@@ -225,6 +225,93 @@ static void test_irradiance_odd_sizes(void)
 }
 
 /*
+ * Irradiance next to bright area lights, against a brute-force integral of
+ * the bilinear radiance (2 x 2 points a texel): two softboxes on a dim
+ * gradient, a rotated map wider than the 256 cells (reduced by 2), normals
+ * at random and with their horizon across a softbox, where bilinear
+ * weights missed by 3.8 % (64-wide grid) and 1.4 % (128); the tree and the
+ * cubic on 128 by 0.055 %.
+ */
+static double brute_irradiance(const struct glint_envmap *env, struct vec3 n)
+{
+	int W = env->img->width * 2, H = env->img->height * 2;
+	double e = 0;
+
+	for (int j = 0; j < H; j++) {
+		double t0 = M_PI * j / H, t1 = M_PI * (j + 1) / H;
+		double om = (2 * M_PI / W) * (cos(t0) - cos(t1));
+		for (int i = 0; i < W; i++) {
+			struct vec3 d =
+				m3_mul(&env->rot,
+				       glint_envmap_uv_to_dir((i + 0.5) / W,
+							      (j + 0.5) / H));
+			double c = v3_dot(n, d), l[3];
+			if (c <= 0)
+				continue;
+			glint_envmap_lookup(env, d, l);
+			e += c * l[1] * om;
+		}
+	}
+	return e;
+}
+
+static void test_irradiance_softboxes(void)
+{
+	const int w = 520, h = 260;
+	struct glint_image *img = glint_image_new(w, h);
+	struct glint_envmap *env = NULL;
+	struct glint_irradiance ir;
+	double rot[3] = { 10, 35, 0 }, worst = 0;
+	/* softboxes: (u0, v0, u1, v1) */
+	static const double box[2][4] = { { 0.20, 0.30, 0.24, 0.38 },
+					  { 0.55, 0.40, 0.60, 0.44 } };
+
+	for (int y = 0; y < h; y++)
+		for (int x = 0; x < w; x++) {
+			double u = (x + 0.5) / w, v = (y + 0.5) / h;
+			float l = (float)(0.05 + 0.1 * (1 - v));
+			for (int b = 0; b < 2; b++)
+				if (u >= box[b][0] && u < box[b][2] &&
+				    v >= box[b][1] && v < box[b][3])
+					l = 40;
+			for (int c = 0; c < 3; c++)
+				glint_image_px(img, x, y)[c] = l;
+		}
+	CHECK(glint_envmap_new(img, rot, 1, "softboxes", &env) == 0, "%s",
+	      glint_error_msg());
+	CHECK(glint_irradiance_build(env, NULL, 128, 2, &ir) == 0, "%s",
+	      glint_error_msg());
+	for (int k = 0; k < 20; k++) {
+		struct vec3 n;
+		if (k < 8) { /* horizon through a softbox's middle */
+			const double *b = box[k % 2];
+			struct vec3 c = m3_mul(
+				&env->rot,
+				glint_envmap_uv_to_dir((b[0] + b[2]) / 2,
+						       (b[1] + b[3]) / 2));
+			struct vec3 t, s;
+			v3_frame(c, &t, &s);
+			double a = M_PI * k / 8 + 0.3;
+			n = v3_add(v3_scale(t, cos(a)), v3_scale(s, sin(a)));
+		} else {
+			double z = 2 * glint_u01(glint_hash3(k, 1, 7)) - 1;
+			double p = 2 * M_PI * glint_u01(glint_hash3(k, 2, 7));
+			n = v3(sqrt(1 - z * z) * cos(p),
+			       sqrt(1 - z * z) * sin(p), z);
+		}
+		double e[3], ref = brute_irradiance(env, n);
+		glint_irradiance_lookup(&ir, n, e);
+		double rel = fabs(e[1] / ref - 1);
+		worst = rel > worst ? rel : worst;
+	}
+	CHECK(worst < 2e-3,
+	      "irradiance next to softboxes within 0.2 %%: %.3f %%",
+	      100 * worst);
+	glint_irradiance_free(&ir);
+	glint_envmap_free(env);
+}
+
+/*
  * The map split at its sun (glint_env_hot_new): the rest's radiance plus
  * the hot part's adds up to the map's everywhere; the rest's is
  * continuous across a hot texel's edge, where a cut by area jumps (the
@@ -326,6 +413,7 @@ int main(void)
 	RUN(test_sampling_histogram);
 	RUN(test_bad_maps);
 	RUN(test_irradiance_odd_sizes);
+	RUN(test_irradiance_softboxes);
 	RUN(test_hot_split);
 	return test_result();
 }

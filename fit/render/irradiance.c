@@ -43,31 +43,31 @@ struct irr_tree {
  * the map's convention (glint_envmap_uv_to_dir: w = (sin t sin p, cos t,
  * -sin t cos p), t the polar angle from +y): a product of a row's and a
  * column's integrals. */
-struct texel_rows {
+struct row_integrals {
 	double s2; /* integral of sin^2 t dt over the row */
 	double y;  /* integral of cos t sin t dt */
 };
 
-struct texel_cols {
+struct col_integrals {
 	double sx; /* integral of sin p dp over the column */
 	double cz; /* integral of cos p dp */
 	double dp; /* its width */
 };
 
-static struct texel_rows texel_row(double t0, double t1)
+static struct row_integrals texel_row(double t0, double t1)
 {
 	double sa = sin(t0), sb = sin(t1);
 
-	return (struct texel_rows){
+	return (struct row_integrals){
 		(t1 - t0) / 2 - (sin(2 * t1) - sin(2 * t0)) / 4,
 		(sb * sb - sa * sa) / 2,
 	};
 }
 
-static struct texel_cols texel_col(double p0, double p1)
+static struct col_integrals texel_col(double p0, double p1)
 {
-	return (struct texel_cols){ cos(p0) - cos(p1), sin(p1) - sin(p0),
-				    p1 - p0 };
+	return (struct col_integrals){ cos(p0) - cos(p1), sin(p1) - sin(p0),
+				       p1 - p0 };
 }
 
 /* The cone of the lat-long rectangle [t0, t1] x [p0, p1]: axis at its middle;
@@ -234,7 +234,7 @@ static int cell_moments(const struct glint_envmap *env,
 	static const double k[3] = { 1.0 / 8, 6.0 / 8, 1.0 / 8 };
 	const struct glint_image *img = env->img;
 	int W = img->width, H = img->height;
-	struct texel_cols *col = malloc((size_t)W * sizeof(*col));
+	struct col_integrals *col = malloc((size_t)W * sizeof(*col));
 
 	if (!col)
 		return -1;
@@ -242,7 +242,7 @@ static int cell_moments(const struct glint_envmap *env,
 		col[i] = texel_col(2 * M_PI * ((double)i / W - 0.5),
 				   2 * M_PI * ((double)(i + 1) / W - 0.5));
 	for (int j = 0; j < H; j++) {
-		struct texel_rows row =
+		struct row_integrals row =
 			texel_row(M_PI * j / H, M_PI * (j + 1) / H);
 		for (int i = 0; i < W; i++) {
 			if (exclude && exclude[(size_t)j * W + i])

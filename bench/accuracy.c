@@ -45,7 +45,8 @@
  * may be refused).  These three write no CSV.
  * Writes bench-out/accuracy.csv; prints a line per case and a table per
  * map.  For studies: ACCURACY_ONLY=MATERIAL[,MATERIAL...] (those of the
- * list alone), ACCURACY_SAMPLES=N (the
+ * list alone), ACCURACY_LOG=1 (the fits' own log on stderr: when they
+ * raise their samples and why), ACCURACY_SAMPLES=N (the
  * fit's light and lobe samples per set), ACCURACY_REF_SAMPLES=N and
  * ACCURACY_REF_SPP=N (the reference photos'), ACCURACY_CACHE=DIR (the
  * reference photos kept there and read back on the next run: reference()),
@@ -602,7 +603,8 @@ int main(int argc, char **argv)
 			return 77;
 		}
 	}
-	glint_log_set_mode(GLINT_LOG_QUIET);
+	if (!getenv("ACCURACY_LOG"))
+		glint_log_set_mode(GLINT_LOG_QUIET);
 	FILE *csv = NULL;
 	if (!check && !no_refusals && !within) {
 		mkdir("bench-out", 0777);

@@ -17,10 +17,10 @@
  * exactly; a tree of such groups (lat-long rectangles with bounding
  * cones) leaves only the texels across the horizon to sum one by one, each
  * as its clamped n . moment (never above the true share: a 64 x 32 map's
- * 5.6 degree texels leave a uniform map's irradiance 0.12 % low).  Maps wider than 512 are first reduced by an
- * integer factor (cells whose moments are the sums of their texels').
- * Texels flagged in `exclude` (hot texels integrated elsewhere) are left
- * out.
+ * 5.6 degree texels leave a uniform map's irradiance 0.12 % low).  Maps
+ * wider than 256 are first reduced by an integer factor (cells whose
+ * moments are the sums of their texels').  Texels flagged in `exclude`
+ * (hot texels integrated elsewhere) are left out.
  */
 
 #include "fit/scene/envmap.h"

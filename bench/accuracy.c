@@ -46,7 +46,9 @@
  * Writes bench-out/accuracy.csv; prints a line per case and a table per
  * map.  For studies: ACCURACY_ONLY=MATERIAL[,MATERIAL...] (those of the
  * list alone), ACCURACY_LOG=1 (the fits' own log on stderr: when they
- * raise their samples and why), ACCURACY_SAMPLES=N (the
+ * raise their samples and why), ACCURACY_KEEP_LEAN=1 (the fit's
+ * sampling lean left in its answer: fit.c, remove_lean()),
+ * ACCURACY_SAMPLES=N (the
  * fit's light and lobe samples per set), ACCURACY_REF_SAMPLES=N and
  * ACCURACY_REF_SPP=N (the reference photos'), ACCURACY_CACHE=DIR (the
  * reference photos kept there and read back on the next run: reference()),
@@ -472,6 +474,7 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 					atoi(getenv("ACCURACY_MAX_SAMPLES"));
 			o.no_footprint =
 				getenv("ACCURACY_NO_FOOTPRINT") != NULL;
+			o.keep_lean = getenv("ACCURACY_KEEP_LEAN") != NULL;
 			struct glint_fit_verdict v = { 0 };
 			if (glint_fit(&r, m, photo, w, &o, &res) == 0 &&
 			    glint_fit_judge(&res, 0, &v))

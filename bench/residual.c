@@ -18,11 +18,12 @@
  * and RESIDUAL_SPP=N change the fast path as bench/accuracy's options
  * (RESIDUAL_LIGHT_SAMPLES=N the light samples alone: 0 leaves the lobe
  * samples' estimate by itself);
- * RESIDUAL_SEED=N the fast path's sample seed; RESIDUAL_NO_HOT=1 no hot
- * texels (the whole map sampled); RESIDUAL_AT=P1,P2,... one
- * more row at every parameter given (a fit's answer against the truth),
- * each row also split by the view's angle to the normal (all three
- * channels).
+ * RESIDUAL_SEED=N the fast path's sample seed (RESIDUAL_LOBE_SUMS=1 prints
+ * each lobe's red integral summed over the interior: over seeds and
+ * sample counts, whether the estimate itself is biased); RESIDUAL_NO_HOT=1 no
+ * hot texels (the whole map sampled); RESIDUAL_AT=P1,P2,... one more row at
+ * every parameter given (a fit's answer against the truth), each row also split
+ * by the view's angle to the normal (all three channels).
  * RESIDUAL_OTHER=PHOTO2.exr (the same scene rendered with another seed)
  * prints the photo's own Monte Carlo noise on the same terms: half the
  * squared differences of the two photos over the interior.
@@ -176,6 +177,16 @@ int main(int argc, char **argv)
 		else if (k)
 			p[m->roughness_param] = atof(argv[3 + k]);
 		glint_shade_cache_lobes(c, p, lobes);
+		if (getenv("RESIDUAL_LOBE_SUMS")) {
+			for (int j = 0; j < m->nlobes; j++) {
+				double sj = 0;
+				for (int i = 0; i < n; i++)
+					sj += lobes[((size_t)i * m->nlobes +
+						     j) *
+						    3];
+				printf("lobe %d sum %.6f\n", j, sj);
+			}
+		}
 		for (int i = 0; i < n; i++) {
 			px[i].x = pix[i] % gb->width;
 			px[i].y = pix[i] / gb->width;

@@ -97,6 +97,9 @@ struct glint_fit_opts {
 	/* leave out the model-error jackknife a structured residual adds
 	 * (fit/optim/uncertainty.h) */
 	int no_model_error;
+	/* leave the sampling lean in the answer (fit.c, remove_lean();
+	 * benchmarks' comparison) */
+	int keep_lean;
 	/* glint_fit_evaluate(): the weights from the noise model at these
 	 * parameters' prediction (a fit's result: its own objective at
 	 * other parameters); NULL: at the evaluated parameters */
@@ -162,6 +165,9 @@ struct glint_fit_result {
 	double mc_over_noise;
 	/* ... and per value: the sets' variance over the residual's */
 	double model_noise;
+	/* The sampling lean taken off each parameter (p is the fit's
+	 * optimum minus its estimated lean; fit.c, remove_lean()) */
+	double lean_removed[GLINT_MAX_PARAMS];
 	int pixels;   /* pixels in the final pass */
 	int interior; /* pixels wholly on the sphere */
 	int specular_pixels;

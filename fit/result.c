@@ -194,7 +194,7 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 	const struct glint_model_ops *m = r->model;
 	const struct glint_uncertainty *u = &r->unc;
 	int n = u->n, rk = m->roughness_param;
-	json_t *find, *comb, *tb, *sys, *me;
+	json_t *find, *comb, *tb, *sys, *me, *lean;
 	char msg[256];
 
 	if (!n)
@@ -204,6 +204,7 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 	tb = json_array();
 	sys = json_array();
 	me = json_array();
+	lean = json_array();
 	if (u->nregions) {
 		snprintf(msg, sizeof(msg),
 			 "the residual is structured (the model is too simple "
@@ -225,6 +226,7 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 		json_array_append_new(
 			tb, glint_json_real_or_null(u->se_textbook[k]));
 		json_array_append_new(sys, json_real(u->sys[k]));
+		json_array_append_new(lean, json_real(r->lean_removed[k]));
 		json_array_append_new(
 			me,
 			json_real(sqrt(fmax(0, u->cov_regions[k * n + k]))));
@@ -253,7 +255,7 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 		}
 	}
 	return json_pack(
-		"{s:s,s:f,s:f,s:i,s:i,s:i,s:o,s:o,s:o,s:o,s:o,s:o,s:o,s:f}",
+		"{s:s,s:f,s:f,s:i,s:i,s:i,s:o,s:o,s:o,s:o,s:o,s:o,s:o,s:o,s:f}",
 		"method",
 		"cluster-robust covariance over spatial blocks (not below "
 		"chi2/dof-scaled, nor, when the residual is structured, below "
@@ -265,8 +267,9 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 		u->nblocks, "sample_sets", u->ndraws, "model_error_regions",
 		u->nregions, "covariance", matrix_json(u->cov, n),
 		"correlation", matrix_json(u->corr, n), "textbook_stderr", tb,
-		"systematic_stderr", sys, "model_error_stderr", me, "findings",
-		find, "combinations", comb, "seconds", r->unc_seconds);
+		"systematic_stderr", sys, "model_error_stderr", me,
+		"sampling_lean_removed", lean, "findings", find, "combinations",
+		comb, "seconds", r->unc_seconds);
 }
 
 void glint_fit_result_view(const struct glint_fit_result *res, int k,

@@ -242,6 +242,56 @@ static void mc_covariance(const struct glint_unc_problem *pr,
 						  ((k1 - 1.0) * k1);
 }
 
+/* The sampling lean and its standard error (uncertainty.h) over the
+ * parameters off their bounds, from the normal matrix a (n x n). */
+static int sampling_lean(const struct glint_unc_problem *pr, const double *a,
+			 struct glint_uncertainty *u)
+{
+	int n = pr->n, g = pr->nblocks, k1 = pr->ndraws, f[N], nf = 0;
+	double af[N * N], ainv[N * N], c[N] = { 0 }, vc[N * N] = { 0 };
+	int unseen[N];
+
+	if (!pr->draws_jr || k1 < 2 || g < 2)
+		return 0;
+	for (int k = 0; k < n; k++) {
+		double tol = 1e-9 * (pr->hi[k] - pr->lo[k]);
+		if (pr->p[k] > pr->lo[k] + tol && pr->p[k] < pr->hi[k] - tol)
+			f[nf++] = k;
+	}
+	if (nf == 0)
+		return 0;
+	for (int i = 0; i < nf; i++)
+		for (int j = 0; j < nf; j++)
+			af[i * nf + j] = a[f[i] * n + f[j]];
+	int ret = normal_inverse(af, nf, ainv, unseen);
+	if (ret < 0)
+		return ret;
+	for (int b = 0; b < g; b++)
+		for (int i = 0; i < nf; i++)
+			c[i] += pr->draws_jr[(size_t)b * n + f[i]];
+	/* The blocks' spread about their mean: the variance of the sum. */
+	for (int b = 0; b < g; b++) {
+		const double *x = pr->draws_jr + (size_t)b * n;
+		for (int i = 0; i < nf; i++)
+			for (int j = 0; j < nf; j++)
+				vc[i * nf + j] += (x[f[i]] - c[i] / g) *
+						  (x[f[j]] - c[j] / g) * g /
+						  (g - 1.0);
+	}
+	double cl[N * N], sc = 1 / (k1 * (k1 - 1.0));
+	sandwich(ainv, vc, nf, cl);
+	for (int i = 0; i < nf; i++) {
+		if (unseen[i])
+			continue;
+		double s = 0;
+		for (int j = 0; j < nf; j++)
+			s -= ainv[i * nf + j] * c[j];
+		u->lean[f[i]] = s * sc;
+		u->lean_se[f[i]] = sqrt(fmax(0, cl[i * nf + i])) * sc;
+	}
+	return 0;
+}
+
 int glint_uncertainty_compute(const struct glint_unc_problem *pr,
 			      struct glint_uncertainty *u)
 {
@@ -299,6 +349,9 @@ int glint_uncertainty_compute(const struct glint_unc_problem *pr,
 		sc[k] = b > 0 && t > b ? sqrt(t / b) : 1;
 	}
 	mc_covariance(pr, ainv, u->cov_mc);
+	ret = sampling_lean(pr, a, u);
+	if (ret < 0)
+		return ret;
 	for (int i = 0; i < n; i++)
 		for (int j = 0; j < n; j++)
 			u->cov[i * n + j] =

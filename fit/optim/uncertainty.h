@@ -65,6 +65,10 @@ struct glint_unc_problem {
 	 * or more) */
 	const double *draws;
 	int ndraws;
+	/* nblocks x n, or NULL: per block of residuals, sum over its
+	 * residuals i and the sets s of (r_s,i - r_i) J_s,ik, with J_s set
+	 * s's own Jacobian (the sampling lean below) */
+	const double *draws_jr;
 	/* n systematic standard uncertainties, or NULL */
 	const double *sys;
 	double level; /* of the intervals, e.g. 0.95 */
@@ -84,6 +88,11 @@ struct glint_uncertainty {
 	/* the regions' jackknife (0 without regions) */
 	double cov_regions[GLINT_UNC_MAX_N * GLINT_UNC_MAX_N];
 	double sys[GLINT_UNC_MAX_N]; /* systematic standard uncertainties */
+	/* The sampling lean (with draws_jr): the expected offset of the
+	 * optimum of the sets' mean from the optimum of the exact render,
+	 * and its standard error (over the blocks); 0 for a parameter at
+	 * its bound or unseen, or without draws_jr */
+	double lean[GLINT_UNC_MAX_N], lean_se[GLINT_UNC_MAX_N];
 	double corr[GLINT_UNC_MAX_N * GLINT_UNC_MAX_N];
 	double se[GLINT_UNC_MAX_N]; /* sqrt(diag cov); INFINITY: unseen */
 	double se_textbook[GLINT_UNC_MAX_N];		 /* for comparison */
@@ -99,6 +108,20 @@ struct glint_uncertainty {
  * (bad sizes, out of memory). */
 int glint_uncertainty_compute(const struct glint_unc_problem *pr,
 			      struct glint_uncertainty *u);
+
+/*
+ * The sampling lean.  Each set's residuals are r_s(p) = rho(p) + e_s(p),
+ * rho those of the exact render and e_s the set's Monte Carlo error; the
+ * fit minimises |mean_s r_s|^2, whose expectation carries |e|^2 / K, a
+ * function of p: the optimum leans to where the render's error is small
+ * (errors in variables; for a lobe's albedo, regression dilution).  To
+ * first order the lean is
+ *   -A^-1 sum_i Cov(e_i, de_i/dp) / K,
+ * and the covariance is estimated from the sets' own residuals and
+ * Jacobians, sum_s (r_s,i - r_i) J_s,ik / (K - 1) (draws_jr), with its
+ * standard error from the spread over the blocks.  Over the parameters
+ * not at a bound.
+ */
 
 /* Standard error of a function f of the parameters, from its gradient
  * grad (n) by the delta method: sqrt(grad^T cov grad). */

@@ -221,9 +221,10 @@ static void coverage(double sigma, double shared, double *glint,
 		double p[2];
 		struct glint_uncertainty u;
 		line(sigma, shared, jac, r, block, p);
-		struct glint_unc_problem pr = { 2,  M,	  jac,	r,    block,
-						NB, p,	  lo,	hi,   NULL,
-						0,  NULL, 0.95, NULL, 0 };
+		struct glint_unc_problem pr = { 2,     M,    jac,  r,
+						block, NB,   p,	   lo,
+						hi,    NULL, 0,	   NULL,
+						NULL,  0.95, NULL, 0 };
 		if (glint_uncertainty_compute(&pr, &u) < 0) {
 			CHECK(0, "compute failed");
 			return;
@@ -272,9 +273,9 @@ static void regions(void)
 				v[a * 2 + b] += (G - 1.0) / G *
 						(q[g][a] - mean[a]) *
 						(q[g][b] - mean[b]);
-	struct glint_unc_problem pr = { 2,  M,	  jac,	r,	block,
-					NB, p,	  lo,	hi,	NULL,
-					0,  NULL, 0.95, region, G };
+	struct glint_unc_problem pr = { 2,    M,    jac,    r,	  block, NB,
+					p,    lo,   hi,	    NULL, 0,	 NULL,
+					NULL, 0.95, region, G };
 	CHECK(glint_uncertainty_compute(&pr, &u) == 0, "compute");
 	CHECK(u.nregions == G, "%d regions", u.nregions);
 	for (int k = 0; k < 4; k++)
@@ -355,9 +356,113 @@ static void acceptance(void)
 	json_decref(j);
 }
 
+/*
+ * The sampling lean (uncertainty.h) where it is known: y = a x exactly,
+ * the model's regressor seen through K = 3 noisy sample sets x + e_s
+ * (errors in variables), a fitted where the first set's Jacobian is
+ * orthogonal to the mean residual (as fit.c's polish stops).  The
+ * slope comes out low by about a sigma^2 / K / (x^2 + sigma^2 / K)
+ * (regression dilution); the estimated lean must match that on
+ * average and, taken off, leave a within its standard error.
+ */
+static void lean(void)
+{
+	enum { K = 3, REPS = 200 };
+	static double x[K * M], jac[M], r[M], draws[K * M], jr[NB];
+	static int block[M];
+	const double a = 2, sigma = 0.3, lo1 = -100, hi1 = 100;
+	double sum_err = 0, sum_lean = 0, sum_fixed = 0, sum_fixed2 = 0;
+	double sum_se2 = 0, sum_lean2 = 0;
+
+	for (int rep = 0; rep < REPS; rep++) {
+		double xt[M], sxy = 0, sxx = 0, ahat;
+		for (int i = 0; i < M; i++) {
+			xt[i] = 0.5 + (i % 97) / 96.0;
+			block[i] = i * NB / M;
+			for (int k = 0; k < K; k++)
+				x[k * M + i] = xt[i] + sigma * gauss();
+		}
+		for (int i = 0; i < M; i++) {
+			double xm = 0;
+			for (int k = 0; k < K; k++)
+				xm += x[k * M + i] / K;
+			sxy += x[i] * a * xt[i];
+			sxx += x[i] * xm;
+		}
+		ahat = sxy / sxx;
+		memset(jr, 0, sizeof(jr));
+		for (int i = 0; i < M; i++) {
+			double xm = 0;
+			for (int k = 0; k < K; k++)
+				xm += x[k * M + i] / K;
+			r[i] = ahat * xm - a * xt[i];
+			jac[i] = x[i];
+			for (int k = 0; k < K; k++) {
+				draws[k * M + i] =
+					ahat * x[k * M + i] - a * xt[i];
+				jr[block[i]] += (draws[k * M + i] - r[i]) *
+						x[k * M + i];
+			}
+		}
+		struct glint_unc_problem pr = {
+			.n = 1,
+			.m = M,
+			.jac = jac,
+			.r = r,
+			.block = block,
+			.nblocks = NB,
+			.p = &ahat,
+			.lo = &lo1,
+			.hi = &hi1,
+			.draws = draws,
+			.ndraws = K,
+			.draws_jr = jr,
+			.level = 0.95,
+		};
+		struct glint_uncertainty u;
+		CHECK(glint_uncertainty_compute(&pr, &u) == 0, "compute");
+		sum_err += ahat - a;
+		sum_lean += u.lean[0];
+		sum_lean2 += u.lean[0] * u.lean[0];
+		sum_fixed += ahat - u.lean[0] - a;
+		sum_fixed2 += (ahat - u.lean[0] - a) * (ahat - u.lean[0] - a);
+		sum_se2 += u.lean_se[0] * u.lean_se[0];
+	}
+	double ex2 = 0;
+	for (int i = 0; i < M; i++) {
+		double xi = 0.5 + (i % 97) / 96.0;
+		ex2 += xi * xi / M;
+	}
+	double expect = -a * sigma * sigma / K / (ex2 + sigma * sigma / K);
+	double err = sum_err / REPS, ln = sum_lean / REPS,
+	       fixed = sum_fixed / REPS;
+	double sd = sqrt(sum_fixed2 / REPS - fixed * fixed);
+	printf("  slope's lean %.4f on average (expected %.4f), estimated "
+	       "%.4f; taken off: %.4f +- %.4f\n",
+	       err, expect, ln, fixed, sd / sqrt(REPS));
+	CHECK(fabs(err - expect) < 0.15 * fabs(expect), "lean %.4f vs %.4f",
+	      err, expect);
+	CHECK(fabs(ln - err) < 0.15 * fabs(expect),
+	      "estimated lean %.4f, actual %.4f", ln, err);
+	/* First order: the rest is a lean's share of the lean (8 % here). */
+	CHECK(fabs(fixed) < 0.15 * fabs(expect),
+	      "taken off, the slope is off by %.4f (+- %.4f)", fixed,
+	      sd / sqrt(REPS));
+	/* The estimate's standard error against its spread over the
+	 * repetitions: the blocks' spread sees the covariance's noise, not
+	 * that of the slope and A it is scaled by (here 20 % below). */
+	double lsd = sqrt(sum_lean2 / REPS - ln * ln),
+	       lse = sqrt(sum_se2 / REPS);
+	printf("  the estimate's spread %.4f, its standard error %.4f\n", lsd,
+	       lse);
+	CHECK(lse > 0.7 * lsd && lse < 2 * lsd,
+	      "standard error %.4f, spread %.4f", lse, lsd);
+}
+
 int main(void)
 {
 	RUN(acceptance);
+	RUN(lean);
 	static double jac[2 * M], r[M], draws[4 * M];
 	static int block[M];
 	double p[2], c, ctb;
@@ -365,8 +470,9 @@ int main(void)
 
 	/* The textbook covariance of a line. */
 	line(0.1, 0, jac, r, block, p);
-	struct glint_unc_problem pr = { 2,  M,	  jac, r,    block, NB,	  p, lo,
-					hi, NULL, 0,   NULL, 0.95,  NULL, 0 };
+	struct glint_unc_problem pr = { 2,    M,    jac,  r,	block, NB,
+					p,    lo,   hi,	  NULL, 0,     NULL,
+					NULL, 0.95, NULL, 0 };
 	CHECK(glint_uncertainty_compute(&pr, &u) == 0, "compute");
 	double sx = 0, sxx = 0, s2 = 0;
 	for (int i = 0; i < M; i++) {
@@ -399,9 +505,9 @@ int main(void)
 	for (int k = 0; k < 4; k++)
 		for (int i = 0; i < M; i++)
 			draws[k * M + i] = r[i] + sign[k] * d * jac[2 * i + 1];
-	struct glint_unc_problem pm = { 2,  M,	  jac,	r,    block,
-					NB, p,	  lo,	hi,   draws,
-					4,  NULL, 0.95, NULL, 0 };
+	struct glint_unc_problem pm = { 2,    M,    jac,  r,	 block, NB,
+					p,    lo,   hi,	  draws, 4,	NULL,
+					NULL, 0.95, NULL, 0 };
 	CHECK(glint_uncertainty_compute(&pm, &u) == 0, "compute");
 	/* steps -+d: sample variance 4/3 d^2, over K = 4 */
 	double vmc = 4.0 / 3 * d * d / 4;

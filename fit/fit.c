@@ -111,6 +111,10 @@ struct objective {
 	 * the others owned), whose mean the statistics use */
 	struct glint_shade_cache *sets[MAX_SETS];
 	int nsets;
+	/* each set's lobes at its last evaluation (sets_residuals()), at
+	 * the nonlinear parameters set_lobes_p, for the sets' Jacobians */
+	double *set_lobes[MAX_SETS];
+	double set_lobes_p[MAX_SETS][GLINT_MAX_PARAMS];
 	struct view views[GLINT_FIT_MAX_VIEWS];
 	int nviews;
 	/* The sets' mean weighted residuals at the final p over every
@@ -907,6 +911,8 @@ static void objective_free(struct objective *ob)
 	glint_image_free(ob->img);
 	free(ob->lobes);
 	free(ob->lobes2);
+	for (int k = 0; k < MAX_SETS; k++)
+		free(ob->set_lobes[k]);
 }
 
 /* A shade cache over every fitted pixel at the objective's sample counts
@@ -1485,10 +1491,20 @@ static int sets_residuals(void *ctx, const double *q, double *r)
 
 	so->have_res = 0;
 	/* The fitted set last: its lobes stay memoised for the Jacobian. */
+	size_t nl = (size_t)ob->nsel * ob->m->nlobes * 3 * sizeof(double);
 	for (int k = so->nsets - 1; k >= 0 && !ret; k--) {
 		ob->cache = so->sets[k];
 		ob->memo_valid = 0;
 		ret = obj_residuals(ob, q, so->each + (size_t)k * rows);
+		if (!ob->set_lobes[k])
+			ob->set_lobes[k] =
+				malloc((size_t)ob->d->n * ob->m->nlobes * 3 *
+				       sizeof(double));
+		if (ret == 0 && ob->set_lobes[k] && ob->memo_valid) {
+			memcpy(ob->set_lobes[k], ob->lobes, nl);
+			memcpy(ob->set_lobes_p[k], ob->memo_p,
+			       sizeof(ob->memo_p));
+		}
 	}
 	ob->cache = fitted;
 	if (ret < 0 || so->sets[0] != fitted)
@@ -1774,6 +1790,15 @@ static int sets_jr(struct objective *ob, int nsets, const double *each,
 		if (s > 0) {
 			ob->cache = ob->sets[s];
 			ob->memo_valid = 0;
+			/* its lobes at p from the polish's last evaluation */
+			if (ob->set_lobes[s] &&
+			    nonlinear_same(ob, ob->p, ob->set_lobes_p[s])) {
+				memcpy(ob->lobes, ob->set_lobes[s],
+				       (size_t)ob->nsel * ob->m->nlobes * 3 *
+					       sizeof(double));
+				memcpy(ob->memo_p, ob->p, sizeof(ob->memo_p));
+				ob->memo_valid = 1;
+			}
 			ret = obj_jacobian(ob, ob->p, NULL, js);
 			j = js;
 		}
@@ -1939,36 +1964,42 @@ static int more_samples(struct objective *ob, const struct glint_uncertainty *u,
  * average over six seeds at 16 + 16 samples, 0.438 at 128).  The
  * estimate's own noise is shrunk away (by 1 - se^2 / lean^2, at least
  * 0) and the rest's variance joins the parameter's systematic
- * uncertainty.  The residuals are evaluated again at the new optimum
- * (each and r); the Jacobian stays (a step below the standard error).
- * Returns 1 when the optimum moved, 0 when not, or a negative errno.
+ * uncertainty.  The residuals (each and r) follow to first order, by the
+ * Jacobian jac, which stays (the step is below the standard error).
+ * Returns 1 when the optimum moved, 0 when not.
  */
 static int remove_lean(struct objective *ob, int nsets, const double *lo,
 		       const double *hi, double *each, double *r,
-		       const struct glint_uncertainty *u)
+		       const double *jac, const struct glint_uncertainty *u)
 {
-	int moved = 0;
+	int n = ob->m->nparams, rows = 3 * ob->nsel, moved = 0;
+	double step[GLINT_MAX_PARAMS] = { 0 };
 
 	if (!ob->cache || nsets < 2 || ob->o->keep_lean)
 		return 0;
-	for (int k = 0; k < ob->m->nparams; k++) {
+	for (int k = 0; k < n; k++) {
 		double l = u->lean[k], s = u->lean_se[k];
 		if (!(fabs(l) > s) || !isfinite(l) || !isfinite(s))
 			continue;
 		double f = 1 - s * s / (l * l);
 		double q = fmin(hi[k], fmax(lo[k], ob->p[k] - f * l));
 		ob->lean_var[k] = f * s * f * s;
-		ob->lean_fix[k] = q - ob->p[k];
+		ob->lean_fix[k] = step[k] = q - ob->p[k];
 		moved |= q != ob->p[k];
 		ob->p[k] = q;
 	}
 	if (!moved)
 		return 0;
-	struct sets_objective so = {
-		.ob = ob, .sets = ob->sets, .nsets = nsets, .each = each
-	};
-	int ret = sets_residuals(&so, ob->p, r);
-	return ret < 0 ? ret : 1;
+	ob->memo_valid = 0;
+	for (int i = 0; i < rows; i++) {
+		double d = 0;
+		for (int k = 0; k < n; k++)
+			d += jac[(size_t)i * n + k] * step[k];
+		r[i] += d;
+		for (int s = 0; s < nsets; s++)
+			each[(size_t)s * rows + i] += d;
+	}
+	return 1;
 }
 
 /* The uncertainty at the optimum over every pixel and parameter
@@ -2007,7 +2038,7 @@ static int uncertainty(struct objective *ob, struct fit_data *d,
 	while (ret == 0 &&
 	       (ret = more_samples(ob, &res->unc, each, r, rows)) > 0);
 	if (ret == 0)
-		ret = remove_lean(ob, nsets, lo, hi, each, r, &res->unc);
+		ret = remove_lean(ob, nsets, lo, hi, each, r, jac, &res->unc);
 	if (ret > 0)
 		ret = covariance(ob, sl, nsets, lo, hi, each, r, jac, block,
 				 pixel_blocks(ob, sl->all, sl->nall, block), jr,

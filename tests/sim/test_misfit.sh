@@ -64,4 +64,13 @@ import json
 u = json.load(open('d/fit/params.json'))['uncertainty']
 assert u['model_error_regions'] == 0 and not any(u['model_error_stderr']), u
 "
+check "the sampling lean taken off is stated per parameter, within its interval" python3 -c "
+import json
+d = json.load(open('d/fit/params.json'))
+lean = d['uncertainty']['sampling_lean_removed']
+print('   lean removed', lean)
+assert len(lean) == len(d['parameters']), lean
+for p, l in zip(d['parameters'], lean):
+    assert p['stderr'] is None or abs(l) <= 2 * p['stderr'], (p, l)
+"
 [ "$fails" -eq 0 ] || { echo "$fails check(s) failed"; exit 1; }

@@ -803,6 +803,16 @@ static void test_header_bombs(void)
 		    tmp_path("attr.exr"), 704);
 	expect_read_error(tmp_path("attr.exr"),
 			  "header attribute 'type' says 1701273965 bytes");
+	/* A channel list shorter than its stated size: the C++ library
+	 * reads by the list, so on out of step with the sizes, into an
+	 * opaque attribute of 1.6 GB (found by fuzz_exr). */
+	copy_prefix(GLINT_TEST_DATA
+		    "/../fuzz/regressions/exr/"
+		    "chlist-short-then-opaque-1.6gb-in-756-bytes",
+		    tmp_path("chlist.exr"), 756);
+	expect_read_error(tmp_path("chlist.exr"),
+			  "header attribute 'chennals' of type chlist says "
+			  "55 bytes");
 
 	/* The limit is configurable; a good file over it is refused. */
 	glint_pfm_write(tmp_path("ok.pfm"), a);

@@ -546,17 +546,21 @@ static int check_attribute_sizes(const char *path)
 		}
 		int fixed = imf_fixed_bytes(type);
 		long long reads = fixed > 0 ? fixed : len;
-		if (fixed == 0 && len > MAX_PARSED) {
+		/* a preview's size is in its first 8 bytes */
+		size_t want = !strcmp(type, "preview")
+				      ? (size_t)(len < 8 ? len : 8)
+				      : (size_t)len;
+		if (fixed == 0 && want > MAX_PARSED) {
 			reads = -1;
 		} else if (fixed == 0) {
-			uint8_t *v = realloc(val, len > 0 ? (size_t)len : 1);
+			uint8_t *v = realloc(val, want > 0 ? want : 1);
 			if (!v) {
 				ret = glint_error_set(ENOMEM, "out of memory");
 				break;
 			}
 			val = v;
 			if (fseek(fp, (long)at, SEEK_SET) < 0 ||
-			    fread(val, 1, (size_t)len, fp) != (size_t)len) {
+			    fread(val, 1, want, fp) != want) {
 				ret = glint_error_set(EIO,
 						      "%s: cannot read the "
 						      "header at byte %lld",

@@ -59,7 +59,13 @@
  * texels on its hits alone, as before the footprint integral:
  * shade_cache.h), ACCURACY_DUMP=DIR (each clean reference photo
  * written there as MAP-MATERIAL.exr, to fit again with glint fit: the
- * scene is bench/captures.h's bench_scene at 256 px).
+ * scene is bench/captures.h's bench_scene at 256 px),
+ * ACCURACY_REF_SEED=S (the reference photo's seed, 1 unless given; the
+ * bias ratio's second photo S + 1), ACCURACY_REF_MEAN=N (the photo the
+ * mean of N reference renders, seeds S .. S + N - 1: 1/N of one
+ * render's Monte Carlo variance; the bias ratio's noise from the first
+ * two, no second photo), ACCURACY_SE=1 (each fit's standard errors:
+ * reported, the noise part, the sample sets' part, the systematic).
  */
 #define _DEFAULT_SOURCE
 #include "bench.h"
@@ -212,6 +218,40 @@ static double mc_noise(const struct glint_renderer *r,
 		       const struct glint_image *a, const struct glint_image *b)
 {
 	return sphere_stat(r, a, b) / sqrt(2);
+}
+
+/* The mean of n reference photos, seeds seed .. seed + n - 1: a photo
+ * with 1/n of one photo's Monte Carlo variance (ACCURACY_REF_MEAN=n;
+ * ACCURACY_REF_SEED the first; the cache keeps each).  With n >= 2 and
+ * noise, *noise is the mean's Monte Carlo noise on the sphere, from the
+ * first two: rms(a - b) / sqrt(2 n). */
+static struct glint_image *reference_mean(const struct glint_renderer *r,
+					  const char *map, const char *material,
+					  const struct glint_model_ops *m,
+					  const double *p, uint32_t seed, int n,
+					  double *noise)
+{
+	struct glint_image *sum = reference(r, map, material, m, p, seed);
+
+	for (int k = 1; sum && k < n; k++) {
+		struct glint_image *img =
+			reference(r, map, material, m, p, seed + (uint32_t)k);
+		if (!img) {
+			glint_image_free(sum);
+			return NULL;
+		}
+		if (k == 1 && noise)
+			*noise = sphere_stat(r, sum, img) / sqrt(2.0 * n);
+		for (size_t i = 0; i < (size_t)sum->width * sum->height * 3;
+		     i++)
+			sum->data[i] += img->data[i];
+		glint_image_free(img);
+	}
+	if (!sum)
+		return NULL;
+	for (size_t i = 0; i < (size_t)sum->width * sum->height * 3; i++)
+		sum->data[i] /= (float)n;
+	return sum;
 }
 
 /* Where the sensor photo's exposure puts the sphere: its mean as a
@@ -406,6 +446,15 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 
 	struct glint_envmap *env = NULL;
 
+	uint32_t seed0 = getenv("ACCURACY_REF_SEED")
+				 ? (uint32_t)atoi(getenv("ACCURACY_REF_SEED"))
+				 : 1;
+	int nref = getenv("ACCURACY_REF_MEAN")
+			   ? atoi(getenv("ACCURACY_REF_MEAN"))
+			   : 1;
+
+	if (nref < 1)
+		nref = 1;
 	memset(t, 0, sizeof(*t));
 	bench_scene(&sc, 256, map);
 	if (getenv("ACCURACY_SPP"))
@@ -423,18 +472,23 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 		if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
 					mats[i], &m, truth) < 0)
 			continue;
-		struct glint_image *a =
-			reference(&r, map, mats[i], m, truth, 1);
-		struct glint_image *b =
-			with_bias ? reference(&r, map, mats[i], m, truth, 2)
-				  : NULL;
-		if (!a || (with_bias && !b)) {
+		double noise = NAN;
+		struct glint_image *a = reference_mean(
+			&r, map, mats[i], m, truth, seed0, nref, &noise);
+		struct glint_image *b = with_bias && nref == 1
+						? reference(&r, map, mats[i], m,
+							    truth, seed0 + 1)
+						: NULL;
+		if (!a || (with_bias && nref == 1 && !b)) {
 			fprintf(stderr, "%s\n", glint_error_msg());
 			glint_image_free(a);
 			glint_image_free(b);
 			continue;
 		}
-		double noise = b ? mc_noise(&r, a, b) : NAN;
+		if (b)
+			noise = mc_noise(&r, a, b);
+		if (!with_bias)
+			noise = NAN;
 		if (getenv("ACCURACY_DUMP")) {
 			char path[1024];
 			snprintf(path, sizeof(path), "%s/%s-%s.exr",
@@ -451,10 +505,10 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 				atoi(getenv("ACCURACY_SAMPLES"));
 		o.no_footprint = getenv("ACCURACY_NO_FOOTPRINT") != NULL;
 		double bias = NAN;
-		if (b &&
+		if (isfinite(noise) &&
 		    glint_fit_evaluate(&r, m, a, NULL, &o, truth, &ev) == 0)
 			bias = ev.rmse / noise;
-		if (b && t->nbias < 64)
+		if (isfinite(noise) && t->nbias < 64)
 			t->bias[t->nbias++] = bias;
 		for (int lv = 0; lv < 2; lv++) {
 			struct glint_image *photo = glint_image_dup(a);
@@ -548,6 +602,22 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 					printf(" %s %.4f/%.4f",
 					       m->params[k].name, res.p[k],
 					       truth[k]);
+			/* ACCURACY_SE=1: each parameter's reported standard
+			 * error, its noise part (the blocks' sandwich), the
+			 * sample sets' part and the systematic one: what a
+			 * study over photo seeds compares with the spread of
+			 * the answers. */
+			if (getenv("ACCURACY_SE") && out != REFUSED)
+				for (int k = 0; k < res.unc.n; k++) {
+					int d = k * res.unc.n + k;
+					printf("\n    %-11s se %.5f  noise "
+					       "%.5f  "
+					       "sets %.5f  sys %.5f",
+					       m->params[k].name, res.unc.se[k],
+					       sqrt(res.unc.cov_blocks[d]),
+					       sqrt(res.unc.cov_mc[d]),
+					       res.unc.sys[k]);
+				}
 			if (lv)
 				printf("  sphere at %.2f %% of the ADC range",
 				       100 * sphere_level(&r, a, SENSOR_LEVEL));

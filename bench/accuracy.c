@@ -64,8 +64,11 @@
  * bias ratio's second photo S + 1), ACCURACY_REF_MEAN=N (the photo the
  * mean of N reference renders, seeds S .. S + N - 1: 1/N of one
  * render's Monte Carlo variance; the bias ratio's noise from the first
- * two, no second photo), ACCURACY_SE=1 (each fit's standard errors:
- * reported, the noise part, the sample sets' part, the systematic).
+ * two, no second photo), ACCURACY_SENSOR_SEED=S (the sensor's noise
+ * draw, 1 unless given), ACCURACY_PHOTOS=clean or noisy (those alone),
+ * ACCURACY_NO_BIAS=1 (no bias ratio: no second photo), ACCURACY_SE=1 (each
+ * fit's standard errors: reported, the noise part, the sample sets' part, the
+ * systematic).
  */
 #define _DEFAULT_SOURCE
 #include "bench.h"
@@ -453,8 +456,15 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			   ? atoi(getenv("ACCURACY_REF_MEAN"))
 			   : 1;
 
+	uint64_t sensor_seed =
+		getenv("ACCURACY_SENSOR_SEED")
+			? (uint64_t)atoll(getenv("ACCURACY_SENSOR_SEED"))
+			: 1;
+
 	if (nref < 1)
 		nref = 1;
+	if (getenv("ACCURACY_NO_BIAS"))
+		with_bias = 0;
 	memset(t, 0, sizeof(*t));
 	bench_scene(&sc, 256, map);
 	if (getenv("ACCURACY_SPP"))
@@ -517,7 +527,11 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			double err = INFINITY, t0 = glint_now();
 			int out = REFUSED, bound = 0;
 			char why[128] = "";
-			if (lv && bench_add_noise(photo, &w, SENSOR_LEVEL) < 0)
+			if (!selected(getenv("ACCURACY_PHOTOS"),
+				      lv ? "noisy" : "clean"))
+				goto next;
+			if (lv && bench_add_noise_seed(photo, &w, SENSOR_LEVEL,
+						       sensor_seed) < 0)
 				goto next;
 			glint_fit_default_opts(&o);
 			if (getenv("ACCURACY_SAMPLES"))
@@ -603,20 +617,24 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 					       m->params[k].name, res.p[k],
 					       truth[k]);
 			/* ACCURACY_SE=1: each parameter's reported standard
-			 * error, its noise part (the blocks' sandwich), the
-			 * sample sets' part and the systematic one: what a
-			 * study over photo seeds compares with the spread of
-			 * the answers. */
+			 * error and its parts: the photo's noise (the blocks'
+			 * sandwich, raised to the textbook or the regions'
+			 * where larger: what the interval uses), the sample
+			 * sets' and the systematic one; what a study over
+			 * photo seeds compares with the answers' spread. */
 			if (getenv("ACCURACY_SE") && out != REFUSED)
 				for (int k = 0; k < res.unc.n; k++) {
-					int d = k * res.unc.n + k;
-					printf("\n    %-11s se %.5f  noise "
-					       "%.5f  "
-					       "sets %.5f  sys %.5f",
-					       m->params[k].name, res.unc.se[k],
-					       sqrt(res.unc.cov_blocks[d]),
-					       sqrt(res.unc.cov_mc[d]),
-					       res.unc.sys[k]);
+					const struct glint_uncertainty *u =
+						&res.unc;
+					double mc = u->cov_mc[k * u->n + k],
+					       sys = u->sys[k] * u->sys[k];
+					printf("\n    %-11s se %.5f  noise %.5f"
+					       "  sets %.5f  sys %.5f",
+					       m->params[k].name, u->se[k],
+					       sqrt(fmax(0,
+							 u->se[k] * u->se[k] -
+								 mc - sys)),
+					       sqrt(mc), u->sys[k]);
 				}
 			if (lv)
 				printf("  sphere at %.2f %% of the ADC range",

@@ -127,13 +127,15 @@ bench_photo_512(const char *mat, const struct glint_model_ops *m,
  * sits at fraction `level` of the ADC range (0.1: a normal exposure; less
  * is darker and noisier), back to radiance with 1/variance weights (0
  * where clipped). */
-static inline int bench_add_noise(struct glint_image *photo,
-				  struct glint_image **weight, double level)
+static inline int bench_add_noise_seed(struct glint_image *photo,
+				       struct glint_image **weight,
+				       double level, uint64_t seed)
 {
 	struct glint_sensor s;
 	struct glint_image *dn = glint_image_new(photo->width, photo->height);
 	*weight = glint_image_new(photo->width, photo->height);
 	glint_sensor_default(&s);
+	s.seed = seed;
 	double mean = 0;
 	for (int i = 0; i < photo->width * photo->height * 3; i++)
 		mean += photo->data[i];
@@ -144,6 +146,13 @@ static inline int bench_add_noise(struct glint_image *photo,
 		ret = glint_sensor_to_radiance(&s, dn, photo, *weight);
 	glint_image_free(dn);
 	return ret;
+}
+
+/* The same with the sensor's default seed. */
+static inline int bench_add_noise(struct glint_image *photo,
+				  struct glint_image **weight, double level)
+{
+	return bench_add_noise_seed(photo, weight, level, 1);
 }
 
 /* The largest difference of Torrance-Sparrow parameters p from q in units

@@ -65,7 +65,10 @@
  * mean of N reference renders, seeds S .. S + N - 1: 1/N of one
  * render's Monte Carlo variance; the bias ratio's noise from the first
  * two, no second photo), ACCURACY_SENSOR_SEED=S (the sensor's noise
- * draw, 1 unless given), ACCURACY_PHOTOS=clean or noisy (those alone),
+ * draw, 1 unless given), ACCURACY_SENSOR_LEVEL=F (the whole image's
+ * mean at F of the ADC range, 0.1 unless given), ACCURACY_NO_WEIGHTS=1
+ * (the noisy photo fitted without its 1/variance weights: glint's
+ * default variance model), ACCURACY_PHOTOS=clean or noisy (those alone),
  * ACCURACY_NO_BIAS=1 (no bias ratio: no second photo), ACCURACY_SE=1 (each
  * fit's standard errors: reported, the noise part, the sample sets' part, the
  * systematic).
@@ -461,6 +464,10 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			? (uint64_t)atoll(getenv("ACCURACY_SENSOR_SEED"))
 			: 1;
 
+	double level = getenv("ACCURACY_SENSOR_LEVEL")
+			       ? atof(getenv("ACCURACY_SENSOR_LEVEL"))
+			       : SENSOR_LEVEL;
+
 	if (nref < 1)
 		nref = 1;
 	if (getenv("ACCURACY_NO_BIAS"))
@@ -530,9 +537,13 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			if (!selected(getenv("ACCURACY_PHOTOS"),
 				      lv ? "noisy" : "clean"))
 				goto next;
-			if (lv && bench_add_noise_seed(photo, &w, SENSOR_LEVEL,
+			if (lv && bench_add_noise_seed(photo, &w, level,
 						       sensor_seed) < 0)
 				goto next;
+			if (lv && getenv("ACCURACY_NO_WEIGHTS")) {
+				glint_image_free(w);
+				w = NULL;
+			}
 			glint_fit_default_opts(&o);
 			if (getenv("ACCURACY_SAMPLES"))
 				o.light_samples = o.lobe_samples =
@@ -638,7 +649,7 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 				}
 			if (lv)
 				printf("  sphere at %.2f %% of the ADC range",
-				       100 * sphere_level(&r, a, SENSOR_LEVEL));
+				       100 * sphere_level(&r, a, level));
 			printf("%s\n", why);
 			fflush(stdout);
 			if (csv)

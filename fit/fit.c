@@ -1611,6 +1611,9 @@ static void select_all(struct objective *ob, const struct selections *sl)
 /*
  * Weights from the noise model at the fit's prediction (fit_data.h), for
  * a photo whose weights came with it (a weight image: a real noise model)
+ * or without (the default signal-proportional variance, known up to its
+ * scale, which residual_scale() estimates; evaluated at the photo's own
+ * values alone until 2026-11-27, it left a dark photo's albedos 20 % low)
  * and for the values the fit explains to within 3 standard deviations:
  * there the photo's own noise is what is left, and weights made from it
  * bias the fit.  Elsewhere the misfit is far above the noise, its weight
@@ -1618,12 +1621,42 @@ static void select_all(struct objective *ob, const struct selections *sl)
  * would move the optimum (a near-mirror's sharp reflections: copper
  * under the studio map ended 3x above the truth's cost).
  */
+/* The scale of a variance model known up to it: (median |z| / 0.6745)^2
+ * over the selection's residuals z, each over the model's standard
+ * deviation at the prediction (not the current weights, so that a fit
+ * and an evaluation at its parameters agree); 1 when none. */
+static int residual_scale(const struct objective *ob, const struct fit_data *d,
+			  const double *r, double *s2)
+{
+	double *a = malloc((size_t)3 * (ob->nsel > 0 ? ob->nsel : 1) *
+			   sizeof(double));
+	int n = 0;
+
+	if (!a)
+		return glint_error_set(ENOMEM, "out of memory");
+	for (int t = 0; t < ob->nsel; t++)
+		for (int c = 0; c < 3; c++) {
+			int i = 3 * ob->sel[t] + c;
+			if (!(d->sw[i] > 0))
+				continue;
+			double e = r[3 * t + c] / d->sw[i],
+			       v = fit_data_variance(d, i, d->y[i] + e);
+			if (v > 0)
+				a[n++] = fabs(e) / sqrt(v);
+		}
+	qsort(a, (size_t)n, sizeof(double), cmp_double);
+	double med = n ? a[n / 2] / 0.6745 : 1;
+	*s2 = med > 0 ? med * med : 1;
+	free(a);
+	return 0;
+}
+
 static int reweight(struct objective *ob, struct fit_data *d, double *r)
 {
 	double *pred;
 	int ret;
 
-	if (!d->noise_model)
+	if (!d->noise_model && !d->shape_only)
 		return 0;
 	pred = malloc((size_t)3 * d->n * sizeof(double));
 	ret = pred ? 0 : glint_error_set(ENOMEM, "out of memory");
@@ -1631,6 +1664,11 @@ static int reweight(struct objective *ob, struct fit_data *d, double *r)
 		ret = obj_residuals(ob, ob->p, r);
 	for (int i = 0; i < 3 * d->n && ret == 0; i++)
 		pred[i] = d->y[i];
+	/* A model known up to its scale (no weight image): the scale from
+	 * the weighted residuals' median, robust to a misfit's. */
+	double s2 = 1;
+	if (ret == 0 && !d->noise_model)
+		ret = residual_scale(ob, d, r, &s2);
 	/* Within 3 standard deviations of the noise model at the
 	 * prediction, not of the photo's own weight: a value that came out
 	 * dark by chance has a small variance of its own and so a large
@@ -1643,7 +1681,7 @@ static int reweight(struct objective *ob, struct fit_data *d, double *r)
 				continue;
 			double e = r[3 * t + c] / d->sw[i],
 			       v = fit_data_variance(d, i, d->y[i] + e);
-			if (v > 0 && e * e < 9 * v)
+			if (v > 0 && e * e < 9 * s2 * v)
 				pred[i] += e;
 		}
 	if (ret == 0)
@@ -1663,7 +1701,7 @@ static int reweight_all(struct objective *ob, struct fit_data *d,
 	double *r;
 	int ret;
 
-	if (!d->noise_model || !ob->cache)
+	if ((!d->noise_model && !d->shape_only) || !ob->cache)
 		return 0;
 	r = malloc((size_t)3 * (sl->nall > 0 ? sl->nall : 1) * sizeof(double));
 	if (!r)

@@ -236,6 +236,7 @@ int fit_data_prepare(struct glint_gbuffer *gb, const struct glint_image *photo,
 			d->vb[i] = 1;
 		}
 		fit_data_reweight(d, d->y);
+		d->shape_only = 1;
 	} else {
 		for (int i = 0; i < 3 * d->n; i++) {
 			d->va[i] = 1;
@@ -264,6 +265,7 @@ int fit_data_join(const struct fit_data *parts, int nparts, struct fit_data *d)
 		return glint_error_set(ENOMEM, "out of memory");
 	}
 	d->noise_model = 1;
+	d->shape_only = 1;
 	for (int k = 0; k < nparts; k++) {
 		const struct fit_data *q = &parts[k];
 		size_t o = (size_t)d->n, m = (size_t)q->n;
@@ -275,6 +277,7 @@ int fit_data_join(const struct fit_data *parts, int nparts, struct fit_data *d)
 		memcpy(d->vb + 3 * o, q->vb, m * 3 * sizeof(double));
 		d->n += q->n;
 		d->noise_model &= q->noise_model;
+		d->shape_only &= q->shape_only;
 	}
 	d->stride = parts[0].stride;
 	d->frame_x = parts[0].frame_x;

@@ -23,7 +23,11 @@ struct fit_data {
 	 * instead. */
 	double *va, *vb;
 	int noise_model; /* va, vb model a weight image (a real noise model) */
-	int stride;	 /* every stride-th row and column was taken */
+	/* va, vb known up to a scale (the default signal-proportional
+	 * variance, `--weights` not given): re-evaluated at the prediction
+	 * too, the scale estimated from the residuals */
+	int shape_only;
+	int stride;	      /* every stride-th row and column was taken */
 	int frame_x, frame_y; /* xy's origin in the frame (pinhole.h) */
 };
 
@@ -49,7 +53,8 @@ int fit_data_prepare(struct glint_gbuffer *gb, const struct glint_image *photo,
 
 /* The pixels of several photos one after the other (a joint fit):
  * copies; stride and frame are parts[0]'s, noise_model is set when every
- * part has one. */
+ * part has one, shape_only when every part is so (photos with and
+ * without weights together: no reweighting, the scales differ). */
 int fit_data_join(const struct fit_data *parts, int nparts, struct fit_data *d);
 
 /* Where one photo's pixels lie in a joint fit_data (off, n) and how they

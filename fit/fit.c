@@ -1608,19 +1608,6 @@ static void select_all(struct objective *ob, const struct selections *sl)
 		ob->free_idx[k] = k;
 }
 
-/*
- * Weights from the noise model at the fit's prediction (fit_data.h), for
- * a photo whose weights came with it (a weight image: a real noise model)
- * or without (the default signal-proportional variance, known up to its
- * scale, which residual_scale() estimates; evaluated at the photo's own
- * values alone until 2026-11-27, it left a dark photo's albedos 20 % low)
- * and for the values the fit explains to within 3 standard deviations:
- * there the photo's own noise is what is left, and weights made from it
- * bias the fit.  Elsewhere the misfit is far above the noise, its weight
- * correlates with nothing that matters, and moving the weights there
- * would move the optimum (a near-mirror's sharp reflections: copper
- * under the studio map ended 3x above the truth's cost).
- */
 /* The scale of a variance model known up to it: (median |z| / 0.6745)^2
  * over the selection's residuals z, each over the model's standard
  * deviation at the prediction (not the current weights, so that a fit
@@ -1651,6 +1638,19 @@ static int residual_scale(const struct objective *ob, const struct fit_data *d,
 	return 0;
 }
 
+/*
+ * Weights from the noise model at the fit's prediction (fit_data.h), for
+ * a photo whose weights came with it (a weight image: a real noise model)
+ * or without (the default signal-proportional variance, known up to its
+ * scale, which residual_scale() estimates; evaluated at the photo's own
+ * values alone until 2026-11-27, it left a dark photo's albedos 20 % low)
+ * and for the values the fit explains to within 3 standard deviations:
+ * there the photo's own noise is what is left, and weights made from it
+ * bias the fit.  Elsewhere the misfit is far above the noise, its weight
+ * correlates with nothing that matters, and moving the weights there
+ * would move the optimum (a near-mirror's sharp reflections: copper
+ * under the studio map ended 3x above the truth's cost).
+ */
 static int reweight(struct objective *ob, struct fit_data *d, double *r)
 {
 	double *pred;
@@ -1665,7 +1665,7 @@ static int reweight(struct objective *ob, struct fit_data *d, double *r)
 	for (int i = 0; i < 3 * d->n && ret == 0; i++)
 		pred[i] = d->y[i];
 	/* A model known up to its scale (no weight image): the scale from
-	 * the weighted residuals' median, robust to a misfit's. */
+	 * the residuals' median (residual_scale()), robust to a misfit's. */
 	double s2 = 1;
 	if (ret == 0 && !d->noise_model)
 		ret = residual_scale(ob, d, r, &s2);

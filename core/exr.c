@@ -475,7 +475,10 @@ static long long imf_parsed_bytes(const char *type, const uint8_t *v,
 			return -1;
 		memcpy(&w, v, 4);
 		memcpy(&h, v + 4, 4);
-		return 8 + 4 * (long long)w * h;
+		uint64_t px = (uint64_t)w * h; /* below 2^64: no overflow */
+		if (px > (len - 8) / 4)	       /* more than the value holds */
+			return -1;
+		return 8 + 4 * (long long)px;
 	}
 	while (at < len) { /* stringvector: length, bytes */
 		int32_t n;
@@ -568,6 +571,16 @@ static int check_attribute_sizes(const char *path)
 				break;
 			}
 			reads = imf_parsed_bytes(type, val, (size_t)len);
+		}
+		if (reads < 0) {
+			ret = glint_error_set(EINVAL,
+					      "%s: header attribute '%.64s' "
+					      "of type %.32s says %d bytes at "
+					      "byte %lld, but its value is not "
+					      "a %.32s of that size",
+					      path, (const char *)buf, type,
+					      len, at, type);
+			break;
 		}
 		if (reads != len) {
 			ret = glint_error_set(EINVAL,

@@ -813,6 +813,14 @@ static void test_header_bombs(void)
 	expect_read_error(tmp_path("chlist.exr"),
 			  "header attribute 'chennals' of type chlist says "
 			  "55 bytes");
+	/* A preview of 2^32 - 1 squared pixels: 4wh overflowed 64 bits in
+	 * the check itself (found by fuzz_exr under UBSan, 2026-11-27). */
+	copy_prefix(GLINT_TEST_DATA "/../fuzz/regressions/exr/"
+				    "preview-4wh-overflows-64-bits",
+		    tmp_path("preview.exr"), 832);
+	expect_read_error(tmp_path("preview.exr"),
+			  "header attribute 'thumb' of type preview says 8 "
+			  "bytes at byte 26, but its value is not a preview");
 
 	/* The limit is configurable; a good file over it is refused. */
 	glint_pfm_write(tmp_path("ok.pfm"), a);

@@ -572,24 +572,20 @@ static int check_attribute_sizes(const char *path)
 			}
 			reads = imf_parsed_bytes(type, val, (size_t)len);
 		}
-		if (reads < 0) {
-			ret = glint_error_set(EINVAL,
-					      "%s: header attribute '%.64s' "
-					      "of type %.32s says %d bytes at "
-					      "byte %lld, but its value is not "
-					      "a %.32s of that size",
-					      path, (const char *)buf, type,
-					      len, at, type);
-			break;
-		}
 		if (reads != len) {
+			char took[64];
+			if (reads < 0)
+				snprintf(took, sizeof(took),
+					 "is not a %.32s of that size", type);
+			else
+				snprintf(took, sizeof(took), "takes %lld",
+					 reads);
 			ret = glint_error_set(EINVAL,
 					      "%s: header attribute '%.64s' "
 					      "of type %.32s says %d bytes at "
-					      "byte %lld, but its value takes "
-					      "%lld",
+					      "byte %lld, but its value %s",
 					      path, (const char *)buf, type,
-					      len, at, reads);
+					      len, at, took);
 			break;
 		}
 		pos = at + len;

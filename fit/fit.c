@@ -1608,12 +1608,14 @@ static void select_all(struct objective *ob, const struct selections *sl)
 		ob->free_idx[k] = k;
 }
 
-/* The scale of a variance model known up to it: (median |z| / 0.6745)^2
- * over the selection's residuals z, each over the model's standard
- * deviation at the prediction (not the current weights, so that a fit
- * and an evaluation at its parameters agree); 1 when none. */
-static int residual_scale(const struct objective *ob, const struct fit_data *d,
-			  const double *r, double *s2)
+/* Each selected value's squared residual over the noise model's
+ * variance at the prediction, z[3 t + c] (NAN without a weight or a
+ * variance); with s2, the scale of a model known up to it,
+ * (median sqrt z / 0.6745)^2 (1 when none).  From the model at the
+ * prediction, not the current weights, so that a fit and an evaluation
+ * at its parameters agree. */
+static int residual_z(const struct objective *ob, const struct fit_data *d,
+		      const double *r, double *z, double *s2)
 {
 	double *a = malloc((size_t)3 * (ob->nsel > 0 ? ob->nsel : 1) *
 			   sizeof(double));
@@ -1624,16 +1626,19 @@ static int residual_scale(const struct objective *ob, const struct fit_data *d,
 	for (int t = 0; t < ob->nsel; t++)
 		for (int c = 0; c < 3; c++) {
 			int i = 3 * ob->sel[t] + c;
-			if (!(d->sw[i] > 0))
-				continue;
-			double e = r[3 * t + c] / d->sw[i],
-			       v = fit_data_variance(d, i, d->y[i] + e);
+			double e = d->sw[i] > 0 ? r[3 * t + c] / d->sw[i] : 0,
+			       v = d->sw[i] > 0 ? fit_data_variance(d, i,
+								    d->y[i] + e)
+						: 0;
+			z[3 * t + c] = v > 0 ? e * e / v : NAN;
 			if (v > 0)
-				a[n++] = fabs(e) / sqrt(v);
+				a[n++] = z[3 * t + c];
 		}
-	qsort(a, (size_t)n, sizeof(double), cmp_double);
-	double med = n ? a[n / 2] / 0.6745 : 1;
-	*s2 = med > 0 ? med * med : 1;
+	if (s2) {
+		qsort(a, (size_t)n, sizeof(double), cmp_double);
+		double med = n ? sqrt(a[n / 2]) / 0.6745 : 1;
+		*s2 = med > 0 ? med * med : 1;
+	}
 	free(a);
 	return 0;
 }
@@ -1642,7 +1647,7 @@ static int residual_scale(const struct objective *ob, const struct fit_data *d,
  * Weights from the noise model at the fit's prediction (fit_data.h), for
  * a photo whose weights came with it (a weight image: a real noise model)
  * or without (the default signal-proportional variance, known up to its
- * scale, which residual_scale() estimates; evaluated at the photo's own
+ * scale, which residual_z() estimates; evaluated at the photo's own
  * values alone until 2026-11-27, it left a dark photo's albedos 20 % low)
  * and for the values the fit explains to within 3 standard deviations:
  * there the photo's own noise is what is left, and weights made from it
@@ -1653,41 +1658,40 @@ static int residual_scale(const struct objective *ob, const struct fit_data *d,
  */
 static int reweight(struct objective *ob, struct fit_data *d, double *r)
 {
-	double *pred;
+	double *pred, *z;
 	int ret;
 
 	if (!d->noise_model && !d->shape_only)
 		return 0;
 	pred = malloc((size_t)3 * d->n * sizeof(double));
-	ret = pred ? 0 : glint_error_set(ENOMEM, "out of memory");
+	z = malloc((size_t)3 * (ob->nsel > 0 ? ob->nsel : 1) * sizeof(double));
+	ret = pred && z ? 0 : glint_error_set(ENOMEM, "out of memory");
 	if (ret == 0)
 		ret = obj_residuals(ob, ob->p, r);
 	for (int i = 0; i < 3 * d->n && ret == 0; i++)
 		pred[i] = d->y[i];
 	/* A model known up to its scale (no weight image): the scale from
-	 * the residuals' median (residual_scale()), robust to a misfit's. */
+	 * the residuals' median, robust to a misfit's; a weight image's
+	 * model is the noise's own (scale 1). */
 	double s2 = 1;
-	if (ret == 0 && !d->noise_model)
-		ret = residual_scale(ob, d, r, &s2);
+	if (ret == 0)
+		ret = residual_z(ob, d, r, z, d->noise_model ? NULL : &s2);
 	/* Within 3 standard deviations of the noise model at the
 	 * prediction, not of the photo's own weight: a value that came out
 	 * dark by chance has a small variance of its own and so a large
 	 * weighted residual, and leaving it on its own weight kept the very
 	 * bias this removes (every albedo low at 1 000 electrons). */
 	for (int t = 0; t < ob->nsel && ret == 0; t++)
-		for (int c = 0; c < 3; c++) {
-			int i = 3 * ob->sel[t] + c;
-			if (!(d->sw[i] > 0))
-				continue;
-			double e = r[3 * t + c] / d->sw[i],
-			       v = fit_data_variance(d, i, d->y[i] + e);
-			if (v > 0 && e * e < 9 * s2 * v)
-				pred[i] += e;
-		}
+		for (int c = 0; c < 3; c++)
+			if (z[3 * t + c] < 9 * s2) /* NAN: no weight */
+				pred[3 * ob->sel[t] + c] +=
+					r[3 * t + c] /
+					d->sw[3 * ob->sel[t] + c];
 	if (ret == 0)
 		fit_data_reweight(d, pred);
 	ob->memo_valid = 0;
 	free(pred);
+	free(z);
 	return ret;
 }
 

@@ -97,6 +97,9 @@ struct glint_fit_opts {
 	/* leave out the model-error jackknife a structured residual adds
 	 * (fit/optim/uncertainty.h) */
 	int no_model_error;
+	/* leave out the model-discrepancy term a structured residual adds
+	 * (fit.c, discrepancy(); its calibration: bench/misfit) */
+	int no_discrepancy;
 	/* leave the sampling lean in the answer (fit.c, remove_lean();
 	 * benchmarks' comparison) */
 	int keep_lean;
@@ -168,6 +171,13 @@ struct glint_fit_result {
 	/* The sampling lean taken off each parameter (p is the fit's
 	 * optimum minus its estimated lean; fit.c, remove_lean()) */
 	double lean_removed[GLINT_MAX_PARAMS];
+	/* When the residual is structured (the model misses the photo): the
+	 * part of the relative RMSE its structure makes (the regions' mean
+	 * residuals, less their noise), else 0; and the model-discrepancy
+	 * standard uncertainty it gave each parameter (fit.c,
+	 * discrepancy()), in se */
+	double misfit_share;
+	double discrepancy[GLINT_MAX_PARAMS];
 	int pixels;   /* pixels in the final pass */
 	int interior; /* pixels wholly on the sphere */
 	int specular_pixels;

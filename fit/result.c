@@ -194,8 +194,8 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 	const struct glint_model_ops *m = r->model;
 	const struct glint_uncertainty *u = &r->unc;
 	int n = u->n, rk = m->roughness_param;
-	json_t *find, *comb, *tb, *sys, *me, *lean;
-	char msg[256];
+	json_t *find, *comb, *tb, *sys, *me, *md, *lean;
+	char msg[320];
 
 	if (!n)
 		return json_null();
@@ -204,6 +204,7 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 	tb = json_array();
 	sys = json_array();
 	me = json_array();
+	md = json_array();
 	lean = json_array();
 	if (u->nregions) {
 		snprintf(msg, sizeof(msg),
@@ -212,6 +213,16 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 			 "the answer moves between %d regions of the sphere "
 			 "that see the light differently",
 			 u->nregions);
+		json_array_append_new(find, json_string(msg));
+	}
+	if (r->misfit_share > 0) {
+		snprintf(msg, sizeof(msg),
+			 "the residual's structure is %.1f %% of the photo's "
+			 "signal: the answer imitates the material under this "
+			 "light and may move under another; the intervals "
+			 "include a model discrepancy for that, calibrated on "
+			 "materials outside the model (bench/misfit)",
+			 100 * r->misfit_share);
 		json_array_append_new(find, json_string(msg));
 	}
 	specular_fresnel(r, find, comb);
@@ -230,6 +241,7 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 		json_array_append_new(
 			me,
 			json_real(sqrt(fmax(0, u->cov_regions[k * n + k]))));
+		json_array_append_new(md, json_real(r->discrepancy[k]));
 		if (undetermined(r, k) &&
 		    strcmp(m->params[k].name, "ior") != 0) {
 			snprintf(msg, sizeof(msg),
@@ -255,19 +267,23 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 		}
 	}
 	return json_pack(
-		"{s:s,s:f,s:f,s:i,s:i,s:i,s:o,s:o,s:o,s:o,s:o,s:o,s:o,s:o,s:f}",
+		"{s:s,s:f,s:f,s:i,s:i,s:i,s:o,s:o,s:o,s:o,s:o,s:f,s:o,s:o,s:o,"
+		"s:o,s:f}",
 		"method",
 		"cluster-robust covariance over spatial blocks (not below "
 		"chi2/dof-scaled, nor, when the residual is structured, below "
 		"a delete-one-region jackknife over regions that see the "
 		"light differently) plus the spread over independent sample "
-		"sets plus the fast render's systematic accuracy; Student t at "
+		"sets plus the fast render's systematic accuracy (and, when "
+		"the residual is structured, a model discrepancy calibrated "
+		"on materials outside the model); Student t at "
 		"Welch-Satterthwaite degrees of freedom",
 		"level", u->level, "chi2_dof", u->chi2_dof, "blocks",
 		u->nblocks, "sample_sets", u->ndraws, "model_error_regions",
 		u->nregions, "covariance", matrix_json(u->cov, n),
 		"correlation", matrix_json(u->corr, n), "textbook_stderr", tb,
 		"systematic_stderr", sys, "model_error_stderr", me,
+		"misfit_share", r->misfit_share, "model_discrepancy_stderr", md,
 		"sampling_lean_removed", lean, "findings", find, "combinations",
 		comb, "seconds", r->unc_seconds);
 }

@@ -59,10 +59,25 @@ for p, e in zip(d['parameters'], u['model_error_stderr']):
 assert any('model is too simple' in f for f in u['findings']), u['findings']
 "
 check "... and the text output names them" grep -q '^  the model error over [0-9]* regions' lam.txt
-check "the true model's fit has no model-error term" python3 -c "
+check "... and a model discrepancy scaled by the structure's share of the signal" python3 -c "
+import json
+d = json.load(open('lam/params.json'))
+u = d['uncertainty']
+share, md = u['misfit_share'], u['model_discrepancy_stderr']
+print('   share', share, 'discrepancy', md)
+assert 0.01 < share < 1, share
+# Lambert's parameters are all diffuse albedos: 0.73 x share x albedo (fit.c)
+for p, e in zip(d['parameters'], md):
+    assert abs(e - 0.73 * share * p['value']) <= 1e-9 + 1e-6 * e, (p, e)
+    assert p['stderr'] >= e * (1 - 1e-9), (p, e)
+assert any('model discrepancy' in f for f in u['findings']), u['findings']
+"
+check "... which the text output names" grep -q '^  a model discrepancy (the residual.s structure [0-9.]* % of the signal)' lam.txt
+check "the true model's fit has no model-error or discrepancy term" python3 -c "
 import json
 u = json.load(open('d/fit/params.json'))['uncertainty']
 assert u['model_error_regions'] == 0 and not any(u['model_error_stderr']), u
+assert u['misfit_share'] == 0 and not any(u['model_discrepancy_stderr']), u
 "
 check "the sampling lean taken off is stated per parameter, within its interval" python3 -c "
 import json

@@ -173,4 +173,13 @@ json_t *glint_fit_verdict_json(const struct glint_fit_result *r,
  * the model by BIC as --select-model does (issue 15). */
 int glint_fit_needs_selection(const struct glint_fit_result *r);
 
+/* Specular x F0(ior) of r per channel (NAN where the model has no such
+ * channel), its delta-method standard error, and the largest |correlation|
+ * of a specular channel with ior in corr.  Returns 1 when the photo
+ * determines that product rather than each (they correlate beyond 0.9, or
+ * ior is not determined), 0 when it determines each, -1 when the model
+ * has no ior (nothing filled). */
+int glint_fit_specular_f0(const struct glint_fit_result *r, double v[3],
+			  double se[3], double *corr);
+
 #endif

@@ -113,6 +113,40 @@ static json_t *matrix_json(const double *a, int n)
 	return rows;
 }
 
+int glint_fit_specular_f0(const struct glint_fit_result *r, double v[3],
+			  double se[3], double *corr)
+{
+	const struct glint_model_ops *m = r->model;
+	int ki = param_index(m, "ior"), n = r->unc.n;
+	static const char *const ch[3] = { "specular.r", "specular.g",
+					   "specular.b" };
+	double worst = 0;
+
+	if (ki < 0 || !n)
+		return -1;
+	for (int c = 0; c < 3; c++) {
+		int ks = param_index(m, ch[c]);
+		if (ks >= 0)
+			worst = fmax(worst, fabs(r->unc.corr[ks * n + ki]));
+	}
+	*corr = worst;
+	double nn = r->p[ki], f0 = glint_fresnel_dielectric(1, nn);
+	double df0 = 4 * (nn - 1) / ((nn + 1) * (nn + 1) * (nn + 1));
+	for (int c = 0; c < 3; c++) {
+		int ks = param_index(m, ch[c]);
+		double g[GLINT_UNC_MAX_N] = { 0 };
+		if (ks < 0) {
+			v[c] = se[c] = NAN;
+			continue;
+		}
+		g[ks] = f0;
+		g[ki] = r->p[ks] * df0;
+		v[c] = r->p[ks] * f0;
+		se[c] = glint_uncertainty_delta(&r->unc, g);
+	}
+	return worst >= 0.9 || undetermined(r, ki);
+}
+
 /*
  * Specular albedo and ior enter a Torrance-Sparrow image mostly as
  * specular x F0(ior): when they correlate strongly the photo determines
@@ -121,23 +155,12 @@ static json_t *matrix_json(const double *a, int n)
 static void specular_fresnel(const struct glint_fit_result *r, json_t *find,
 			     json_t *comb)
 {
-	const struct glint_model_ops *m = r->model;
-	int ki = param_index(m, "ior"), n = r->unc.n;
 	static const char *const ch[3] = { "specular.r", "specular.g",
 					   "specular.b" };
-	double worst = 0;
+	double v[3], se[3], worst;
 
-	if (ki < 0)
+	if (glint_fit_specular_f0(r, v, se, &worst) < 1)
 		return;
-	for (int c = 0; c < 3; c++) {
-		int ks = param_index(m, ch[c]);
-		if (ks >= 0)
-			worst = fmax(worst, fabs(r->unc.corr[ks * n + ki]));
-	}
-	if (worst < 0.9 && !undetermined(r, ki))
-		return;
-	double nn = r->p[ki], f0 = glint_fresnel_dielectric(1, nn);
-	double df0 = 4 * (nn - 1) / ((nn + 1) * (nn + 1) * (nn + 1));
 	char msg[512];
 	int len = worst >= 0.9
 			  ? snprintf(msg, sizeof(msg),
@@ -149,26 +172,21 @@ static void specular_fresnel(const struct glint_fit_result *r, json_t *find,
 				     "the photo determines specular x "
 				     "F0(ior):");
 	for (int c = 0; c < 3; c++) {
-		int ks = param_index(m, ch[c]);
-		if (ks < 0)
+		if (!isfinite(v[c]))
 			continue;
-		double g[GLINT_UNC_MAX_N] = { 0 };
-		g[ks] = f0;
-		g[ki] = r->p[ks] * df0;
-		double v = r->p[ks] * f0,
-		       se = glint_uncertainty_delta(&r->unc, g);
 		char name[48];
 		snprintf(name, sizeof(name), "%s x F0(ior)", ch[c]);
-		json_array_append_new(comb,
-				      json_pack("{s:s,s:f,s:o}", "name", name,
-						"value", v, "stderr",
-						glint_json_real_or_null(se)));
+		json_array_append_new(
+			comb,
+			json_pack("{s:s,s:f,s:o}", "name", name, "value", v[c],
+				  "stderr", glint_json_real_or_null(se[c])));
 		if (len < (int)sizeof(msg))
 			len += snprintf(msg + len, sizeof(msg) - (size_t)len,
-					" %s%.4f +- %.4f", c ? ", " : "", v,
-					1.96 * se);
+					" %s%.4f +- %.4f", c ? ", " : "", v[c],
+					1.96 * se[c]);
 	}
-	if (undetermined(r, ki) && len < (int)sizeof(msg))
+	if (undetermined(r, param_index(r->model, "ior")) &&
+	    len < (int)sizeof(msg))
 		snprintf(msg + len, sizeof(msg) - (size_t)len,
 			 "; ior is not determined by this photo");
 	json_array_append_new(find, json_string(msg));

@@ -138,8 +138,8 @@ static const char *const class_name[4] = { "diffuse", "specular", "roughness",
 
 static const char *base(const char *path)
 {
-	const char *s = strrchr(path, '/');
-	return s ? s + 1 : path;
+	const char *s = path ? strrchr(path, '/') : NULL;
+	return s ? s + 1 : path ? path : "(none)";
 }
 
 static int fit_one(const char *map, double rot,

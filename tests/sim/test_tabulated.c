@@ -245,6 +245,11 @@ static int fit_map(const char *map, const struct glint_model_ops *tm,
 			printf(" %s %.4f+-%.4f",
 			       glint_model_torrance_sparrow.params[k].name,
 			       out->ts.p[k], out->ts.se[k]);
+		printf("\n   structure's share of the signal %.4f; model "
+		       "discrepancy:",
+		       out->ts.misfit_share);
+		for (int k = 0; k < 8; k++)
+			printf(" %.4f", out->ts.discrepancy[k]);
 		printf("\n   model-error jackknife over %d regions:",
 		       out->ts.unc.nregions);
 		for (int k = 0; out->ts.unc.nregions && k < 8; k++)

@@ -1778,6 +1778,56 @@ static void discrepancy(const struct glint_model_ops *m, const double *p,
 	}
 }
 
+/* Per region of misfit_regions(): the sums of its pixels' residual in
+ * radiance (the mean over their channels), of its square, and of the
+ * photo's values, and the pixel count. */
+struct region_sums {
+	double e, e2, y;
+	long n;
+};
+
+static void region_add(struct region_sums *g, const struct fit_data *d,
+		       const double *r, int px)
+{
+	double e = 0, y = 0;
+	int nc = 0;
+
+	for (int c = 0; c < 3; c++) {
+		double sw = d->sw[3 * px + c];
+		if (!(sw > 0))
+			continue;
+		e += r[c] / sw;
+		y += d->y[3 * px + c];
+		nc++;
+	}
+	if (!nc)
+		return;
+	g->e += e / nc;
+	g->e2 += e * e / (nc * nc);
+	g->y += y / nc;
+	g->n++;
+}
+
+/* The structure's share of the signal: the regions' mean residuals, each
+ * less its own noise (the spread within it), as an RMS over the pixels,
+ * over the photo's mean there. */
+static double structure_share(const struct region_sums *g, int ng)
+{
+	double st = 0, sy = 0;
+	long n = 0;
+
+	for (int k = 0; k < ng; k++) {
+		if (g[k].n < 2)
+			continue;
+		double mean = g[k].e / g[k].n,
+		       var = (g[k].e2 - g[k].e * mean) / (g[k].n - 1);
+		st += g[k].n * fmax(0, mean * mean - var / g[k].n);
+		sy += g[k].y;
+		n += g[k].n;
+	}
+	return n && sy > 0 ? sqrt(st / n) / (sy / n) : 0;
+}
+
 /*
  * The regions of the model-error jackknife (fit/optim/uncertainty.h) for
  * the residuals r (3 per fitted pixel) when they show structure, as
@@ -1786,7 +1836,8 @@ static void discrepancy(const struct glint_model_ops *m, const double *p,
  * pixel's region is its band of the angle from the mirror direction to
  * the brightest light and its third of the view angle (0-30, 30-60,
  * 60-90 degrees), per photo (-1: no hits).  Returns the number of
- * regions, or 0 when the residual shows no structure.
+ * regions, or 0 when the residual shows no structure; *share is then the
+ * structure's share of the signal (structure_share()), else 0.
  */
 static int misfit_regions(const struct objective *ob,
 			  const struct selections *sl, const double *r,
@@ -1797,15 +1848,10 @@ static int misfit_regions(const struct objective *ob,
 	double s[2][B] = { { 0 } }, s2[2][B] = { { 0 } }, c2 = 0;
 	long cnt[2][B] = { { 0 } };
 	int ids[GLINT_FIT_MAX_VIEWS * R], nr = 0;
-	/* per region: the sum of the pixels' residual in radiance, of its
-	 * square, their count; and of the photo's values */
-	static const int G = GLINT_FIT_MAX_VIEWS * R;
-	double ge[GLINT_FIT_MAX_VIEWS * R] = { 0 },
-					ge2[GLINT_FIT_MAX_VIEWS * R] = { 0 },
-					sy = 0;
-	long gn[GLINT_FIT_MAX_VIEWS * R] = { 0 };
+	struct region_sums sums[GLINT_FIT_MAX_VIEWS * R];
 	struct vec3 light[GLINT_FIT_MAX_VIEWS];
 
+	memset(sums, 0, sizeof(sums));
 	for (int v = 0; v < ob->nviews; v++)
 		light[v] = glint_misfit_light(ob->views[v].r->env);
 	for (int k = 0; k < ob->nviews * R; k++)
@@ -1835,36 +1881,8 @@ static int misfit_regions(const struct objective *ob,
 			ids[g] = nr++;
 		for (int c = 0; c < 3; c++)
 			region[3 * t + c] = ids[g];
-		double e = 0, y = 0;
-		int nc = 0;
-		for (int c = 0; c < 3; c++) {
-			double sw = d->sw[3 * px + c];
-			if (!(sw > 0))
-				continue;
-			e += r[3 * t + c] / sw;
-			y += d->y[3 * px + c];
-			nc++;
-		}
-		if (nc) {
-			ge[g] += e / nc;
-			ge2[g] += e * e / (nc * nc);
-			gn[g]++;
-			sy += y / nc;
-		}
+		region_add(&sums[g], d, r + 3 * t, px);
 	}
-	/* The structure's share of the relative RMSE: the regions' mean
-	 * residuals, each less its own noise (the spread within it). */
-	double st = 0;
-	long nall = 0;
-	for (int g = 0; g < G; g++) {
-		if (gn[g] < 2)
-			continue;
-		double mean = ge[g] / gn[g],
-		       var = (ge2[g] - ge[g] * mean) / (gn[g] - 1);
-		st += gn[g] * fmax(0, mean * mean - var / gn[g]);
-		nall += gn[g];
-	}
-	*share = nall && sy > 0 ? sqrt(st / nall) / (sy / nall) : 0;
 	double zmax = 0;
 	for (int a = 0; a < 2; a++)
 		for (int k = 0; k < B; k++) {
@@ -1877,8 +1895,7 @@ static int misfit_regions(const struct objective *ob,
 				zmax = fmax(zmax, fabs(mean) / sqrt(var / n));
 		}
 	int noisy = !d->noise_model || c2 / (3.0 * sl->nall) > 1.5;
-	if (!(zmax > 5 && noisy))
-		*share = 0;
+	*share = zmax > 5 && noisy ? structure_share(sums, ob->nviews * R) : 0;
 	return zmax > 5 && noisy ? nr : 0;
 }
 

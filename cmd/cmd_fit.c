@@ -274,9 +274,8 @@ void cmd_print_params(const json_t *doc, const double *truth)
 		       regions);
 	double share = json_real_value(json_object_get(unc, "misfit_share"));
 	if (share > 0)
-		printf("  a model discrepancy (the residual's structure %.1f "
-		       "%% "
-		       "of the signal),\n",
+		printf("  a model discrepancy (the residual's structure: "
+		       "%.1f %% of the signal),\n",
 		       100 * share);
 	printf("  and the render's systematic accuracy (docs/fitting.md, "
 	       "\"Uncertainty\")\n");

@@ -72,7 +72,7 @@ for p, e in zip(d['parameters'], md):
     assert p['stderr'] >= e * (1 - 1e-9), (p, e)
 assert any('model discrepancy' in f for f in u['findings']), u['findings']
 "
-check "... which the text output names" grep -q '^  a model discrepancy (the residual.s structure [0-9.]* % of the signal)' lam.txt
+check "... which the text output names" grep -q '^  a model discrepancy (the residual.s structure: [0-9.]* % of the signal)' lam.txt
 check "the true model's fit has no model-error or discrepancy term" python3 -c "
 import json
 u = json.load(open('d/fit/params.json'))['uncertainty']

@@ -634,6 +634,9 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			 * sets' and the systematic one; what a study over
 			 * photo seeds compares with the answers' spread. */
 			if (getenv("ACCURACY_SE") && out != REFUSED)
+				printf("\n    structure's share %.4f",
+				       res.misfit_share);
+			if (getenv("ACCURACY_SE") && out != REFUSED)
 				for (int k = 0; k < res.unc.n; k++) {
 					const struct glint_uncertainty *u =
 						&res.unc;

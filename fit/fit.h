@@ -171,11 +171,10 @@ struct glint_fit_result {
 	/* The sampling lean taken off each parameter (p is the fit's
 	 * optimum minus its estimated lean; fit.c, remove_lean()) */
 	double lean_removed[GLINT_MAX_PARAMS];
-	/* When the residual is structured (the model misses the photo): the
-	 * part of the relative RMSE its structure makes (the regions' mean
-	 * residuals, less their noise), else 0; and the model-discrepancy
-	 * standard uncertainty it gave each parameter (fit.c,
-	 * discrepancy()), in se */
+	/* The part of the relative RMSE the residual's structure makes (the
+	 * regions' mean residuals, less their noise: about 0 for the right
+	 * model); and the model-discrepancy standard uncertainty it gave
+	 * each parameter (fit.c, discrepancy()), in se */
 	double misfit_share;
 	double discrepancy[GLINT_MAX_PARAMS];
 	int pixels;   /* pixels in the final pass */
@@ -236,5 +235,17 @@ int glint_fit_evaluate(struct glint_renderer *r,
 		       const struct glint_image *weight,
 		       const struct glint_fit_opts *o, const double *p,
 		       struct glint_fit_result *res);
+
+/*
+ * The model discrepancy's scale of parameter k at p (fit.c,
+ * discrepancy()): a lobe's albedo channel the larger of its own value and
+ * its lobe's mean channel (energy a misfit moves between lobes moves in
+ * every channel alike, so a dark channel moves as far as the others), any
+ * other parameter its own magnitude.  *cls gets its class: 0 diffuse
+ * albedo, 1 specular albedo, 2 roughness, 3 other.  bench/misfit
+ * calibrates the coefficient per class with it.
+ */
+double glint_fit_discrepancy_scale(const struct glint_model_ops *m,
+				   const double *p, int k, int *cls);
 
 #endif

@@ -233,7 +233,9 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 			 u->nregions);
 		json_array_append_new(find, json_string(msg));
 	}
-	if (r->misfit_share > 0) {
+	/* The term is in every interval with a share; the finding from 1 %,
+	 * where a structure stands out of a noisy photo's estimate. */
+	if (r->misfit_share >= 0.01) {
 		snprintf(msg, sizeof(msg),
 			 "the residual's structure is %.1f %% of the photo's "
 			 "signal: the answer imitates the material under this "
@@ -292,9 +294,10 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 		"chi2/dof-scaled, nor, when the residual is structured, below "
 		"a delete-one-region jackknife over regions that see the "
 		"light differently) plus the spread over independent sample "
-		"sets plus the fast render's systematic accuracy (and, when "
-		"the residual is structured, a model discrepancy calibrated "
-		"on materials outside the model); Student t at "
+		"sets plus the fast render's systematic accuracy plus a "
+		"model discrepancy in proportion to the residual structure's "
+		"share of the signal, calibrated on materials outside the "
+		"model; Student t at "
 		"Welch-Satterthwaite degrees of freedom",
 		"level", u->level, "chi2_dof", u->chi2_dof, "blocks",
 		u->nblocks, "sample_sets", u->ndraws, "model_error_regions",

@@ -188,6 +188,21 @@ int glint_brdf_table_from(void (*f)(void *ctx, struct vec3 wo, struct vec3 wi,
 }
 
 /* The model: one table at a time. */
+void glint_ashikhmin_shirley_eval(void *ctx, struct vec3 wo, struct vec3 wi,
+				  double rgb[3])
+{
+	const struct glint_ashikhmin_shirley *a = ctx;
+	struct vec3 h = v3_norm(v3_add(wo, wi));
+	double hk = v3_dot(h, wi);
+	double f = a->rs + (1 - a->rs) * pow(1 - hk, 5);
+	double spec = (a->n + 1) / (8 * M_PI) * pow(h.z, a->n) /
+		      (hk * fmax(wi.z, wo.z)) * f;
+	double k1 = 1 - pow(1 - wi.z / 2, 5), k2 = 1 - pow(1 - wo.z / 2, 5);
+	for (int c = 0; c < 3; c++)
+		rgb[c] = 28 * a->rd[c] / (23 * M_PI) * (1 - a->rs) * k1 * k2 +
+			 spec;
+}
+
 static const struct glint_brdf_table *cur;
 static double cur_proposal = 0.1;
 

@@ -32,6 +32,19 @@ int glint_brdf_table_from(void (*f)(void *ctx, struct vec3 wo, struct vec3 wi,
 				    double rgb[3]),
 			  void *ctx, struct glint_brdf_table **out);
 
+/*
+ * Ashikhmin & Shirley (2000), isotropic, as an f for glint_brdf_table_from():
+ * a coupled diffuse that falls off toward grazing, a normalised Blinn-Phong
+ * lobe of exponent n with Schlick's Fresnel from rs.  None of glint's models:
+ * the tests' and benchmarks' material from outside.  ctx is a struct
+ * glint_ashikhmin_shirley.
+ */
+struct glint_ashikhmin_shirley {
+	double n, rd[3], rs;
+};
+void glint_ashikhmin_shirley_eval(void *ctx, struct vec3 wo, struct vec3 wi,
+				  double rgb[3]);
+
 /* The table's value for (wo, wi) in the local frame (normal +z). */
 void glint_brdf_table_eval(const struct glint_brdf_table *t, struct vec3 wo,
 			   struct vec3 wi, double rgb[3]);

@@ -34,26 +34,6 @@
 
 #include <sys/stat.h>
 
-/* Ashikhmin & Shirley (2000), isotropic: exponent n, diffuse Rd (RGB),
- * specular Rs at normal incidence. */
-struct as_brdf {
-	double n, rd[3], rs;
-};
-
-static void as_eval(void *ctx, struct vec3 wo, struct vec3 wi, double rgb[3])
-{
-	const struct as_brdf *a = ctx;
-	struct vec3 h = v3_norm(v3_add(wo, wi));
-	double hk = v3_dot(h, wi);
-	double f = a->rs + (1 - a->rs) * pow(1 - hk, 5);
-	double spec = (a->n + 1) / (8 * M_PI) * pow(h.z, a->n) /
-		      (hk * fmax(wi.z, wo.z)) * f;
-	double k1 = 1 - pow(1 - wi.z / 2, 5), k2 = 1 - pow(1 - wo.z / 2, 5);
-	for (int c = 0; c < 3; c++)
-		rgb[c] = 28 * a->rd[c] / (23 * M_PI) * (1 - a->rs) * k1 * k2 +
-			 spec;
-}
-
 static struct vec3 random_dir(unsigned *s)
 {
 	*s = *s * 1664525u + 1013904223u;
@@ -70,8 +50,8 @@ static int cmp_double(const void *a, const void *b)
 	return (x > y) - (x < y);
 }
 
-static void file_checks(struct glint_brdf_table *t, struct as_brdf *as,
-			const char *dir)
+static void file_checks(struct glint_brdf_table *t,
+			struct glint_ashikhmin_shirley *as, const char *dir)
 {
 	char path[512], bad[512];
 	struct glint_brdf_table *back = NULL;
@@ -89,7 +69,7 @@ static void file_checks(struct glint_brdf_table *t, struct as_brdf *as,
 		double a[3], b[3], f[3];
 		glint_brdf_table_eval(t, wo, wi, a);
 		glint_brdf_table_eval(back, wo, wi, b);
-		as_eval(as, wo, wi, f);
+		glint_ashikhmin_shirley_eval(as, wo, wi, f);
 		for (int c = 0; c < 3; c++)
 			same &= fabs(a[c] - b[c]) <= 1e-6 * fabs(a[c]);
 		rel[i] = fabs(a[1] - f[1]) / f[1];
@@ -307,7 +287,7 @@ static void joint_fit(struct map_fit *fits, int nmaps)
 
 int main(int argc, char **argv)
 {
-	struct as_brdf as = { 200, { 0.30, 0.12, 0.05 }, 0.05 };
+	struct glint_ashikhmin_shirley as = { 200, { 0.30, 0.12, 0.05 }, 0.05 };
 	struct glint_brdf_table *t = NULL;
 	static struct map_fit fits[8];
 	char dir[] = "/tmp/glint-tabulated-XXXXXX";
@@ -324,7 +304,8 @@ int main(int argc, char **argv)
 			return 77;
 		}
 	}
-	if (!mkdtemp(dir) || glint_brdf_table_from(as_eval, &as, &t) < 0) {
+	if (!mkdtemp(dir) ||
+	    glint_brdf_table_from(glint_ashikhmin_shirley_eval, &as, &t) < 0) {
 		fprintf(stderr, "set-up: %s\n", glint_error_msg());
 		return 1;
 	}

@@ -27,7 +27,8 @@
  * polish), COVERAGE_SPP=N with N primary samples per pixel,
  * COVERAGE_REF_SAMPLES=N photos with N samples per technique (256),
  * COVERAGE_VERBOSE=1 prints each fit's value and error parts,
- * COVERAGE_NO_MODEL_ERROR=1 leaves out the model-error jackknife,
+ * COVERAGE_NO_MODEL_ERROR=1 leaves out the model-error jackknife (and with
+ * it the model discrepancy), COVERAGE_NO_DISCREPANCY=1 the discrepancy alone,
  * COVERAGE_POLISH=N gives the polish on the sample sets N iterations.
  */
 #include "test.h"
@@ -168,6 +169,7 @@ static void one_case(const char *map, const char *material, int placement,
 		if (getenv("COVERAGE_START_TRUTH"))
 			o.start = truth;
 		o.no_model_error = getenv("COVERAGE_NO_MODEL_ERROR") != NULL;
+		o.no_discrepancy = getenv("COVERAGE_NO_DISCREPANCY") != NULL;
 		if (getenv("COVERAGE_POLISH"))
 			o.polish_iter = atoi(getenv("COVERAGE_POLISH"));
 		if (getenv("COVERAGE_SAMPLES"))

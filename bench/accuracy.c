@@ -70,8 +70,8 @@
  * (the noisy photo fitted without its 1/variance weights: glint's
  * default variance model), ACCURACY_PHOTOS=clean or noisy (those alone),
  * ACCURACY_NO_BIAS=1 (no bias ratio: no second photo), ACCURACY_SE=1 (each
- * fit's standard errors: reported, the noise part, the sample sets' part, the
- * systematic).
+ * fit's structure share and standard errors: reported, the noise part, the
+ * sample sets' part, the systematic).
  */
 #define _DEFAULT_SOURCE
 #include "bench.h"

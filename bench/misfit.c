@@ -55,8 +55,8 @@ struct material {
 	const char *name;
 	void (*eval)(void *ctx, struct vec3 wo, struct vec3 wi, double rgb[3]);
 	double kd[3], ks[3], shape;
-	double aux;	 /* the diffuse's own roughness, where it has one */
-	const void *ctx; /* eval's, when not the material itself */
+	double aux; /* the diffuse's own roughness, where it has one */
+	void *ctx;  /* eval's, when not the material itself */
 };
 
 static double schlick(double f0, double c)
@@ -160,48 +160,38 @@ static void burley(void *ctx, struct vec3 wo, struct vec3 wi, double rgb[3])
 }
 
 static struct material materials[] = {
-	{ "phong",
-	  phong,
-	  { 0.45, 0.25, 0.10 },
-	  { 0.05, 0.05, 0.05 },
-	  120,
-	  0,
-	  NULL },
-	{ "ward",
-	  ward,
-	  { 0.15, 0.30, 0.45 },
-	  { 0.08, 0.08, 0.08 },
-	  0.12,
-	  0,
-	  NULL },
-	{ "ggx",
-	  ggx,
-	  { 0.30, 0.30, 0.30 },
-	  { 0.04, 0.04, 0.04 },
-	  0.15,
-	  0,
-	  NULL },
-	{ "metal",
-	  metal,
-	  { 0.02, 0.02, 0.02 },
-	  { 0.90, 0.60, 0.40 },
-	  400,
-	  0,
-	  NULL },
-	{ "oren",
-	  oren,
-	  { 0.35, 0.30, 0.20 },
-	  { 0.06, 0.06, 0.06 },
-	  150,
-	  0.4,
-	  NULL },
-	{ "burley",
-	  burley,
-	  { 0.25, 0.30, 0.45 },
-	  { 0.04, 0.04, 0.04 },
-	  0.10,
-	  0.2,
-	  NULL },
+	{ .name = "phong",
+	  .eval = phong,
+	  .kd = { 0.45, 0.25, 0.10 },
+	  .ks = { 0.05, 0.05, 0.05 },
+	  .shape = 120 },
+	{ .name = "ward",
+	  .eval = ward,
+	  .kd = { 0.15, 0.30, 0.45 },
+	  .ks = { 0.08, 0.08, 0.08 },
+	  .shape = 0.12 },
+	{ .name = "ggx",
+	  .eval = ggx,
+	  .kd = { 0.30, 0.30, 0.30 },
+	  .ks = { 0.04, 0.04, 0.04 },
+	  .shape = 0.15 },
+	{ .name = "metal",
+	  .eval = metal,
+	  .kd = { 0.02, 0.02, 0.02 },
+	  .ks = { 0.90, 0.60, 0.40 },
+	  .shape = 400 },
+	{ .name = "oren",
+	  .eval = oren,
+	  .kd = { 0.35, 0.30, 0.20 },
+	  .ks = { 0.06, 0.06, 0.06 },
+	  .shape = 150,
+	  .aux = 0.4 },
+	{ .name = "burley",
+	  .eval = burley,
+	  .kd = { 0.25, 0.30, 0.45 },
+	  .ks = { 0.04, 0.04, 0.04 },
+	  .shape = 0.10,
+	  .aux = 0.2 },
 };
 #define NMAT (int)(sizeof(materials) / sizeof(*materials))
 
@@ -275,6 +265,15 @@ static double scale_of(const struct one_fit *f, int k, int *cl)
 					   k, cl);
 }
 
+/* Parameter k's class alone (it does not depend on the values). */
+static int class_of(int k)
+{
+	static const double p[NP];
+	int cl;
+	glint_fit_discrepancy_scale(&glint_model_torrance_sparrow, p, k, &cl);
+	return cl;
+}
+
 /* The c that just puts the pair (a, b) within its combined 95 % interval
  * for parameter k: 0 when it is already, INFINITY when neither fit has
  * a misfit share. */
@@ -297,13 +296,12 @@ static void material_c(int m, int nmaps, double c[4])
 {
 	for (int cl = 0; cl < 4; cl++) {
 		static double v[MAX_LIGHTS * MAX_LIGHTS * NP];
-		int n = 0, kc;
+		int n = 0;
 		for (int i = 0; i < nmaps; i++)
 			for (int j = i + 1; j < nmaps; j++)
 				for (int k = 0; k < NP; k++)
 					if (fits[m][i].ok && fits[m][j].ok &&
-					    (scale_of(&fits[m][i], k, &kc),
-					     kc == cl))
+					    class_of(k) == cl)
 						v[n++] = c_needed(&fits[m][i],
 								  &fits[m][j],
 								  k);
@@ -357,8 +355,8 @@ static int run(struct material *mat, const char *const *maps, int nmaps,
 {
 	struct glint_brdf_table *t = NULL;
 
-	void *ctx = (void *)(mat->ctx ? mat->ctx : mat);
-	if (glint_brdf_table_from(mat->eval, ctx, &t) < 0) {
+	if (glint_brdf_table_from(mat->eval, mat->ctx ? mat->ctx : mat, &t) <
+	    0) {
 		fprintf(stderr, "%s: %s\n", mat->name, glint_error_msg());
 		return -1;
 	}
@@ -402,9 +400,9 @@ int main(int argc, char **argv)
 		GLINT_SHARED_DATA "/probes/blender_studiolights/courtyard.exr",
 	};
 	/* tests/sim/test_tabulated.c's material. */
-	static const struct glint_ashikhmin_shirley as_brdf = {
-		200, { 0.30, 0.12, 0.05 }, 0.05
-	};
+	static struct glint_ashikhmin_shirley as_brdf = { 200,
+							  { 0.30, 0.12, 0.05 },
+							  0.05 };
 	static struct material as = { .name = "a-s",
 				      .eval = glint_ashikhmin_shirley_eval,
 				      .ctx = &as_brdf };

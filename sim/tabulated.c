@@ -187,7 +187,6 @@ int glint_brdf_table_from(void (*f)(void *ctx, struct vec3 wo, struct vec3 wi,
 	return 0;
 }
 
-/* The model: one table at a time. */
 void glint_ashikhmin_shirley_eval(void *ctx, struct vec3 wo, struct vec3 wi,
 				  double rgb[3])
 {
@@ -203,6 +202,7 @@ void glint_ashikhmin_shirley_eval(void *ctx, struct vec3 wo, struct vec3 wi,
 			 spec;
 }
 
+/* The model: one table at a time. */
 static const struct glint_brdf_table *cur;
 static double cur_proposal = 0.1;
 

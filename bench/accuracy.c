@@ -7,8 +7,11 @@
  * a camera's pixel integrates its area, and 4 samples per pixel (at 256
  * per technique, before 2026-11-26) aliased a near-mirror's sun into
  * a photo no camera takes), noise-free and
- * through the sensor model (mean at 10 % of the ADC range, 1/variance weights);
- * each fitted with glint's defaults.
+ * through the sensor model twice: as glint's rig takes a photo (a bracket
+ * metered on the sphere, merged by glint's raw merge: bracket_photo()) and
+ * as one frame with the whole image's mean at 10 % of the ADC range (under
+ * a map whose lights are in view the sphere sits far below it), both with
+ * their 1/variance weights; each fitted with glint's defaults.
  *
  * Per case it reports
  *   bias     the fitter's own objective at the TRUE parameters (its
@@ -68,7 +71,9 @@
  * draw, 1 unless given), ACCURACY_SENSOR_LEVEL=F (the whole image's
  * mean at F of the ADC range, 0.1 unless given), ACCURACY_NO_WEIGHTS=1
  * (the noisy photo fitted without its 1/variance weights: glint's
- * default variance model), ACCURACY_PHOTOS=clean or noisy (those alone),
+ * default variance model), ACCURACY_PHOTOS=clean, bracket or noisy (a
+ * comma-separated list: those alone; bracket: the sensor seed draws its
+ * frames),
  * ACCURACY_NO_BIAS=1 (no bias ratio: no second photo), ACCURACY_SE=1 (each
  * fit's structure share and standard errors: reported, the noise part, the
  * sample sets' part, the systematic).
@@ -78,6 +83,8 @@
 #include "captures.h"
 
 #include "core/error.h"
+#include "capture/bracket.h"
+#include "capture/hdr_linear.h"
 #include "capture/probe.h"
 #include "core/log.h"
 #include "fit/fit.h"
@@ -122,6 +129,13 @@ static const char *const default_maps[] = {
 #define SENSOR_LEVEL 0.1
 
 enum { WITHIN, FLAGGED, WRONG, REFUSED, NOUT };
+/* The photos of a case: noise-free; through the sensor as glint's rig
+ * takes it (bracket_photo()); one frame metered on the whole image
+ * (bench_add_noise_seed(): the mean at SENSOR_LEVEL of the ADC range),
+ * which under a map whose lights are in view leaves the sphere at a
+ * fraction of a per cent of the range. */
+enum { CLEAN, BRACKET, NOISY, NPHOTO };
+static const char *const photo_names[NPHOTO] = { "clean", "bracket", "noisy" };
 static const char *const outcome_names[NOUT] = { "within", "flagged", "wrong",
 						 "refused" };
 
@@ -133,6 +147,7 @@ struct map_tally {
 	double bias[64];
 	int nbias;
 	double ideal; /* expected within count of an ideal fitter */
+	int kind_n[NPHOTO], kind_within[NPHOTO];
 };
 
 static const char *base(const char *path)
@@ -272,6 +287,117 @@ static double sphere_level(const struct glint_renderer *r,
 		mean += a->data[i];
 	mean /= a->width * a->height * 3.0;
 	return level * sphere_stat(r, a, NULL) / mean;
+}
+
+/*
+ * The photo as glint's rig takes it: a bracket metered on the sphere's
+ * region (its bounding square, 2 px of margin: the rig's "sample" ROI),
+ * by capture/bracket.c's two goals: its shortest frame clips no sample of
+ * the region (the brightest at 40-80 % of the full well: exposures are
+ * powers of two of a second) and frames 1 EV apart follow until the
+ * region's 1st percentile is floor_dn (16 DN) above black, at most 24
+ * frames.  The planner meters on its own noisy frames; here on the
+ * noise-free values, which a region of 30 000 samples hardly tells apart.
+ * Each frame goes through the sensor (its own draw) and the frames are
+ * merged by glint's raw merge (capture/hdr_linear.c: inverse-variance
+ * weights, the variance at the merged value, a sample clipped in one
+ * frame left out of it), a pixel's three channels as three photosites of
+ * a mono frame.  photo becomes the merged radiance, *weight its
+ * 1/variance (0 where clipped in every frame); *nframes the bracket's
+ * length.
+ */
+static int bracket_photo(const struct glint_renderer *r,
+			 struct glint_image *photo, struct glint_image **weight,
+			 uint64_t seed, int *nframes)
+{
+	const struct glint_scene *sc = &r->scene;
+	double rad = sc->cam.fpx * sc->sphere_radius / -sc->sphere_centre.z + 2;
+	int w = photo->width, h = photo->height, n = 0, ret = 0;
+	int x0 = (int)fmax(0, floor(sc->cam.cx - rad));
+	int x1 = (int)fmin(w, ceil(sc->cam.cx + rad));
+	int y0 = (int)fmax(0, floor(sc->cam.cy - rad));
+	int y1 = (int)fmin(h, ceil(sc->cam.cy + rad));
+	size_t nroi = (size_t)(x1 - x0) * (y1 - y0) * 3, k = 0;
+	struct glint_frame frames[24];
+	struct glint_sensor s;
+	struct glint_bracket_opts bo;
+	struct glint_noise_model nm;
+	struct glint_raw_hdr hdr = { 0 };
+	struct glint_image *dn = glint_image_new(w, h);
+	double *roi = malloc(nroi * sizeof(*roi));
+
+	*weight = NULL;
+	*nframes = 0;
+	memset(frames, 0, sizeof(frames));
+	if (!dn || !roi || x1 <= x0 || y1 <= y0) {
+		ret = glint_error_set(ENOMEM, "bracket: out of memory");
+		goto out;
+	}
+	glint_sensor_default(&s);
+	glint_bracket_default_opts(&bo);
+	glint_noise_default(&nm);
+	for (int y = y0; y < y1; y++)
+		for (int x = x0; x < x1; x++)
+			for (int c = 0; c < 3; c++)
+				roi[k++] =
+					fmax(0, glint_image_px(photo, x, y)[c]);
+	qsort(roi, nroi, sizeof(*roi), bench_cmp);
+	double lmax = roi[nroi - 1], l01 = roi[nroi / 100];
+	/* electrons = L k t; the brightest at 80 % of the full well at most */
+	double t = exp2(floor(log2(0.8 * s.full_well_e / (s.k * lmax))));
+	for (; n < bo.max_frames; n++, t *= 2) {
+		struct glint_frame *f = &frames[n];
+		s.exposure_s = t;
+		s.seed = seed * 64 + (uint64_t)n;
+		if ((ret = glint_sensor_capture(&s, photo, dn)) < 0)
+			goto out;
+		f->width = 3 * w;
+		f->height = h;
+		snprintf(f->format, sizeof(f->format), "MONO16");
+		f->channels = 1;
+		f->bit_depth = s.bits;
+		f->linear = 1;
+		f->exposure_s = t;
+		f->gain = 1;
+		f->black_level = s.black_level;
+		f->data = malloc((size_t)3 * w * h * sizeof(*f->data));
+		if (!f->data) {
+			ret = glint_error_set(ENOMEM, "bracket: out of memory");
+			goto out;
+		}
+		for (size_t i = 0; i < (size_t)3 * w * h; i++)
+			f->data[i] = (uint16_t)dn->data[i];
+		if (s.gain * l01 * s.k * t >= bo.floor_dn) {
+			n++;
+			break;
+		}
+	}
+	if ((ret = glint_hdr_merge_raw(frames, n, &nm, &hdr, NULL)) < 0)
+		goto out;
+	if (!(*weight = glint_image_new(w, h))) {
+		ret = glint_error_set(ENOMEM, "bracket: out of memory");
+		goto out;
+	}
+	/* x = (DN - black) / t in DN per second = gain k L */
+	double scale = 1 / (s.gain * s.k);
+	for (size_t i = 0; i < (size_t)3 * w * h; i++) {
+		photo->data[i] = (float)(hdr.x[i] * scale);
+		double var = hdr.var[i] * scale * scale;
+		(*weight)->data[i] =
+			hdr.valid[i] && var > 0 ? (float)(1 / var) : 0.0f;
+	}
+	*nframes = n;
+out:
+	for (int i = 0; i < 24; i++)
+		free(frames[i].data);
+	glint_raw_hdr_release(&hdr);
+	glint_image_free(dn);
+	free(roi);
+	if (ret < 0) {
+		glint_image_free(*weight);
+		*weight = NULL;
+	}
+	return ret;
 }
 
 /* The chance that an ideal fitter (unbiased, at the photo's noise) lands
@@ -527,19 +653,26 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			bias = ev.rmse / noise;
 		if (isfinite(noise) && t->nbias < 64)
 			t->bias[t->nbias++] = bias;
-		for (int lv = 0; lv < 2; lv++) {
+		for (int lv = 0; lv < NPHOTO; lv++) {
 			struct glint_image *photo = glint_image_dup(a);
 			struct glint_image *w = NULL;
 			struct glint_fit_result res;
 			double err = INFINITY, t0 = glint_now();
-			int out = REFUSED, bound = 0;
+			int out = REFUSED, bound = 0, nframes = 0;
 			char why[128] = "";
 			if (!selected(getenv("ACCURACY_PHOTOS"),
-				      lv ? "noisy" : "clean"))
+				      photo_names[lv]))
 				goto next;
-			if (lv && bench_add_noise_seed(photo, &w, level,
-						       sensor_seed) < 0)
+			if (lv == NOISY &&
+			    bench_add_noise_seed(photo, &w, level,
+						 sensor_seed) < 0)
 				goto next;
+			if (lv == BRACKET &&
+			    bracket_photo(&r, photo, &w, sensor_seed,
+					  &nframes) < 0) {
+				fprintf(stderr, "%s\n", glint_error_msg());
+				goto next;
+			}
 			if (lv && getenv("ACCURACY_NO_WEIGHTS")) {
 				glint_image_free(w);
 				w = NULL;
@@ -560,6 +693,8 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 				out = judge(m, truth, &res, &err, &bound, why,
 					    sizeof(why));
 			t->n[out]++;
+			t->kind_n[lv]++;
+			t->kind_within[lv] += out == WITHIN;
 			t->bound += bound;
 			double ideal = out == REFUSED
 					       ? NAN
@@ -569,8 +704,7 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			if (err > t->worst || out == REFUSED) {
 				t->worst = out == REFUSED ? INFINITY : err;
 				snprintf(t->worst_case, sizeof(t->worst_case),
-					 "%s %s", mats[i],
-					 lv ? "noisy" : "clean");
+					 "%s %s", mats[i], photo_names[lv]);
 			}
 			int smp = out == REFUSED ? 0 : res.light_samples;
 			/* The truth on the fit's own objective (weights at
@@ -589,11 +723,11 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 					       &at_truth) == 0)
 				ratio = at_truth.wcost / res.wcost;
 			o.weights_at = NULL;
-			printf("%-26s %-17s %-5s bias %5.2f  %-8s err %6.2f "
+			printf("%-26s %-17s %-7s bias %5.2f  %-8s err %6.2f "
 			       "tol  rel.rmse %.3f  truth/fit cost %5.2f  "
 			       "ideal "
 			       "%.2f  %2d smp %5.1f s",
-			       base(map), mats[i], lv ? "noisy" : "clean", bias,
+			       base(map), mats[i], photo_names[lv], bias,
 			       bound ? "within<" : outcome_names[out], err,
 			       out == REFUSED ? NAN : res.rel_rmse, ratio,
 			       ideal, smp, glint_now() - t0);
@@ -650,16 +784,18 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 								 mc - sys)),
 					       sqrt(mc), u->sys[k]);
 				}
-			if (lv)
+			if (lv == NOISY)
 				printf("  sphere at %.2f %% of the ADC range",
 				       100 * sphere_level(&r, a, level));
+			if (lv == BRACKET)
+				printf("  %d frames", nframes);
 			printf("%s\n", why);
 			fflush(stdout);
 			if (csv)
 				fprintf(csv,
 					"%s,%s,%s,%.4f,%s,%.4f,%.5f,%d,%.3f\n",
-					base(map), mats[i],
-					lv ? "noisy" : "clean", bias,
+					base(map), mats[i], photo_names[lv],
+					bias,
 					bound ? "within-bound"
 					      : outcome_names[out],
 					err,
@@ -749,6 +885,16 @@ int main(int argc, char **argv)
 		       t->worst_case, t->worst);
 	}
 	int all = tot[0] + tot[1] + tot[2] + tot[3];
+	for (int k = 0; k < NPHOTO; k++) {
+		int n = 0, in = 0;
+		for (int i = 0; i < nmaps; i++) {
+			n += tally[i].kind_n[k];
+			in += tally[i].kind_within[k];
+		}
+		if (n)
+			printf("%s photos: within %d of %d\n", photo_names[k],
+			       in, n);
+	}
 	printf("all: %d cases, %.1f %% within tolerance (%d of them with "
 	       "roughness under glint's upper bound), %.1f %% flagged by "
 	       "glint, %d wrong, %d refused; an ideal fitter at the photos' "

@@ -148,6 +148,7 @@ struct map_tally {
 	int nbias;
 	double ideal; /* expected within count of an ideal fitter */
 	int kind_n[NPHOTO], kind_within[NPHOTO];
+	int bad_weights; /* bracket photos whose weights are not 1/variance */
 };
 
 static const char *base(const char *path)
@@ -304,11 +305,12 @@ static double sphere_level(const struct glint_renderer *r,
  * frame left out of it), a pixel's three channels as three photosites of
  * a mono frame.  photo becomes the merged radiance, *weight its
  * 1/variance (0 where clipped in every frame); *nframes the bracket's
- * length.
+ * length, *zrms the rms of the merged values' errors over the region in
+ * their own standard deviations (1 when the weights are honest).
  */
 static int bracket_photo(const struct glint_renderer *r,
 			 struct glint_image *photo, struct glint_image **weight,
-			 uint64_t seed, int *nframes)
+			 uint64_t seed, int *nframes, double *zrms)
 {
 	const struct glint_scene *sc = &r->scene;
 	double rad = sc->cam.fpx * sc->sphere_radius / -sc->sphere_centre.z + 2;
@@ -379,14 +381,25 @@ static int bracket_photo(const struct glint_renderer *r,
 		goto out;
 	}
 	/* x = (DN - black) / t in DN per second = gain k L */
-	double scale = 1 / (s.gain * s.k);
+	double scale = 1 / (s.gain * s.k), zz = 0;
+	long nz = 0;
 	for (size_t i = 0; i < (size_t)3 * w * h; i++) {
-		photo->data[i] = (float)(hdr.x[i] * scale);
-		double var = hdr.var[i] * scale * scale;
+		double x = hdr.x[i] * scale, var = hdr.var[i] * scale * scale;
+		size_t px = i / 3;
+		int in = (int)(px % (size_t)w) >= x0 &&
+			 (int)(px % (size_t)w) < x1 &&
+			 (int)(px / (size_t)w) >= y0 &&
+			 (int)(px / (size_t)w) < y1;
 		(*weight)->data[i] =
 			hdr.valid[i] && var > 0 ? (float)(1 / var) : 0.0f;
+		if (in && (*weight)->data[i] > 0) {
+			zz += (x - photo->data[i]) * (x - photo->data[i]) / var;
+			nz++;
+		}
+		photo->data[i] = (float)x;
 	}
 	*nframes = n;
+	*zrms = nz ? sqrt(zz / nz) : NAN;
 out:
 	for (int i = 0; i < 24; i++)
 		free(frames[i].data);
@@ -659,6 +672,7 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			struct glint_fit_result res;
 			double err = INFINITY, t0 = glint_now();
 			int out = REFUSED, bound = 0, nframes = 0;
+			double zrms = NAN;
 			char why[128] = "";
 			if (!selected(getenv("ACCURACY_PHOTOS"),
 				      photo_names[lv]))
@@ -668,8 +682,8 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 						 sensor_seed) < 0)
 				goto next;
 			if (lv == BRACKET &&
-			    bracket_photo(&r, photo, &w, sensor_seed,
-					  &nframes) < 0) {
+			    bracket_photo(&r, photo, &w, sensor_seed, &nframes,
+					  &zrms) < 0) {
 				fprintf(stderr, "%s\n", glint_error_msg());
 				goto next;
 			}
@@ -787,8 +801,13 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			if (lv == NOISY)
 				printf("  sphere at %.2f %% of the ADC range",
 				       100 * sphere_level(&r, a, level));
-			if (lv == BRACKET)
-				printf("  %d frames", nframes);
+			if (lv == BRACKET) {
+				printf("  %d frames, their merge's errors "
+				       "%.3f of its sd",
+				       nframes, zrms);
+				if (!(fabs(zrms - 1) < 0.1))
+					t->bad_weights++;
+			}
 			printf("%s\n", why);
 			fflush(stdout);
 			if (csv)
@@ -904,6 +923,15 @@ int main(int argc, char **argv)
 	       all ? 100.0 * tot_ideal / all : 0, bench_peak_mib());
 	if ((check || no_refusals) && tot[REFUSED]) {
 		printf("FAIL: %d correct photos refused\n", tot[REFUSED]);
+		return 1;
+	}
+	int bad = 0;
+	for (int i = 0; i < nmaps; i++)
+		bad += tally[i].bad_weights;
+	if (check && bad) {
+		printf("FAIL: %d bracketed photos with errors not at their "
+		       "merge's standard deviations (rms outside 0.9 .. 1.1)\n",
+		       bad);
 		return 1;
 	}
 	if (within && tot[WITHIN] < all) {

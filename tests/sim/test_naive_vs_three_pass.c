@@ -1,7 +1,8 @@
 /* SPDX-License-Identifier: MIT */
 /*
  * Where the naive single pass fails and the paper's three passes succeed:
- * aluminium bronze (roughness 0.023, a metal) under Blender's studio map,
+ * silver (roughness 0.138; until stop 47 aluminium bronze, roughness
+ * 0.023, a metal: below) under Blender's studio map,
  * fitted at full resolution (no coarse-to-fine, whose safeguards would
  * rescue both).  From the paper's initial values with every parameter free,
  * the naive pass slides into a mirror-like lobe (roughness -> its bound)
@@ -12,7 +13,14 @@
  * roughness 0.0195 (true 0.023).  Since a pixel's hits share one sample
  * sequence (stop 41) the naive pass stops short of the bound, in another
  * valley just as wrong: cost 23.2 against 3.53, roughness 0.0158,
- * specular red 0.166 (true 0.510).
+ * specular red 0.166 (true 0.510).  Since the lobe samples spread over
+ * the pixel from a lobe of two turns of its mirror direction (stop 47,
+ * shade_cache.c: SPREAD_FROM) the naive pass escapes on aluminium bronze
+ * (cost 3.567 as three-pass's, roughness 0.0227): part of that valley
+ * was the hits' aliasing of a lobe about a pixel wide.  Silver (roughness
+ * 0.138) under the same map still shows the naive pass's failure, in
+ * the other wrong valley: the lobe all but gone, the diffuse taking its
+ * light (cost 567 against 9.17, specular red 0.076, true 0.676).
  * The naive pass is run as the paper describes it, LM straight from the
  * initial values (no_start_scan); glint's naive method, which starts LM
  * from the best of a roughness and ior scan (fit.c, scan_start), must
@@ -34,8 +42,8 @@ int main(void)
 	struct glint_fit_result res[3];
 
 	sim_scene_192(&sc, GLINT_TEST_DATA "/studio_dwab.exr", 0);
-	CHECK(glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
-				  "aluminium-bronze", &m, truth) == 0,
+	CHECK(glint_material_load(GLINT_DATA_DIR "/paper-table1.json", "silver",
+				  &m, truth) == 0,
 	      "%s", glint_error_msg());
 	CHECK(glint_renderer_init(&r, &sc, 0, NULL) == 0, "%s",
 	      glint_error_msg());
@@ -72,10 +80,9 @@ int main(void)
 	CHECK(res[0].wcost > 2 * res[1].wcost,
 	      "naive cost %.4g should be far above three-pass %.4g",
 	      res[0].wcost, res[1].wcost);
-	CHECK(res[0].p[6] < 0.75 * truth[6] &&
-		      fabs(res[0].p[3] / truth[3] - 1) > 0.5,
+	CHECK(fabs(res[0].p[3] / truth[3] - 1) > 0.5,
 	      "naive roughness %.4f, specular red %.3f: expected it stuck "
-	      "toward a mirror, its specular far off",
+	      "in a wrong valley, its specular far off",
 	      res[0].p[6], res[0].p[3]);
 	CHECK(res[2].wcost < 1.01 * res[1].wcost,
 	      "naive with the start scan: cost %.4g, three-pass %.4g",

@@ -136,6 +136,10 @@ enum { WITHIN, FLAGGED, WRONG, REFUSED, NOUT };
  * fraction of a per cent of the range. */
 enum { CLEAN, BRACKET, NOISY, NPHOTO };
 static const char *const photo_names[NPHOTO] = { "clean", "bracket", "noisy" };
+static const char *const photo_what[NPHOTO] = {
+	"c: noise-free", "b: bracketed on the sphere as glint's rig takes it",
+	"n: one frame, the image's mean at 10 % of the ADC range"
+};
 static const char *const outcome_names[NOUT] = { "within", "flagged", "wrong",
 						 "refused" };
 
@@ -882,9 +886,10 @@ int main(int argc, char **argv)
 	if (csv)
 		fclose(csv);
 
-	printf("\n%-26s %6s %7s %7s %6s %7s %5s %7s %11s  %s\n", "map", "cases",
-	       "within", "(bound)", "ideal", "flagged", "wrong", "refused",
-	       "bias median", "worst case (tolerance units)");
+	printf("\n%-26s %6s %7s %7s %6s %7s %5s %7s %11s %17s  %s\n", "map",
+	       "cases", "within", "(bound)", "ideal", "flagged", "wrong",
+	       "refused", "bias median", "within: c / b / n",
+	       "worst case (tolerance units)");
 	int tot[NOUT] = { 0 }, tot_bound = 0;
 	double tot_ideal = 0;
 	for (int i = 0; i < nmaps; i++) {
@@ -897,10 +902,15 @@ int main(int argc, char **argv)
 		double med = t->nbias ? bench_median(t->bias, t->nbias) : NAN;
 		tot_bound += t->bound;
 		tot_ideal += t->ideal;
-		printf("%-26s %6d %7d %7d %6.1f %7d %5d %7d %11.2f  %s "
+		char kinds[64];
+		snprintf(kinds, sizeof(kinds), "%d/%d %d/%d %d/%d",
+			 t->kind_within[CLEAN], t->kind_n[CLEAN],
+			 t->kind_within[BRACKET], t->kind_n[BRACKET],
+			 t->kind_within[NOISY], t->kind_n[NOISY]);
+		printf("%-26s %6d %7d %7d %6.1f %7d %5d %7d %11.2f %17s  %s "
 		       "(%.1f)\n",
 		       base(maps[i]), n, t->n[WITHIN], t->bound, t->ideal,
-		       t->n[FLAGGED], t->n[WRONG], t->n[REFUSED], med,
+		       t->n[FLAGGED], t->n[WRONG], t->n[REFUSED], med, kinds,
 		       t->worst_case, t->worst);
 	}
 	int all = tot[0] + tot[1] + tot[2] + tot[3];
@@ -911,8 +921,8 @@ int main(int argc, char **argv)
 			in += tally[i].kind_within[k];
 		}
 		if (n)
-			printf("%s photos: within %d of %d\n", photo_names[k],
-			       in, n);
+			printf("%s photos (%s): within %d of %d\n",
+			       photo_names[k], photo_what[k], in, n);
 	}
 	printf("all: %d cases, %.1f %% within tolerance (%d of them with "
 	       "roughness under glint's upper bound), %.1f %% flagged by "

@@ -70,7 +70,7 @@
  * two, no second photo), ACCURACY_SENSOR_SEED=S (the sensor's noise
  * draw, 1 unless given), ACCURACY_SENSOR_LEVEL=F (the whole image's
  * mean at F of the ADC range, 0.1 unless given), ACCURACY_NO_WEIGHTS=1
- * (the noisy photo fitted without its 1/variance weights: glint's
+ * (the sensor's photos fitted without their 1/variance weights: glint's
  * default variance model), ACCURACY_PHOTOS=clean, bracket or noisy (a
  * comma-separated list: those alone; bracket: the sensor seed draws its
  * frames),
@@ -302,7 +302,8 @@ static double sphere_level(const struct glint_renderer *r,
  * powers of two of a second) and frames 1 EV apart follow until the
  * region's 1st percentile is floor_dn (16 DN) above black, at most 24
  * frames.  The planner meters on its own noisy frames; here on the
- * noise-free values, which a region of 30 000 samples hardly tells apart.
+ * noise-free values, which a region of about 100 000 samples hardly
+ * tells apart.
  * Each frame goes through the sensor (its own draw) and the frames are
  * merged by glint's raw merge (capture/hdr_linear.c: inverse-variance
  * weights, the variance at the merged value, a sample clipped in one
@@ -323,7 +324,9 @@ static int bracket_photo(const struct glint_renderer *r,
 	int x1 = (int)fmin(w, ceil(sc->cam.cx + rad));
 	int y0 = (int)fmax(0, floor(sc->cam.cy - rad));
 	int y1 = (int)fmin(h, ceil(sc->cam.cy + rad));
-	size_t nroi = (size_t)(x1 - x0) * (y1 - y0) * 3, k = 0;
+	size_t nroi = x1 > x0 && y1 > y0 ? (size_t)(x1 - x0) * (y1 - y0) * 3
+					 : 1,
+	       k = 0;
 	struct glint_frame frames[24];
 	struct glint_sensor s;
 	struct glint_bracket_opts bo;
@@ -335,7 +338,12 @@ static int bracket_photo(const struct glint_renderer *r,
 	*weight = NULL;
 	*nframes = 0;
 	memset(frames, 0, sizeof(frames));
-	if (!dn || !roi || x1 <= x0 || y1 <= y0) {
+	if (x1 <= x0 || y1 <= y0) {
+		ret = glint_error_set(EINVAL, "bracket: the sphere is not in "
+					      "the frame");
+		goto out;
+	}
+	if (!dn || !roi) {
 		ret = glint_error_set(ENOMEM, "bracket: out of memory");
 		goto out;
 	}
@@ -349,6 +357,11 @@ static int bracket_photo(const struct glint_renderer *r,
 					fmax(0, glint_image_px(photo, x, y)[c]);
 	qsort(roi, nroi, sizeof(*roi), bench_cmp);
 	double lmax = roi[nroi - 1], l01 = roi[nroi / 100];
+	if (!(lmax > 0) || !isfinite(lmax)) {
+		ret = glint_error_set(EINVAL, "bracket: the sphere's region is "
+					      "black or not finite");
+		goto out;
+	}
 	/* electrons = L k t; the brightest at 80 % of the full well at most */
 	double t = exp2(floor(log2(0.8 * s.full_well_e / (s.k * lmax))));
 	for (; n < bo.max_frames; n++, t *= 2) {
@@ -691,7 +704,7 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 				fprintf(stderr, "%s\n", glint_error_msg());
 				goto next;
 			}
-			if (lv && getenv("ACCURACY_NO_WEIGHTS")) {
+			if (lv != CLEAN && getenv("ACCURACY_NO_WEIGHTS")) {
 				glint_image_free(w);
 				w = NULL;
 			}

@@ -155,12 +155,14 @@ static void verdict(struct glint_misfit *m)
 		describe(&m->mirror[km], 0, zm, b, sizeof(b));
 	if (m->structured && zv > 5 && zm > 5)
 		snprintf(m->verdict, sizeof(m->verdict),
-			 "structured residual, the model is too simple: the "
+			 "structured residual, the model is too simple (or "
+			 "the scene is not the photo's): the "
 			 "render is %s; %s",
 			 zv >= zm ? a : b, zv >= zm ? b : a);
 	else if (m->structured)
 		snprintf(m->verdict, sizeof(m->verdict),
-			 "structured residual, the model is too simple: the "
+			 "structured residual, the model is too simple (or "
+			 "the scene is not the photo's): the "
 			 "render is %s",
 			 zv > 5 ? a : b);
 	else if (m->weighted && m->chi2 > 1.5)

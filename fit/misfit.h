@@ -42,7 +42,7 @@ struct glint_misfit {
 	double light[3]; /* the map's brightest direction (world) */
 	double chi2;	 /* over all the pixels; NAN without weights */
 	int structured;
-	char verdict[400];
+	char verdict[448];
 };
 
 /*

@@ -227,7 +227,9 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 	if (u->nregions) {
 		snprintf(msg, sizeof(msg),
 			 "the residual is structured (the model is too simple "
-			 "for this material): the intervals include how far "
+			 "for this material, or the scene is not the photo's: "
+			 "the light probe, the sphere's place): the intervals "
+			 "include how far "
 			 "the answer moves between %d regions of the sphere "
 			 "that see the light differently",
 			 u->nregions);
@@ -239,7 +241,8 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 		snprintf(msg, sizeof(msg),
 			 "the residual's structure is %.1f %% of the photo's "
 			 "signal: the answer imitates the material under this "
-			 "light and may move under another; the intervals "
+			 "light (as the probe measured it) and may move under "
+			 "another; the intervals "
 			 "include a model discrepancy for that, calibrated on "
 			 "materials outside the model (bench/misfit)",
 			 100 * r->misfit_share);

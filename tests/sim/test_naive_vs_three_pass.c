@@ -1,26 +1,23 @@
 /* SPDX-License-Identifier: MIT */
 /*
  * Where the naive single pass fails and the paper's three passes succeed:
- * silver (roughness 0.138; until stop 47 aluminium bronze, roughness
- * 0.023, a metal: below) under Blender's studio map,
- * fitted at full resolution (no coarse-to-fine, whose safeguards would
- * rescue both).  From the paper's initial values with every parameter free,
- * the naive pass slides into a mirror-like lobe (roughness -> its bound)
- * and stops there; three-pass fits the diffuse albedo first on the diffuse
- * mask, then the lobe on the specular mask, and ends at a cost over 4x
- * lower with a roughness near the truth.  Numbers seen when this test was
- * written: naive cost 45.7, roughness 0.0001; three-pass cost 10.55,
- * roughness 0.0195 (true 0.023).  Since a pixel's hits share one sample
- * sequence (stop 41) the naive pass stops short of the bound, in another
- * valley just as wrong: cost 23.2 against 3.53, roughness 0.0158,
- * specular red 0.166 (true 0.510).  Since the lobe samples spread over
- * the pixel from a lobe of two turns of its mirror direction (stop 47,
- * shade_cache.c: SPREAD_FROM) the naive pass escapes on aluminium bronze
- * (cost 3.567 as three-pass's, roughness 0.0227): part of that valley
- * was the hits' aliasing of a lobe about a pixel wide.  Silver (roughness
- * 0.138) under the same map still shows the naive pass's failure, in
- * the other wrong valley: the lobe all but gone, the diffuse taking its
- * light (cost 567 against 9.17, specular red 0.076, true 0.676).
+ * silver (roughness 0.138) under Blender's studio map, fitted at full
+ * resolution (no coarse-to-fine, whose safeguards would rescue both).
+ * From the paper's initial values with every parameter free, the naive
+ * pass ends in a wrong valley, the lobe all but gone and the diffuse
+ * taking its light (cost 567 against three-pass's 9.17, specular red
+ * 0.076, true 0.676); three-pass fits the diffuse albedo first on the
+ * diffuse mask, then the lobe on the specular mask, and ends with a
+ * roughness near the truth (0.139).  The test checks the naive pass is
+ * far above in cost and far off in specular, not where it stops.
+ * History: until stop 47 the case was aluminium bronze (roughness
+ * 0.023), where the naive pass slid to a mirror (cost 45.7, roughness
+ * 0.0001, against 10.55 and 0.0195), and since stop 41 stopped short of
+ * it (cost 23.2 against 3.53, roughness 0.0158).  Since the lobe samples
+ * spread over the pixel from a lobe of two turns of its mirror direction
+ * (stop 47, shade_cache.c: SPREAD_FROM) it escapes there (cost 3.567, as
+ * three-pass's): part of that valley was the hits' aliasing of a lobe
+ * about a pixel wide.
  * The naive pass is run as the paper describes it, LM straight from the
  * initial values (no_start_scan); glint's naive method, which starts LM
  * from the best of a roughness and ior scan (fit.c, scan_start), must

@@ -174,6 +174,10 @@ int glint_rig_run_sequence(const struct glint_rig *rig, struct glint_board *b,
 		default:
 			break;
 		}
+		if (ret < 0)
+			glint_error_prefix(ret, "step %d/%d (%s)", i + 1,
+					   rig->nsteps,
+					   glint_rig_step_names[s]);
 	}
 	return ret;
 }

@@ -4,6 +4,7 @@
 #include "core/error.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -56,7 +57,13 @@ static void roi_stats(const struct glint_frame *f, const struct glint_roi *roi,
 	}
 	for (unsigned c = 0; c <= top; c++)
 		n += hist[c];
-	*saturated = (int)hist[top];
+	/* Clipped as the merge counts it (glint_frame_clip_dn), not only
+	 * the top code: a frame whose brightest samples sit between the two
+	 * would end the way down while the merge has no value there. */
+	unsigned clip = (unsigned)ceil(glint_frame_clip_dn(f));
+	*saturated = 0;
+	for (unsigned c = clip < top ? clip : top; c <= top; c++)
+		*saturated += (int)hist[c];
 	/* The quantiles of the codes' distribution, each code standing for
 	 * [c - 1/2, c + 1/2) with its samples spread evenly: the k-th sample's
 	 * code alone is biased low by half a code on average, which at the
@@ -144,9 +151,9 @@ struct planner {
 	struct glint_camera_info in;
 	const struct glint_bracket_opts *o;
 	const struct glint_roi *roi;
-	const struct glint_clock *clock;
+	struct glint_camera *cam;
 	struct glint_bracket *b;
-	double t0, step, e0;
+	double cam_t0, step, e0;
 	int phase; /* 0: down from e0, 1: up, 2: no more */
 	double next_down, last_up;
 	int requested;
@@ -166,11 +173,20 @@ static int plan_next(void *ctx, double *e, double *g)
 
 	if (p->phase == 2 || (p->low_done && p->high_done))
 		return 0;
+	/* The caps: frames, and time on the camera's own clock (its
+	 * exposures and readouts), so a busy host or a slow simulator
+	 * does not cut a bracket short. */
+	const char *cap = NULL;
 	if (p->requested >= p->o->max_frames ||
-	    p->requested >= GLINT_BRACKET_MAX ||
-	    p->clock->now(p->clock->ctx) - p->t0 > p->o->max_time_s ||
-	    (p->o->cancel && *p->o->cancel)) {
+	    p->requested >= GLINT_BRACKET_MAX)
+		cap = "frame";
+	else if (glint_camera_seconds(p->cam) - p->cam_t0 > p->o->max_time_s)
+		cap = "time";
+	else if (p->o->cancel && *p->o->cancel)
+		cap = "cancel";
+	if (cap) {
 		p->b->truncated = 1;
+		snprintf(p->b->stopped_by, sizeof(p->b->stopped_by), "%s", cap);
 		p->phase = 2;
 		return 0;
 	}
@@ -216,6 +232,7 @@ static int plan_next(void *ctx, double *e, double *g)
 		p->b->used_gain = 1;
 	} else {
 		p->up_exhausted = 1;
+		p->b->camera_limit = 1;
 		return 0;
 	}
 	p->last_up = *e * *g;
@@ -315,9 +332,15 @@ int glint_bracket_capture(struct glint_camera *cam, const struct glint_roi *roi,
 				       p.in.name, p.in.backend);
 	p.o = o;
 	p.roi = roi;
-	p.clock = clock;
+	p.cam = cam;
 	p.b = b;
-	p.t0 = clock->now(clock->ctx);
+	/* The camera gets ready first (the simulator renders its views):
+	 * not part of the bracket's time. */
+	ret = glint_camera_start(cam);
+	if (ret < 0)
+		return ret;
+	double wall0 = clock->now(clock->ctx);
+	p.cam_t0 = glint_camera_seconds(cam);
 	p.step = exp2(o->step_ev);
 	/* Start at o->start_s, or at the shortest exposure, and extend both
 	 * ways: down from the start, then up from it.  From the shortest
@@ -354,11 +377,50 @@ int glint_bracket_capture(struct glint_camera *cam, const struct glint_roi *roi,
 	}
 	b->covered_low = p.low_done;
 	b->covered_high = p.high_done;
-	if (b->covered_low && b->covered_high)
+	if (b->covered_low && b->covered_high) {
 		b->truncated = 0;
+		b->stopped_by[0] = '\0';
+	}
+	if (!b->covered_low && p.down_exhausted)
+		b->camera_limit = 1;
 	qsort(b->frames, (size_t)b->n, sizeof(b->frames[0]), by_exposure);
-	b->seconds = clock->now(clock->ctx) - p.t0;
+	b->seconds = glint_camera_seconds(cam) - p.cam_t0;
+	b->wall_seconds = clock->now(clock->ctx) - wall0;
 	return 0;
+}
+
+int glint_bracket_verdict(const struct glint_bracket *b,
+			  const struct glint_bracket_opts *o)
+{
+	if (b->n == 0)
+		return glint_error_set(EIO, "the bracket has no frames");
+	if (!b->truncated)
+		return 0;
+	const struct glint_frame *lo = &b->frames[0],
+				 *hi = &b->frames[b->n - 1];
+	char cap[96];
+	if (!strcmp(b->stopped_by, "frame"))
+		snprintf(cap, sizeof(cap), "the frame cap (%d frames)",
+			 o->max_frames);
+	else if (!strcmp(b->stopped_by, "time"))
+		snprintf(cap, sizeof(cap),
+			 "the time cap (%g s of the camera's exposure and "
+			 "readout)",
+			 o->max_time_s);
+	else
+		snprintf(cap, sizeof(cap), "a cancel");
+	return glint_error_set(
+		EIO,
+		"the bracket was stopped by %s before it covered the scene: "
+		"%d frame%s, %.4g s .. %.4g s (gain %.3g), %s%s%s",
+		cap, b->n, b->n == 1 ? "" : "s", lo->exposure_s, hi->exposure_s,
+		hi->gain,
+		b->covered_low ? ""
+			       : "the shortest frame still clips the region",
+		!b->covered_low && !b->covered_high ? "; " : "",
+		b->covered_high ? ""
+				: "the longest leaves its darkest pixels "
+				  "under the floor");
 }
 
 void glint_bracket_release(struct glint_bracket *b)

@@ -24,10 +24,12 @@ struct glint_roi {
 };
 
 struct glint_bracket_opts {
-	double step_ev;	   /* default 1 */
-	int max_frames;	   /* default 24 */
-	double max_time_s; /* total capture time, default 60 */
-	double start_s;	   /* 0: metered by the bracket's own frames */
+	double step_ev; /* default 1 */
+	int max_frames; /* default 24 */
+	/* Cap on the camera's time (its exposures and readouts, as it
+	 * reports them: glint_camera_seconds()), default 60 s. */
+	double max_time_s;
+	double start_s; /* 0: metered by the bracket's own frames */
 	/* Meter with frames of its own before the bracket starts, as glint
 	 * did until 2026-11 (bench/capture compares the two). */
 	int meter_apart;
@@ -53,10 +55,15 @@ struct glint_bracket {
 	struct glint_frame frames[GLINT_BRACKET_MAX]; /* shortest first */
 	int used_gain;		       /* exposure ran out: gain was raised */
 	int truncated;		       /* a cap stopped it before coverage */
+	char stopped_by[8];	       /* then "frame", "time" or "cancel" */
 	int covered_low, covered_high; /* the two goals reached */
-	double seconds;		       /* on the camera's clock */
-	double metered_start_s;	       /* where it started */
-	int metering_frames;	       /* frames spent metering apart */
+	/* A goal not reached because the camera has no shorter exposure
+	 * or no more exposure x gain: as far as it can go, not cut short. */
+	int camera_limit;
+	double seconds;		/* the camera's time (exposure and readout) */
+	double wall_seconds;	/* on the clock given, preparation excluded */
+	double metered_start_s; /* where it started */
+	int metering_frames;	/* frames spent metering apart */
 	int superseded; /* unclipped frames a longer unclipped one replaced
 			   (captured, not kept) */
 };
@@ -67,7 +74,15 @@ int glint_bracket_capture(struct glint_camera *cam, const struct glint_roi *roi,
 			  struct glint_bracket *out);
 void glint_bracket_release(struct glint_bracket *b);
 
-/* ROI statistics of a frame: saturated sample count and the 1st percentile
+/* 0 when the bracket is whole: both goals reached, or reached as far as
+ * the camera goes.  Else (a cap or a cancel stopped it first, or it has
+ * no frame) an error saying which cap, what it got and which goal it
+ * missed: such a bracket is never merged as if it were complete. */
+int glint_bracket_verdict(const struct glint_bracket *b,
+			  const struct glint_bracket_opts *o);
+
+/* ROI statistics of a frame: clipped sample count (glint_frame_clip_dn)
+ * and the 1st percentile
  * of (value - black level). */
 void glint_frame_roi_stats(const struct glint_frame *f,
 			   const struct glint_roi *roi, int *saturated,

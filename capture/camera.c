@@ -74,6 +74,8 @@ struct glint_camera {
 	struct glint_clock clock;
 	void *priv;
 	struct glint_camera_info info;
+	double seconds; /* exposure and readout of every frame grabbed */
+	int started;	/* ops->start() has run */
 };
 
 static const struct glint_camera_ops *const no_backends[] = { NULL };
@@ -149,6 +151,35 @@ int glint_camera_describe(struct glint_camera *cam,
 	return 0;
 }
 
+double glint_camera_seconds(const struct glint_camera *cam)
+{
+	return cam->seconds;
+}
+
+/* A frame from the backend, its exposure and readout counted on the
+ * camera's own time: the applied exposure, or the fastest frame period
+ * when that is longer (the sensor cannot read out faster).  What the host
+ * does between frames (a busy machine, the simulator's rendering) is not
+ * the camera's time. */
+static int grab(struct glint_camera *cam, struct glint_frame *f)
+{
+	int ret = cam->ops->grab(cam->priv, f);
+	if (ret == 0 && f->exposure_s > 0)
+		cam->seconds +=
+			fmax(f->exposure_s, cam->info.frame_period_min_s);
+	return ret;
+}
+
+int glint_camera_start(struct glint_camera *cam)
+{
+	if (cam->started || !cam->ops->start)
+		return 0;
+	int ret = cam->ops->start(cam->priv);
+	if (ret == 0)
+		cam->started = 1;
+	return ret;
+}
+
 static int check_request(const struct glint_camera_info *in, double exposure_s,
 			 double gain)
 {
@@ -192,13 +223,15 @@ int glint_camera_capture(struct glint_camera *cam, double exposure_s,
 	if (dropped)
 		*dropped = 0;
 	ret = check_request(in, exposure_s, gain);
+	if (ret == 0)
+		ret = glint_camera_start(cam);
 	if (ret < 0)
 		return ret;
 	ret = cam->ops->set_exposure(cam->priv, &exposure_s, &gain);
 	if (ret < 0)
 		return ret;
 	for (int k = 0; k <= max_drop; k++) {
-		ret = cam->ops->grab(cam->priv, frame);
+		ret = grab(cam, frame);
 		if (ret < 0)
 			return ret;
 		if (matches(in, frame, exposure_s, gain))
@@ -229,6 +262,9 @@ int glint_camera_stream(struct glint_camera *cam,
 		*dropped = 0;
 	if (depth > STREAM_MAX)
 		depth = STREAM_MAX;
+	ret = glint_camera_start(cam);
+	if (ret < 0)
+		return ret;
 	for (;;) {
 		/* One request per frame keeps `depth` in flight: the next
 		 * only once a frame has started since the last one (frames
@@ -257,7 +293,7 @@ int glint_camera_stream(struct glint_camera *cam,
 		if (n == 0)
 			continue; /* plan() is waiting for nothing: ask again */
 		struct glint_frame f;
-		ret = cam->ops->grab(cam->priv, &f);
+		ret = grab(cam, &f);
 		if (ret < 0)
 			return ret;
 		if (f.t_start >= t_write)

@@ -78,6 +78,16 @@ struct glint_frame {
 
 void glint_frame_release(struct glint_frame *f);
 
+/* Where a frame's samples count as clipped when the sensor's own
+ * saturation is not known: 95 % of the range above black (a sensor's
+ * response bends before its top code).  The bracket planner and the merge
+ * use the same level, so a bracket covers what the merge can use. */
+static inline double glint_frame_clip_dn(const struct glint_frame *f)
+{
+	double top = (double)((1u << f->bit_depth) - 1);
+	return f->black_level + 0.95 * (top - f->black_level);
+}
+
 struct glint_camera_ops {
 	/* Backend name ("sim", "v4l2", "libcamera"). */
 	const char *name;
@@ -101,6 +111,11 @@ struct glint_camera_ops {
 	 * `found`; returns the count or a negative errno. */
 	int (*enumerate)(void (*found)(const char *device, void *ctx),
 			 void *ctx);
+	/* Optional: get ready to deliver frames at once (the simulated
+	 * camera renders or loads its views), so that no frame waits on
+	 * work the camera would not do.  Called once, before the first
+	 * request of a capture or stream. */
+	int (*start)(void *priv);
 };
 
 struct glint_camera;
@@ -114,6 +129,18 @@ int glint_camera_open(const char *backend, const char *device,
 void glint_camera_close(struct glint_camera *cam);
 int glint_camera_describe(struct glint_camera *cam,
 			  struct glint_camera_info *info);
+
+/* The backend's start(), once (a no-op after the first and for a backend
+ * without one); glint_camera_capture() and glint_camera_stream() call it
+ * themselves, so a caller needs it only to do that work at a time of its
+ * choosing. */
+int glint_camera_start(struct glint_camera *cam);
+
+/* Seconds of exposure and readout of every frame the camera has delivered
+ * since it was opened, as it reports them (each frame's applied exposure,
+ * or the fastest frame period when that is longer): the camera's own
+ * time, which the host's load does not stretch.  Bracket caps count it. */
+double glint_camera_seconds(const struct glint_camera *cam);
 
 /*
  * A frame exposed as requested: set exposure and gain, then grab frames,

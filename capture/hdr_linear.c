@@ -94,9 +94,8 @@ void glint_merge_frame_init(struct merge_frame *k, const struct glint_frame *f,
 	k->data = f->data;
 	k->black = f->black_level;
 	k->top = top;
-	k->sat = m->saturation_dn > 0
-			 ? m->saturation_dn
-			 : f->black_level + 0.95 * (top - f->black_level);
+	k->sat = m->saturation_dn > 0 ? m->saturation_dn
+				      : glint_frame_clip_dn(f);
 	k->tg = f->exposure_s * f->gain;
 	k->gc = f->gain * m->dn_per_electron;
 	k->floor_var =
@@ -243,6 +242,10 @@ int glint_hdr_merge_raw(const struct glint_frame *frames, int n,
 	rep->frames = n;
 	rep->sites = (long)ns;
 	rep->pairs = n - 1 < 32 ? n - 1 : 32;
+	for (int i = 0; i < rep->pairs; i++) {
+		rep->pair_tg[i][0] = mf[i].tg;
+		rep->pair_tg[i][1] = mf[i + 1].tg;
+	}
 	/* Rows to every thread; each counts into its own report (sums of
 	 * whole numbers: the same totals in any order). */
 	struct merge_job job = { mf, n, frames[0].width, out, part };
@@ -286,7 +289,34 @@ int glint_hdr_report_finish(struct glint_hdr_report *rep,
 				       "site 3 sigma above the read noise): "
 				       "nothing to merge");
 	}
-	return 0;
+	int ret = glint_hdr_report_check_moved(rep, "HDR merge");
+	if (ret < 0)
+		glint_raw_hdr_release(out);
+	return ret;
+}
+
+int glint_hdr_report_check_moved(const struct glint_hdr_report *rep,
+				 const char *what)
+{
+	int worst = -1;
+
+	if (!rep->moved)
+		return 0;
+	for (int i = 0; i < rep->pairs; i++)
+		if (rep->compared[i] > 100 &&
+		    (worst < 0 || rep->disagree[i] > rep->disagree[worst]))
+			worst = i;
+	if (worst < 0)
+		return 0;
+	return glint_error_set(
+		EINVAL,
+		"%s: the frames at %.4g s and %.4g s (exposure x gain) "
+		"disagree beyond their noise on %.1f %% of the %ld sites both "
+		"expose well (a still bracket: under 1 %%): frames of another "
+		"scene among the bracket, or the rig or the scene moved; "
+		"refused, nothing merged",
+		what, rep->pair_tg[worst][0], rep->pair_tg[worst][1],
+		100 * rep->disagree[worst], rep->compared[worst]);
 }
 
 /* Colour (0 R, 1 G, 2 B) of the 2x2 cell's sites, -1 each for mono. */

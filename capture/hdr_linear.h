@@ -52,8 +52,18 @@ struct glint_hdr_report {
 	int pairs;
 	double disagree[32];
 	long compared[32];
-	int moved; /* some pair disagrees on > 1 % of > 100 sites */
+	int moved;	       /* some pair disagrees on > 1 % of > 100 sites */
+	double pair_tg[32][2]; /* each pair's exposure x gain (s) */
 };
+
+/* 0 for a bracket whose frames agree; for a moved one (rep->moved) an
+ * error naming `what` (the session or the files), the pair of frames
+ * that disagrees most (by exposure x gain) and on what share of the
+ * sites both expose well: frames of another scene among the bracket
+ * (probe frames among a sample's) or a rig that moved are refused, never
+ * merged into one image. */
+int glint_hdr_report_check_moved(const struct glint_hdr_report *rep,
+				 const char *what);
 
 int glint_hdr_merge_raw(const struct glint_frame *frames, int n,
 			const struct glint_noise_model *noise,

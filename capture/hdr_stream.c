@@ -270,6 +270,10 @@ int glint_hdr_stream_finish(struct glint_hdr_stream *s,
 	rep->frames = s->n;
 	rep->sites = (long)s->sites;
 	rep->pairs = s->n - 1 < 32 ? s->n - 1 : 32;
+	for (int i = 0; i < rep->pairs; i++) {
+		rep->pair_tg[i][0] = s->k[i].tg;
+		rep->pair_tg[i][1] = s->k[i + 1].tg;
+	}
 	for (int t = 0; t < nthreads; t++) {
 		rep->invalid_sites += part[t].invalid_sites;
 		rep->dark_sites += part[t].dark_sites;

@@ -481,8 +481,10 @@ static int lc_enumerate(void (*found)(const char *device, void *ctx), void *ctx)
 	return n;
 }
 
-const struct glint_camera_ops glint_camera_libcamera_ops = {
-	"libcamera",  lc_open,	       lc_close, lc_describe,
-	lc_configure, lc_set_exposure, lc_grab,	 lc_enumerate,
-};
+const struct glint_camera_ops
+	glint_camera_libcamera_ops = {
+		"libcamera",  lc_open,	       lc_close, lc_describe,
+		lc_configure, lc_set_exposure, lc_grab,	 lc_enumerate,
+		nullptr, /* start: streaming starts with the first request */
+	};
 }

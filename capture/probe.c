@@ -500,6 +500,53 @@ int glint_probe_unwrap(const struct glint_image *photo,
 	return 0;
 }
 
+/*
+ * An unwrapped map is light before it is written: finite, and not
+ * negative beyond what a merged photo's noise about zero gives (its dark
+ * pixels scatter both ways; within 1 % of the map's mean they are set to
+ * 0, as the fitter's reader does).  A value further below zero is no
+ * light at all (a wrong black level, a photo darker than its noise) and
+ * is refused here, where it was made, naming the file and the pixel.
+ */
+static int check_light(struct glint_image *env, const char *path)
+{
+	size_t n = (size_t)env->width * env->height * 3;
+	double mean = 0;
+
+	for (size_t i = 0; i < n; i++) {
+		if (!isfinite(env->data[i]))
+			return glint_error_set(
+				ERANGE,
+				"unwrap: %s: pixel (%zu, %zu) has radiance "
+				"%g: expected a finite value",
+				path, i / 3 % (size_t)env->width,
+				i / 3 / (size_t)env->width,
+				(double)env->data[i]);
+		mean += env->data[i];
+	}
+	mean /= (double)n;
+	if (!(mean > 0))
+		return glint_error_set(ERANGE,
+				       "unwrap: %s: the map's mean radiance "
+				       "is %g: expected some light",
+				       path, mean);
+	for (size_t i = 0; i < n; i++) {
+		if (env->data[i] >= 0)
+			continue;
+		if (env->data[i] < -0.01 * mean)
+			return glint_error_set(
+				ERANGE,
+				"unwrap: %s: pixel (%zu, %zu) has radiance "
+				"%g, below zero by more than the noise allows "
+				"(1 %% of the mean %g): expected light >= 0",
+				path, i / 3 % (size_t)env->width,
+				i / 3 / (size_t)env->width,
+				(double)env->data[i], mean);
+		env->data[i] = 0;
+	}
+	return 0;
+}
+
 int glint_probe_unwrap_write(const struct glint_image *photo,
 			     const struct glint_unwrap_opts *o,
 			     const char *env_path, int *width, int *height)
@@ -509,6 +556,8 @@ int glint_probe_unwrap_write(const struct glint_image *photo,
 	char path[GLINT_PATH_MAX];
 	int ret = glint_probe_unwrap(photo, o, &env, &mask, &dens);
 
+	if (ret == 0)
+		ret = check_light(env, env_path);
 	if (ret == 0)
 		ret = glint_image_write(env_path, env, NULL);
 	if (ret == 0)
@@ -529,43 +578,6 @@ int glint_probe_unwrap_write(const struct glint_image *photo,
 	glint_image_free(mask);
 	glint_image_free(dens);
 	return ret;
-}
-
-/* An 8-bit photo is camera-encoded, not radiance: refused, or with
- * --srgb linearised through the sRGB curve (IEC 61966-2-1). */
-int glint_probe_photo_radiance(const char *path, struct glint_image *img,
-			       int srgb)
-{
-	char ext[16];
-	const char *ldr[] = { "png", "tga", "jpg", "jpeg", "bmp" };
-	int is_ldr = 0;
-
-	glint_path_ext(path, ext, sizeof(ext));
-	for (int i = 0; i < 5; i++)
-		is_ldr |= !strcmp(ext, ldr[i]);
-	if (!is_ldr)
-		return 0;
-	if (!srgb)
-		return glint_error_set(
-			EINVAL,
-			"%s: an 8-bit image holds camera-encoded "
-			"values, not radiance, and unwrapped as "
-			"light it would be wrong: merge a "
-			"bracket to HDR (glint hdr), or give "
-			"--srgb to take it as sRGB-encoded "
-			"(highlights stay clipped)",
-			path);
-	for (size_t i = 0; i < (size_t)img->width * img->height * 3; i++) {
-		float v = img->data[i];
-		img->data[i] = v <= 0.04045f
-				       ? v / 12.92f
-				       : powf((v + 0.055f) / 1.055f, 2.4f);
-	}
-	glint_log_warn("%s: 8-bit, taken as sRGB-encoded: highlights above "
-		       "the white point are clipped, so the map's lights are "
-		       "too dim",
-		       path);
-	return 0;
 }
 
 /* The ball's circle: found in the photo when --ball is not given (the

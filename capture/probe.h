@@ -111,15 +111,6 @@ int glint_probe_unwrap_write(const struct glint_image *photo,
 double glint_fresnel_conductor(double n, double k, double c);
 
 /*
- * A probe photo read from `path` as radiance.  An 8-bit format (png, tga,
- * jpg, bmp) holds camera-encoded values: refused with advice, or with
- * srgb linearised in place through the sRGB curve (IEC 61966-2-1) with a
- * warning that its highlights are clipped.  HDR formats pass unchanged.
- */
-int glint_probe_photo_radiance(const char *path, struct glint_image *img,
-			       int srgb);
-
-/*
  * The ball's circle in o->ball_cx, ball_cy, ball_r: found by the sphere
  * detector (capture/sphere_detect.h) unless `given`; a given circle is
  * kept, with a warning when the detector finds one more than 2 px away.

@@ -15,12 +15,15 @@
 #include "core/error.h"
 #include "core/log.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 /* The merged probe -> env.exr (+ env-mask.png, env-density.exr): the ball
- * found in it, unwrapped with the rig's focal length. */
+ * found in it, unwrapped with the rig's focal length, and the map checked
+ * as light before it is written (glint_probe_unwrap_write). */
 static int unwrap_probe(const char *dir, const struct glint_capture_setup *s,
 			const struct glint_image *probe)
 {
@@ -29,27 +32,21 @@ static int unwrap_probe(const char *dir, const struct glint_capture_setup *s,
 	struct glint_circle c;
 	int ret = glint_sphere_detect(probe, 0, 0, &c);
 
-	if (ret == 0) {
-		glint_unwrap_default_opts(&o);
-		o.fpx = s->focal_px;
-		o.cx = s->principal[0];
-		o.cy = s->principal[1];
-		o.ball_cx = c.cx;
-		o.ball_cy = c.cy;
-		o.ball_r = c.r;
-		glint_log_info("probe ball at (%.2f, %.2f), radius %.2f px "
-			       "(%d edge points, %.2f px rms)",
-			       c.cx, c.cy, c.r, c.points, c.rms_px);
-		ret = glint_path_join(path, sizeof(path), dir,
-				      GLINT_SESSION_ENV);
-	}
+	if (ret < 0)
+		return glint_error_prefix(ret, "%s/probe.exr", dir);
+	glint_unwrap_default_opts(&o);
+	o.fpx = s->focal_px;
+	o.cx = s->principal[0];
+	o.cy = s->principal[1];
+	o.ball_cx = c.cx;
+	o.ball_cy = c.cy;
+	o.ball_r = c.r;
+	glint_log_info("probe ball at (%.2f, %.2f), radius %.2f px "
+		       "(%d edge points, %.2f px rms)",
+		       c.cx, c.cy, c.r, c.points, c.rms_px);
+	ret = glint_path_join(path, sizeof(path), dir, GLINT_SESSION_ENV);
 	if (ret == 0)
 		ret = glint_probe_unwrap_write(probe, &o, path, NULL, NULL);
-	if (ret < 0)
-		glint_error_prefix(ret,
-				   "unwrapping the probe (frames and "
-				   "probe.exr kept in %s)",
-				   dir);
 	return ret;
 }
 
@@ -110,8 +107,8 @@ static int save_frame(const struct glint_frame *f, int index, void *ctx)
 	return ret;
 }
 
-/* The bracket into the session, which records the outcome either way
- * (and is gone after this). */
+/* The bracket into the session (which is finished by the caller, once
+ * every stage after it has run). */
 static int bracket_into(struct glint_camera *cam,
 			const struct glint_capture_setup *s, const char *kind,
 			struct glint_session *session, atomic_int *cancel,
@@ -119,40 +116,99 @@ static int bracket_into(struct glint_camera *cam,
 {
 	struct glint_bracket_opts opts = s->bracket;
 	struct frame_ctx fc = { .session = session };
-	char err[512], dir[GLINT_PATH_MAX];
 
 	opts.on_frame = save_frame;
 	opts.ctx = &fc;
 	opts.cancel = cancel;
 	opts.release_pixels = 1;
-	glint_progress_start(&fc.progress, "frames", opts.max_frames);
-	int ret =
-		glint_bracket_capture(cam, &s->roi[strcmp(kind, "probe") != 0],
-				      &opts, &glint_clock_real, b);
-	glint_progress_finish(&fc.progress);
-	snprintf(err, sizeof(err), "%s", glint_error_msg());
-	snprintf(dir, sizeof(dir), "%s", glint_session_dir(session));
-	int r2 = glint_session_finish(session, b, ret < 0 ? err : NULL);
-	*hdr = fc.hdr;
+	/* The camera's preparation (the simulator renders its views) before
+	 * the progress bar and the bracket's clock start. */
+	int ret = glint_camera_start(cam);
 	if (ret < 0)
-		return glint_error_set(-ret, "%s (session %s kept, incomplete)",
-				       err, dir);
-	return r2;
+		return ret;
+	glint_progress_start(&fc.progress, "frames", opts.max_frames);
+	ret = glint_bracket_capture(cam, &s->roi[strcmp(kind, "probe") != 0],
+				    &opts, &glint_clock_real, b);
+	glint_progress_finish(&fc.progress);
+	*hdr = fc.hdr;
+	if (ret == 0)
+		ret = glint_bracket_verdict(b, &opts);
+	return ret;
+}
+
+/* A merged bracket is radiance before it is written: finite, not
+ * negative beyond its noise (a merge's dark sites scatter about zero by
+ * their noise; -5 sigma happens about once in 3.5 million by chance),
+ * brighter than its noise somewhere, and for a probe, its brightest
+ * sites measured in some frame (a light clipped in every frame is a
+ * light of unknown strength). */
+static int check_raw(const struct glint_raw_hdr *raw, const char *kind,
+		     const char *file)
+{
+	size_t n = (size_t)raw->width * raw->height;
+	size_t bright = 0, clipped = 0, first_clip = 0;
+
+	for (size_t i = 0; i < n; i++) {
+		double x = raw->x[i], v = raw->var[i];
+		if (!raw->valid[i]) {
+			if (!clipped++)
+				first_clip = i;
+			continue;
+		}
+		if (!isfinite(x) || !isfinite(v) || v < 0)
+			return glint_error_set(
+				ERANGE,
+				"%s: site (%zu, %zu) has radiance %g, variance "
+				"%g: expected finite values",
+				file, i % (size_t)raw->width,
+				i / (size_t)raw->width, x, v);
+		if (x < -5 * sqrt(v))
+			return glint_error_set(
+				ERANGE,
+				"%s: site (%zu, %zu) has radiance %g, %.1f "
+				"standard deviations below zero: expected >= "
+				"0 within its noise (a wrong black level or "
+				"noise model?)",
+				file, i % (size_t)raw->width,
+				i / (size_t)raw->width, x, x / sqrt(v));
+		bright += x > 3 * sqrt(v);
+	}
+	if (bright * 100 < n)
+		return glint_error_set(
+			ERANGE,
+			"%s: the photo is darker than its noise: %zu of %zu "
+			"sites are 3 standard deviations above zero (at "
+			"least 1 %% expected): lights off, lens capped, or "
+			"a bracket too short",
+			file, bright, n);
+	if (!strcmp(kind, "probe") && clipped)
+		return glint_error_set(
+			ERANGE,
+			"%s: %zu sites are clipped in every frame, the "
+			"first at (%zu, %zu): the brightest light's strength "
+			"is unknown, so the probe cannot say how the sample "
+			"was lit (the shortest exposure was not short enough: "
+			"an ND filter, or a smaller aperture)",
+			file, clipped, first_clip % (size_t)raw->width,
+			first_clip / (size_t)raw->width);
+	return 0;
 }
 
 /* The merged HDR image of a raw bracket, beside its frames: KIND.exr,
  * KIND-variance.exr, KIND-weights.exr, KIND-mask.png, KIND.png; then the
- * probe's unwrap or the sample's scene. */
+ * probe's unwrap or the sample's scene.  *stage says which step failed;
+ * files[] gets the outputs promised (names inside the session). */
 static int merge_session(const struct glint_capture_setup *s, const char *kind,
 			 const char *out, const char *probe,
 			 struct glint_hdr_stream *hdr,
-			 struct glint_capture_result *res)
+			 struct glint_capture_result *res, const char **stage,
+			 char files[][64], int *nfiles)
 {
 	static const char *const suffix[5] = { ".exr", "-variance.exr",
 					       "-weights.exr", "-mask.png",
 					       ".png" };
 	const char *dir = res->session;
-	char names[5][64];
+	char names[5][64], file[GLINT_PATH_MAX];
 	const char *np[5];
 	struct glint_hdr_report rep;
 	struct glint_raw_hdr raw;
@@ -160,27 +216,60 @@ static int merge_session(const struct glint_capture_setup *s, const char *kind,
 	long valid_px;
 	int w, h, ret;
 
+	*stage = "merge";
 	for (int i = 0; i < 5; i++) {
 		snprintf(names[i], sizeof(names[i]), "%s%s", kind, suffix[i]);
 		np[i] = names[i];
 	}
-	ret = glint_hdr_stream_finish(hdr, &raw, &rep);
+	ret = glint_path_join(file, sizeof(file), dir, names[0]);
+	if (ret == 0)
+		ret = glint_hdr_stream_finish(hdr, &raw, &rep);
+	if (ret == 0 && (ret = check_raw(&raw, kind, file)) < 0)
+		glint_raw_hdr_release(&raw);
 	if (ret == 0)
 		ret = glint_hdr_write(&raw, dir, np, &w, &h, &valid_px, &rad);
-	if (ret == 0 && rep.moved)
-		glint_log_warn("the bracket's frames disagree (moved rig or "
-			       "scene?); run glint hdr on the session for "
-			       "details");
-	if (ret < 0)
-		glint_error_prefix(
-			ret, "merging the bracket (frames kept in %s)", dir);
-	if (ret == 0 && !strcmp(kind, "probe") && s->focal_px > 0)
+	for (int i = 0; ret == 0 && i < 5; i++)
+		snprintf(files[(*nfiles)++], 64, "%s", names[i]);
+	if (ret == 0 && !strcmp(kind, "probe") && s->focal_px > 0) {
+		*stage = "unwrap";
 		ret = unwrap_probe(dir, s, rad);
-	if (ret == 0 && !strcmp(kind, "sample") && s->focal_px > 0)
+		if (ret == 0) {
+			snprintf(files[(*nfiles)++], 64, "%s",
+				 GLINT_SESSION_ENV);
+			snprintf(files[(*nfiles)++], 64, "env-mask.png");
+			snprintf(files[(*nfiles)++], 64, "env-density.exr");
+		}
+	}
+	if (ret == 0 && !strcmp(kind, "sample") && s->focal_px > 0) {
+		*stage = "scene";
 		ret = sample_scene(dir, out, probe, s, rad, res->scene,
 				   sizeof(res->scene));
+		if (ret == 0 && res->scene[0])
+			snprintf(files[(*nfiles)++], 64, "%s",
+				 GLINT_SESSION_SCENE);
+	}
 	glint_image_free(rad);
 	return ret;
+}
+
+/* Every output promised is there, a regular file with something in it. */
+static int verify_files(const char *dir, char files[][64], int n)
+{
+	char path[GLINT_PATH_MAX];
+	struct stat st;
+
+	for (int i = 0; i < n; i++) {
+		int ret = glint_path_join(path, sizeof(path), dir, files[i]);
+		if (ret < 0)
+			return ret;
+		if (stat(path, &st) < 0 || !S_ISREG(st.st_mode) ||
+		    st.st_size == 0)
+			return glint_error_set(EIO,
+					       "%s: missing or empty after it "
+					       "was written",
+					       path);
+	}
+	return 0;
 }
 
 static json_t *summary(const char *kind, const struct glint_bracket *b,
@@ -190,20 +279,22 @@ static json_t *summary(const char *kind, const struct glint_bracket *b,
 				 *hi = &b->frames[b->n - 1];
 
 	glint_log_info(
-		"%d frames, %.4g s .. %.4g s (gain up to %.3g) in "
-		"%.1f s%s%s",
+		"%d frames, %.4g s .. %.4g s (gain up to %.3g): %.1f s of "
+		"exposure and readout, %.1f s here%s%s",
 		b->n, lo->exposure_s, hi->exposure_s, hi->gain, b->seconds,
+		b->wall_seconds,
 		b->covered_low && b->covered_high ? ", range covered" : "",
-		b->truncated ? " (stopped by a cap)" : "");
+		b->camera_limit ? " (as far as the camera goes)" : "");
 	return json_pack(
 		"{s:s, s:s, s:s, s:s*, s:i, s:f, s:f, s:f, s:b, s:b, "
-		"s:b, s:b, s:f}",
+		"s:b, s:b, s:b, s:f, s:f}",
 		"status", "complete", "kind", kind, "session", res->session,
 		"scene", res->scene[0] ? res->scene : NULL, "frames", b->n,
 		"shortest_s", lo->exposure_s, "longest_s", hi->exposure_s,
 		"max_gain", hi->gain, "covered_low", b->covered_low,
 		"covered_high", b->covered_high, "used_gain", b->used_gain,
-		"truncated", b->truncated, "seconds", b->seconds);
+		"truncated", b->truncated, "camera_limit", b->camera_limit,
+		"seconds", b->seconds, "wall_seconds", b->wall_seconds);
 }
 
 int glint_capture_run(const struct glint_capture_setup *s, const char *kind,
@@ -215,7 +306,9 @@ int glint_capture_run(const struct glint_capture_setup *s, const char *kind,
 	struct glint_session *session = NULL;
 	struct glint_bracket b = { 0 };
 	struct glint_hdr_stream *hdr = NULL;
-	int ret;
+	const char *stage = "bracket";
+	char files[16][64], err[1024];
+	int nfiles = 0, ret;
 
 	memset(res, 0, sizeof(*res));
 	ret = glint_camera_open(s->backend, s->device, NULL, &cam);
@@ -230,13 +323,33 @@ int glint_capture_run(const struct glint_capture_setup *s, const char *kind,
 	glint_log_info("capturing the %s with %s (%s) into %s", kind, info.name,
 		       info.backend, res->session);
 	ret = bracket_into(cam, s, kind, session, cancel, &b, &hdr);
-	if (ret < 0)
-		goto err_bracket;
-	if (hdr)
-		ret = merge_session(s, kind, out, probe, hdr, res);
+	if (ret == 0 && hdr)
+		ret = merge_session(s, kind, out, probe, hdr, res, &stage,
+				    files, &nfiles);
+	if (ret == 0) {
+		stage = "verify";
+		ret = verify_files(res->session, files, nfiles);
+	}
 	if (ret == 0 && !(res->summary = summary(kind, &b, res)))
 		ret = glint_error_set(ENOMEM, "out of memory");
-err_bracket:
+	/* The session says how it ended, whatever ended it. */
+	snprintf(err, sizeof(err), "%s", ret < 0 ? glint_error_msg() : "");
+	const char *fp[17];
+	for (int i = 0; i < nfiles; i++)
+		fp[i] = files[i];
+	fp[nfiles] = NULL;
+	int r2 = glint_session_finish(session, &b, ret < 0 ? stage : NULL,
+				      ret < 0 ? err : NULL, fp);
+	if (ret < 0) {
+		int capture = !strcmp(stage, "bracket");
+		glint_error_set(-ret, "the %s's %s: %s (session %s kept, %s)",
+				kind, stage, err, res->session,
+				capture ? "incomplete" : "failed");
+		json_decref(res->summary);
+		res->summary = NULL;
+	} else {
+		ret = r2;
+	}
 	/* The frames are released on every path (they are on disk). */
 	glint_hdr_stream_free(hdr);
 	glint_bracket_release(&b);

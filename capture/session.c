@@ -224,29 +224,50 @@ int glint_session_add_frame(struct glint_session *s,
 }
 
 int glint_session_finish(struct glint_session *s, const struct glint_bracket *b,
-			 const char *error)
+			 const char *stage, const char *error,
+			 const char *const *files)
 {
 	char stamp[32];
 	int ret;
 
 	utc_stamp(stamp, sizeof(stamp), 0);
 	json_object_set_new(s->doc, "finished", json_string(stamp));
-	if (error) {
-		json_object_set_new(s->doc, "error", json_string(error));
-		glint_session_log(s, "stopped: %s", error);
-	} else {
-		json_object_set_new(s->doc, "status", json_string("complete"));
+	if (b && b->n > 0)
 		json_object_set_new(
 			s->doc, "bracket",
-			json_pack("{s:i, s:b, s:b, s:b, s:b, s:f, s:f, s:i, "
-				  "s:i}",
+			json_pack("{s:i, s:b, s:b, s:b, s:b, s:s?, s:b, s:f, "
+				  "s:f, s:f, s:i, s:i}",
 				  "frames", b->n, "covered_low", b->covered_low,
 				  "covered_high", b->covered_high, "used_gain",
 				  b->used_gain, "truncated", b->truncated,
-				  "seconds", b->seconds, "metered_start_s",
-				  b->metered_start_s, "metering_frames",
-				  b->metering_frames, "unclipped_superseded",
-				  b->superseded));
+				  "stopped_by",
+				  b->stopped_by[0] ? b->stopped_by : NULL,
+				  "camera_limit", b->camera_limit, "seconds",
+				  b->seconds, "wall_seconds", b->wall_seconds,
+				  "metered_start_s", b->metered_start_s,
+				  "metering_frames", b->metering_frames,
+				  "unclipped_superseded", b->superseded));
+	if (error) {
+		/* The capture itself did not finish (its frames are whole
+		 * but too few): incomplete; a stage after it refused what
+		 * it was given or could not write: failed. */
+		int capture = !stage || !strcmp(stage, "bracket") ||
+			      !strcmp(stage, "camera");
+		json_object_set_new(
+			s->doc, "status",
+			json_string(capture ? "incomplete" : "failed"));
+		json_object_set_new(s->doc, "stage",
+				    json_string(stage ? stage : "bracket"));
+		json_object_set_new(s->doc, "error", json_string(error));
+		glint_session_log(s, "%s at the %s stage: %s",
+				  capture ? "incomplete" : "failed",
+				  stage ? stage : "bracket", error);
+	} else {
+		json_t *list = json_array();
+		for (int i = 0; files && files[i]; i++)
+			json_array_append_new(list, json_string(files[i]));
+		json_object_set_new(s->doc, "files", list);
+		json_object_set_new(s->doc, "status", json_string("complete"));
 		glint_session_log(s, "complete: %d frames in %.2f s", b->n,
 				  b->seconds);
 	}

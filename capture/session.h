@@ -5,9 +5,13 @@
 /*
  * A capture session on disk: one directory per capture,
  *   <root>/<kind>-<UTC date>T<time>Z[-n]/
- *     session.json      status ("incomplete" until the bracket finished,
- *                       then "complete"), camera, bracket outcome, frame
- *                       list, the error that stopped it if any
+ *     session.json      status: "incomplete" while capturing and when the
+ *                       bracket did not finish; "failed" when a stage
+ *                       after it (merge, unwrap, scene) refused; and
+ *                       "complete" only once every output it promises is
+ *                       written and checked (listed in "files"); camera,
+ *                       bracket outcome, frame list, the stage and error
+ *                       that stopped it if any
  *     rig.json          the rig configuration used
  *     log.txt           one line per event, appended and flushed
  *     frame-NNN.png     raw frames (capture/frame_file.h), in capture order
@@ -54,10 +58,18 @@ int glint_session_add_frame(struct glint_session *s,
 void glint_session_log(struct glint_session *s, const char *fmt, ...)
 	GLINT_PRINTF(2, 3);
 
-/* Final session.json: "complete" with the bracket's outcome when error is
- * NULL, else "incomplete" with the error.  Frees s. */
+/*
+ * Final session.json, with the bracket's outcome (b may be NULL).  With
+ * error NULL: "complete", and `files` (NULL-terminated, may be NULL) the
+ * outputs the caller verified are there.  Else the stage that stopped it
+ * ("bracket", "merge", "unwrap", "scene", "verify") and the error: status
+ * "incomplete" when the capture itself did not finish (stage "bracket" or
+ * "camera", or NULL), "failed" when a later stage refused or could not
+ * write.  Frees s.
+ */
 int glint_session_finish(struct glint_session *s, const struct glint_bracket *b,
-			 const char *error);
+			 const char *stage, const char *error,
+			 const char *const *files);
 
 /* What `glint fit SESSION` fits: a complete sample session's scene,
  * photo, weights ("" when it has none) and result folder, each a path of

@@ -12,7 +12,7 @@
 
 void cmd_convert_help(void)
 {
-	printf("usage: glint convert IN OUT [--half] [--exposure EV] "
+	printf("usage: glint convert IN OUT [--half] [--exposure EV] [--srgb] "
 	       "[--json]\n"
 	       "\n"
 	       "Read IN (.exr incl. DWAA/DWAB, .hdr, .pfm, .tif: float or "
@@ -23,6 +23,13 @@ void cmd_convert_help(void)
 	       "  -o, --output OUT  the output (instead of the second "
 	       "argument)\n"
 	       "  --half         EXR output with half floats\n"
+	       "  --srgb         IN is 8-bit (.png, .jpg, ...) and OUT a float "
+	       "format: take IN\n"
+	       "                 as sRGB-encoded and linearise it (without it "
+	       "such a\n"
+	       "                 conversion is refused: 8-bit values are "
+	       "camera-encoded,\n"
+	       "                 not radiance)\n"
 	       "  --exposure EV  PNG exposure in stops (default: auto)\n"
 	       "  --allow-nonfinite  copy NaN/Inf values instead of "
 	       "failing\n"
@@ -35,8 +42,9 @@ int cmd_convert(int argc, char **argv)
 	struct glint_image *img;
 	const char *out = NULL;
 	double exposure = NAN;
-	int nonfinite = 0;
+	int nonfinite = 0, srgb = 0;
 	const struct cmd_opt opts[] = {
+		CMD_FLAG("srgb", 0, &srgb),
 		CMD_FLAG("half", 0, &wo.exr_half),
 		CMD_REAL("exposure", &exposure, -64, 64),
 		CMD_FLAG("allow-nonfinite", 0, &nonfinite),
@@ -60,7 +68,11 @@ int cmd_convert(int argc, char **argv)
 	if (!out)
 		out = a.argv[1];
 	argv = a.argv;
-	if (glint_image_read(argv[0], &img) < 0)
+	/* To a float format the values become radiance: the one policy.
+	 * 8-bit to 8-bit (a PNG preview) copies them. */
+	int to_ldr = glint_image_encoded(out);
+	if ((to_ldr ? glint_image_read(argv[0], &img)
+		    : glint_image_read_radiance(argv[0], srgb, &img)) < 0)
 		return cmd_fail("convert");
 	if (!nonfinite && glint_image_check_finite(img, argv[0], 0) < 0) {
 		glint_image_free(img);

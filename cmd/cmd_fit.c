@@ -181,10 +181,21 @@ void cmd_fit_help(void)
 	       "                        a flat disc of the photo's mean "
 	       "colour); a refused\n"
 	       "                        fit's diagnostics go to OUT.refused\n"
-	       "  --force               replace OUT even when it holds files "
-	       "glint did not write\n"
-	       "                        (without it such a folder is refused "
+	       "  --force               write into OUT even when it holds "
+	       "files "
+	       "glint did not\n"
+	       "                        write: glint's own (its "
+	       "glint-outputs.txt) are replaced,\n"
+	       "                        the others kept; never an input of "
+	       "this fit (without\n"
+	       "                        --force such a folder is refused "
 	       "before any work)\n"
+	       "  --srgb                take an 8-bit photo (.png, .jpg, ...) "
+	       "as sRGB-encoded and\n"
+	       "                        linearise it (without it an 8-bit "
+	       "photo is refused: it\n"
+	       "                        holds camera-encoded values, not "
+	       "radiance)\n"
 	       "  --export F[,F...]     also write the material for a "
 	       "renderer into OUT:\n"
 	       "                        material.gltf (gltf), material.xml "
@@ -476,6 +487,7 @@ static int load_inputs(struct glint_fit_job *job, struct glint_fit_job *also,
 		memset(a, 0, sizeof(*a));
 		a->scene_path = in->scene[k];
 		a->photo_path = in->photo[k];
+		a->srgb = job->srgb;
 		a->nthreads = job->nthreads;
 		job->nalso = k;
 		ret = glint_fit_job_load(a, in->weights[k]);
@@ -532,6 +544,7 @@ int cmd_fit(int argc, char **argv)
 		CMD_REAL("level", &job.opts.level, 0.51, 0.999),
 		CMD_REAL("accept-rmse", &job.accept_rmse, 1e-9, 1e9),
 		CMD_FLAG("force", 0, &job.force),
+		CMD_FLAG("srgb", 0, &job.srgb),
 		CMD_CALL("export", &job.exports, parse_exports),
 		CMD_INT("max-iter", &job.opts.max_iter, 1, 10000),
 		CMD_INT("threads", &job.nthreads, 0, 256),

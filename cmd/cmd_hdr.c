@@ -70,8 +70,11 @@ void cmd_hdr_help(void)
 	       "                        the range above black)\n"
 	       "      --json            print a JSON result on stdout\n"
 	       "  -q, --quiet           no info messages\n"
-	       "\nExit status: 0 done (a moved bracket is reported, not an "
-	       "error), 1 bad input,\n2 bad command line.\n");
+	       "\nA raw bracket whose frames disagree beyond their noise (a "
+	       "moved rig, or frames of\nanother scene among them) is "
+	       "refused, naming the pair; nothing is merged.\n"
+	       "\nExit status: 0 done, 1 bad input (a mixed or moved bracket "
+	       "among it),\n2 bad command line.\n");
 }
 
 static int ldr_main(char **files, int n, const char *times,
@@ -206,11 +209,6 @@ int cmd_hdr(int argc, char **argv)
 		ret = glint_hdr_report_write(out, n, width, height, valid_px,
 					     &rep, &nm, &res);
 	if (ret == 0) {
-		if (rep.moved)
-			glint_log_warn("frames of the bracket "
-				       "disagree where both are well exposed "
-				       "(moved rig or scene?): see %s/hdr.json",
-				       out);
 		glint_log_info("%d frames -> %s/hdr.exr (%dx%d), %ld of %ld "
 			       "pixels valid, %ld sites clipped in every "
 			       "frame",

@@ -23,9 +23,9 @@ void cmd_probe_help(void)
 	printf("usage: glint probe unwrap PHOTO.exr --focal-px F [--ball "
 	       "CX,CY,R] [options] -o ENV.exr\n"
 	       "       glint probe convert IN OUT --from FMT --to FMT "
-	       "[--size WxH]\n"
+	       "[--size WxH] [--srgb]\n"
 	       "       glint probe register ENV1.exr ENV2.exr -o OUT.exr "
-	       "[--yaw DEG] [--points F]\n"
+	       "[--yaw DEG] [--points F] [--srgb]\n"
 	       "\n"
 	       "unwrap: a photographed mirror ball (HDR, linear) to a "
 	       "lat-long map in the\ncamera's frame (+Y up, the camera "
@@ -69,6 +69,9 @@ void cmd_probe_help(void)
 	       "views are reliable; then\nthe views are blended, each "
 	       "weighted by its mask x sampling density (the\n-mask.png and "
 	       "-density.exr written by unwrap, when present).\n"
+	       "\nEvery subcommand takes light: an 8-bit image (.png, .jpg, "
+	       "...) is refused\nas not radiance, unless --srgb (then "
+	       "linearised through the sRGB curve).\n"
 	       "\nExit status: 0 done, 1 bad input, 2 bad command line.\n");
 }
 
@@ -157,9 +160,7 @@ static int unwrap_main(int argc, char **argv)
 						"required");
 	struct glint_image *photo = NULL;
 	int w, h;
-	int ret = glint_image_read(argv[0], &photo);
-	if (ret == 0)
-		ret = glint_probe_photo_radiance(argv[0], photo, srgb);
+	int ret = glint_image_read_radiance(argv[0], srgb, &photo);
 	if (ret == 0)
 		ret = glint_probe_find_ball(photo, have_ball, &o);
 	if (ret == 0)
@@ -177,10 +178,12 @@ static int convert_main(int argc, char **argv)
 				to = GLINT_PROBE_LATLONG;
 	const char *fs = NULL, *ts = NULL;
 	struct numbers size = { .n = 2 };
+	int srgb = 0;
 	const struct cmd_opt opts[] = {
 		CMD_STRING("from", 0, &fs),
 		CMD_STRING("to", 0, &ts),
 		CMD_CALL("size", &size, parse_numbers),
+		CMD_FLAG("srgb", 0, &srgb),
 		{ 0 },
 	};
 	struct cmd_args a;
@@ -199,11 +202,9 @@ static int convert_main(int argc, char **argv)
 	    glint_probe_format_parse(ts, &to) < 0)
 		return cmd_usage_error("probe", "%s", glint_error_msg());
 	struct glint_image *src = NULL, *dst = NULL;
-	int ret = glint_image_read(argv[0], &src);
-	if (ret == 0)
-		ret = glint_probe_convert(src, from, to, (int)v[0], (int)v[1],
-					  &dst);
-	if (ret < 0)
+	int ret = glint_image_read_radiance(argv[0], srgb, &src);
+	if (ret == 0 && (ret = glint_probe_convert(src, from, to, (int)v[0],
+						   (int)v[1], &dst)) < 0)
 		glint_error_prefix(ret, "%s", argv[0]);
 	if (ret == 0)
 		ret = glint_image_write(argv[1], dst, NULL);
@@ -219,8 +220,10 @@ static int register_main(int argc, char **argv)
 {
 	const char *out = NULL, *points = NULL;
 	double yaw = 90;
+	int srgb = 0;
 	const struct cmd_opt opts[] = {
 		CMD_REAL("yaw", &yaw, -360, 360),
+		CMD_FLAG("srgb", 0, &srgb),
 		CMD_STRING("points", 0, &points),
 		CMD_STRING("output", 'o', &out),
 		{ 0 },
@@ -239,9 +242,9 @@ static int register_main(int argc, char **argv)
 	struct glint_image *e1 = NULL, *e2 = NULL, *w1, *w2, *blend = NULL;
 	struct mat3 r;
 	double quality = NAN;
-	int ret = glint_image_read(argv[0], &e1);
+	int ret = glint_image_read_radiance(argv[0], srgb, &e1);
 	if (ret == 0)
-		ret = glint_image_read(argv[1], &e2);
+		ret = glint_image_read_radiance(argv[1], srgb, &e2);
 	w1 = ret == 0 ? glint_probe_view_weight(argv[0]) : NULL;
 	w2 = ret == 0 ? glint_probe_view_weight(argv[1]) : NULL;
 	if (ret == 0 && points) {

@@ -37,6 +37,10 @@ void cmd_render_help(void)
 	       "of the scene's\n"
 	       "                      (lat-long .exr/.hdr/.pfm; a path from "
 	       "the current folder)\n"
+	       "      --srgb          the map is an 8-bit image to take as "
+	       "sRGB-encoded (without\n"
+	       "                      it an 8-bit map is refused: "
+	       "camera-encoded, not radiance)\n"
 	       "      --env-rotation X,Y,Z  the map's rotation, degrees about "
 	       "X, Y, Z\n"
 	       "                      (default: the scene's; 0,0,0 with "
@@ -121,7 +125,7 @@ int cmd_render(int argc, char **argv)
 					.background = 1,
 					.exposure = NAN };
 	const char *material = NULL, *entry = NULL, *paper = NULL;
-	int spp = 0, ls = -1, bs = -1, nobg = 0;
+	int spp = 0, ls = -1, bs = -1, nobg = 0, srgb = 0;
 	const char *env = NULL;
 	struct rotation rot = { 0 };
 	double env_scale = NAN;
@@ -131,6 +135,7 @@ int cmd_render(int argc, char **argv)
 		CMD_STRING("entry", 0, &entry),
 		CMD_STRING("paper", 0, &paper),
 		CMD_STRING("env", 0, &env),
+		CMD_FLAG("srgb", 0, &srgb),
 		CMD_CALL("env-rotation", &rot, parse_rotation),
 		CMD_REAL("env-scale", &env_scale, 1e-12, 1e12),
 		CMD_STRING("output", 'o', &job.out_exr),
@@ -164,6 +169,7 @@ int cmd_render(int argc, char **argv)
 	if (glint_scene_load(a.argv[0], &job.scene) < 0 ||
 	    relight(&job.scene, env, &rot, env_scale) < 0)
 		return cmd_fail("render");
+	job.scene.env_srgb = srgb;
 	if (paper) {
 		snprintf(paper_path, sizeof(paper_path), "%s/paper-table1.json",
 			 glint_data_dir());

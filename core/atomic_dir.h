@@ -19,7 +19,18 @@
 struct glint_atomic_dir {
 	char final_path[4096];
 	char tmp_path[4096];
+	/* Set before commit: the names glint writes into such a folder
+	 * (NULL-terminated), which a folder without a manifest is taken to
+	 * hold as glint's; and keep_others: files of the target that are
+	 * not glint's (a user's notes, the inputs of the run) are carried
+	 * into the new folder, so that only glint's own are replaced. */
+	const char *const *names;
+	int keep_others;
 };
+
+/* Each result folder lists the files glint wrote into it, one name a
+ * line: what a later result may replace there, and nothing else. */
+#define GLINT_ATOMIC_DIR_MANIFEST "glint-outputs.txt"
 
 /* Create the temporary folder for `path`; -ENAMETOOLONG (and nothing
  * created) when path has GLINT_ATOMIC_DIR_PATH_MAX bytes or more. */
@@ -28,21 +39,31 @@ int glint_atomic_dir_open(struct glint_atomic_dir *ad, const char *path);
  * call site is the caller's: buf of size n). */
 const char *glint_atomic_dir_file(const struct glint_atomic_dir *ad,
 				  const char *name, char *buf, unsigned n);
-/* Put the folder in place of the target. */
+/* Put the folder in place of the target, with its manifest (every file
+ * written into it); with keep_others, the target's files that are not
+ * glint's are hard-linked into it first, so they stay whole at every
+ * instant and the old folder's removal takes only glint's files.  A file
+ * of the user's that cannot be carried (another file system, a folder)
+ * stops the commit and nothing is replaced. */
 int glint_atomic_dir_commit(struct glint_atomic_dir *ad);
 /* Remove the temporary folder and its files. */
 void glint_atomic_dir_abort(struct glint_atomic_dir *ad);
 /*
- * May `path` be replaced by a result folder?  Yes when it does not exist,
- * is an empty folder, or is a previous result: a folder holding only
- * files named in `names` (NULL-terminated).  A folder
- * holding anything else (a user's notes, another program's output), a
- * file, a symbolic link, or the current folder or one holding it is
- * refused with -EEXIST/-EBUSY and a message, unless force (which still
- * refuses a non-folder, a link and the current folder).  Checked before any
- * work, so a refusal costs nothing.
+ * May `path` take a result folder?  Yes when it does not exist, is an
+ * empty folder, or is a previous result: a folder holding only glint's
+ * files (those its manifest lists; without one, those named in `names`,
+ * NULL-terminated).  Anything else (a user's notes, another program's
+ * output, an input of this run) is refused with -EEXIST and a message,
+ * unless force: then glint's files are replaced and the others kept,
+ * carried into the new folder at commit (keep_others).  Even with force
+ * it refuses a non-folder, a link, the current folder or one holding it,
+ * a sub-folder or special file that is not glint's, and a file of
+ * someone else's (or one of `inputs`, the run's input paths, may be
+ * NULL) under a name the result writes (`writes`, NULL-terminated; NULL:
+ * `names`).  Checked before any work, so a refusal costs nothing.
  */
 int glint_atomic_dir_check(const char *path, const char *const *names,
+			   const char *const *writes, const char *const *inputs,
 			   int force);
 
 /* Clean up after writers that died (SIGKILL, power cut) while writing

@@ -340,3 +340,59 @@ struct glint_image *glint_image_downsample(const struct glint_image *src, int f)
 			}
 	return d;
 }
+
+int glint_image_encoded(const char *path)
+{
+	static const char *const ldr[] = { "png", "tga", "jpg", "jpeg", "bmp" };
+	char ext[16];
+
+	glint_path_ext(path, ext, sizeof(ext));
+	for (int i = 0; i < 5; i++)
+		if (!strcmp(ext, ldr[i]))
+			return 1;
+	return 0;
+}
+
+int glint_radiance_check(const char *path, int srgb)
+{
+	if (srgb || !glint_image_encoded(path))
+		return 0;
+	return glint_error_set(EINVAL,
+			       "%s: an 8-bit image holds camera-encoded "
+			       "values, not radiance: merge a bracket to HDR "
+			       "(glint hdr), or give --srgb to take it as "
+			       "sRGB-encoded (highlights stay clipped)",
+			       path);
+}
+
+void glint_image_srgb_to_linear(struct glint_image *img)
+{
+	for (size_t i = 0; i < (size_t)img->width * img->height * 3; i++) {
+		float v = img->data[i];
+		img->data[i] = v <= 0.04045f
+				       ? v / 12.92f
+				       : powf((v + 0.055f) / 1.055f, 2.4f);
+	}
+}
+
+int glint_image_read_radiance(const char *path, int srgb,
+			      struct glint_image **out)
+{
+	int ret = glint_radiance_check(path, srgb);
+
+	*out = NULL;
+	if (ret == 0)
+		ret = glint_image_read(path, out);
+	if (ret == 0 && glint_image_encoded(path))
+		glint_image_from_srgb(path, *out);
+	return ret;
+}
+
+void glint_image_from_srgb(const char *path, struct glint_image *img)
+{
+	glint_image_srgb_to_linear(img);
+	glint_log_warn("%s: 8-bit, taken as sRGB-encoded (--srgb): "
+		       "highlights above its white point are clipped, so its "
+		       "brightest light or highlight is too dim",
+		       path);
+}

@@ -113,6 +113,28 @@ int glint_image_read_window(const char *path, int frame_width, int frame_height,
 			    const struct glint_image_window *win,
 			    struct glint_image **out, int *cropped);
 
+/*
+ * One radiance policy for every command that takes light or a photo to
+ * fit (fit, render --env, convert to a float format, probe): an 8-bit
+ * image (PNG, TGA, JPEG, BMP) holds camera-encoded values, not radiance.
+ * glint_image_encoded() says whether path is one; glint_radiance_check()
+ * refuses it, with the one message every command gives, unless srgb;
+ * glint_image_read_radiance() reads any image as radiance: HDR formats as
+ * they are, an 8-bit one refused, or with srgb linearised through the
+ * sRGB curve (IEC 61966-2-1), with a warning that its highlights are
+ * clipped.
+ */
+int glint_image_encoded(const char *path);
+int glint_radiance_check(const char *path, int srgb);
+int glint_image_read_radiance(const char *path, int srgb,
+			      struct glint_image **out);
+/* The sRGB curve undone in place (values in 0..1 as the 8-bit readers
+ * give them). */
+void glint_image_srgb_to_linear(struct glint_image *img);
+/* That, for an 8-bit image read from path under --srgb, with the
+ * warning every command gives. */
+void glint_image_from_srgb(const char *path, struct glint_image *img);
+
 /* Options for glint_image_write(). */
 struct glint_write_opts {
 	int exr_half;	 /* EXR: store half floats instead of 32-bit */

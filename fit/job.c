@@ -547,6 +547,32 @@ static int write_view(struct glint_atomic_dir *ad, int k,
 	return ret;
 }
 
+/* The names a fit writes into its folder: NULL-terminated, in static
+ * storage (a joint fit's render-N.exr, compare-N.png among them). */
+static const char *const *output_names(void)
+{
+	static const char *const fixed[] = {
+		"params.json",	"render.exr",	 "compare.png", "material.gltf",
+		"material.xml", "material.pbrt", "material.py", "material.mtlx",
+	};
+	enum { NFIXED = sizeof(fixed) / sizeof(fixed[0]) };
+	static char more[2 * (GLINT_FIT_MAX_VIEWS - 1)][32];
+	static const char *names[NFIXED + 2 * (GLINT_FIT_MAX_VIEWS - 1) + 1];
+	if (names[0])
+		return names;
+	int n = 0;
+	for (int k = 1; k < GLINT_FIT_MAX_VIEWS; k++) {
+		view_file(k, "render", ".exr", more[2 * k - 2], 32);
+		view_file(k, "compare", ".png", more[2 * k - 1], 32);
+	}
+	for (int k = 0; k < NFIXED; k++)
+		names[n++] = fixed[k];
+	for (int k = 0; k < 2 * (GLINT_FIT_MAX_VIEWS - 1); k++)
+		names[n++] = more[k];
+	names[n] = NULL;
+	return names;
+}
+
 /* params.json, and each photo's render.exr and compare.png, into dir as
  * one atomic folder (the old one stays whole on failure). */
 static int write_results(const struct glint_fit_job *job, const char *dir,
@@ -560,6 +586,10 @@ static int write_results(const struct glint_fit_job *job, const char *dir,
 
 	if (ret < 0)
 		return ret;
+	/* What is not glint's there stays (check_outputs let it through
+	 * only with --force). */
+	ad.names = output_names();
+	ad.keep_others = job->force;
 	char *text = json_dumps(doc, JSON_INDENT(2) | JSON_REAL_PRECISION(9));
 	ret = text ? glint_atomic_write_file(
 			     glint_atomic_dir_file(&ad, "params.json", path,
@@ -632,36 +662,34 @@ static json_t *refit_exports(const struct glint_fit_job *job,
 	return list;
 }
 
-/* The output folder and the refused fit's sibling may be replaced (a
- * previous result, or nothing): checked before any work. */
+/* The output folder and the refused fit's sibling may take the result
+ * (nothing there, or glint's own files; with --force, glint's files are
+ * replaced and the others kept): checked before any work.  The run's
+ * inputs (scene, photo, weights, map, for every photo) are never
+ * replaced, with or without --force. */
 static int check_outputs(const struct glint_fit_job *job)
 {
-	static const char *const fixed[] = {
-		"params.json",	"render.exr",	 "compare.png", "material.gltf",
-		"material.xml", "material.pbrt", "material.py", "material.mtlx",
-	};
-	enum { NFIXED = sizeof(fixed) / sizeof(fixed[0]) };
-	/* and a joint fit's render-N.exr, compare-N.png */
-	char more[2 * (GLINT_FIT_MAX_VIEWS - 1)][32];
-	const char *names[NFIXED + 2 * (GLINT_FIT_MAX_VIEWS - 1) + 1];
+	const char *inputs[4 * (GLINT_FIT_MAX_VIEWS + 1) + 1];
 	int n = 0;
-	for (int k = 0; k < NFIXED; k++)
-		names[n++] = fixed[k];
-	for (int k = 1; k < GLINT_FIT_MAX_VIEWS; k++) {
-		view_file(k, "render", ".exr", more[2 * k - 2], 32);
-		view_file(k, "compare", ".png", more[2 * k - 1], 32);
-		names[n++] = more[2 * k - 2];
-		names[n++] = more[2 * k - 1];
+	for (int k = -1; k < job->nalso && n < 4 * GLINT_FIT_MAX_VIEWS; k++) {
+		const struct glint_fit_job *j = k < 0 ? job : &job->also[k];
+		const char *p[4] = { j->scene_path, j->photo_path,
+				     j->weights_path, j->scene.env_path };
+		for (int i = 0; i < 4; i++)
+			if (p[i] && p[i][0])
+				inputs[n++] = p[i];
 	}
-	names[n] = NULL;
+	inputs[n] = NULL;
 	char dir[GLINT_PATH_MAX];
-	int ret = glint_atomic_dir_check(job->out_dir, names, job->force);
+	int ret = glint_atomic_dir_check(job->out_dir, output_names(), NULL,
+					 inputs, job->force);
 
 	if (!ret)
 		ret = glint_path_fmt(dir, sizeof(dir), "%s.refused",
 				     job->out_dir);
 	if (!ret)
-		ret = glint_atomic_dir_check(dir, names, job->force);
+		ret = glint_atomic_dir_check(dir, output_names(), NULL, inputs,
+					     job->force);
 	return ret;
 }
 
@@ -746,15 +774,31 @@ static int read_whole(struct glint_fit_job *job, const char *weights_path)
 	return ret;
 }
 
+static int read_photo(struct glint_fit_job *job, const char *weights_path);
+
 int glint_fit_job_load(struct glint_fit_job *job, const char *weights_path)
 {
-	struct glint_image_window win;
 	int ret = glint_scene_load(job->scene_path, &job->scene);
-	int cp = 0, cw = 0;
 
+	job->weights_path = weights_path;
 	job->photo = job->weight = NULL;
+	if (ret == 0)
+		ret = glint_radiance_check(job->photo_path, job->srgb);
 	if (ret < 0)
 		return ret;
+	ret = read_photo(job, weights_path);
+	if (ret == 0 && glint_image_encoded(job->photo_path))
+		glint_image_from_srgb(job->photo_path, job->photo);
+	return ret;
+}
+
+/* The photo (and weights): the sphere's window of a frame-sized one, or
+ * whole. */
+static int read_photo(struct glint_fit_job *job, const char *weights_path)
+{
+	struct glint_image_window win;
+	int cp = 0, cw = 0, ret;
+
 	if (!sphere_window(job, &win))
 		return read_whole(job, weights_path);
 	/* Only the window of a frame-sized photo and weights: a 12 MP

@@ -14,6 +14,8 @@
 struct glint_fit_job {
 	const char *scene_path; /* for the record and messages */
 	const char *photo_path;
+	const char *weights_path; /* set by glint_fit_job_load(); may be NULL */
+	int srgb; /* the photo is 8-bit sRGB, to be linearised (--srgb) */
 	struct glint_scene scene;
 	const struct glint_model_ops *model; /* NULL: --model auto */
 	struct glint_image *photo;	     /* owned by the caller */
@@ -35,7 +37,9 @@ struct glint_fit_job {
 	/* > 0: accept a fit whose relative RMSE is below this instead of
 	 * the default rule (glint_fit_judge) */
 	double accept_rmse;
-	/* replace out_dir even when it holds files glint did not write */
+	/* write into out_dir even when it holds files glint did not
+	 * write: glint's own are replaced, the others kept (never an input
+	 * of this run, never a file of someone else's of a name it writes) */
 	int force;
 	/* bit k set: write out_dir/material + the extension of export
 	 * format k (fit/export.h) with an accepted result */

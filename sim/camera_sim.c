@@ -29,6 +29,7 @@
  * writer; while it is missing the lab is dark).  It must come last: the
  * path runs to the end of the string.
  */
+#define _POSIX_C_SOURCE 200809L
 #include "camera_sim.h"
 #include "probe_sim.h"
 #include "capture/camera.h"
@@ -43,6 +44,7 @@
 #include <math.h>
 #include <errno.h>
 #include <pthread.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -414,7 +416,7 @@ static int upscale(struct glint_image **img, int w, int h, int k)
 
 /* A scene's radiance at the sensor's size, rendered at 1/scene_scale,
  * lit by s->lamps. */
-static int scene_image(const struct sim_cam *s, int sample,
+static int render_view(const struct sim_cam *s, int sample,
 		       struct glint_image **out)
 {
 	int k = s->scene_scale > 1 ? s->scene_scale : 1;
@@ -428,6 +430,109 @@ static int scene_image(const struct sim_cam *s, int sample,
 		glint_image_free(*out);
 		*out = NULL;
 	}
+	return ret;
+}
+
+/* "size:mtime" of a file, for a cache key ("-" when it is missing). */
+static void file_stamp(const char *path, char *buf, size_t n)
+{
+	struct stat st;
+	if (stat(path, &st) == 0)
+		snprintf(buf, n, "%lld:%lld.%09ld", (long long)st.st_size,
+			 (long long)st.st_mtim.tv_sec, st.st_mtim.tv_nsec);
+	else
+		snprintf(buf, n, "-");
+}
+
+/* The folder views are cached in, made if need be: $GLINT_SIM_CACHE
+ * ("off": none), else $XDG_CACHE_HOME/glint/sim, else
+ * ~/.cache/glint/sim.  Returns 0 and "" when there is none. */
+static int cache_dir(char *buf, size_t n)
+{
+	const char *env = getenv("GLINT_SIM_CACHE");
+	const char *xdg = getenv("XDG_CACHE_HOME"), *home = getenv("HOME");
+	int ret;
+
+	buf[0] = '\0';
+	if (env && (!*env || !strcmp(env, "off")))
+		return 0;
+	if (env)
+		ret = glint_path_fmt(buf, n, "%s", env);
+	else if (xdg && *xdg)
+		ret = glint_path_fmt(buf, n, "%s/glint/sim", xdg);
+	else if (home && *home)
+		ret = glint_path_fmt(buf, n, "%s/.cache/glint/sim", home);
+	else
+		return 0;
+	/* mkdir -p: each component in turn */
+	for (char *p = buf + 1; ret == 0 && *p; p++) {
+		if (*p != '/')
+			continue;
+		*p = '\0';
+		mkdir(buf, 0777);
+		*p = '/';
+	}
+	if (ret == 0 && mkdir(buf, 0777) < 0 && errno != EEXIST)
+		buf[0] = '\0'; /* no cache: render every time */
+	glint_error_clear();
+	return 0;
+}
+
+/*
+ * A view through the disk cache: the reference render of a rig view
+ * takes tens of CPU-seconds, and a camera that renders at its first frame
+ * stalls every capture that starts it.  The key is everything the render
+ * depends on: the view, its size and scale, the lamps, the material, the
+ * map and table files, and the renderer itself (this program's file), so
+ * that a rebuilt glint or a changed map renders anew.  A cached file that
+ * does not read back whole at the right size is rendered again.
+ */
+static int scene_image(const struct sim_cam *s, int sample,
+		       struct glint_image **out)
+{
+	char dir[GLINT_PATH_MAX], path[GLINT_PATH_MAX], data[GLINT_PATH_MAX];
+	char key[2048], exe[64], map[64], table[64];
+	int ret;
+
+	*out = NULL;
+	cache_dir(dir, sizeof(dir));
+	if (!dir[0])
+		return render_view(s, sample, out);
+	file_stamp("/proc/self/exe", exe, sizeof(exe));
+	map[0] = table[0] = '\0';
+	if (glint_data_path(data, sizeof(data), "env/venice_sunset_1k.hdr") ==
+	    0)
+		file_stamp(data, map, sizeof(map));
+	if (glint_data_path(data, sizeof(data), "paper-table1.json") == 0)
+		file_stamp(data, table, sizeof(table));
+	glint_error_clear();
+	snprintf(key, sizeof(key),
+		 "glint sim view 1|%s|%dx%d/%d|lamps %u|%s|exe %s|map %s|"
+		 "table %s",
+		 sample ? "sample" : "probe", s->width, s->height,
+		 s->scene_scale, s->lamps, sample ? s->material : "-", exe, map,
+		 table);
+	uint64_t h = 1469598103934665603ull; /* FNV-1a */
+	for (const char *c = key; *c; c++)
+		h = (h ^ (unsigned char)*c) * 1099511628211ull;
+	if (glint_path_fmt(path, sizeof(path), "%s/%s-%016llx.exr", dir,
+			   sample ? "sample" : "probe",
+			   (unsigned long long)h) < 0) {
+		glint_error_clear();
+		return render_view(s, sample, out);
+	}
+	if (glint_image_read(path, out) == 0 && (*out)->width == s->width &&
+	    (*out)->height == s->height &&
+	    glint_image_check_finite(*out, path, 1) == 0)
+		return 0;
+	glint_image_free(*out);
+	*out = NULL;
+	glint_error_clear();
+	ret = render_view(s, sample, out);
+	/* A cache that cannot be written costs the next capture a render,
+	 * nothing else. */
+	if (ret == 0 && glint_image_write(path, *out, NULL) < 0)
+		glint_error_clear();
 	return ret;
 }
 
@@ -456,8 +561,9 @@ static int rig_scenes(struct sim_cam *s)
 }
 
 /* scene=rig at open: what its views need is there (the map, the
- * material); they are rendered for the first frame (rig_view), so that
- * opening the camera to check a rig costs nothing. */
+ * material); they are rendered (or read from the cache) when a capture
+ * starts (sim_start), so that opening the camera to check a rig costs
+ * nothing. */
 static int rig_check(const struct sim_cam *s)
 {
 	char path[GLINT_PATH_MAX];
@@ -574,6 +680,22 @@ static void world_now(const struct sim_cam *s, struct glint_sim_world *w)
 		world_from_file(s->world, w);
 	else
 		glint_sim_world_get(w);
+}
+
+/* scene=rig, before the stream: the views for the lamps on now, so that
+ * no frame waits on a render. */
+static int sim_start(void *priv)
+{
+	struct sim_cam *s = priv;
+	struct glint_sim_world w;
+
+	if (s->scene != SCENE_RIG)
+		return 0;
+	world_now(s, &w);
+	if (s->probe_img && (!w.lights || w.lights == s->lamps))
+		return 0;
+	int ret = rig_scenes(s);
+	return ret < 0 ? glint_error_prefix(ret, "sim camera") : 0;
 }
 
 /* scene=rig: the radiance of what is in view, lit by the lamps on (the
@@ -727,4 +849,5 @@ const struct glint_camera_ops glint_camera_sim_ops = {
 	.configure = sim_configure,
 	.set_exposure = sim_set_exposure,
 	.grab = sim_grab,
+	.start = sim_start,
 };

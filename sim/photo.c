@@ -53,7 +53,7 @@ int glint_sim_photo(const struct glint_scene *scene,
 	if (weight)
 		*weight = NULL;
 	ret = glint_envmap_load(scene->env_path, scene->env_rotation,
-				scene->env_scale, &env);
+				scene->env_scale, scene->env_srgb, &env);
 	if (ret < 0)
 		return ret;
 	img = glint_image_new(scene->cam.width, scene->cam.height);

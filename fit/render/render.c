@@ -212,7 +212,7 @@ int glint_renderer_init(struct glint_renderer *r,
 {
 	struct glint_envmap *env;
 	int ret = glint_envmap_load(scene->env_path, scene->env_rotation,
-				    scene->env_scale, &env);
+				    scene->env_scale, scene->env_srgb, &env);
 	if (ret < 0)
 		return ret;
 	return glint_renderer_init_env(r, scene, env, nthreads, progress);

@@ -176,10 +176,10 @@ err_img:
 }
 
 int glint_envmap_load(const char *path, const double rot_deg[3], double scale,
-		      struct glint_envmap **out)
+		      int srgb, struct glint_envmap **out)
 {
 	struct glint_image *img;
-	int ret = glint_image_read(path, &img);
+	int ret = glint_image_read_radiance(path, srgb, &img);
 
 	*out = NULL;
 	if (ret < 0)

@@ -42,9 +42,11 @@ struct glint_envmap {
  */
 int glint_envmap_new(struct glint_image *img, const double rot_deg[3],
 		     double scale, const char *what, struct glint_envmap **out);
-/* Read a map from an image file and build it (see glint_envmap_new). */
+/* Read a map from an image file as radiance (an 8-bit one refused
+ * unless srgb: glint_image_read_radiance) and build it (see
+ * glint_envmap_new). */
 int glint_envmap_load(const char *path, const double rot_deg[3], double scale,
-		      struct glint_envmap **out);
+		      int srgb, struct glint_envmap **out);
 void glint_envmap_free(struct glint_envmap *env);
 
 /* Map-space direction <-> (u, v) in [0, 1]^2. */

@@ -19,6 +19,9 @@ struct glint_scene {
 	char env_path[GLINT_PATH_MAX]; /* resolved against the scene's dir */
 	double env_rotation[3];	       /* degrees about X, Y, Z */
 	double env_scale;
+	/* the map is an 8-bit image taken as sRGB-encoded (--srgb); else
+	 * such a map is refused (glint_radiance_check) */
+	int env_srgb;
 	int spp;	   /* primary samples per pixel */
 	int light_samples; /* env-map samples per hit */
 	int brdf_samples;  /* BRDF samples per hit */

@@ -306,14 +306,53 @@ with open('$tmp/other.pfm', 'wb') as f:
     f.write(b'PF\\n96 96\\n-1.0\\n')
     f.write(struct.pack('<%df' % (96 * 96 * 3), *[random.random() for _ in range(96 * 96 * 3)]))"
 check "a photo of something else is refused" run 1 "does not show this scene's sphere" fit "$tmp/fscene.json" "$tmp/other.pfm" -o "$tmp/fit1"
+# One radiance policy: every command that takes light or a photo to fit
+# refuses an 8-bit image with the same message, unless --srgb.
+"$glint" convert "$tmp/photo.exr" "$tmp/photo8.png" -q
+"$glint" convert "$tmp/env.exr" "$tmp/env8.png" -q
+msg="an 8-bit image holds camera-encoded values, not radiance"
+check "fit of an 8-bit photo: refused as radiance" run 1 "photo8.png: $msg" fit "$tmp/fscene.json" "$tmp/photo8.png" -o "$tmp/fit8"
+check "... nothing written" test ! -e "$tmp/fit8"
+check "fit --srgb: the photo linearised, a result" run 0 "8-bit, taken as sRGB-encoded" fit "$tmp/fscene.json" "$tmp/photo8.png" -o "$tmp/fit8" --srgb
+check "render --env of an 8-bit map: refused" run 1 "env8.png: $msg" render "$tmp/fscene.json" --paper copper --env "$tmp/env8.png" -o "$tmp/r8.exr"
+check "render --env MAP --srgb: done" run 0 "" render "$tmp/fscene.json" --paper copper --env "$tmp/env8.png" --srgb -o "$tmp/r8.exr" -q
+check "convert 8-bit to a float format: refused" run 1 "photo8.png: $msg" convert "$tmp/photo8.png" "$tmp/x8.exr"
+check "... with --srgb: done" run 0 "" convert "$tmp/photo8.png" "$tmp/x8.exr" --srgb -q
+check "... 8-bit to 8-bit: copied" run 0 "" convert "$tmp/photo8.png" "$tmp/x8.png" -q
+check "probe convert of an 8-bit map: refused" run 1 "env8.png: $msg" probe convert "$tmp/env8.png" "$tmp/a8.exr" --from latlong --to angular
+check "probe register of an 8-bit map: refused" run 1 "env8.png: $msg" probe register "$tmp/env8.png" "$tmp/env.exr" -o "$tmp/b8.exr"
 # An output folder holding a user's files is refused before any work.
 mkdir -p "$tmp/mine" "$tmp/here"
 echo "my notes" >"$tmp/mine/notes.txt"
 check "-o DIR holding a user's file is refused" run 1 "holds files glint did not write ('notes.txt')" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/mine"
 check "the user's file is still there" grep -q "my notes" "$tmp/mine/notes.txt"
 check "-o . (the current folder) is refused" bash -c "cd '$tmp/here' && { '$glint' fit '$tmp/fscene.json' '$tmp/photo.exr' -o . 2>'$tmp/err'; test \$? = 1; } && grep -q 'is the current folder' '$tmp/err'"
-check "--force replaces it" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/mine" --force -q
-check "--force wrote a result" test -s "$tmp/mine/params.json" -a ! -e "$tmp/mine/notes.txt"
+check "--force writes the result beside it" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/mine" --force -q
+check "--force wrote a result, and the user's file is kept" bash -c "test -s '$tmp/mine/params.json' && grep -q 'my notes' '$tmp/mine/notes.txt'"
+check "... the folder lists glint's own files in its manifest" bash -c "grep -qx params.json '$tmp/mine/glint-outputs.txt' && ! grep -q notes '$tmp/mine/glint-outputs.txt'"
+# The output folder holds the run's own inputs and a user's notes
+# (glint fit d/s.json d/photo.exr -o d --force): the result goes in
+# beside them, and the inputs and notes are the same bytes after.
+mkdir -p "$tmp/d"
+cp "$tmp/fscene.json" "$tmp/d/s.json"
+cp "$tmp/env.exr" "$tmp/d/env.exr"
+cp "$tmp/photo.exr" "$tmp/d/photo.exr"
+echo "lab notes: sphere 3, batch 7" >"$tmp/d/notes.txt"
+(cd "$tmp/d" && sha256sum s.json env.exr photo.exr notes.txt) >"$tmp/d.sums"
+check "-o DIR holding the run's inputs: refused without --force" run 1 "holds files glint did not write" fit "$tmp/d/s.json" "$tmp/d/photo.exr" -o "$tmp/d"
+check "-o DIR holding the run's inputs and notes, --force: done" run 0 "" fit "$tmp/d/s.json" "$tmp/d/photo.exr" -o "$tmp/d" --force --export gltf -q
+check "... the inputs and the notes untouched, byte for byte" bash -c "cd '$tmp/d' && sha256sum -c --quiet '$tmp/d.sums' && test -s params.json && test -s material.gltf"
+check "... again (no export this time): glint's old export replaced, the rest kept" run 0 "" fit "$tmp/d/s.json" "$tmp/d/photo.exr" -o "$tmp/d" --force -q
+check "... material.gltf gone, inputs and notes still whole" bash -c "cd '$tmp/d' && test ! -e material.gltf && sha256sum -c --quiet '$tmp/d.sums' && test -s params.json"
+# An input under a name the result writes would be replaced: refused,
+# even with --force, before any work.
+mkdir -p "$tmp/e"
+cp "$tmp/photo.exr" "$tmp/e/render.exr"
+check "an input named like an output (render.exr): refused even with --force" run 1 "is an input of this run, and the result writes a file of that name" fit "$tmp/fscene.json" "$tmp/e/render.exr" -o "$tmp/e" --force
+check "... it is untouched" cmp "$tmp/photo.exr" "$tmp/e/render.exr"
+mkdir -p "$tmp/f/sub"
+check "a sub-folder of the user's: refused even with --force" run 1 "not a plain file" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/f" --force
+check "... it is still there" test -d "$tmp/f/sub"
 mkdir -p "$tmp/theirs"
 echo "their notes" >"$tmp/theirs/notes.txt"
 ln -s "$tmp/theirs" "$tmp/link"

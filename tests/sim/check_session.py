@@ -5,6 +5,8 @@ glint metadata, EXIF's exposure time; or an older session's PNG: through
 IEND, CRCs right, metadata chunk), sidecar JSON matching, no temporary
 files left; a complete session's bracket counts (frames kept as listed,
 unclipped frames superseded, metering frames).
+A session that is not complete must name the stage that stopped it and
+why.
 usage: check_session.py DIR STATUS [MIN_FRAMES]"""
 import json
 import os
@@ -91,8 +93,9 @@ def main():
     want_min = int(sys.argv[3]) if len(sys.argv) > 3 else 1
     s = json.load(open(os.path.join(d, "session.json")))
     assert s["status"] == status, f"status {s['status']}, expected {status}"
-    if status == "incomplete":
-        assert s.get("error"), "an incomplete session must say why"
+    if status in ("incomplete", "failed"):
+        assert s.get("error"), f"a session {status} must say why"
+        assert s.get("stage"), f"a session {status} must name its stage"
     frames = s["frames"]
     assert len(frames) >= want_min, f"{len(frames)} frames < {want_min}"
     on_disk = sorted(f for f in os.listdir(d) if f.startswith("frame-") and
@@ -124,6 +127,12 @@ def main():
         b = s["bracket"]
         assert b["frames"] == len(frames), f"bracket says {b['frames']} frames, {len(frames)} listed"
         assert b["unclipped_superseded"] >= 0 and b["metering_frames"] >= 0, b
+        assert not b["truncated"], "a complete session's bracket was cut short"
+        # complete: every output it promises is there, whole
+        for name in s.get("files", []):
+            p = os.path.join(d, name)
+            assert os.path.isfile(p) and os.path.getsize(p) > 0, \
+                f"{name}: listed as written, missing or empty"
     print(f"{d}: {status}, {len(frames)} frames whole")
 
 

@@ -142,6 +142,54 @@ JSON
 check "no manual exposure: refused, named" run 1 "no manual exposure" capture sample --config "$tmp/auto.json"
 check "the refused session is kept, incomplete" python3 "$checker" "$(only_session "$tmp/auto")" incomplete 0
 
+# The first press: a stage that did not make what it promised stops the
+# chain there, and the session says which stage and why.
+cat >"$tmp/capped.json" <<JSON
+{"camera": {"backend": "sim", "device": "sim:width=96,height=64,timescale=0.01,decades=4"},
+ "bracket": {"step_ev": 1, "max_frames": 2}, "output": "$tmp/capped"}
+JSON
+check "a bracket cut by the frame cap: exit 1, the cap named" run 1 "stopped by the frame cap (2 frames) before it covered" capture sample --config "$tmp/capped.json"
+check "... the stage named" grep -q "the sample's bracket" "$tmp/err"
+check "... its session incomplete, frames whole" python3 "$checker" "$(only_session "$tmp/capped")" incomplete 1
+check "... nothing merged from it" bash -c "! ls '$(only_session "$tmp/capped")'/sample.exr 2>/dev/null"
+cat >"$tmp/timecap.json" <<JSON
+{"camera": {"backend": "sim", "device": "sim:width=96,height=64,timescale=0.01,decades=4"},
+ "bracket": {"step_ev": 1, "max_time_s": 0.05}, "output": "$tmp/timecap"}
+JSON
+check "a bracket cut by the time cap: exit 1, named" run 1 "the time cap (0.05 s of the camera's exposure and readout)" capture sample --config "$tmp/timecap.json"
+check "... its session incomplete" python3 "$checker" "$(only_session "$tmp/timecap")" incomplete 1
+# The lab dark (the rig scene with no world file: lights off, nothing in
+# view): every frame black, the merge refuses, the session says failed.
+cat >"$tmp/dark.json" <<JSON
+{"camera": {"backend": "sim", "device": "sim:width=96,height=64,timescale=0.01,scene=rig,world=$tmp/no-world"},
+ "output": "$tmp/dark"}
+JSON
+check "a dark lab: exit 1, the merge names why" run 1 "the sample's merge: HDR merge: every frame is black" capture sample --config "$tmp/dark.json"
+check "... its session failed at the merge" python3 "$checker" "$(only_session "$tmp/dark")" failed 1
+check "... stage merge in session.json" python3 -c "import json,sys; d=json.load(open('$(only_session "$tmp/dark")/session.json')); sys.exit(d['stage'] != 'merge')"
+check "glint sessions shows it failed" bash -c "'$glint' sessions --root '$tmp/dark' | grep -q failed"
+# A write the file system refuses during the merge (the file-size limit
+# stands in for a full disk: the same failed write): failed, not complete.
+cat >"$tmp/full.json" <<JSON
+{"camera": {"backend": "sim", "device": "sim:width=96,height=64,timescale=0.01,decades=4"},
+ "output": "$tmp/full"}
+JSON
+check "a write refused in the merge: exit 1" bash -c "(trap '' XFSZ; ulimit -f 40; exec '$glint' capture sample --config '$tmp/full.json') 2>'$tmp/err'; test \$? = 1 && grep -q \"the sample's merge\" '$tmp/err'"
+check "... its session failed, no sample.exr called complete" python3 "$checker" "$(only_session "$tmp/full")" failed 1
+# Frames of another scene among a bracket (a different card at the same
+# exposures): refused by name, nothing merged.
+cat >"$tmp/other.json" <<JSON
+{"camera": {"backend": "sim", "device": "sim:width=96,height=64,timescale=0.01,decades=2"},
+ "output": "$tmp/other"}
+JSON
+"$glint" capture sample --config "$tmp/other.json" -q 2>/dev/null
+osess=$(only_session "$tmp/other")
+mixed=()
+for f in "$sess"/frame-00[0-5].dng; do mixed+=("$f"); done
+mixed+=("$osess/frame-000.dng")
+check "a bracket with another scene's frame: exit 1, the pair named" run 1 "disagree beyond their noise" hdr "${mixed[@]}" -o "$tmp/mixed"
+check "... refused, nothing merged" test ! -e "$tmp/mixed/hdr.exr"
+
 check "cameras lists the sim" run 0 "" cameras --backend sim
 check "... with its ranges" grep -q "exposure manual" "$tmp/out"
 check "cameras --json" run 0 "" cameras --json

@@ -78,7 +78,7 @@ static int run_case(const char *name, const char *map, double fnum,
 	scene_128(&sc, map, fnum);
 	if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
 				"yellow-plastic", &m, truth) < 0 ||
-	    glint_envmap_load(map, sc.env_rotation, 1, &env) < 0)
+	    glint_envmap_load(map, sc.env_rotation, 1, 0, &env) < 0)
 		return -1;
 	struct glint_image *photo = glint_image_new(128, 128);
 	struct glint_reference_opts ro;

@@ -136,6 +136,31 @@ check "jobs lists the done job" run 0 "" jobs --root "$tmp/one"
 check "... done" grep -q " done " "$tmp/out"
 check "... its record holds the parameters, relative RMSE and the fit's peak memory" bash -c "'$glint' jobs --root '$tmp/one' --json | python3 -c 'import json,sys; j=[x for x in json.load(sys.stdin)[\"jobs\"] if x[\"state\"] == \"done\"]; m=[x.get(\"peak_rss_mib\") for x in j]; print(\"  peak MiB\", m); sys.exit(not j or not all(v and 10 < v < 4096 for v in m) or not all(len(x.get(\"parameters\") or []) >= 4 and x.get(\"relative_rmse\", 0) > 0 for x in j))'"
 
+# 1a. A probe bracket cut short by its cap: the run stops at that step,
+# naming it and the cap; the session is incomplete, nothing is unwrapped,
+# no sample is captured, no fit is queued.
+rig capped '{"at_s": 0.3, "hold_s": 0.1}'
+python3 - "$tmp/capped.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+r["bracket"]["max_frames"] = 2
+json.dump(r, open(sys.argv[1], "w"))
+PY
+check "a bracket cut short: rig --once exits 1 naming the step and the cap" run 1 "step 3/7 (capture probe): the probe's bracket: the bracket was stopped by the frame cap (2 frames)" rig --config "$tmp/capped.json" --once
+check "... the probe session incomplete, not unwrapped; no sample, no job" python3 -c "
+import glob, json, os
+runs = glob.glob('$tmp/capped/run-*')
+assert len(runs) == 1, runs
+p = glob.glob(runs[0] + '/probe-*')
+assert len(p) == 1, p
+s = json.load(open(p[0] + '/session.json'))
+assert s['status'] == 'incomplete' and s['stage'] == 'bracket', (s['status'], s.get('stage'))
+assert s['bracket']['truncated'] and s['bracket']['stopped_by'] == 'frame', s['bracket']
+assert not os.path.exists(p[0] + '/env.exr'), 'unwrapped'
+assert not glob.glob(runs[0] + '/sample-*'), 'a sample was captured'
+assert not glob.glob('$tmp/capped/queue/*.json') and not glob.glob('$tmp/capped/queue/*/*.json'), 'a fit was queued'
+"
+
 # 1b. With a position sensor (the sim reports the probe in view at 0 deg),
 # the moves are checked against it.
 rig pos '{"at_s": 0.2}'

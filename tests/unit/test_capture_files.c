@@ -168,8 +168,9 @@ static void test_session(const char *dir)
 	/* Stopped by an error: stays incomplete, says why, keeps frames. */
 	struct glint_bracket b;
 	memset(&b, 0, sizeof(b));
-	CHECK(glint_session_finish(s, &b, "camera disappeared") == 0, "%s",
-	      glint_error_msg());
+	CHECK(glint_session_finish(s, &b, "bracket", "camera disappeared",
+				   NULL) == 0,
+	      "%s", glint_error_msg());
 	doc = load(sdir, "session.json");
 	CHECK(doc &&
 		      !strcmp(json_string_value(json_object_get(doc, "status")),

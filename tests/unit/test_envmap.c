@@ -185,7 +185,7 @@ static void test_bad_maps(void)
 	CHECK(glint_envmap_sample(env, 0.3, 0.3, &d) == 0,
 	      "black map sampled with pdf > 0");
 	glint_envmap_free(env);
-	CHECK(glint_envmap_load("/no/such/map.hdr", NULL, 1, &env) < 0,
+	CHECK(glint_envmap_load("/no/such/map.hdr", NULL, 1, 0, &env) < 0,
 	      "missing map loaded");
 	CHECK_MSG(glint_error_msg(), "/no/such/map.hdr");
 }

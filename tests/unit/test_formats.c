@@ -930,7 +930,7 @@ static void test_atomic_dir_link(void)
 	FILE *f = fopen(note, "w");
 	CHECK(f && fputs("mine\n", f) >= 0 && fclose(f) == 0, "note");
 	static const char *const names[] = { "params.json", NULL };
-	CHECK(glint_atomic_dir_check(link, names, 1) == -EEXIST,
+	CHECK(glint_atomic_dir_check(link, names, NULL, NULL, 1) == -EEXIST,
 	      "a link is refused, even with force");
 	CHECK_MSG(glint_error_msg(), "is a symbolic link");
 	/* A writer that gets past the check (a link made after it) fails

@@ -304,6 +304,98 @@ static void circle_fit(const double *px, const double *py, int np, double c[3])
 }
 
 /*
+ * The detection's test statistic on circle c (image coordinates): of
+ * about one rim step per pixel, the share with an edge pixel within
+ * 1.5 px of the circle whose gradient is radial; and that share against
+ * the null of edges scattered at the image's own density: each step
+ * looks at about 4 pixels, each an edge with radial gradient with
+ * probability rho * 0.287 (rho: edge pixels per pixel; 0.287: gradients
+ * within 25.8 deg of the radius either way, |cos| > 0.9), so a step is
+ * covered by chance with p0 = 1 - (1 - 0.287 rho)^4, and z is the
+ * binomial standard score of the covered count.  A circle RANSAC chose
+ * among thousands in noise covers a few times p0; a silhouette covers
+ * most of its visible rim.
+ */
+#define RUN_GAP 8
+/* A rim edge's gradient within 14 deg of the radius (either way): a
+ * silhouette's is radial to a few degrees, a straight edge touching the
+ * circle is so only near where it touches.  The share of directions that
+ * passes by chance: 2 x 2 x acos(0.97) / 360 deg. */
+#define RIM_COS	      0.97
+#define RIM_COS_SHARE 0.1563
+
+static void rim_statistic(const struct edge_map *em, const double c[3],
+			  double *share, double *z, double *run_deg,
+			  double *slope)
+{
+	int w = em->w, h = em->h;
+	int steps = (int)fmax(32, ceil(2 * M_PI * c[2]));
+	int covered = 0;
+	unsigned char *hits = calloc((size_t)steps, 1);
+	float *steep = malloc((size_t)steps * sizeof(float));
+
+	for (int k = 0; k < steps; k++) {
+		double a = 2 * M_PI * (k + 0.5) / steps;
+		double ux = cos(a), uy = sin(a);
+		int hit = 0;
+		for (int j = -3; j <= 3 && !hit; j++) {
+			double rr = c[2] + 0.5 * j;
+			int x = (int)floor(c[0] + rr * ux),
+			    y = (int)floor(c[1] + rr * uy);
+			if (x < 1 || y < 1 || x >= w - 1 || y >= h - 1)
+				continue;
+			size_t i = (size_t)y * w + x;
+			if (!em->edge[i] || !(em->m[i] > 0))
+				continue;
+			double cosg =
+				(ux * em->gx[i] + uy * em->gy[i]) / em->m[i];
+			hit = fabs(cosg) > RIM_COS;
+			if (hit && steep)
+				steep[covered] = em->m[i] / 8;
+		}
+		covered += hit;
+		if (hits)
+			hits[k] = (unsigned char)hit;
+	}
+	/* The longest arc covered with no gap over RUN_GAP steps, round
+	 * the circle: a silhouette is one contour, where edges of other
+	 * things touch a circle in short pieces. */
+	int best = 0;
+	for (int k0 = 0; hits && k0 < steps; k0++) {
+		if (!hits[k0] || hits[(k0 + steps - 1) % steps])
+			continue; /* runs start after a miss */
+		int len = 0, gap = 0, last = 0;
+		for (int k = 0; k < steps; k++) {
+			if (hits[(k0 + k) % steps]) {
+				gap = 0;
+				last = k + 1;
+			} else if (++gap > RUN_GAP) {
+				break;
+			}
+		}
+		len = last;
+		best = best > len ? best : len;
+	}
+	if (hits && covered == steps)
+		best = steps;
+	free(hits);
+	*run_deg = 360.0 * best / steps;
+	/* How steep the rim is: the median log-luminance slope across it
+	 * (Sobel's 8 x the derivative, per pixel).  A silhouette is a step;
+	 * a vignette's ring of steepest fall-off is a gentle slope. */
+	*slope = 0;
+	if (steep && covered) {
+		qsort(steep, (size_t)covered, sizeof(float), cmp_float);
+		*slope = steep[covered / 2];
+	}
+	free(steep);
+	double rho = (double)em->nedge / ((double)w * h);
+	double p0 = 1 - pow(1 - RIM_COS_SHARE * rho, 4);
+	*share = (double)covered / steps;
+	*z = (covered - steps * p0) / sqrt(fmax(steps * p0 * (1 - p0), 1e-9));
+}
+
+/*
  * Above DETECT_SIDE px on the shorter side the circle is found first on a
  * copy reduced to at most that, then refined on the full image.  RANSAC
  * needs two rim points out of all the edges, and the rim's share of them
@@ -389,12 +481,27 @@ int glint_sphere_detect(const struct glint_image *img, double r_min,
 	}
 	for (int k = 0; k < 36; k++)
 		covered += bins[k];
+	rim_statistic(&em, c, &out->rim_share, &out->rim_z, &out->rim_run_deg,
+		      &out->rim_slope);
 	out->cx = c[0];
 	out->cy = c[1];
 	out->r = c[2];
 	out->points = np;
 	out->rms_px = sqrt(ss / np);
 	out->arc_deg = 10.0 * covered;
+	if (out->rim_share < GLINT_DETECT_MIN_RIM_SHARE ||
+	    out->rim_z < GLINT_DETECT_MIN_RIM_Z ||
+	    out->rim_slope < GLINT_DETECT_MIN_RIM_SLOPE)
+		ret = glint_error_set(
+			ENOENT,
+			"no sphere in the image: the best circle, (%.1f, %.1f) "
+			"radius %.1f px, has edges along %.0f %% of its rim, "
+			"%.1f standard deviations above chance, log-luminance "
+			"slope %.3f/px (a sphere's silhouette: at least %.0f "
+			"%%, %.0f and %.1f)",
+			c[0], c[1], c[2], 100 * out->rim_share, out->rim_z,
+			out->rim_slope, 100 * GLINT_DETECT_MIN_RIM_SHARE,
+			GLINT_DETECT_MIN_RIM_Z, GLINT_DETECT_MIN_RIM_SLOPE);
 out:
 	edge_map_free(&em);
 	free(px);

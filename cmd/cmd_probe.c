@@ -161,8 +161,8 @@ static int unwrap_main(int argc, char **argv)
 	struct glint_image *photo = NULL;
 	int w, h;
 	int ret = glint_image_read_radiance(argv[0], srgb, &photo);
-	if (ret == 0)
-		ret = glint_probe_find_ball(photo, have_ball, &o);
+	if (ret == 0 && (ret = glint_probe_find_ball(photo, have_ball, &o)) < 0)
+		glint_error_prefix(ret, "%s", argv[0]);
 	if (ret == 0)
 		ret = glint_probe_unwrap_write(photo, &o, out, &w, &h);
 	if (ret == 0)

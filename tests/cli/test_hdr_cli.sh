@@ -65,6 +65,16 @@ check "... nothing written" test ! -e "$tmp/u.exr"
 check "--srgb: the ball is found in the photo" run 0 "found the ball at 254." probe unwrap "$chrome" -o "$tmp/u.exr" --focal-px 1000 --srgb
 check "... and the 8-bit input is warned about" grep -q "8-bit, taken as sRGB-encoded" "$tmp/err"
 check "a --ball 19 px off the photo's is warned about" run 0 "disagrees with the ball found in the photo" probe unwrap "$chrome" -o "$tmp/u.exr" --focal-px 1000 --srgb --ball 254.5,147.5,100
+python3 - "$tmp/noise.pfm" <<'PY'
+import random, struct, sys
+random.seed(7)
+w, h = 320, 240
+with open(sys.argv[1], "wb") as f:
+    f.write(b"PF\n%d %d\n-1.0\n" % (w, h))
+    f.write(struct.pack("<%df" % (w * h * 3), *[random.random() for _ in range(w * h * 3)]))
+PY
+check "unwrap of pure noise: no ball, the photo named, exit 1" run 1 "noise.pfm: no ball found" probe unwrap "$tmp/noise.pfm" -o "$tmp/n.exr" --focal-px 640
+check "... 'no sphere in the image', nothing written" bash -c "grep -q 'no sphere in the image' '$tmp/err' && test ! -e '$tmp/n.exr'"
 check "unwrap of a ball off the photo: exit 1" run 1 "not inside" probe unwrap "$tmp/c.exr" -o "$tmp/e.exr" --focal-px 1000 --ball 10,10,50
 check "... nothing written" test ! -e "$tmp/e.exr"
 check "unwrap writes env, mask, density" run 0 "" probe unwrap "$tmp/c.exr" -o "$tmp/e.exr" --focal-px 1000 --ball 320,160,100

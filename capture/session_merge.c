@@ -308,19 +308,25 @@ int glint_session_fit_inputs(const char *dir, struct glint_session_fit *fs)
 		return ret;
 	const char *status = json_string_value(json_object_get(doc, "status"));
 	const char *kind = json_string_value(json_object_get(doc, "kind"));
+	const char *stage = json_string_value(json_object_get(doc, "stage"));
+	const char *why = json_string_value(json_object_get(doc, "error"));
 	if (!status || strcmp(status, "complete") != 0 || !kind ||
 	    strcmp(kind, "sample") != 0) {
-		ret = glint_error_set(EINVAL,
-				      "%s: a %s %s session: expected a "
-				      "complete sample session%s",
-				      dir, status ? status : "(no status)",
-				      kind ? kind : "(no kind)",
-				      kind && !strcmp(kind, "probe")
-					      ? " (a probe session is the "
-						"light of a sample's scene; "
-						"fit the sample captured "
-						"after it)"
-					      : "");
+		ret = glint_error_set(
+			EINVAL,
+			"%s: a %s %s session%s%s%s%s%s: expected a "
+			"complete sample session%s",
+			dir, status ? status : "(no status)",
+			kind ? kind : "(no kind)",
+			stage ? " (stopped at its " : "", stage ? stage : "",
+			stage && why ? " stage: " : "", stage && why ? why : "",
+			stage ? ")" : "",
+			kind && !strcmp(kind, "probe")
+				? " (a probe session is the "
+				  "light of a sample's scene; "
+				  "fit the sample captured "
+				  "after it)"
+				: "");
 		json_decref(doc);
 		return ret;
 	}

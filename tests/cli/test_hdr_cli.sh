@@ -75,6 +75,20 @@ with open(sys.argv[1], "wb") as f:
 PY
 check "unwrap of pure noise: no ball, the photo named, exit 1" run 1 "noise.pfm: no ball found" probe unwrap "$tmp/noise.pfm" -o "$tmp/n.exr" --focal-px 640
 check "... 'no sphere in the image', nothing written" bash -c "grep -q 'no sphere in the image' '$tmp/err' && test ! -e '$tmp/n.exr'"
+python3 - "$tmp/neg.pfm" <<'PY'
+import struct, sys
+w, h = 128, 128
+px = []
+for y in range(h):
+    for x in range(w):
+        v = -40.0 if (x - 64) ** 2 + (y - 64) ** 2 < 100 else 1.0
+        px += [v, v, v]
+with open(sys.argv[1], "wb") as f:
+    f.write(b"PF\n%d %d\n-1.0\n" % (w, h))
+    f.write(struct.pack("<%df" % len(px), *px))
+PY
+check "unwrap of a ball holding negative radiance: refused where it is made" run 1 "unwrap: $tmp/nmap.exr: pixel" probe unwrap "$tmp/neg.pfm" -o "$tmp/nmap.exr" --focal-px 1000 --ball 64,64,50
+check "... below zero by more than the noise allows, nothing written" bash -c "grep -q 'below zero by more than the noise allows' '$tmp/err' && test ! -e '$tmp/nmap.exr'"
 check "unwrap of a ball off the photo: exit 1" run 1 "not inside" probe unwrap "$tmp/c.exr" -o "$tmp/e.exr" --focal-px 1000 --ball 10,10,50
 check "... nothing written" test ! -e "$tmp/e.exr"
 check "unwrap writes env, mask, density" run 0 "" probe unwrap "$tmp/c.exr" -o "$tmp/e.exr" --focal-px 1000 --ball 320,160,100

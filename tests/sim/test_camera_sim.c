@@ -11,7 +11,9 @@
 #include "capture/camera.h"
 #include "core/error.h"
 
+#include <dirent.h>
 #include <stdio.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 static void test_describe(void)
@@ -222,6 +224,99 @@ static void test_scene_scale(void)
 	CHECK_MSG(glint_error_msg(), "scene_scale");
 }
 
+/* Files in dir whose names start with prefix; the first into first. */
+static int count_files(const char *dir, const char *prefix, char *first,
+		       size_t n)
+{
+	DIR *d = opendir(dir);
+	struct dirent *e;
+	int k = 0;
+	if (!d)
+		return 0;
+	while ((e = readdir(d)))
+		if (!strncmp(e->d_name, prefix, strlen(prefix)) && !k++)
+			snprintf(first, n, "%s/%s", dir, e->d_name);
+	closedir(d);
+	return k;
+}
+
+/*
+ * The rig views are made when a capture starts, not at a frame, and kept
+ * on disk by what they depend on: a second camera of the same rig reads
+ * them (the same frames, bit for bit, without noise); another material is
+ * another file; a cached file that is not whole is rendered again.
+ */
+static void test_view_cache(void)
+{
+	struct glint_fake_clock fc = { 0 };
+	struct glint_clock clk = glint_clock_fake(&fc);
+	struct glint_camera *cam;
+	char dir[64], world[80], dev[200], probe[160] = "", sample[160] = "";
+	struct glint_frame f[2];
+
+	snprintf(dir, sizeof(dir), "/tmp/glint-cache-%d", (int)getpid());
+	snprintf(world, sizeof(world), "%s.world", dir);
+	setenv("GLINT_SIM_CACHE", dir, 1);
+	write_world(world, "1 180\n");
+	snprintf(dev, sizeof(dev),
+		 "sim:width=48,height=36,scene=rig,noise=0,world=%s", world);
+	for (int k = 0; k < 2; k++) {
+		CHECK(glint_camera_open("sim", dev, &clk, &cam) == 0, "%s",
+		      glint_error_msg());
+		if (!cam)
+			return;
+		if (k == 0)
+			CHECK(count_files(dir, "", probe, sizeof(probe)) == 0,
+			      "views made at open: %s", probe);
+		CHECK(glint_camera_start(cam) == 0, "%s", glint_error_msg());
+		CHECK(count_files(dir, "probe-", probe, sizeof(probe)) == 1 &&
+			      count_files(dir, "sample-", sample,
+					  sizeof(sample)) == 1,
+		      "the start cached no views in %s", dir);
+		CHECK(glint_camera_capture(cam, 0.01, 1, 6, &f[k], NULL) == 0,
+		      "%s", glint_error_msg());
+		glint_camera_close(cam);
+	}
+	size_t n = (size_t)f[0].width * f[0].height;
+	CHECK(f[0].data && f[1].data &&
+		      !memcmp(f[0].data, f[1].data, n * sizeof(uint16_t)),
+	      "the cached view gives other frames than the rendered one");
+	/* a cached file cut short: rendered again, the file replaced */
+	FILE *t = fopen(sample, "r+");
+	CHECK(t && ftruncate(fileno(t), 100) == 0, "cannot cut %s", sample);
+	if (t)
+		fclose(t);
+	CHECK(glint_camera_open("sim", dev, &clk, &cam) == 0 &&
+		      glint_camera_start(cam) == 0,
+	      "%s", glint_error_msg());
+	struct glint_frame g;
+	CHECK(glint_camera_capture(cam, 0.01, 1, 6, &g, NULL) == 0 &&
+		      !memcmp(g.data, f[0].data, n * sizeof(uint16_t)),
+	      "a torn cache file was used");
+	glint_frame_release(&g);
+	glint_camera_close(cam);
+	struct stat st;
+	CHECK(stat(sample, &st) == 0 && st.st_size > 100,
+	      "the torn cache file was not replaced");
+	/* another material: another view */
+	snprintf(dev, sizeof(dev),
+		 "sim:width=48,height=36,scene=rig,noise=0,material=teflon,"
+		 "world=%s",
+		 world);
+	CHECK(glint_camera_open("sim", dev, &clk, &cam) == 0 &&
+		      glint_camera_start(cam) == 0,
+	      "%s", glint_error_msg());
+	glint_camera_close(cam);
+	CHECK(count_files(dir, "sample-", sample, sizeof(sample)) == 2,
+	      "teflon's view shares the cache file of yellow plastic");
+	glint_frame_release(&f[0]);
+	glint_frame_release(&f[1]);
+	char cmd[160];
+	snprintf(cmd, sizeof(cmd), "rm -rf '%s' '%s'", dir, world);
+	CHECK(system(cmd) == 0, "%s", cmd);
+	unsetenv("GLINT_SIM_CACHE");
+}
+
 int main(void)
 {
 	glint_backends_register();
@@ -230,5 +325,6 @@ int main(void)
 	RUN(test_refusals);
 	RUN(test_world_file);
 	RUN(test_scene_scale);
+	RUN(test_view_cache);
 	return test_result();
 }

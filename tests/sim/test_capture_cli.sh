@@ -167,6 +167,7 @@ JSON
 check "a dark lab: exit 1, the merge names why" run 1 "the sample's merge: HDR merge: every frame is black" capture sample --config "$tmp/dark.json"
 check "... its session failed at the merge" python3 "$checker" "$(only_session "$tmp/dark")" failed 1
 check "... stage merge in session.json" python3 -c "import json,sys; d=json.load(open('$(only_session "$tmp/dark")/session.json')); sys.exit(d['stage'] != 'merge')"
+check "glint fit of it: refused, with the stage and why" run 1 "a failed sample session (stopped at its merge stage: HDR merge: every frame is black" fit "$(only_session "$tmp/dark")"
 check "glint sessions shows it failed" bash -c "'$glint' sessions --root '$tmp/dark' | grep -q failed"
 # A write the file system refuses during the merge (the file-size limit
 # stands in for a full disk: the same failed write): failed, not complete.

@@ -131,8 +131,11 @@ static char **read_manifest(const char *dir)
 		if (!line[0] || strchr(line, '/') || !strcmp(line, ".") ||
 		    !strcmp(line, ".."))
 			continue;
+		size_t len = strlen(line);
+		if (len >= NAMELEN)
+			continue; /* no file name of glint's is that long */
 		list[n] = store + (size_t)n * NAMELEN;
-		snprintf(list[n], NAMELEN, "%s", line);
+		memcpy(list[n], line, len + 1);
 		n++;
 	}
 	fclose(f);

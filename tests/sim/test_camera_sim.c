@@ -251,7 +251,7 @@ static void test_view_cache(void)
 	struct glint_fake_clock fc = { 0 };
 	struct glint_clock clk = glint_clock_fake(&fc);
 	struct glint_camera *cam;
-	char dir[64], world[80], dev[200], probe[160] = "", sample[160] = "";
+	char dir[64], world[80], dev[200], probe[512] = "", sample[512] = "";
 	struct glint_frame f[2];
 
 	snprintf(dir, sizeof(dir), "/tmp/glint-cache-%d", (int)getpid());

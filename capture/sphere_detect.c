@@ -489,8 +489,10 @@ int glint_sphere_detect(const struct glint_image *img, double r_min,
 	out->points = np;
 	out->rms_px = sqrt(ss / np);
 	out->arc_deg = 10.0 * covered;
-	if (out->rim_share < GLINT_DETECT_MIN_RIM_SHARE ||
-	    out->rim_z < GLINT_DETECT_MIN_RIM_Z ||
+	int z_ok = out->rim_z >= GLINT_DETECT_MIN_RIM_Z ||
+		   (out->rim_share >= GLINT_DETECT_SMALL_SHARE &&
+		    out->rim_z >= GLINT_DETECT_SMALL_MIN_Z);
+	if (out->rim_share < GLINT_DETECT_MIN_RIM_SHARE || !z_ok ||
 	    out->rim_slope < GLINT_DETECT_MIN_RIM_SLOPE)
 		ret = glint_error_set(
 			ENOENT,
@@ -498,10 +500,11 @@ int glint_sphere_detect(const struct glint_image *img, double r_min,
 			"radius %.1f px, has edges along %.0f %% of its rim, "
 			"%.1f standard deviations above chance, log-luminance "
 			"slope %.3f/px (a sphere's silhouette: at least %.0f "
-			"%%, %.0f and %.1f)",
+			"%% and %.0f, or %.0f %% and %.0f; slope %.1f)",
 			c[0], c[1], c[2], 100 * out->rim_share, out->rim_z,
 			out->rim_slope, 100 * GLINT_DETECT_MIN_RIM_SHARE,
-			GLINT_DETECT_MIN_RIM_Z, GLINT_DETECT_MIN_RIM_SLOPE);
+			GLINT_DETECT_MIN_RIM_Z, 100 * GLINT_DETECT_SMALL_SHARE,
+			GLINT_DETECT_SMALL_MIN_Z, GLINT_DETECT_MIN_RIM_SLOPE);
 out:
 	edge_map_free(&em);
 	free(px);

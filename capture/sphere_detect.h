@@ -41,16 +41,21 @@ struct glint_circle {
 /*
  * The thresholds a circle must pass to be found, set on 1000 images that
  * hold no sphere (noise, blank frames, vignetting, gradients, smooth
- * texture, rectangles, checkerboards, gratings: the highest z among those
- * with a steep rim was 35.0) and the real UW spheres (the lowest z of a
- * correct find 54.1): tests/sim/test_sphere_detect.c measures both, and
- * docs/capture.md gives the numbers.  The slope keeps out a vignette's
- * ring of steepest fall-off (0.045 at most), the share a circle that
- * only grazes a few strong edges.
+ * texture, rectangles, checkerboards, gratings) and on real and simulated
+ * spheres: tests/sim/test_sphere_detect.c measures both, docs/hdr.md
+ * gives the numbers.  A steep rim (the slope keeps out a vignette's ring
+ * of steepest fall-off, 0.045 at most) covered on at least a tenth, and
+ * either z >= 45 (the highest among the frames with no sphere: 35.0; the
+ * lowest of a correct find on the UW photos: 54.1) or, for a small sphere
+ * whose rim is too short for such a z, a covered share >= 0.36 with z >=
+ * 20 (the highest share among the frames with no sphere: 0.32; a 25 px
+ * simulated sample: 0.42 at z 34.5).
  */
 #define GLINT_DETECT_MIN_RIM_SHARE 0.10
 #define GLINT_DETECT_MIN_RIM_Z	   45.0
 #define GLINT_DETECT_MIN_RIM_SLOPE 0.2
+#define GLINT_DETECT_SMALL_SHARE   0.36
+#define GLINT_DETECT_SMALL_MIN_Z   20.0
 
 /* Search radii [r_min, r_max] in pixels (0, 0: 5 % .. 50 % of the smaller
  * image side).  -ENOENT ("no sphere") when the best circle fails the

@@ -62,7 +62,7 @@
  * texels on its hits alone, as before the footprint integral:
  * shade_cache.h), ACCURACY_DUMP=DIR (each clean reference photo
  * written there as MAP-MATERIAL.exr, to fit again with glint fit: the
- * scene is bench/captures.h's bench_scene at 256 px),
+ * scene is sim/fixtures.h's fixture_scene at 256 px),
  * ACCURACY_REF_SEED=S (the reference photo's seed, 1 unless given; the
  * bias ratio's second photo S + 1), ACCURACY_REF_MEAN=N (the photo the
  * mean of N reference renders, seeds S .. S + N - 1: 1/N of one
@@ -80,12 +80,12 @@
  */
 #define _DEFAULT_SOURCE
 #include "bench.h"
-#include "captures.h"
+#include "sim/fixtures.h"
 
 #include "core/error.h"
-#include "capture/bracket.h"
-#include "capture/hdr_linear.h"
-#include "capture/probe.h"
+#include "capture/camera/bracket.h"
+#include "capture/hdr/hdr_linear.h"
+#include "capture/probe/probe.h"
 #include "core/log.h"
 #include "fit/fit.h"
 #include "fit/job.h"
@@ -131,7 +131,7 @@ static const char *const default_maps[] = {
 enum { WITHIN, FLAGGED, WRONG, REFUSED, NOUT };
 /* The photos of a case: noise-free; through the sensor as glint's rig
  * takes it (bracket_photo()); one frame metered on the whole image
- * (bench_add_noise_seed(): the mean at SENSOR_LEVEL of the ADC range),
+ * (fixture_add_noise_seed(): the mean at SENSOR_LEVEL of the ADC range),
  * which under a map whose lights are in view leaves the sphere at a
  * fraction of a per cent of the range. */
 enum { CLEAN, BRACKET, NOISY, NPHOTO };
@@ -282,7 +282,7 @@ static struct glint_image *reference_mean(const struct glint_renderer *r,
 }
 
 /* Where the sensor photo's exposure puts the sphere: its mean as a
- * fraction of the ADC range, bench_add_noise() putting the whole image's
+ * fraction of the ADC range, fixture_add_noise() putting the whole image's
  * mean at `level` (a map whose bright lights are in view leaves the
  * sphere far below it). */
 static double sphere_level(const struct glint_renderer *r,
@@ -298,15 +298,15 @@ static double sphere_level(const struct glint_renderer *r,
 /*
  * The photo as glint's rig takes it: a bracket metered on the sphere's
  * region (its bounding square, 2 px of margin: the rig's "sample" ROI),
- * by capture/bracket.c's two goals: its shortest frame clips no sample of
- * the region (the brightest at 40-80 % of the full well: exposures are
+ * by capture/camera/bracket.c's two goals: its shortest frame clips no sample
+ * of the region (the brightest at 40-80 % of the full well: exposures are
  * powers of two of a second) and frames 1 EV apart follow until the
  * region's 1st percentile is floor_dn (16 DN) above black, at most 24
  * frames.  The planner meters on its own noisy frames; here on the
  * noise-free values, which a region of about 100 000 samples hardly
  * tells apart.
  * Each frame goes through the sensor (its own draw) and the frames are
- * merged by glint's raw merge (capture/hdr_linear.c: inverse-variance
+ * merged by glint's raw merge (capture/hdr/hdr_linear.c: inverse-variance
  * weights, the variance at the merged value, a sample clipped in one
  * frame left out of it), a pixel's three channels as three photosites of
  * a mono frame.  photo becomes the merged radiance, *weight its
@@ -507,7 +507,7 @@ static int judge(const struct glint_model_ops *m, const double *truth,
 		 const struct glint_fit_result *res, double *err, int *bound,
 		 char *why, size_t nwhy)
 {
-	*err = bench_tolerance_error(res->p, truth);
+	*err = fixture_tolerance_error(res->p, truth);
 	*bound = 0;
 	if (*err <= 1)
 		return WITHIN;
@@ -518,9 +518,9 @@ static int judge(const struct glint_model_ops *m, const double *truth,
 	memcpy(p, res->p, sizeof(p));
 	p[6] = truth[6];
 	if (truth[6] <= glint_fit_roughness_bound(res) &&
-	    bench_tolerance_error(p, truth) <= 1) {
+	    fixture_tolerance_error(p, truth) <= 1) {
 		*bound = 1;
-		*err = bench_tolerance_error(p, truth);
+		*err = fixture_tolerance_error(p, truth);
 		return WITHIN;
 	}
 	for (int k = 0; k < m->nparams; k++) {
@@ -545,7 +545,7 @@ static int judge(const struct glint_model_ops *m, const double *truth,
 /*
  * The scene's map: a lat-long one as it is; a square one is an angular
  * light probe (Debevec's format, as the shared campus probe), converted
- * to lat-long at its angular resolution (capture/probe.h) as
+ * to lat-long at its angular resolution (capture/probe/probe.h) as
  * `glint probe convert` would, in memory.
  */
 static int load_map(const char *map, const struct glint_scene *sc,
@@ -630,7 +630,7 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 	if (getenv("ACCURACY_NO_BIAS"))
 		with_bias = 0;
 	memset(t, 0, sizeof(*t));
-	bench_scene(&sc, 256, map);
+	fixture_scene(&sc, 256, map);
 	if (getenv("ACCURACY_SPP"))
 		sc.spp = atoi(getenv("ACCURACY_SPP"));
 	if (load_map(map, &sc, &env) < 0 ||
@@ -696,8 +696,8 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 				      photo_names[lv]))
 				goto next;
 			if (lv == NOISY &&
-			    bench_add_noise_seed(photo, &w, level,
-						 sensor_seed) < 0)
+			    fixture_add_noise_seed(photo, &w, level,
+						   sensor_seed) < 0)
 				goto next;
 			if (lv == BRACKET &&
 			    bracket_photo(&r, photo, &w, sensor_seed, &nframes,

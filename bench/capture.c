@@ -25,7 +25,7 @@
 #include "cmd/backends.h"
 #include "bench.h"
 
-#include "capture/bracket.h"
+#include "capture/camera/bracket.h"
 #include "core/error.h"
 
 #include <math.h>

@@ -17,7 +17,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "bench.h"
-#include "captures.h"
+#include "sim/fixtures.h"
 
 #include "core/error.h"
 #include "core/formats.h"
@@ -111,7 +111,7 @@ static int dielectric_rows(int rounds)
 		const struct glint_model_ops *m;
 		double truth[GLINT_MAX_PARAMS];
 		char path[512];
-		bench_scene(&sc, 256, NULL);
+		fixture_scene(&sc, 256, NULL);
 		if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
 					mats[mi], &m, truth) < 0 ||
 		    glint_renderer_init(&r, &sc, 0, NULL) < 0)
@@ -228,7 +228,7 @@ int main(int argc, char **argv)
 			rounds = atoi(argv[i]) > 0 ? atoi(argv[i]) : 1;
 	}
 	glint_log_set_mode(GLINT_LOG_QUIET);
-	bench_scene(&sc, 512, NULL);
+	fixture_scene(&sc, 512, NULL);
 	sc.light_samples = 16;
 	sc.brdf_samples = 16;
 	if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json", material,

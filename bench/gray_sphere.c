@@ -29,7 +29,7 @@
  * Prints one row per light and model, then the spread of each parameter
  * across lights against the median reported standard error.
  */
-#include "captures.h"
+#include "sim/fixtures.h"
 #include "core/error.h"
 #include "core/formats.h"
 #include "core/image.h"
@@ -163,7 +163,7 @@ static int load_light(int li, struct vec3 ldir, double cx, double cy,
 					       &sc.sphere_centre);
 	sc.sphere_radius = R;
 	sc.env_scale = 1;
-	map = ret < 0 ? NULL : bench_disc_map(ldir, 2048, 0.5, 0);
+	map = ret < 0 ? NULL : fixture_disc_map(ldir, 2048, 0.5, 0);
 	if (!ret && !map)
 		ret = -ENOMEM;
 	if (!ret)

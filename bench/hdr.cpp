@@ -11,9 +11,9 @@
 
 extern "C" {
 #include "cmd/backends.h"
-#include "capture/bracket.h"
-#include "capture/hdr_linear.h"
-#include "capture/hdr_response.h"
+#include "capture/camera/bracket.h"
+#include "capture/hdr/hdr_linear.h"
+#include "capture/hdr/hdr_response.h"
 #include "core/error.h"
 #include "core/formats.h"
 #include "core/image.h"

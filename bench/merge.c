@@ -25,9 +25,9 @@
 #include "cmd/backends.h"
 #include "bench.h"
 
-#include "capture/bracket.h"
-#include "capture/hdr_linear.h"
-#include "capture/session_merge.h"
+#include "capture/camera/bracket.h"
+#include "capture/hdr/hdr_linear.h"
+#include "capture/hdr/session_merge.h"
 #include "core/error.h"
 #include "sim/camera_sim.h"
 #include "sim/sensor.h"

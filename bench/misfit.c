@@ -34,7 +34,7 @@
  */
 #define _DEFAULT_SOURCE
 #include "bench.h"
-#include "captures.h"
+#include "sim/fixtures.h"
 
 #include "core/error.h"
 #include "core/log.h"
@@ -221,7 +221,7 @@ static int fit_one(const char *map, double rot,
 	struct glint_fit_result *res = calloc(1, sizeof(*res));
 	int ret;
 
-	bench_scene(&sc, 192, map);
+	fixture_scene(&sc, 192, map);
 	sc.env_rotation[1] = rot;
 	if (!res || glint_renderer_init(&r, &sc, 0, NULL) < 0) {
 		free(res);
@@ -235,7 +235,7 @@ static int fit_one(const char *map, double rot,
 					     glint_tabulated_params, &ro, photo)
 		    : -1;
 	if (!ret)
-		ret = bench_add_noise(photo, &weight, 0.1);
+		ret = fixture_add_noise(photo, &weight, 0.1);
 	struct glint_fit_opts o;
 	glint_fit_default_opts(&o);
 	o.no_discrepancy = 1;

@@ -27,7 +27,7 @@
  */
 #define _DEFAULT_SOURCE
 #include "bench.h"
-#include "captures.h"
+#include "sim/fixtures.h"
 
 #include "core/error.h"
 #include "core/log.h"
@@ -112,9 +112,9 @@ static struct outcome run_one(const struct config *c, const char *mat,
 		bench_photo_512_lens(mat, m, truth, cap->fnum);
 	if (!big)
 		return out;
-	struct glint_image *photo = bench_shrink(big, 512 / c->px);
+	struct glint_image *photo = fixture_shrink(big, 512 / c->px);
 	glint_image_free(big);
-	if (cap->noise > 0 && bench_add_noise(photo, &weight, cap->noise) < 0)
+	if (cap->noise > 0 && fixture_add_noise(photo, &weight, cap->noise) < 0)
 		return out;
 	if (c->env_w == 1024)
 		snprintf(env, sizeof(env), "%s",
@@ -122,7 +122,7 @@ static struct outcome run_one(const struct config *c, const char *mat,
 	else
 		snprintf(env, sizeof(env), "bench-out/venice-%d.exr", c->env_w);
 	double t0 = glint_now();
-	bench_scene_lens(&sc, c->px, env, c->dof ? cap->fnum : 0);
+	fixture_scene_lens(&sc, c->px, env, c->dof ? cap->fnum : 0);
 	if (glint_renderer_init(&r, &sc, 0, NULL) < 0)
 		return out;
 	struct glint_fit_opts o;
@@ -137,7 +137,7 @@ static struct outcome run_one(const struct config *c, const char *mat,
 	o.light_samples = o.lobe_samples = c->samples;
 	if (glint_fit(&r, m, photo, weight, &o, &res) == 0) {
 		out.seconds = glint_now() - t0;
-		out.perr = bench_tolerance_error(res.p, truth);
+		out.perr = fixture_tolerance_error(res.p, truth);
 		out.rel_rmse = res.rel_rmse;
 		out.ok = 1;
 	}
@@ -159,7 +159,7 @@ static int small_env(int w)
 	if (glint_image_read(GLINT_DATA_DIR "/env/venice_sunset_1k.hdr", &src) <
 	    0)
 		return -1;
-	struct glint_image *d = bench_shrink(src, src->width / w);
+	struct glint_image *d = fixture_shrink(src, src->width / w);
 	int ret = d ? glint_image_write(path, d, NULL) : -1;
 	glint_image_free(src);
 	glint_image_free(d);

@@ -8,7 +8,7 @@
  *
  *   bench/residual MAP MATERIAL PHOTO.exr [ROUGHNESS...]
  *
- * PHOTO is bench_scene's 256 px view of MATERIAL under MAP (as
+ * PHOTO is fixture_scene's 256 px view of MATERIAL under MAP (as
  * bench/accuracy's ACCURACY_DUMP or ACCURACY_CACHE writes it).  For the
  * truth's roughness and each ROUGHNESS given (the truth's other
  * parameters), prints the sum of squared differences over the interior,
@@ -30,7 +30,7 @@
  */
 #define _DEFAULT_SOURCE
 #include "bench.h"
-#include "captures.h"
+#include "sim/fixtures.h"
 
 #include "core/error.h"
 #include "fit/brdf/model.h"
@@ -74,7 +74,7 @@ int main(int argc, char **argv)
 	}
 	struct glint_scene sc;
 	struct glint_renderer r;
-	bench_scene(&sc, 256, argv[1]);
+	fixture_scene(&sc, 256, argv[1]);
 	if (getenv("RESIDUAL_SPP"))
 		sc.spp = atoi(getenv("RESIDUAL_SPP"));
 	if (glint_renderer_init(&r, &sc, 0, NULL) < 0) {

@@ -20,7 +20,7 @@
  */
 #define _DEFAULT_SOURCE
 #include "bench.h"
-#include "captures.h"
+#include "sim/fixtures.h"
 
 #include "core/error.h"
 #include "core/log.h"
@@ -65,14 +65,14 @@ static struct glint_image *
 photo_128(const char *mat, const struct glint_model_ops *m, const double *truth)
 {
 	struct glint_image *big = bench_photo_512(mat, m, truth);
-	struct glint_image *img = big ? bench_shrink(big, 4) : NULL;
+	struct glint_image *img = big ? fixture_shrink(big, 4) : NULL;
 	glint_image_free(big);
 	return img;
 }
 
 static int within(const double *p, const double *q)
 {
-	return bench_tolerance_error(p, q) <= 1;
+	return fixture_tolerance_error(p, q) <= 1;
 }
 
 int main(int argc, char **argv)
@@ -100,7 +100,7 @@ int main(int argc, char **argv)
 					materials[mi], &m, truth) < 0)
 			return 1;
 		struct glint_image *clean = photo_128(materials[mi], m, truth);
-		bench_scene(&sc, 128, NULL);
+		fixture_scene(&sc, 128, NULL);
 		if (!clean || glint_renderer_init(&r, &sc, 0, NULL) < 0) {
 			fprintf(stderr, "bench/stability: %s\n",
 				glint_error_msg());
@@ -114,8 +114,8 @@ int main(int argc, char **argv)
 			       (size_t)clean->width * clean->height * 3 *
 				       sizeof(float));
 			if (noise_levels[nl] > 0 &&
-			    bench_add_noise(photo, &weight, noise_levels[nl]) <
-				    0)
+			    fixture_add_noise(photo, &weight,
+					      noise_levels[nl]) < 0)
 				return 1;
 			/* The reference: the default fit from the paper's
 			 * start. */
@@ -197,8 +197,8 @@ int main(int argc, char **argv)
 						methods[me].name, materials[mi],
 						noise_levels[nl], s,
 						outcome_names[out], dt,
-						bench_tolerance_error(res.p,
-								      ref.p));
+						fixture_tolerance_error(res.p,
+									ref.p));
 					fflush(csv);
 				}
 			}

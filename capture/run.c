@@ -7,11 +7,11 @@
 #define _POSIX_C_SOURCE 200809L
 #include "run.h"
 
-#include "probe.h"
+#include "capture/probe/probe.h"
 #include "scene_file.h"
-#include "session.h"
-#include "session_merge.h"
-#include "sphere_detect.h"
+#include "capture/hdr/session.h"
+#include "capture/hdr/session_merge.h"
+#include "capture/probe/sphere_detect.h"
 #include "core/error.h"
 #include "core/log.h"
 

@@ -9,14 +9,14 @@
  * unwrap to env.exr, for a sample its scene.json lit by a probe session.
  */
 
-#include "bracket.h"
+#include "capture/camera/bracket.h"
 #include "core/path.h"
 
 #include "core/atomic.h"
 
 #include <jansson.h>
 
-/* What a capture needs to know of the rig (board/rig.c fills it from the
+/* What a capture needs to know of the rig (appliance/rig.c fills it from the
  * rig file). */
 struct glint_capture_setup {
 	const char *backend, *device; /* camera */

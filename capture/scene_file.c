@@ -8,7 +8,7 @@
 #define _GNU_SOURCE /* realpath */
 #include "scene_file.h"
 
-#include "sphere_detect.h"
+#include "capture/probe/sphere_detect.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/json.h"

@@ -2,7 +2,7 @@
 #ifndef GLINT_CAPTURE_SCENE_FILE_H
 #define GLINT_CAPTURE_SCENE_FILE_H
 
-#include "sphere_detect.h"
+#include "capture/probe/sphere_detect.h"
 #include "core/image.h"
 
 #include <stddef.h>

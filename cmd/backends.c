@@ -2,7 +2,7 @@
 #include "backends.h"
 
 #include "board/board.h"
-#include "capture/camera.h"
+#include "capture/camera/camera.h"
 #include "sim/board_sim.h"
 #include "sim/camera_sim.h"
 

@@ -6,7 +6,7 @@
 
 #include "core/error.h"
 #include "core/path.h"
-#include "fit/export.h"
+#include "export/export.h"
 
 #include <jansson.h>
 

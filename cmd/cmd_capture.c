@@ -1,19 +1,19 @@
 /* SPDX-License-Identifier: MIT */
 /*
  * glint capture probe|sample: a verified exposure bracket of the region of
- * interest into a capture session (capture/session.h); glint cameras: the
+ * interest into a capture session (capture/hdr/session.h); glint cameras: the
  * cameras each backend can open and what they can do.
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
 #include "options.h"
 
-#include "board/daemon.h"
+#include "appliance/daemon.h"
 
-#include "capture/hdr_linear.h"
-#include "capture/probe.h"
-#include "capture/sphere_detect.h"
-#include "capture/session.h"
+#include "capture/hdr/hdr_linear.h"
+#include "capture/probe/probe.h"
+#include "capture/probe/sphere_detect.h"
+#include "capture/hdr/session.h"
 #include "core/error.h"
 #include "core/json.h"
 #include "core/log.h"

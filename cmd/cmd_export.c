@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: MIT */
-/* glint export: the fitted material in a renderer's model (fit/export.h). */
+/* glint export: the fitted material in a renderer's model (export/export.h). */
 #define _POSIX_C_SOURCE 200809L /* lstat */
 #include "cmd.h"
 #include "options.h"
@@ -7,7 +7,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/log.h"
-#include "fit/export.h"
+#include "export/export.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -2,7 +2,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
 #include "options.h"
-#include "capture/session.h"
+#include "capture/hdr/session.h"
 #include "fit/job.h"
 
 #include "core/error.h"

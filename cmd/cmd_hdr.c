@@ -1,16 +1,16 @@
 /* SPDX-License-Identifier: MIT */
 /*
  * glint hdr: a session's (or a list of) raw frames -> radiance, variance,
- * fit weights and a validity mask (capture/hdr_linear.h, docs/hdr.md).
+ * fit weights and a validity mask (capture/hdr/hdr_linear.h, docs/hdr.md).
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
 #include "options.h"
 
-#include "capture/frame_file.h"
-#include "capture/hdr_linear.h"
-#include "capture/hdr_files.h"
-#include "capture/session_merge.h"
+#include "capture/hdr/frame_file.h"
+#include "capture/hdr/hdr_linear.h"
+#include "capture/hdr/hdr_files.h"
+#include "capture/hdr/session_merge.h"
 #include "core/error.h"
 #include "core/json.h"
 #include "core/log.h"

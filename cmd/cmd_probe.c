@@ -1,14 +1,14 @@
 /* SPDX-License-Identifier: MIT */
 /*
  * glint probe unwrap | convert: light-probe processing
- * (capture/probe.h, docs/hdr.md).
+ * (capture/probe/probe.h, docs/hdr.md).
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
 #include "options.h"
 
-#include "capture/probe.h"
-#include "capture/probe_register.h"
+#include "capture/probe/probe.h"
+#include "capture/probe/probe_register.h"
 #include "core/error.h"
 #include "core/log.h"
 

@@ -1,17 +1,17 @@
 /* SPDX-License-Identifier: MIT */
 /*
  * glint queue add|cancel|run, glint jobs, glint sessions: the job queue
- * (board/queue.h) and the capture sessions, as plain commands for SSH
+ * (appliance/queue.h) and the capture sessions, as plain commands for SSH
  * users and the rig daemon alike.
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
 #include "options.h"
-#include "board/worker.h"
-#include "board/rig.h"
+#include "appliance/worker.h"
+#include "appliance/rig.h"
 
-#include "board/queue.h"
-#include "capture/session.h"
+#include "appliance/queue.h"
+#include "capture/hdr/session.h"
 #include "core/error.h"
 #include "core/log.h"
 

@@ -1,6 +1,8 @@
 /* SPDX-License-Identifier: MIT */
 #include "vec.h"
 
+#include <math.h>
+
 struct mat3 m3_mul_m3(const struct mat3 *a, const struct mat3 *b)
 {
 	struct mat3 r;
@@ -38,4 +40,21 @@ void v3_frame(struct vec3 n, struct vec3 *t, struct vec3 *b)
 
 	*t = v3(1.0 + sign * n.x * n.x * a, sign * bb, -sign * n.x);
 	*b = v3(bb, sign + n.y * n.y * a, -n.y);
+}
+
+void glint_latlong_dir_to_uv(struct vec3 d, double *u, double *v)
+{
+	double y = d.y < -1 ? -1 : d.y > 1 ? 1 : d.y;
+	double phi = atan2(d.x, -d.z);
+
+	*u = 0.5 + phi / (2 * M_PI);
+	*v = acos(y) / M_PI;
+}
+
+struct vec3 glint_latlong_uv_to_dir(double u, double v)
+{
+	double phi = 2 * M_PI * (u - 0.5), theta = M_PI * v;
+	double s = sin(theta);
+
+	return v3(s * sin(phi), cos(theta), -s * cos(phi));
 }

@@ -88,6 +88,14 @@ struct mat3 m3_mul_m3(const struct mat3 *a, const struct mat3 *b);
 /* Orthonormal frame (t, b, n) around the unit vector n (Duff et al. 2017). */
 void v3_frame(struct vec3 n, struct vec3 *t, struct vec3 *b);
 
+/*
+ * The lat-long (equirectangular) convention of every environment map and
+ * probe: map-space direction <-> (u, v) in [0, 1]^2, u = 0.5 looking down
+ * -z, v = 0 straight up (+y).
+ */
+void glint_latlong_dir_to_uv(struct vec3 d, double *u, double *v);
+struct vec3 glint_latlong_uv_to_dir(double u, double v);
+
 /* Luminance of linear Rec.709 RGB. */
 static inline double rgb_luminance(double r, double g, double b)
 {

@@ -602,7 +602,7 @@ static void objective_lm_opts(struct glint_lm_opts *lo, int max_iter,
 }
 
 /* Adaptive simulated annealing over every parameter on selection sel
- * (fit/anneal.h); the caller polishes with LM. */
+ * (fit/optim/anneal.h); the caller polishes with LM. */
 static int anneal_pass(struct objective *ob, const int *sel, int nsel,
 		       struct glint_fit_result *res)
 {

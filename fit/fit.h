@@ -42,7 +42,7 @@ const char *glint_fit_method_name(enum glint_fit_method m);
 int glint_fit_method_parse(const char *s, enum glint_fit_method *m);
 
 /* lm: Levenberg-Marquardt (the method's passes); anneal: adaptive
- * simulated annealing (fit/anneal.h) then an LM polish; auto: anneal for
+ * simulated annealing (fit/optim/anneal.h) then an LM polish; auto: anneal for
  * transparent models, LM otherwise. */
 enum glint_fit_optimizer { GLINT_OPT_AUTO, GLINT_OPT_LM, GLINT_OPT_ANNEAL };
 /* Their names, indexed by the enums, NULL-terminated. */

@@ -11,7 +11,7 @@
 #include "ladder.h"
 #include "misfit.h"
 #include "select.h"
-#include "export.h"
+#include "export/export.h"
 #include "fit/render/compare.h"
 #include "core/atomic_dir.h"
 #include "core/atomic_file.h"

@@ -42,7 +42,7 @@ struct glint_fit_job {
 	 * of this run, never a file of someone else's of a name it writes) */
 	int force;
 	/* bit k set: write out_dir/material + the extension of export
-	 * format k (fit/export.h) with an accepted result */
+	 * format k (export/export.h) with an accepted result */
 	unsigned exports;
 	/* More photos of the same material, each in its own scene: one
 	 * fit to all of them (glint_fit_views()).  Each is a job of its own

@@ -43,7 +43,7 @@ struct vec3 glint_misfit_light(const struct glint_envmap *env)
 		}
 	}
 	return m3_mul(&env->rot,
-		      glint_envmap_uv_to_dir((bi + 0.5) / img->width,
+		      glint_latlong_uv_to_dir((bi + 0.5) / img->width,
 					     (bj + 0.5) / img->height));
 }
 

@@ -32,7 +32,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "camera_sim.h"
 #include "probe_sim.h"
-#include "capture/camera.h"
+#include "capture/camera/camera.h"
 #include "sensor.h"
 
 #include "reference.h"

@@ -2,9 +2,9 @@
 #ifndef GLINT_SIM_CAMERA_SIM_H
 #define GLINT_SIM_CAMERA_SIM_H
 
-/* The simulated camera (a backend of capture/camera.h) and its scene. */
+/* The simulated camera (a backend of capture/camera/camera.h) and its scene. */
 
-#include "capture/camera.h"
+#include "capture/camera/camera.h"
 #include "core/image.h"
 #include "fit/scene/scene.h"
 

@@ -4,7 +4,7 @@
 
 /*
  * A photograph of a mirror ball, rendered forward (independently of
- * capture/probe.c's inverse mapping): a pinhole camera at the origin
+ * capture/probe/probe.c's inverse mapping): a pinhole camera at the origin
  * looking along -Z (x right, y up, principal point at the image centre),
  * each pixel's rays (spp x spp, stratified) intersected with the sphere,
  * reflected, and looked up in a lat-long map (bilinear), times the

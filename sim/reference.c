@@ -122,7 +122,7 @@ static void shade(const struct ref_job *job, struct vec3 pos, struct vec3 d,
 
 /* Fresnel reflectance in its angle form (Rs = sin^2(i - t) / sin^2(i + t),
  * Rp = tan^2(i - t) / tan^2(i + t)), written independently of
- * fit/dielectric.c's coefficient form.  n1 -> n2; sets *tt (angle of
+ * fit/render/dielectric_paths.c's coefficient form.  n1 -> n2; sets *tt (angle of
  * refraction), returns 1 on total internal reflection. */
 static double fresnel_angles(double ti, double n1, double n2, double *tt)
 {

@@ -40,7 +40,7 @@ struct irr_tree {
 };
 
 /* The first moment of a lat-long texel (the integral of w dw over it) in
- * the map's convention (glint_envmap_uv_to_dir: w = (sin t sin p, cos t,
+ * the map's convention (glint_latlong_uv_to_dir: w = (sin t sin p, cos t,
  * -sin t cos p), t the polar angle from +y): a product of a row's and a
  * column's integrals. */
 struct row_integrals {
@@ -218,7 +218,7 @@ static void irr_rows(void *ctx, int y0, int y1, int thread)
 	(void)thread;
 	for (int y = y0; y < y1; y++)
 		for (int x = 0; x < ir->w; x++) {
-			struct vec3 n = glint_envmap_uv_to_dir(
+			struct vec3 n = glint_latlong_uv_to_dir(
 				(x + 0.5) / ir->w, (y + 0.5) / ir->h);
 			tree_query(job->t, m3_tmul(job->t->rot, n),
 				   ir->e + ((size_t)y * ir->w + x) * 3);
@@ -335,7 +335,7 @@ void glint_irradiance_lookup(const struct glint_irradiance *ir, struct vec3 n,
 {
 	double u, v, wx[4], wy[4];
 
-	glint_envmap_dir_to_uv(n, &u, &v);
+	glint_latlong_dir_to_uv(n, &u, &v);
 	double x = u * ir->w - 0.5, y = v * ir->h - 0.5;
 	double fx = floor(x), fy = floor(y);
 	cr_weights(x - fx, wx);

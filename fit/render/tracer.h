@@ -8,7 +8,7 @@
  * re-shades).  Build: _new, _add_*, _commit; then trace.
  */
 
-#include "fit/scene/pinhole.h"
+#include "core/pinhole.h"
 
 #include "core/log.h"
 

@@ -7,23 +7,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-void glint_envmap_dir_to_uv(struct vec3 d, double *u, double *v)
-{
-	double y = d.y < -1 ? -1 : d.y > 1 ? 1 : d.y;
-	double phi = atan2(d.x, -d.z);
-
-	*u = 0.5 + phi / (2 * M_PI);
-	*v = acos(y) / M_PI;
-}
-
-struct vec3 glint_envmap_uv_to_dir(double u, double v)
-{
-	double phi = 2 * M_PI * (u - 0.5), theta = M_PI * v;
-	double s = sin(theta);
-
-	return v3(s * sin(phi), cos(theta), -s * cos(phi));
-}
-
 /*
  * Sampling weight of texel (i, j): the mean of the bilinear interpolant over
  * the texel (a separable [1, 6, 1] / 8 filter of the luminance), times
@@ -260,7 +243,7 @@ void glint_envmap_lookup(const struct glint_envmap *env, struct vec3 d,
 {
 	double u, v;
 
-	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
+	glint_latlong_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
 	lookup_uv(env, u, v, rgb);
 }
 
@@ -310,7 +293,7 @@ double glint_env_dist_sample(const struct glint_envmap *env,
 	double u = (i + fu) / w, v = (j + fv) / h;
 	double s = sin(M_PI * v);
 
-	*dir = m3_mul(&env->rot, glint_envmap_uv_to_dir(u, v));
+	*dir = m3_mul(&env->rot, glint_latlong_uv_to_dir(u, v));
 	if (!(s > 0) || !(cell > 0))
 		return 0;
 	/* Density over (u, v) is cell * W * H / total; dA = 2 pi^2 sin. */
@@ -330,7 +313,7 @@ double glint_env_dist_pdf(const struct glint_envmap *env,
 
 	if (!(dd->total > 0))
 		return 0;
-	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
+	glint_latlong_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
 	int i = (int)(u * w), j = (int)(v * h);
 	i = i < 0 ? 0 : i >= w ? w - 1 : i;
 	j = j < 0 ? 0 : j >= h ? h - 1 : j;
@@ -384,7 +367,7 @@ double glint_env_dist_pdf_smooth(const struct glint_envmap *env,
 {
 	double u, v;
 
-	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
+	glint_latlong_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
 	return pdf_smooth_uv(env, dd, u, v);
 }
 
@@ -432,7 +415,7 @@ static int hot_part_points(const struct glint_envmap *env,
 						     sin(M_PI * v) / (q * q);
 					struct vec3 d = m3_mul(
 						&env->rot,
-						glint_envmap_uv_to_dir(u, v));
+						glint_latlong_uv_to_dir(u, v));
 					float *pt = hot->part +
 						    6 * (size_t)hot->npart++;
 					pt[0] = (float)d.x;
@@ -529,7 +512,7 @@ int glint_env_hot_new(const struct glint_envmap *env, double tau,
 					double v = (j + (b + 0.5) / q) / h;
 					struct vec3 d = m3_mul(
 						&env->rot,
-						glint_envmap_uv_to_dir(u, v));
+						glint_latlong_uv_to_dir(u, v));
 					double l[3];
 					double dom = (2 * M_PI / w) *
 						     (M_PI / h) *
@@ -608,7 +591,7 @@ void glint_env_query(const struct glint_env_hot *hot, struct vec3 d,
 	struct vec3 dm = m3_tmul(&env->rot, d);
 	double u, v, cy = fmin(fmax(dm.y, -1), 1);
 
-	glint_envmap_dir_to_uv(dm, &u, &v);
+	glint_latlong_dir_to_uv(dm, &u, &v);
 	/* u, v in [0, 1]: x, y within half a texel of the map, whose
 	 * border in the table holds what wrapping and clamping would read. */
 	double x = fmin(fmax(u * w - 0.5, -0.5), w - 0.5);
@@ -639,6 +622,6 @@ void glint_env_rest_lookup(const struct glint_envmap *env,
 {
 	double u, v;
 
-	glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
+	glint_latlong_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
 	rest_uv(env, hot, u, v, rgb);
 }

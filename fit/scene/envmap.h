@@ -49,10 +49,6 @@ int glint_envmap_load(const char *path, const double rot_deg[3], double scale,
 		      int srgb, struct glint_envmap **out);
 void glint_envmap_free(struct glint_envmap *env);
 
-/* Map-space direction <-> (u, v) in [0, 1]^2. */
-void glint_envmap_dir_to_uv(struct vec3 d, double *u, double *v);
-struct vec3 glint_envmap_uv_to_dir(double u, double v);
-
 /* Bilinear radiance seen along world direction d (unit). */
 void glint_envmap_lookup(const struct glint_envmap *env, struct vec3 d,
 			 double rgb[3]);

@@ -8,7 +8,7 @@
  * angles in degrees; pixel coordinates with (0, 0) the top-left corner.
  */
 
-#include "pinhole.h"
+#include "core/pinhole.h"
 
 #define GLINT_PATH_MAX 4096
 

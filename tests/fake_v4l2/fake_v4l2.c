@@ -3,7 +3,8 @@
  * A fake V4L2 camera for tests: an LD_PRELOAD interposer of open, close,
  * ioctl, mmap and poll (and their *64 names) that serves the simulated
  * sensor (sim/camera_sim.c) through the kernel's real ioctl protocol, so
- * capture/v4l2.c runs unchanged, and injects the faults real cameras have.
+ * capture/camera/v4l2.c runs unchanged, and injects the faults real cameras
+ * have.
  *
  * Configured by the environment, read at each open:
  *   FAKE_V4L2="key=value,..."  keys:
@@ -37,8 +38,8 @@
 /* Interpose the plain and the *64 names both: see them undecorated. */
 #undef _FILE_OFFSET_BITS
 #define _GNU_SOURCE
-#include "capture/camera.h"
-#include "capture/v4l2_format.h"
+#include "capture/camera/camera.h"
+#include "capture/camera/v4l2_format.h"
 #include "sim/camera_sim.h"
 
 #include <dlfcn.h>
@@ -212,7 +213,7 @@ static const struct glint_v4l2_format *cur_fmt(const struct fake *f)
 	return glint_v4l2_format_find(f->fourcc);
 }
 
-/* Written independently of capture/v4l2_format.c's reader. */
+/* Written independently of capture/camera/v4l2_format.c's reader. */
 static size_t row_bytes(uint32_t fourcc, int w)
 {
 	const struct glint_v4l2_format *g = glint_v4l2_format_find(fourcc);

@@ -1,9 +1,9 @@
 /* SPDX-License-Identifier: MIT */
-/* DNG: glint's raw frames as libtiff reads them (capture/dng.h), with
+/* DNG: glint's raw frames as libtiff reads them (capture/hdr/dng.h), with
  * their glint:frame metadata, layout and pixel checksum checks. */
 #include "fuzz.h"
 
-#include "capture/frame_file.h"
+#include "capture/hdr/frame_file.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {

@@ -5,10 +5,10 @@
 #define _DEFAULT_SOURCE /* mkdtemp */
 #include "fuzz.h"
 
-#include "board/queue.h"
-#include "board/rig.h"
-#include "capture/session.h"
-#include "capture/session_merge.h"
+#include "appliance/queue.h"
+#include "appliance/rig.h"
+#include "capture/hdr/session.h"
+#include "capture/hdr/session_merge.h"
 #include "fit/brdf/model.h"
 #include "fit/scene/scene.h"
 

@@ -3,7 +3,7 @@
  * frames with their glint:frame metadata and pixel checksum. */
 #include "fuzz.h"
 
-#include "capture/frame_file.h"
+#include "capture/hdr/frame_file.h"
 #include "core/formats.h"
 
 #include <stdlib.h>

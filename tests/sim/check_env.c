@@ -7,7 +7,7 @@
  * exit 1 above MAX_MEDIAN.  Scale is free (the sensor's units): the
  * median ratio is divided out.
  */
-#include "capture/probe.h"
+#include "capture/probe/probe.h"
 #include "core/error.h"
 #include "sim/camera_sim.h"
 

@@ -8,7 +8,7 @@
 #include "cmd/backends.h"
 #include "test.h"
 
-#include "capture/camera.h"
+#include "capture/camera/camera.h"
 #include "core/error.h"
 
 #include <dirent.h>

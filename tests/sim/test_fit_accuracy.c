@@ -44,7 +44,7 @@
  */
 #include "test.h"
 
-#include "bench/captures.h"
+#include "sim/fixtures.h"
 #include "core/error.h"
 #include "fit/fit.h"
 #include "fit/job.h"
@@ -95,7 +95,7 @@ int main(int argc, char **argv)
 		return test_result();
 	if (dark) {
 		struct glint_image *w = NULL;
-		CHECK(bench_add_noise(photo, &w, 0.001) == 0, "%s",
+		CHECK(fixture_add_noise(photo, &w, 0.001) == 0, "%s",
 		      glint_error_msg());
 		glint_image_free(w); /* fitted as a photo without weights */
 		if (test_failures)

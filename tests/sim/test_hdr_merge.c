@@ -10,8 +10,8 @@
 #include "cmd/backends.h"
 #include "test.h"
 
-#include "capture/bracket.h"
-#include "capture/hdr_linear.h"
+#include "capture/camera/bracket.h"
+#include "capture/hdr/hdr_linear.h"
 #include "core/error.h"
 #include "sim/camera_sim.h"
 #include "sim/sensor.h"

@@ -30,7 +30,7 @@
  */
 #include "test.h"
 
-#include "bench/captures.h"
+#include "sim/fixtures.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "fit/brdf/microfacet.h"
@@ -52,7 +52,7 @@ static int shoot(double deg, const struct glint_model_ops *m,
 	struct glint_envmap *env = NULL;
 	double a = deg * M_PI / 180;
 	struct glint_image *map =
-		bench_disc_map(v3(sin(a), 0, cos(a)), 1024, 0.5, 0.01);
+		fixture_disc_map(v3(sin(a), 0, cos(a)), 1024, 0.5, 0.01);
 
 	memset(s, 0, sizeof(*s));
 	sim_scene_192(&sc, "disc light", 0);
@@ -71,7 +71,7 @@ static int shoot(double deg, const struct glint_model_ops *m,
 	if (!s->photo || glint_reference_render(&s->r.scene, s->r.env, m, truth,
 						&ro, s->photo) < 0)
 		return -1;
-	return bench_add_noise(s->photo, &s->weight, 0.1);
+	return fixture_add_noise(s->photo, &s->weight, 0.1);
 }
 
 static void shot_free(struct shot *s)

@@ -17,7 +17,7 @@
  */
 #include "test.h"
 
-#include "bench/captures.h"
+#include "sim/fixtures.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "fit/ladder.h"
@@ -37,7 +37,7 @@ static int write_sky(const char *path, int sun)
 	for (int y = 0; y < img->height; y++)
 		for (int x = 0; x < img->width; x++) {
 			struct vec3 d =
-				glint_envmap_uv_to_dir((x + 0.5) / img->width,
+				glint_latlong_uv_to_dir((x + 0.5) / img->width,
 						       (y + 0.5) / img->height);
 			double up = 0.5 + 0.5 * d.y;
 			float *px = glint_image_px(img, x, y);
@@ -88,7 +88,7 @@ static int run_case(const char *name, const char *map, double fnum,
 	int ret = glint_reference_render(&sc, env, m, truth, &ro, photo);
 	glint_envmap_free(env);
 	if (!ret)
-		ret = bench_add_noise(photo, &weight, 0.1);
+		ret = fixture_add_noise(photo, &weight, 0.1);
 	struct glint_fit_opts o;
 	glint_fit_default_opts(&o);
 	if (!ret)

@@ -9,7 +9,7 @@
  */
 #include "test.h"
 
-#include "capture/probe.h"
+#include "capture/probe/probe.h"
 #include "core/error.h"
 #include "sim/probe_sim.h"
 

@@ -9,8 +9,8 @@
  */
 #include "test.h"
 
-#include "capture/probe.h"
-#include "capture/probe_register.h"
+#include "capture/probe/probe.h"
+#include "capture/probe/probe_register.h"
 #include "core/error.h"
 #include "fit/scene/envmap.h"
 
@@ -89,7 +89,7 @@ int main(void)
 	int np = 0;
 	while (np < 30) {
 		double u = uniform(), vv = 0.15 + 0.7 * uniform();
-		struct vec3 d1 = glint_envmap_uv_to_dir(u, vv);
+		struct vec3 d1 = glint_latlong_uv_to_dir(u, vv);
 		struct vec3 d2 = m3_tmul(&truth, d1);
 		float w1[3], w2[3];
 		glint_probe_lookup(m[0], GLINT_PROBE_LATLONG, d1, w1);

@@ -22,7 +22,7 @@
  */
 #include "test.h"
 
-#include "bench/captures.h"
+#include "sim/fixtures.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "fit/select.h"
@@ -52,7 +52,7 @@ static int run(const struct scase *cs)
 	    glint_renderer_init(&r, &sc, 0, NULL) < 0)
 		return -1;
 	struct glint_image *photo = sim_photo(&r, cs->render_model, truth);
-	int ret = photo ? bench_add_noise(photo, &weight, 0.1) : -1;
+	int ret = photo ? fixture_add_noise(photo, &weight, 0.1) : -1;
 	struct glint_fit_opts o;
 	glint_fit_default_opts(&o);
 	if (!ret)

@@ -7,7 +7,7 @@
  */
 #include "test.h"
 
-#include "capture/sphere_detect.h"
+#include "capture/probe/sphere_detect.h"
 #include "core/error.h"
 #include "core/formats.h"
 #include "core/log.h"

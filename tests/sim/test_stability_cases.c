@@ -18,7 +18,7 @@
  */
 #include "test.h"
 
-#include "bench/captures.h"
+#include "sim/fixtures.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "fit/fit.h"
@@ -37,7 +37,7 @@ int main(void)
 	struct glint_fit_result ref, res;
 
 	glint_log_set_mode(GLINT_LOG_QUIET);
-	bench_scene(&sc, 128, NULL);
+	fixture_scene(&sc, 128, NULL);
 	CHECK(glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
 				  "green-acrylic", &m, truth) == 0 &&
 		      glint_renderer_init(&r, &sc, 0, NULL) == 0,
@@ -66,7 +66,7 @@ int main(void)
 			int bound = 0;
 			for (int k = 0; k < m->nparams; k++)
 				bound |= res.at_bound[k];
-			double dev = bench_tolerance_error(res.p, ref.p);
+			double dev = fixture_tolerance_error(res.p, ref.p);
 			printf("%-10s %-16s roughness %.4f ior %.3f: %.1f "
 			       "tolerances from it%s\n",
 			       glint_fit_method_name(methods[i]),
@@ -90,7 +90,7 @@ int main(void)
 	o.start = start1;
 	CHECK(glint_fit(&r, m, photo, NULL, &o, &res) == 0, "%s",
 	      glint_error_msg());
-	double dev = bench_tolerance_error(res.p, ref.p);
+	double dev = fixture_tolerance_error(res.p, ref.p);
 	printf("varpro     from start 1     roughness %.4f ior %.3f: %.1f "
 	       "tolerances from it\n",
 	       res.p[6], res.p[7], dev);

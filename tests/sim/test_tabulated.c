@@ -24,7 +24,7 @@
  */
 #include "test.h"
 
-#include "bench/captures.h"
+#include "sim/fixtures.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "fit/job.h"
@@ -201,7 +201,7 @@ static int fit_map(const char *map, const struct glint_model_ops *tm,
 					     glint_tabulated_params, &ro, photo)
 		    : -1;
 	if (!ret)
-		ret = bench_add_noise(photo, &out->weight, 0.1);
+		ret = fixture_add_noise(photo, &out->weight, 0.1);
 	struct glint_fit_opts o;
 	glint_fit_default_opts(&o);
 	if (!ret)

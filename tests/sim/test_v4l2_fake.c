@@ -9,7 +9,7 @@
 #include "cmd/backends.h"
 #include "test.h"
 
-#include "capture/bracket.h"
+#include "capture/camera/bracket.h"
 #include "core/error.h"
 
 #include <stdlib.h>

@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /*
- * Adaptive simulated annealing (fit/anneal.c): the global minimum of a
+ * Adaptive simulated annealing (fit/optim/anneal.c): the global minimum of a
  * multimodal function (2-D Rastrigin: 120 local minima in the box) from
  * random starts, bounds respected, runs repeatable from a seed, a
  * badly-scaled parameter handled by re-annealing.

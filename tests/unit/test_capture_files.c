@@ -7,8 +7,8 @@
  */
 #include "test.h"
 
-#include "capture/frame_file.h"
-#include "capture/session.h"
+#include "capture/hdr/frame_file.h"
+#include "capture/hdr/session.h"
 #include "core/error.h"
 
 #include <jansson.h>

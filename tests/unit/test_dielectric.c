@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /*
- * The transparent sphere's physics (fit/dielectric.c): Fresnel against
+ * The transparent sphere's physics (fit/render/dielectric_paths.c): Fresnel against
  * independently derived forms (Brewster, total internal reflection,
  * energy conservation R + T = 1 from the transmission amplitudes), the
  * ray through the centre, a white furnace, the transmission convention

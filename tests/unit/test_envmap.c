@@ -30,17 +30,17 @@ static struct glint_envmap *make_env(int w, int h, const double rot[3])
 
 static void test_uv_dir(void)
 {
-	struct vec3 d = glint_envmap_uv_to_dir(0.5, 0.5);
+	struct vec3 d = glint_latlong_uv_to_dir(0.5, 0.5);
 	CHECK_NEAR(d.z, -1, 1e-12, "u=v=0.5 is -Z");
-	d = glint_envmap_uv_to_dir(0.5, 0.0);
+	d = glint_latlong_uv_to_dir(0.5, 0.0);
 	CHECK_NEAR(d.y, 1, 1e-12, "v=0 is +Y");
-	d = glint_envmap_uv_to_dir(0.75, 0.5);
+	d = glint_latlong_uv_to_dir(0.75, 0.5);
 	CHECK_NEAR(d.x, 1, 1e-12, "u=0.75 is +X");
 	for (int i = 0; i < 100; i++) {
 		double u = glint_u01(glint_hash32(i)),
 		       v = glint_u01(glint_hash32(i + 999));
 		double u2, v2;
-		glint_envmap_dir_to_uv(glint_envmap_uv_to_dir(u, v), &u2, &v2);
+		glint_latlong_dir_to_uv(glint_latlong_uv_to_dir(u, v), &u2, &v2);
 		CHECK(fabs(u - u2) < 1e-9 && fabs(v - v2) < 1e-9,
 		      "uv round trip (%g,%g) -> (%g,%g)", u, v, u2, v2);
 	}
@@ -51,12 +51,12 @@ static void test_lookup(void)
 	double zero[3] = { 0, 0, 0 }, rgb[3];
 	struct glint_envmap *env = make_env(64, 32, zero);
 	/* At a texel centre the bilinear lookup returns the texel. */
-	struct vec3 d = glint_envmap_uv_to_dir((64 / 3 + 0.5) / 64,
+	struct vec3 d = glint_latlong_uv_to_dir((64 / 3 + 0.5) / 64,
 					       (32 / 4 + 0.5) / 32);
 	glint_envmap_lookup(env, d, rgb);
 	CHECK_NEAR(rgb[0], 500, 1e-3, "texel centre");
 	/* Halfway between two texels: their mean. */
-	d = glint_envmap_uv_to_dir((64 / 3 + 1.0) / 64, (32 / 4 + 0.5) / 32);
+	d = glint_latlong_uv_to_dir((64 / 3 + 1.0) / 64, (32 / 4 + 0.5) / 32);
 	glint_envmap_lookup(env, d, rgb);
 	float *a = glint_image_px(env->img, 64 / 3 + 1, 32 / 4);
 	CHECK_NEAR(rgb[2], (500 + a[2]) / 2, 1e-3, "bilinear midpoint");
@@ -67,7 +67,7 @@ static void test_lookup(void)
 	struct glint_envmap *plain = make_env(64, 32, zero);
 	struct glint_envmap *turned = make_env(64, 32, rot);
 	for (int i = 0; i < 200; i++) {
-		struct vec3 dd = glint_envmap_uv_to_dir(
+		struct vec3 dd = glint_latlong_uv_to_dir(
 			glint_u01(glint_hash32(3 * i)),
 			glint_u01(glint_hash32(3 * i + 1)));
 		double p1[3], p2[3];
@@ -92,7 +92,7 @@ static void test_pdf_integrates(void)
 		for (int i = 0; i < n; i++) {
 			struct vec3 d = m3_mul(
 				&env->rot,
-				glint_envmap_uv_to_dir((i + 0.5) / n, v));
+				glint_latlong_uv_to_dir((i + 0.5) / n, v));
 			sum += glint_envmap_pdf(env, d) * s;
 		}
 	}
@@ -121,7 +121,7 @@ static void test_sampling_histogram(void)
 		if (fabs(pdf - p2) > 1e-6 * pdf)
 			mismatched++;
 		double u, v;
-		glint_envmap_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
+		glint_latlong_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
 		int i = (int)(u * w), j = (int)(v * h);
 		i = i >= w ? w - 1 : i;
 		j = j >= h ? h - 1 : j;
@@ -137,7 +137,7 @@ static void test_sampling_histogram(void)
 					double v = (j + (b + 0.5) / 8) / h;
 					struct vec3 d = m3_mul(
 						&env->rot,
-						glint_envmap_uv_to_dir(u, v));
+						glint_latlong_uv_to_dir(u, v));
 					acc += glint_envmap_pdf(env, d) *
 					       sin(M_PI * v);
 				}
@@ -246,7 +246,7 @@ static double brute_irradiance(const struct glint_envmap *env, struct vec3 n)
 		for (int i = 0; i < W; i++) {
 			struct vec3 d =
 				m3_mul(&env->rot,
-				       glint_envmap_uv_to_dir((i + 0.5) / W,
+				       glint_latlong_uv_to_dir((i + 0.5) / W,
 							      (j + 0.5) / H));
 			double c = v3_dot(n, d), l[3];
 			if (c <= 0)
@@ -290,7 +290,7 @@ static void test_irradiance_softboxes(void)
 			const double *b = box[k % 2];
 			struct vec3 c = m3_mul(
 				&env->rot,
-				glint_envmap_uv_to_dir((b[0] + b[2]) / 2,
+				glint_latlong_uv_to_dir((b[0] + b[2]) / 2,
 						       (b[1] + b[3]) / 2));
 			struct vec3 t, s;
 			v3_frame(c, &t, &s);
@@ -351,7 +351,7 @@ static void test_hot_split(void)
 		for (int i = 0; i < n; i++) {
 			double u = (i + 0.5) / n;
 			struct vec3 d =
-				m3_mul(&env->rot, glint_envmap_uv_to_dir(u, v));
+				m3_mul(&env->rot, glint_latlong_uv_to_dir(u, v));
 			double all[3], rest[3], q[3], pdf;
 			glint_envmap_lookup(env, d, all);
 			glint_env_rest_lookup(env, hot, d, rest);
@@ -393,9 +393,9 @@ static void test_hot_split(void)
 	while (hot->is_hot[(size_t)(h / 4) * w + edge])
 		edge++;
 	double ue = (double)edge / w;
-	struct vec3 in = m3_mul(&env->rot, glint_envmap_uv_to_dir(ue - eps, v));
+	struct vec3 in = m3_mul(&env->rot, glint_latlong_uv_to_dir(ue - eps, v));
 	struct vec3 out =
-		m3_mul(&env->rot, glint_envmap_uv_to_dir(ue + eps, v));
+		m3_mul(&env->rot, glint_latlong_uv_to_dir(ue + eps, v));
 	double ri[3], ro[3], ai[3];
 	glint_env_rest_lookup(env, hot, in, ri);
 	glint_env_rest_lookup(env, hot, out, ro);

@@ -1,10 +1,10 @@
 /* SPDX-License-Identifier: MIT */
-/* The exports' refits (fit/export.h): exact where the target can be. */
+/* The exports' refits (export/export.h): exact where the target can be. */
 #include "test.h"
 
 #include "core/error.h"
 #include "fit/brdf/model.h"
-#include "fit/export.h"
+#include "export/export.h"
 
 #include <errno.h>
 #include <math.h>

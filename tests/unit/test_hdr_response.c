@@ -7,7 +7,7 @@
  */
 #include "test.h"
 
-#include "capture/hdr_response.h"
+#include "capture/hdr/hdr_response.h"
 #include "core/error.h"
 #include "core/formats.h"
 

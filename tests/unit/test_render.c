@@ -465,7 +465,7 @@ static struct glint_envmap *sun_env(int box)
 
 	for (int y = 0; y < 1024; y++)
 		for (int x = 0; x < 2048; x++) {
-			struct vec3 d = glint_envmap_uv_to_dir(
+			struct vec3 d = glint_latlong_uv_to_dir(
 				(x + 0.5) / 2048, (y + 0.5) / 1024);
 			struct vec3 e =
 				v3_sub(d, v3_scale(sun, v3_dot(d, sun)));

@@ -1,0 +1,34 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_CAPTURE_HDR_FRAME_FILE_H
+#define GLINT_CAPTURE_HDR_FRAME_FILE_H
+
+/*
+ * A raw frame on disk: a DNG (dng.h) when the path ends in ".dng", as
+ * sessions write them; else, as older sessions did, a 16-bit PNG (greyscale for
+ * Bayer and mono layouts, RGB for three-channel frames) holding the camera's
+ * numbers unchanged and right-aligned (0 .. 2^bit_depth - 1, not rescaled),
+ * with the frame's metadata as JSON in an iTXt chunk keyed "glint:frame" (the
+ * same JSON as the frame's sidecar file).  Lossless, written atomically (temp +
+ * fsync + rename + directory fsync); any PNG reader opens it.  docs/capture.md
+ * documents the layout.
+ */
+
+#include "capture/camera/camera.h"
+
+/* The frame's metadata as a JSON object text (caller frees): its index
+ * in the session, the camera's values and "pixels_crc32", the CRC-32 of
+ * the samples as the PNG stores them (16-bit big-endian, row by row). */
+char *glint_frame_metadata_json(const struct glint_frame *f, int index);
+
+int glint_frame_write(const char *path, const struct glint_frame *f,
+		      const char *metadata_json);
+
+/* Read pixel data back, from a DNG or a PNG whatever the name (format
+ * and bit depth from the metadata: the PNG's chunk, the DNG's
+ * ImageDescription, whose layout must agree with the DNG's tags);
+ * fails naming the file on anything truncated or inconsistent, or when
+ * the pixels do not match their checksum (an edited frame).  *index (may
+ * be NULL) is the index the metadata gives, -1 when it has none. */
+int glint_frame_read(const char *path, struct glint_frame *f, int *index);
+
+#endif

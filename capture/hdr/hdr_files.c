@@ -1,0 +1,250 @@
+/* SPDX-License-Identifier: MIT */
+#define _POSIX_C_SOURCE 200809L
+#include "capture/hdr/hdr_files.h"
+
+#include "capture/hdr/frame_file.h"
+#include "capture/hdr/hdr_response.h"
+#include "capture/hdr/session_merge.h"
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/exif.h"
+#include "core/formats.h"
+#include "core/path.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+/* "32", "1/1024", "0.5" */
+static int parse_time(const char *s, double *t)
+{
+	char *end;
+	double a = strtod(s, &end);
+	if (*end == '/') {
+		double b = strtod(end + 1, &end);
+		a = b != 0 ? a / b : NAN;
+	}
+	while (*end == ' ' || *end == '\r' || *end == '\n')
+		end++;
+	if (*end || !(a > 0) || !isfinite(a))
+		return -1;
+	*t = a;
+	return 0;
+}
+
+static int times_from_file(const char *file, int n, double *t, int *k)
+{
+	char buf[8192];
+	FILE *f = fopen(file, "r");
+	int ret = 0;
+
+	if (!f)
+		return glint_error_set(errno, "%s: %s", file, strerror(errno));
+	while (ret == 0 && *k <= n && fgets(buf, sizeof(buf), f)) {
+		if (buf[0] == '\n' || buf[0] == '#')
+			continue;
+		if (*k == n || parse_time(buf, &t[*k]) < 0)
+			ret = glint_error_set(EINVAL,
+					      "%s: line %d: '%.40s': expected "
+					      "%d positive times (seconds, "
+					      "1/N allowed)",
+					      file, *k + 1, buf, n);
+		else
+			(*k)++;
+	}
+	fclose(f);
+	return ret;
+}
+
+static int times_from_list(const char *list, int n, double *t, int *k)
+{
+	char buf[8192];
+
+	if (strlen(list) >= sizeof(buf))
+		return glint_error_set(EINVAL, "--times: too long");
+	memcpy(buf, list, strlen(list) + 1);
+	for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok;
+	     tok = strtok_r(NULL, ",", &save)) {
+		if (*k == n || parse_time(tok, &t[*k]) < 0)
+			return glint_error_set(EINVAL,
+					       "--times: '%s': expected %d "
+					       "positive times",
+					       tok, n);
+		(*k)++;
+	}
+	return 0;
+}
+
+int glint_exposure_times_read(const char *list, const char *file, int n,
+			      double *t)
+{
+	int k = 0;
+	int ret = file ? times_from_file(file, n, t, &k)
+		       : times_from_list(list, n, t, &k);
+
+	if (ret == 0 && k != n)
+		ret = glint_error_set(EINVAL,
+				      "%s: %d exposure times for %d images",
+				      file ? file : "--times", k, n);
+	return ret;
+}
+
+int glint_exposure_times_exif(const char *const *files, int n, double *t)
+{
+	for (int i = 0; i < n; i++) {
+		int ret = glint_exif_exposure_time(files[i], &t[i]);
+		if (ret < 0) {
+			char why[512];
+			snprintf(why, sizeof(why), "%s", glint_error_msg());
+			return glint_error_set(-ret,
+					       "%s: give the exposure times "
+					       "with --times or --times-file",
+					       why);
+		}
+	}
+	return 0;
+}
+
+static int read_stack(const char *const *files, int n, uint8_t **img, int *w,
+		      int *h)
+{
+	for (int i = 0; i < n; i++) {
+		int wi, hi;
+		int ret = glint_ldr_read(files[i], &wi, &hi, &img[i]);
+		if (ret < 0)
+			return ret;
+		if (i && (wi != *w || hi != *h))
+			return glint_error_set(EINVAL,
+					       "%s is %dx%d, %s %dx%d: the "
+					       "photos must match",
+					       files[i], wi, hi, files[0], *w,
+					       *h);
+		*w = wi;
+		*h = hi;
+	}
+	return 0;
+}
+
+static int write_response(const char *out, const double resp[256][3])
+{
+	char path[GLINT_PATH_MAX], csv[256 * 64];
+	size_t k = 0;
+	int ret = glint_path_join(path, sizeof(path), out, "response.csv");
+
+	for (int z = 0; z < 256; z++)
+		k += (size_t)snprintf(csv + k, sizeof(csv) - k,
+				      "%.8g,%.8g,%.8g\n", resp[z][0],
+				      resp[z][1], resp[z][2]);
+	return ret < 0 ? ret : glint_atomic_write_file(path, csv, k);
+}
+
+static int write_ldr_result(const char *out, struct glint_image *rad,
+			    struct glint_image *valid,
+			    const double resp[256][3])
+{
+	static const char *const names[] = { "hdr.exr", "mask.png", "hdr.png" };
+	struct glint_image *imgs[] = { rad, valid, rad };
+	char path[GLINT_PATH_MAX];
+
+	if (mkdir(out, 0777) < 0 && errno != EEXIST)
+		return glint_error_set(errno, "%s: %s", out, strerror(errno));
+	for (int i = 0; i < 3; i++) {
+		struct glint_write_opts wo = { .auto_expose = i == 2 };
+		int ret = glint_path_join(path, sizeof(path), out, names[i]);
+		if (ret == 0)
+			ret = glint_image_write(path, imgs[i], &wo);
+		if (ret < 0)
+			return ret;
+	}
+	return write_response(out, resp);
+}
+
+int glint_ldr_merge_files(const char *const *files, int n, const double *t,
+			  const char *method, const char *out,
+			  struct glint_ldr_merge_info *info)
+{
+	uint8_t **img = calloc((size_t)n, sizeof(*img));
+	double resp[256][3];
+	struct glint_image *rad = NULL, *valid = NULL;
+	int ret = img ? 0 : glint_error_set(ENOMEM, "out of memory");
+
+	memset(info, 0, sizeof(*info));
+	if (ret == 0)
+		ret = read_stack(files, n, img, &info->width, &info->height);
+	struct glint_ldr_stack s = { n, info->width, info->height,
+				     (const uint8_t *const *)img, t };
+	if (ret == 0)
+		ret = glint_ldr_check_order(&s, files);
+	if (ret == 0 && !strcmp(method, "debevec")) {
+		struct glint_debevec_opts o;
+		glint_debevec_default_opts(&o);
+		ret = glint_response_debevec(&s, &o, resp);
+	} else if (ret == 0) {
+		ret = glint_response_robertson(&s, 30, 0.01, resp,
+					       &info->iterations);
+	}
+	if (ret == 0)
+		ret = glint_ldr_merge(&s, resp, NULL, &rad, &valid);
+	if (ret == 0)
+		ret = write_ldr_result(out, rad, valid, resp);
+	for (int i = 0; img && i < n; i++)
+		free(img[i]);
+	free(img);
+	glint_image_free(rad);
+	glint_image_free(valid);
+	return ret;
+}
+
+int glint_frames_read(const char *const *files, int n,
+		      struct glint_frame **frames)
+{
+	int ret = 0;
+
+	*frames = calloc((size_t)n, sizeof(**frames));
+	if (!*frames)
+		return glint_error_set(ENOMEM, "out of memory");
+	for (int i = 0; i < n && ret == 0; i++)
+		ret = glint_frame_read(files[i], &(*frames)[i], NULL);
+	return ret;
+}
+
+int glint_hdr_report_write(const char *out, int frames, int width, int height,
+			   long valid_px, const struct glint_hdr_report *rep,
+			   const struct glint_noise_model *nm, json_t **doc)
+{
+	char path[GLINT_PATH_MAX];
+	json_t *pairs = json_array();
+	int ret;
+
+	for (int i = 0; i < rep->pairs; i++)
+		json_array_append_new(
+			pairs,
+			json_pack("{s:i, s:I, s:f}", "pair", i, "compared",
+				  (json_int_t)rep->compared[i],
+				  "disagree_fraction", rep->disagree[i]));
+	json_t *res = json_pack(
+		"{s:s, s:i, s:i, s:i, s:I, s:I, s:I, s:b, s:o, "
+		"s:{s:f, s:f, s:f}}",
+		"output", out, "frames", frames, "width", width, "height",
+		height, "valid_pixels", (json_int_t)valid_px, "clipped_sites",
+		(json_int_t)rep->invalid_sites, "dark_sites",
+		(json_int_t)rep->dark_sites, "moved", rep->moved, "motion",
+		pairs, "noise_model", "dn_per_electron", nm->dn_per_electron,
+		"read_noise_e", nm->read_noise_e, "saturation_dn",
+		nm->saturation_dn);
+	char *text = res ? json_dumps(res, JSON_INDENT(2)) : NULL;
+	ret = text ? glint_path_join(path, sizeof(path), out, "hdr.json")
+		   : glint_error_set(ENOMEM, "out of memory");
+	if (ret == 0)
+		ret = glint_atomic_write_file(path, text, strlen(text));
+	free(text);
+	if (ret == 0 && doc)
+		*doc = res;
+	else
+		json_decref(res);
+	return ret;
+}

@@ -1,0 +1,615 @@
+/* SPDX-License-Identifier: MIT */
+#include "capture/probe/probe.h"
+
+#include "capture/probe/sphere_detect.h"
+
+#include "core/error.h"
+#include "core/log.h"
+#include "core/formats.h"
+#include "core/path.h"
+#include "core/pinhole.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *const names[] = { "latlong", "angular", "cross", "ball" };
+
+int glint_probe_format_parse(const char *name, enum glint_probe_format *f)
+{
+	for (int i = 0; i < 4; i++)
+		if (!strcmp(name, names[i])) {
+			*f = (enum glint_probe_format)i;
+			return 0;
+		}
+	return glint_error_set(EINVAL,
+			       "probe format '%s': expected latlong, angular, "
+			       "cross or ball",
+			       name);
+}
+
+const char *glint_probe_format_name(enum glint_probe_format f)
+{
+	return names[f];
+}
+
+/* Cube cross faces: column, row, and the face's direction from (a, b) in
+ * [-1, 1]^2 (a right, b down). */
+enum { PX, NX, PY, NY, PZ, NZ };
+static const int face_col[6] = { 2, 0, 1, 1, 1, 1 };
+static const int face_row[6] = { 1, 1, 0, 2, 3, 1 };
+
+static struct vec3 face_dir(int f, double a, double b)
+{
+	switch (f) {
+	case PX:
+		return v3(1, -b, a);
+	case NX:
+		return v3(-1, -b, -a);
+	case PY:
+		return v3(a, 1, -b);
+	case NY:
+		return v3(a, -1, b);
+	case PZ:
+		return v3(a, b, 1);
+	default:
+		return v3(a, -b, -1);
+	}
+}
+
+static int dir_face(struct vec3 d, double *a, double *b)
+{
+	double ax = fabs(d.x), ay = fabs(d.y), az = fabs(d.z);
+	if (ax >= ay && ax >= az) {
+		*b = -d.y / ax;
+		*a = d.x > 0 ? d.z / ax : -d.z / ax;
+		return d.x > 0 ? PX : NX;
+	}
+	if (ay >= az) {
+		*a = d.x / ay;
+		*b = d.y > 0 ? -d.z / ay : d.z / ay;
+		return d.y > 0 ? PY : NY;
+	}
+	*a = d.x / az;
+	*b = d.z > 0 ? d.y / az : -d.y / az;
+	return d.z > 0 ? PZ : NZ;
+}
+
+int glint_probe_pixel_dir(enum glint_probe_format f, int w, int h, double x,
+			  double y, struct vec3 *d)
+{
+	switch (f) {
+	case GLINT_PROBE_LATLONG:
+		*d = glint_latlong_uv_to_dir(x / w, y / h);
+		return 1;
+	case GLINT_PROBE_ANGULAR:
+	case GLINT_PROBE_BALL: {
+		double u = 2 * x / w - 1, v = 1 - 2 * y / h;
+		double r = hypot(u, v);
+		if (r > 1)
+			return 0;
+		if (f == GLINT_PROBE_ANGULAR) {
+			double th = M_PI * r, s = r > 0 ? sin(th) / r : 0;
+			*d = v3(u * s, v * s, -cos(th));
+		} else {
+			double nz = sqrt(fmax(0, 1 - r * r));
+			*d = v3(2 * nz * u, 2 * nz * v, 2 * nz * nz - 1);
+		}
+		return 1;
+	}
+	case GLINT_PROBE_CROSS: {
+		double s = w / 3.0;
+		int col = (int)floor(x / s), row = (int)floor(y / s);
+		for (int fc = 0; fc < 6; fc++)
+			if (face_col[fc] == col && face_row[fc] == row) {
+				double a = 2 * (x / s - col) - 1,
+				       b = 2 * (y / s - row) - 1;
+				*d = v3_norm(face_dir(fc, a, b));
+				return 1;
+			}
+		return 0;
+	}
+	}
+	return 0;
+}
+
+void glint_probe_dir_pixel(enum glint_probe_format f, int w, int h,
+			   struct vec3 d, double *x, double *y)
+{
+	switch (f) {
+	case GLINT_PROBE_LATLONG: {
+		double u, v;
+		glint_latlong_dir_to_uv(d, &u, &v);
+		*x = u * w;
+		*y = v * h;
+		return;
+	}
+	case GLINT_PROBE_ANGULAR:
+	case GLINT_PROBE_BALL: {
+		double u = 0, v = 0;
+		if (f == GLINT_PROBE_ANGULAR) {
+			double th = acos(fmax(-1, fmin(1, -d.z)));
+			double s = hypot(d.x, d.y);
+			if (s > 0) {
+				u = th / M_PI * d.x / s;
+				v = th / M_PI * d.y / s;
+			}
+		} else {
+			struct vec3 n = v3_add(d, v3(0, 0, 1));
+			double l = v3_len(n);
+			if (l > 0) {
+				u = n.x / l;
+				v = n.y / l;
+			} else {
+				u = 1; /* straight back: the rim */
+			}
+		}
+		*x = (u + 1) * 0.5 * w;
+		*y = (1 - v) * 0.5 * h;
+		return;
+	}
+	case GLINT_PROBE_CROSS: {
+		double a, b, s = w / 3.0;
+		int fc = dir_face(d, &a, &b);
+		*x = (face_col[fc] + (a + 1) / 2) * s;
+		*y = (face_row[fc] + (b + 1) / 2) * s;
+		return;
+	}
+	}
+}
+
+void glint_probe_lookup(const struct glint_image *img,
+			enum glint_probe_format f, struct vec3 d, float rgb[3])
+{
+	double x, y, x0 = 0.5, x1 = img->width - 0.5, y0 = 0.5,
+		     y1 = img->height - 0.5;
+	glint_probe_dir_pixel(f, img->width, img->height, d, &x, &y);
+	if (f == GLINT_PROBE_CROSS) { /* stay inside the face */
+		double s = img->width / 3.0;
+		int col = (int)floor(x / s), row = (int)floor(y / s);
+		col = col < 0 ? 0 : col > 2 ? 2 : col;
+		row = row < 0 ? 0 : row > 3 ? 3 : row;
+		x0 = col * s + 0.5;
+		x1 = (col + 1) * s - 0.5;
+		y0 = row * s + 0.5;
+		y1 = (row + 1) * s - 0.5;
+	}
+	int wrap = f == GLINT_PROBE_LATLONG;
+	if (!wrap)
+		x = fmin(fmax(x, x0), x1);
+	y = fmin(fmax(y, y0), y1);
+	double fx = x - 0.5, fy = y - 0.5;
+	int ix = (int)floor(fx), iy = (int)floor(fy);
+	double tx = fx - ix, ty = fy - iy;
+	int xa = ix, xb = ix + 1, ya = iy, yb = iy + 1;
+	if (wrap) {
+		xa = ((xa % img->width) + img->width) % img->width;
+		xb = ((xb % img->width) + img->width) % img->width;
+	} else {
+		xa = xa < 0 ? 0 : xa >= img->width ? img->width - 1 : xa;
+		xb = xb < 0 ? 0 : xb >= img->width ? img->width - 1 : xb;
+	}
+	ya = ya < 0 ? 0 : ya >= img->height ? img->height - 1 : ya;
+	yb = yb < 0 ? 0 : yb >= img->height ? img->height - 1 : yb;
+	const float *p00 = glint_image_px(img, xa, ya),
+		    *p10 = glint_image_px(img, xb, ya),
+		    *p01 = glint_image_px(img, xa, yb),
+		    *p11 = glint_image_px(img, xb, yb);
+	for (int c = 0; c < 3; c++)
+		rgb[c] = (float)((1 - ty) * ((1 - tx) * p00[c] + tx * p10[c]) +
+				 ty * ((1 - tx) * p01[c] + tx * p11[c]));
+}
+
+static void default_size(const struct glint_image *src,
+			 enum glint_probe_format from,
+			 enum glint_probe_format to, int *w, int *h)
+{
+	/* Keep the angular resolution: an angular or ball image of side S,
+	 * a lat-long of width S and a cross of face S / 4 all have about
+	 * 2 pi / S radians per pixel around the horizon. */
+	int s = from == GLINT_PROBE_LATLONG ? src->width
+		: from == GLINT_PROBE_CROSS ? src->width / 3 * 4
+					    : src->width;
+	if (to == GLINT_PROBE_LATLONG) {
+		*w = s;
+		*h = s / 2;
+	} else if (to == GLINT_PROBE_CROSS) {
+		*w = s / 4 * 3;
+		*h = s / 4 * 4;
+	} else {
+		*w = *h = s;
+	}
+}
+
+int glint_probe_convert(const struct glint_image *src,
+			enum glint_probe_format from,
+			enum glint_probe_format to, int w, int h,
+			struct glint_image **out)
+{
+	*out = NULL;
+	if ((from == GLINT_PROBE_ANGULAR || from == GLINT_PROBE_BALL) &&
+	    src->width != src->height)
+		return glint_error_set(EINVAL,
+				       "%s probe is %dx%d: expected a square "
+				       "image",
+				       names[from], src->width, src->height);
+	if (from == GLINT_PROBE_CROSS &&
+	    (src->width * 4 != src->height * 3 || src->width % 3))
+		return glint_error_set(EINVAL,
+				       "cross probe is %dx%d: expected 3:4 "
+				       "faces (3s x 4s)",
+				       src->width, src->height);
+	if (w <= 0 || h <= 0)
+		default_size(src, from, to, &w, &h);
+	if (w < 2 || h < 2)
+		return glint_error_set(EINVAL, "probe output %dx%d: too small",
+				       w, h);
+	struct glint_image *img = glint_image_new(w, h);
+	if (!img)
+		return glint_error_set(ENOMEM, "probe: out of memory");
+	for (int y = 0; y < h; y++)
+		for (int x = 0; x < w; x++) {
+			float *p = glint_image_px(img, x, y), rgb[3];
+			double acc[3] = { 0, 0, 0 };
+			int k = 0;
+			for (int s = 0; s < 4; s++) {
+				struct vec3 d;
+				if (!glint_probe_pixel_dir(
+					    to, w, h, x + 0.25 + 0.5 * (s & 1),
+					    y + 0.25 + 0.5 * (s >> 1), &d))
+					continue;
+				glint_probe_lookup(src, from, d, rgb);
+				for (int c = 0; c < 3; c++)
+					acc[c] += rgb[c];
+				k++;
+			}
+			for (int c = 0; c < 3; c++)
+				p[c] = k ? (float)(acc[c] / k) : 0;
+		}
+	*out = img;
+	return 0;
+}
+
+void glint_unwrap_default_opts(struct glint_unwrap_opts *o)
+{
+	memset(o, 0, sizeof(*o));
+	o->cx = o->cy = -1;
+	for (int c = 0; c < 3; c++) {
+		o->n[c] = 3.2;
+		o->k[c] = 3.3;
+	}
+	o->grazing_deg = 80;
+	o->camera_cone_deg = 6;
+}
+
+double glint_fresnel_conductor(double n, double k, double c)
+{
+	c = fmin(fmax(c, 0), 1);
+	double c2 = c * c, s2 = 1 - c2;
+	double t0 = n * n - k * k - s2;
+	double a2b2 = sqrt(t0 * t0 + 4 * n * n * k * k);
+	double a = sqrt(fmax(0, 0.5 * (a2b2 + t0)));
+	double rs = (a2b2 + c2 - 2 * a * c) / (a2b2 + c2 + 2 * a * c);
+	double t1 = c2 * a2b2 + s2 * s2, t2 = 2 * a * c * s2;
+	double rp = rs * (t1 - t2) / (t1 + t2);
+	return 0.5 * (rs + rp);
+}
+
+/* The ball's frame: camera at the origin looking along -Z, x right, y up;
+ * lengths in ball radii. */
+struct ball {
+	double fpx, cx, cy;
+	struct vec3 c;	     /* centre */
+	double bcx, bcy, br; /* its image circle (orthographic mode) */
+	int ortho;
+};
+
+/*
+ * Where the ball shows direction d: the point P = c + n whose mirror
+ * reflection of the camera's ray i (unit, towards P) leaves along d, i.e.
+ * n = normalize(d - i) with i = normalize(c + n): a fixed point, exact for
+ * the perspective camera.  Orthographic (the peers' approximation): i is
+ * the ray to the centre for every point, and the ball's image is its
+ * outline scaled, P at ball_c + r (n . right, n . up).  Returns 0 if the
+ * point is not visible; *ci = cos(incidence).
+ */
+static int ball_image(const struct ball *b, struct vec3 d, double *x, double *y,
+		      double *ci)
+{
+	struct vec3 i = v3_norm(b->c), n = i;
+	if (b->ortho) {
+		n = v3_norm(v3_sub(d, i));
+		*ci = -v3_dot(i, n);
+		struct vec3 right = v3_norm(v3_cross(i, v3(0, 1, 0)));
+		struct vec3 up = v3_cross(right, i);
+		*x = b->bcx + b->br * v3_dot(n, right);
+		*y = b->bcy - b->br * v3_dot(n, up);
+		return *ci > 0;
+	}
+	for (int it = 0; it < 50; it++) {
+		n = v3_norm(v3_sub(d, i));
+		struct vec3 ni = v3_norm(v3_add(b->c, n));
+		double moved = v3_len(v3_sub(ni, i));
+		i = ni;
+		if (moved < 1e-12)
+			break;
+	}
+	n = v3_norm(v3_sub(d, i));
+	*ci = -v3_dot(i, n);
+	struct vec3 p = v3_add(b->c, n);
+	if (p.z >= 0 || *ci <= 0)
+		return 0;
+	*x = b->cx + b->fpx * p.x / -p.z;
+	*y = b->cy - b->fpx * p.y / -p.z;
+	return 1;
+}
+
+/* The photo bilinearly at continuous pixel coordinates (px, py). */
+static void photo_bilinear(const struct glint_image *photo, double px,
+			   double py, float rgb[3])
+{
+	double fx = px - 0.5, fy = py - 0.5;
+	int ix = (int)floor(fx), iy = (int)floor(fy);
+	double tx = fx - ix, ty = fy - iy;
+	int ix1 = ix + 1 < photo->width ? ix + 1 : ix,
+	    iy1 = iy + 1 < photo->height ? iy + 1 : iy;
+	const float *q00 = glint_image_px(photo, ix, iy),
+		    *q10 = glint_image_px(photo, ix1, iy),
+		    *q01 = glint_image_px(photo, ix, iy1),
+		    *q11 = glint_image_px(photo, ix1, iy1);
+	for (int c = 0; c < 3; c++)
+		rgb[c] = (float)((1 - ty) * ((1 - tx) * q00[c] + tx * q10[c]) +
+				 ty * ((1 - tx) * q01[c] + tx * q11[c]));
+}
+
+/* Photo pixels per steradian around direction d (imaged at px, py): the
+ * image of a small (dth x dth) patch. */
+static double pixel_density(const struct ball *b, struct vec3 d, double px,
+			    double py, double dth)
+{
+	struct vec3 t1 = v3_norm(v3_cross(d, v3(0, 1, 0)));
+	if (v3_len(v3_cross(d, v3(0, 1, 0))) < 1e-6)
+		t1 = v3(1, 0, 0);
+	struct vec3 t2 = v3_cross(d, t1);
+	double ax, ay, bx, by, c1;
+	if (!ball_image(b, v3_norm(v3_add(d, v3_scale(t1, dth))), &ax, &ay,
+			&c1) ||
+	    !ball_image(b, v3_norm(v3_add(d, v3_scale(t2, dth))), &bx, &by,
+			&c1))
+		return 0;
+	return fabs((ax - px) * (by - py) - (ay - py) * (bx - px)) /
+	       (dth * dth);
+}
+
+/* The ball as the photo's pinhole camera sees it (its centre from its
+ * circle, exact for the pinhole). */
+static int ball_setup(const struct glint_image *photo,
+		      const struct glint_unwrap_opts *o, struct ball *b)
+{
+	struct glint_pinhole cam;
+
+	if (!(o->fpx > 0) || !(o->ball_r > 0))
+		return glint_error_set(
+			EINVAL,
+			"unwrap: focal length %g px, ball radius "
+			"%g px: expected both > 0",
+			o->fpx, o->ball_r);
+	if (o->ball_cx - o->ball_r < 0 || o->ball_cy - o->ball_r < 0 ||
+	    o->ball_cx + o->ball_r > photo->width ||
+	    o->ball_cy + o->ball_r > photo->height)
+		return glint_error_set(EINVAL,
+				       "unwrap: the ball (%g, %g) r %g px is "
+				       "not inside the %dx%d photo",
+				       o->ball_cx, o->ball_cy, o->ball_r,
+				       photo->width, photo->height);
+	b->fpx = o->fpx;
+	b->cx = o->cx >= 0 ? o->cx : photo->width / 2.0;
+	b->cy = o->cy >= 0 ? o->cy : photo->height / 2.0;
+	b->ortho = o->orthographic;
+	b->bcx = o->ball_cx;
+	b->bcy = o->ball_cy;
+	b->br = o->ball_r;
+	int ret = glint_pinhole_init(&cam, photo->width, photo->height, o->fpx,
+				     1.0, 0, 0, v3(0, 0, 0), v3(0, 0, -1),
+				     v3(0, 1, 0));
+	cam.cx = b->cx;
+	cam.cy = b->cy;
+	if (ret == 0)
+		ret = glint_pinhole_sphere_from_circle(
+			&cam, o->ball_cx, o->ball_cy, o->ball_r, 1, &b->c);
+	return ret;
+}
+
+int glint_probe_unwrap(const struct glint_image *photo,
+		       const struct glint_unwrap_opts *o,
+		       struct glint_image **env, struct glint_image **mask,
+		       struct glint_image **density)
+{
+	struct ball b;
+	int w = o->width, h = o->height;
+
+	*env = NULL;
+	if (mask)
+		*mask = NULL;
+	if (density)
+		*density = NULL;
+	int ret = ball_setup(photo, o, &b);
+	if (ret < 0)
+		return ret;
+	if (w <= 0 || h <= 0) {
+		w = (int)(4 * o->ball_r);
+		h = w / 2;
+	}
+	struct glint_image *e = glint_image_new(w, h),
+			   *m = glint_image_new(w, h),
+			   *dn = glint_image_new(w, h);
+	if (!e || !m || !dn) {
+		glint_image_free(e);
+		glint_image_free(m);
+		glint_image_free(dn);
+		return glint_error_set(ENOMEM, "unwrap: out of memory");
+	}
+	double cos_graze = cos(o->grazing_deg * M_PI / 180);
+	double cos_cone = cos(o->camera_cone_deg * M_PI / 180);
+	struct vec3 to_cam = v3_scale(v3_norm(b.c), -1);
+	double dth = M_PI / h;
+	for (int y = 0; y < h; y++)
+		for (int x = 0; x < w; x++) {
+			struct vec3 d = glint_latlong_uv_to_dir((x + 0.5) / w,
+							       (y + 0.5) / h);
+			double px, py, ci;
+			float *pe = glint_image_px(e, x, y),
+			      *pm = glint_image_px(m, x, y),
+			      *pd = glint_image_px(dn, x, y);
+			int ok = ball_image(&b, d, &px, &py, &ci) &&
+				 px >= 0.5 && py >= 0.5 &&
+				 px <= photo->width - 0.5 &&
+				 py <= photo->height - 0.5;
+			if (!ok) {
+				pe[0] = pe[1] = pe[2] = 0;
+				pm[0] = pm[1] = pm[2] = 0;
+				pd[0] = pd[1] = pd[2] = 0;
+				continue;
+			}
+			float rgb[3];
+			photo_bilinear(photo, px, py, rgb);
+			for (int c = 0; c < 3; c++) {
+				double r =
+					o->reflectivity > 0
+						? o->reflectivity
+						: glint_fresnel_conductor(
+							  o->n[c], o->k[c], ci);
+				pe[c] = (float)(rgb[c] / r);
+			}
+			int reliable =
+				ci > cos_graze && v3_dot(d, to_cam) < cos_cone;
+			pm[0] = pm[1] = pm[2] = (float)reliable;
+			pd[0] = pd[1] = pd[2] =
+				(float)pixel_density(&b, d, px, py, dth);
+		}
+	*env = e;
+	if (mask)
+		*mask = m;
+	else
+		glint_image_free(m);
+	if (density)
+		*density = dn;
+	else
+		glint_image_free(dn);
+	return 0;
+}
+
+/*
+ * An unwrapped map is light before it is written: finite, and not
+ * negative beyond what a merged photo's noise about zero gives (its dark
+ * pixels scatter both ways; within 1 % of the map's mean they are set to
+ * 0, as the fitter's reader does).  A value further below zero is no
+ * light at all (a wrong black level, a photo darker than its noise) and
+ * is refused here, where it was made, naming the file and the pixel.
+ */
+static int check_light(struct glint_image *env, const char *path)
+{
+	size_t n = (size_t)env->width * env->height * 3;
+	double mean = 0;
+
+	for (size_t i = 0; i < n; i++) {
+		if (!isfinite(env->data[i]))
+			return glint_error_set(
+				ERANGE,
+				"unwrap: %s: pixel (%zu, %zu) has radiance "
+				"%g: expected a finite value",
+				path, i / 3 % (size_t)env->width,
+				i / 3 / (size_t)env->width,
+				(double)env->data[i]);
+		mean += env->data[i];
+	}
+	mean /= (double)n;
+	if (!(mean > 0))
+		return glint_error_set(ERANGE,
+				       "unwrap: %s: the map's mean radiance "
+				       "is %g: expected some light",
+				       path, mean);
+	for (size_t i = 0; i < n; i++) {
+		if (env->data[i] >= 0)
+			continue;
+		if (env->data[i] < -0.01 * mean)
+			return glint_error_set(
+				ERANGE,
+				"unwrap: %s: pixel (%zu, %zu) has radiance "
+				"%g, below zero by more than the noise allows "
+				"(1 %% of the mean %g): expected light >= 0",
+				path, i / 3 % (size_t)env->width,
+				i / 3 / (size_t)env->width,
+				(double)env->data[i], mean);
+		env->data[i] = 0;
+	}
+	return 0;
+}
+
+int glint_probe_unwrap_write(const struct glint_image *photo,
+			     const struct glint_unwrap_opts *o,
+			     const char *env_path, int *width, int *height)
+{
+	struct glint_image *env = NULL, *mask = NULL, *dens = NULL;
+	struct glint_write_opts png = { 0 };
+	char path[GLINT_PATH_MAX];
+	int ret = glint_probe_unwrap(photo, o, &env, &mask, &dens);
+
+	if (ret == 0)
+		ret = check_light(env, env_path);
+	if (ret == 0)
+		ret = glint_image_write(env_path, env, NULL);
+	if (ret == 0)
+		ret = glint_path_sibling(path, sizeof(path), env_path,
+					 "-mask.png");
+	if (ret == 0)
+		ret = glint_image_write(path, mask, &png);
+	if (ret == 0)
+		ret = glint_path_sibling(path, sizeof(path), env_path,
+					 "-density.exr");
+	if (ret == 0)
+		ret = glint_image_write(path, dens, NULL);
+	if (ret == 0 && width)
+		*width = env->width;
+	if (ret == 0 && height)
+		*height = env->height;
+	glint_image_free(env);
+	glint_image_free(mask);
+	glint_image_free(dens);
+	return ret;
+}
+
+/* The ball's circle: found in the photo when --ball is not given (the
+ * capture's detector); a given one is checked against it. */
+int glint_probe_find_ball(const struct glint_image *photo, int given,
+			  struct glint_unwrap_opts *o)
+{
+	struct glint_circle c;
+	int ret = glint_sphere_detect(photo, 0, 0, &c);
+
+	if (given) {
+		double d = hypot(c.cx - o->ball_cx, c.cy - o->ball_cy);
+		double dr = fabs(c.r - o->ball_r);
+		if (ret == 0 && (d > 2 || dr > 2))
+			glint_log_warn(
+				"--ball %g,%g,%g disagrees with the ball "
+				"found in the photo, %.1f,%.1f,%.1f "
+				"(centre %.1f px, radius %.1f px "
+				"apart): check it",
+				o->ball_cx, o->ball_cy, o->ball_r, c.cx, c.cy,
+				c.r, d, dr);
+		return 0;
+	}
+	if (ret < 0)
+		return glint_error_prefix(
+			ret, "no ball found (give --ball CX,CY,R)");
+	o->ball_cx = c.cx;
+	o->ball_cy = c.cy;
+	o->ball_r = c.r;
+	glint_log_info("found the ball at %.2f,%.2f, radius %.2f px (%d rim "
+		       "points, %.2f px RMS, %.0f deg of its rim): --ball "
+		       "%.2f,%.2f,%.2f",
+		       c.cx, c.cy, c.r, c.points, c.rms_px, c.arc_deg, c.cx,
+		       c.cy, c.r);
+	return 0;
+}

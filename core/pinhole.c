@@ -1,0 +1,162 @@
+/* SPDX-License-Identifier: MIT */
+#include "core/pinhole.h"
+
+#include "core/error.h"
+
+#include <math.h>
+
+int glint_pinhole_init(struct glint_pinhole *cam, int width, int height,
+		       double focal_m, double pitch_m, double f_number,
+		       double focus_m, struct vec3 pos, struct vec3 look_at,
+		       struct vec3 up)
+{
+	struct vec3 fwd = v3_norm(v3_sub(look_at, pos));
+	struct vec3 right = v3_cross(fwd, up);
+
+	if (v3_len(right) < 1e-9 * v3_len(up) || v3_len(fwd) == 0)
+		return glint_error_set(EINVAL,
+				       "camera pose: 'up' is parallel to the "
+				       "view direction (or look_at == "
+				       "position)");
+	cam->width = width;
+	cam->height = height;
+	cam->frame_x = cam->frame_y = cam->frame_width = 0;
+	cam->fpx = focal_m / pitch_m;
+	cam->cx = width / 2.0;
+	cam->cy = height / 2.0;
+	cam->aperture_radius = f_number > 0 ? focal_m / f_number / 2 : 0;
+	cam->focus_distance = focus_m;
+	cam->pos = pos;
+	cam->fwd = fwd;
+	cam->right = v3_norm(right);
+	cam->up = v3_cross(cam->right, fwd);
+	return 0;
+}
+
+/* Shirley-Chiu concentric map of the unit square onto the unit disk. */
+static void concentric_disk(double u, double v, double *x, double *y)
+{
+	double a = 2 * u - 1, b = 2 * v - 1, r, phi;
+
+	if (a == 0 && b == 0) {
+		*x = *y = 0;
+		return;
+	}
+	if (fabs(a) > fabs(b)) {
+		r = a;
+		phi = (M_PI / 4) * (b / a);
+	} else {
+		r = b;
+		phi = M_PI / 2 - (M_PI / 4) * (a / b);
+	}
+	*x = r * cos(phi);
+	*y = r * sin(phi);
+}
+
+void glint_pinhole_ray(const struct glint_pinhole *cam, double px, double py,
+		       double lu, double lv, struct vec3 *org, struct vec3 *dir)
+{
+	double x = (px - cam->cx) / cam->fpx, y = -(py - cam->cy) / cam->fpx;
+	struct vec3 d = v3_add(cam->fwd, v3_add(v3_scale(cam->right, x),
+						v3_scale(cam->up, y)));
+
+	if (cam->aperture_radius <= 0) {
+		*org = cam->pos;
+		*dir = v3_norm(d);
+		return;
+	}
+	/* d has unit length along fwd, so the focus point is at t = focus. */
+	struct vec3 focus = v3_add(cam->pos, v3_scale(d, cam->focus_distance));
+	double lx, ly;
+	concentric_disk(lu, lv, &lx, &ly);
+	*org = v3_add(cam->pos,
+		      v3_add(v3_scale(cam->right, lx * cam->aperture_radius),
+			     v3_scale(cam->up, ly * cam->aperture_radius)));
+	*dir = v3_norm(v3_sub(focus, *org));
+}
+
+int glint_pinhole_project(const struct glint_pinhole *cam, struct vec3 p,
+			  double *px, double *py)
+{
+	struct vec3 q = v3_sub(p, cam->pos);
+	double z = v3_dot(q, cam->fwd);
+
+	if (!(z > 0))
+		return -EINVAL;
+	*px = cam->cx + cam->fpx * v3_dot(q, cam->right) / z;
+	*py = cam->cy - cam->fpx * v3_dot(q, cam->up) / z;
+	return 0;
+}
+
+/*
+ * The tangent cone of a sphere seen from the pinhole has half-angle alpha
+ * (sin alpha = R / D) and an axis at angle beta from the optical axis.  Its
+ * section by the image plane z = f is an ellipse with, along the radial
+ * direction, centre f sin(b) cos(b) / k and semi-axis f sin(a) cos(a) / k,
+ * and tangential semi-axis f sin(a) / sqrt(k), where
+ * k = cos^2(beta) - sin^2(alpha).
+ */
+int glint_pinhole_sphere_ellipse(const struct glint_pinhole *cam,
+				 struct vec3 centre, double radius,
+				 struct glint_ellipse *out)
+{
+	struct vec3 q = v3_sub(centre, cam->pos);
+	double d = v3_len(q);
+
+	if (!(d > radius))
+		return glint_error_set(EINVAL,
+				       "sphere of radius %g m encloses the "
+				       "camera (distance %g m)",
+				       radius, d);
+	double xc = v3_dot(q, cam->right), yc = v3_dot(q, cam->up);
+	double zc = v3_dot(q, cam->fwd);
+	double sa = radius / d, ca = sqrt(1 - sa * sa);
+	double cb = zc / d, sb = sqrt(fmax(0, 1 - cb * cb));
+	double k = cb * cb - sa * sa;
+
+	if (!(k > 0))
+		return glint_error_set(EINVAL,
+				       "sphere is not wholly in front of the "
+				       "camera: its silhouette is not an "
+				       "ellipse");
+	double rho = cam->fpx * sb * cb / k;
+	double dirx = 1, diry = 0, rl = hypot(xc, yc);
+	if (rl > 0) {
+		dirx = xc / rl;
+		diry = -yc / rl; /* image y grows downwards */
+	}
+	out->cx = cam->cx + rho * dirx;
+	out->cy = cam->cy + rho * diry;
+	out->a = cam->fpx * sa * ca / k;
+	out->b = cam->fpx * sa / sqrt(k);
+	out->angle = atan2(diry, dirx);
+	return 0;
+}
+
+int glint_pinhole_sphere_from_circle(const struct glint_pinhole *cam, double cx,
+				     double cy, double b, double radius,
+				     struct vec3 *centre)
+{
+	double f = cam->fpx;
+	double dx = cx - cam->cx, dy = cy - cam->cy;
+	double rho = hypot(dx, dy);
+
+	if (!(b > 0) || !(radius > 0))
+		return glint_error_set(EINVAL,
+				       "sphere circle radius %g px and "
+				       "diameter %g m: expected both > 0",
+				       b, 2 * radius);
+	/* From the relations above: tan(beta) = rho f / (f^2 + b^2) and
+	 * sin(alpha) = b cos(beta) / sqrt(f^2 + b^2). */
+	double beta = atan(rho * f / (f * f + b * b));
+	double sa = b * cos(beta) / sqrt(f * f + b * b);
+	double dist = radius / sa;
+	double ux = rho > 0 ? dx / rho : 0, uy = rho > 0 ? -dy / rho : 0;
+	struct vec3 axis = v3_add(v3_scale(cam->fwd, cos(beta)),
+				  v3_scale(v3_add(v3_scale(cam->right, ux),
+						  v3_scale(cam->up, uy)),
+					   sin(beta)));
+
+	*centre = v3_add(cam->pos, v3_scale(axis, dist));
+	return 0;
+}

@@ -82,6 +82,7 @@
 #include "bench.h"
 #include "sim/fixtures.h"
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "capture/camera/bracket.h"
 #include "capture/hdr/hdr_linear.h"
@@ -688,7 +689,7 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			struct glint_image *photo = glint_image_dup(a);
 			struct glint_image *w = NULL;
 			struct glint_fit_result res;
-			double err = INFINITY, t0 = glint_now();
+			double err = INFINITY, t0 = glint_clock_monotonic();
 			int out = REFUSED, bound = 0, nframes = 0;
 			double zrms = NAN;
 			char why[128] = "";
@@ -763,7 +764,7 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			       base(map), mats[i], photo_names[lv], bias,
 			       bound ? "within<" : outcome_names[out], err,
 			       out == REFUSED ? NAN : res.rel_rmse, ratio,
-			       ideal, smp, glint_now() - t0);
+			       ideal, smp, glint_clock_monotonic() - t0);
 			if (getenv("ACCURACY_PROFILE") && out != REFUSED)
 				for (int g = 0; g < 13; g++) {
 					double rough =

@@ -30,6 +30,7 @@
  * across lights against the median reported standard error.
  */
 #include "sim/fixtures.h"
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/formats.h"
 #include "core/image.h"
@@ -228,7 +229,7 @@ static int joint_fits(struct shot *const *shots, int n, int max_pixels,
 	       n);
 	for (int m = 0; m < nmodels; m++) {
 		struct row jr;
-		double t0 = glint_now();
+		double t0 = glint_clock_monotonic();
 		int ret = fit_shots(shots, n, max_pixels, models[m], &jr, res);
 		if (ret < 0) {
 			free(res);
@@ -237,7 +238,7 @@ static int joint_fits(struct shot *const *shots, int n, int max_pixels,
 		printf("  %-17s rel.RMSE %.4f, BIC %.1f, chi2/dof %.2f, "
 		       "%.0f s; per photo:",
 		       models[m]->name, jr.rel_rmse, jr.bic, res->unc.chi2_dof,
-		       glint_now() - t0);
+		       glint_clock_monotonic() - t0);
 		for (int v = 0; v < res->nviews; v++)
 			printf(" %.3f", res->view[v].rel_rmse);
 		printf("\n");

@@ -28,6 +28,7 @@
 #include "capture/camera/bracket.h"
 #include "capture/hdr/hdr_linear.h"
 #include "capture/hdr/session_merge.h"
+#include "core/clock.h"
 #include "core/error.h"
 #include "sim/camera_sim.h"
 #include "sim/sensor.h"
@@ -49,9 +50,7 @@ static const char *const mode_key[NM] = { "streaming", "batch" };
 
 static double now(void)
 {
-	struct timespec t;
-	clock_gettime(CLOCK_MONOTONIC, &t);
-	return t.tv_sec + 1e-9 * t.tv_nsec;
+	return glint_clock_monotonic();
 }
 
 static void wait_until(double t)

@@ -29,6 +29,7 @@
 #include "bench.h"
 #include "sim/fixtures.h"
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "fit/fit.h"
@@ -121,7 +122,7 @@ static struct outcome run_one(const struct config *c, const char *mat,
 			 GLINT_DATA_DIR "/env/venice_sunset_1k.hdr");
 	else
 		snprintf(env, sizeof(env), "bench-out/venice-%d.exr", c->env_w);
-	double t0 = glint_now();
+	double t0 = glint_clock_monotonic();
 	fixture_scene_lens(&sc, c->px, env, c->dof ? cap->fnum : 0);
 	if (glint_renderer_init(&r, &sc, 0, NULL) < 0)
 		return out;
@@ -136,7 +137,7 @@ static struct outcome run_one(const struct config *c, const char *mat,
 	o.anneal_evals = 60;
 	o.light_samples = o.lobe_samples = c->samples;
 	if (glint_fit(&r, m, photo, weight, &o, &res) == 0) {
-		out.seconds = glint_now() - t0;
+		out.seconds = glint_clock_monotonic() - t0;
 		out.perr = fixture_tolerance_error(res.p, truth);
 		out.rel_rmse = res.rel_rmse;
 		out.ok = 1;

@@ -15,6 +15,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "bench.h"
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "core/parallel.h"
@@ -107,7 +108,7 @@ int main(int argc, char **argv)
 			struct glint_shade_opts so = { .light_samples = 32,
 						       .brdf_samples = 32,
 						       .background = 1 };
-			double t0 = glint_now();
+			double t0 = glint_clock_monotonic();
 			switch (v) {
 			case RAW16_USER:
 			case RAW1_USER:
@@ -133,7 +134,7 @@ int main(int argc, char **argv)
 						   model, p, &so, img, NULL);
 				break;
 			}
-			t[v][k] = glint_now() - t0;
+			t[v][k] = glint_clock_monotonic() - t0;
 		}
 	}
 

@@ -22,6 +22,7 @@
 #include "bench.h"
 #include "sim/fixtures.h"
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "fit/fit.h"
@@ -148,11 +149,11 @@ int main(int argc, char **argv)
 					o.optimizer = methods[me].opt;
 					o.start = start;
 					o.seed = (uint64_t)s + 1;
-					double t0 = glint_now();
+					double t0 = glint_clock_monotonic();
 					if (glint_fit(&r, m, photo, weight, &o,
 						      &res) < 0)
 						return 1;
-					double dt = glint_now() - t0;
+					double dt = glint_clock_monotonic() - t0;
 					int out = WRONG;
 					if (within(res.p, ref.p))
 						out = CONVERGED;

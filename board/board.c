@@ -6,6 +6,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "board.h"
 
+#include "core/clock.h"
 #include "core/log.h"
 
 #include <errno.h>
@@ -188,20 +189,12 @@ struct glint_board {
 	int tt_known;
 };
 
+/* The LED thread and a press's deadline run on the host's monotonic
+ * clock (the kernel's event waits do); settle times, relay pulses and
+ * turntable steps on the board's clock (cfg.clock), which a test fakes. */
 static double now_s(void)
 {
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static void sleep_s(double s)
-{
-	if (s <= 0)
-		return;
-	struct timespec ts = { (time_t)s, (long)((s - floor(s)) * 1e9) };
-	while (nanosleep(&ts, &ts) < 0 && errno == EINTR) {
-	}
+	return glint_clock_monotonic();
 }
 
 static int set_line(struct glint_board *b, enum glint_role r, int v)
@@ -396,7 +389,7 @@ static int lights_set(struct glint_board *b, unsigned mask)
 			any = 1;
 		}
 	if (ret == 0 && any)
-		sleep_s(b->cfg.settle_s); /* lamps warm up */
+		glint_clock_sleep(b->cfg.clock, b->cfg.settle_s); /* lamps warm up */
 	return ret;
 }
 
@@ -466,7 +459,7 @@ int glint_board_turntable(struct glint_board *b, int which, atomic_int *cancel)
 		if (b->tt_known && fabs(b->angle_deg - target) < 1e-9)
 			return 0;
 		ret = set_line(b, GLINT_ROLE_TT_STEP, 1);
-		sleep_s(c->relay_pulse_s);
+		glint_clock_sleep(b->cfg.clock, c->relay_pulse_s);
 		if (!ret)
 			ret = set_line(b, GLINT_ROLE_TT_STEP, 0);
 	} else {
@@ -485,10 +478,10 @@ int glint_board_turntable(struct glint_board *b, int which, atomic_int *cancel)
 				break;
 			}
 			ret = set_line(b, GLINT_ROLE_TT_STEP, 1);
-			sleep_s(half);
+			glint_clock_sleep(b->cfg.clock, half);
 			if (!ret)
 				ret = set_line(b, GLINT_ROLE_TT_STEP, 0);
-			sleep_s(half);
+			glint_clock_sleep(b->cfg.clock, half);
 		}
 		/* Enable stays on to hold position while capturing. */
 	}
@@ -498,7 +491,7 @@ int glint_board_turntable(struct glint_board *b, int which, atomic_int *cancel)
 	}
 	b->angle_deg = target;
 	b->tt_known = 1;
-	sleep_s(c->settle_s);
+	glint_clock_sleep(b->cfg.clock, c->settle_s);
 	/* With a position sensor, trust it over the step count. */
 	if (c->lines[GLINT_ROLE_POSITION].used) {
 		int at_probe = 0;

@@ -23,6 +23,7 @@
  */
 
 #include "core/atomic.h"
+#include "core/clock.h"
 #include "core/error.h"
 
 #include <jansson.h>
@@ -78,6 +79,10 @@ struct glint_board_cfg {
 	 * anchors relative paths in those keys. */
 	const json_t *backend_opts;
 	const char *rig_file;
+	/* Settle times, relay pulses and turntable steps wait on this clock
+	 * (NULL: the real one, core/clock.h); borrowed for the board's
+	 * life. */
+	const struct glint_clock *clock;
 };
 
 void glint_board_default_cfg(struct glint_board_cfg *c);

@@ -10,6 +10,7 @@
 #include "options.h"
 #include "fit/job.h"
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "sim/photo.h"
@@ -104,12 +105,12 @@ int cmd_demo(int argc, char **argv)
 					   .nthreads = job.nthreads };
 	glint_log_info("simulating a photo of %s (Table 1) under %s", material,
 		       job.scene.env_path);
-	double t0 = glint_now();
+	double t0 = glint_clock_monotonic();
 	ret = glint_sim_photo(&job.scene, model, truth, &so, &photo,
 			      &job.weight);
 	if (ret < 0)
 		return cmd_fail("demo");
-	double sim_s = glint_now() - t0;
+	double sim_s = glint_clock_monotonic() - t0;
 	ret = glint_image_write(photo_path, photo, NULL);
 	if (ret < 0)
 		goto fail;

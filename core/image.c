@@ -1,4 +1,5 @@
 /* SPDX-License-Identifier: MIT */
+#include "core/clock.h"
 #include "image.h"
 
 #include "error.h"
@@ -211,11 +212,11 @@ static int image_read(const char *path, struct glint_image **out)
 
 int glint_image_read(const char *path, struct glint_image **out)
 {
-	double t0 = glint_now();
+	double t0 = glint_clock_monotonic();
 	int ret = image_read(path, out);
 	if (ret == 0)
 		glint_log_debug("read %s: %dx%d in %.3f s", path, (*out)->width,
-				(*out)->height, glint_now() - t0);
+				(*out)->height, glint_clock_monotonic() - t0);
 	return ret;
 }
 

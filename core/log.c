@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 #define _POSIX_C_SOURCE 200809L
+#include "core/clock.h"
 #include "log.h"
 
 #include <jansson.h>
@@ -32,13 +33,6 @@ void glint_log_set_mode(enum glint_log_mode mode)
 enum glint_log_mode glint_log_get_mode(void)
 {
 	return log_mode;
-}
-
-double glint_now(void)
-{
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
 static void log_v(const char *level, const char *fmt, va_list ap)
@@ -154,7 +148,7 @@ void glint_log_error(const char *fmt, ...)
 
 static void progress_draw(struct glint_progress *p, long done)
 {
-	double t = glint_now() - p->t0;
+	double t = glint_clock_monotonic() - p->t0;
 	double frac = p->total > 0 ? (double)done / (double)p->total : 1;
 	int bar = (int)(frac * 30);
 	char b[31];
@@ -175,7 +169,7 @@ void glint_progress_start(struct glint_progress *p, const char *label,
 	p->total = total;
 	atomic_init(&p->done, 0);
 	atomic_init(&p->drawing, 0);
-	p->t0 = glint_now();
+	p->t0 = glint_clock_monotonic();
 	p->last_draw = 0;
 	p->enabled = log_mode == GLINT_LOG_HUMAN && isatty(STDERR_FILENO);
 }
@@ -189,7 +183,7 @@ void glint_progress_add(struct glint_progress *p, long n)
 	/* One thread draws at a time, at most ten times a second. */
 	if (atomic_exchange(&p->drawing, 1))
 		return;
-	double t = glint_now();
+	double t = glint_clock_monotonic();
 	if (t - p->last_draw > 0.1 || done == p->total) {
 		p->last_draw = t;
 		progress_draw(p, done);

@@ -36,9 +36,6 @@ void glint_log_debug(const char *fmt, ...) GLINT_PRINTF(1, 2);
 /* Shown even when quiet: something the user should act on. */
 void glint_log_warn(const char *fmt, ...) GLINT_PRINTF(1, 2);
 
-/* Seconds on a monotonic clock. */
-double glint_now(void);
-
 struct glint_progress {
 	const char *label;
 	long total;

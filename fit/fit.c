@@ -4,6 +4,7 @@
 #include "misfit.h"
 #include "fit/optim/anneal.h"
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/suggest.h"
 #include "core/log.h"
@@ -584,7 +585,7 @@ static void add_pass(struct glint_fit_result *res, const char *name, int pixels,
 	fp->evaluations = evaluations;
 	fp->cost0 = cost0;
 	fp->cost = cost;
-	fp->seconds = glint_now() - t0;
+	fp->seconds = glint_clock_monotonic() - t0;
 }
 
 /* LM options for glint's objective, reporting progress through pc. */
@@ -611,7 +612,7 @@ static int anneal_pass(struct objective *ob, const int *sel, int nsel,
 	struct glint_anneal_opts ao;
 	struct glint_anneal_result ar;
 	struct anneal_ctx a = { ob, malloc((size_t)3 * nsel * sizeof(double)) };
-	double t0 = glint_now();
+	double t0 = glint_clock_monotonic();
 
 	if (!a.r)
 		return glint_error_set(ENOMEM, "out of memory");
@@ -658,7 +659,7 @@ static int run_pass(struct objective *ob, const char *name, const int *sel,
 	double q[GLINT_MAX_PARAMS], lo[GLINT_MAX_PARAMS], hi[GLINT_MAX_PARAMS];
 	struct glint_lm_opts lo_opts;
 	struct progress_ctx pc = { ob->o, name };
-	double t0 = glint_now();
+	double t0 = glint_clock_monotonic();
 
 	ob->sel = sel;
 	ob->nsel = nsel;
@@ -1563,7 +1564,7 @@ static int refine_on_sets(struct objective *ob,
 	struct glint_lm_opts lo_opts;
 	struct glint_lm_result lr;
 	struct progress_ctx pc = { ob->o, "sample sets" };
-	double q[GLINT_MAX_PARAMS], t0 = glint_now();
+	double q[GLINT_MAX_PARAMS], t0 = glint_clock_monotonic();
 	size_t qb = sizeof(double) * (size_t)n;
 
 	memcpy(q, ob->p, sizeof(q));
@@ -2164,7 +2165,7 @@ static int uncertainty(struct objective *ob, struct fit_data *d,
 	const struct glint_model_ops *m = ob->m;
 	int n = m->nparams, rows = 3 * sl->nall, ret;
 	int nsets = ob->cache ? 1 + ob->o->mc_draws : 1;
-	double t0 = glint_now();
+	double t0 = glint_clock_monotonic();
 	double *jac = malloc((size_t)rows * n * sizeof(double));
 	double *r = malloc((size_t)rows * sizeof(double));
 	double *each, lo[GLINT_MAX_PARAMS], hi[GLINT_MAX_PARAMS];
@@ -2234,7 +2235,7 @@ static int uncertainty(struct objective *ob, struct fit_data *d,
 		res->at_bound[k] =
 			ob->p[k] <= lo[k] + tol || ob->p[k] >= hi[k] - tol;
 	}
-	res->unc_seconds = glint_now() - t0;
+	res->unc_seconds = glint_clock_monotonic() - t0;
 	free(ob->final_r);
 	ob->final_r = r;
 	ob->final_rows = rows;
@@ -2312,7 +2313,7 @@ static int fit_or_eval(const struct glint_fit_view *in, int nviews,
 	struct selections sl = { 0 };
 	struct view views[GLINT_FIT_MAX_VIEWS];
 	int ret, interior = 0;
-	double t0 = glint_now();
+	double t0 = glint_clock_monotonic();
 
 	if (nviews < 1 || nviews > GLINT_FIT_MAX_VIEWS)
 		return glint_error_set(EINVAL,
@@ -2343,7 +2344,7 @@ static int fit_or_eval(const struct glint_fit_view *in, int nviews,
 	ret = objective_init(&ob, views, nviews, model, &d, o);
 	if (ret < 0)
 		goto out;
-	res->setup_seconds = glint_now() - t0;
+	res->setup_seconds = glint_clock_monotonic() - t0;
 	if (eval_p) {
 		memcpy(ob.p, eval_p, (size_t)model->nparams * sizeof(double));
 		memcpy(res->p, ob.p, sizeof(res->p));
@@ -2359,7 +2360,7 @@ static int fit_or_eval(const struct glint_fit_view *in, int nviews,
 		if (ret < 0)
 			goto out;
 		finish_stats(&ob, sl.all, d.n, res);
-		res->seconds = glint_now() - t0;
+		res->seconds = glint_clock_monotonic() - t0;
 		goto out;
 	}
 	ret = make_selections(&ob, &sl);
@@ -2397,7 +2398,7 @@ static int fit_or_eval(const struct glint_fit_view *in, int nviews,
 	memcpy(res->p, ob.p, sizeof(res->p));
 	finish_stats(&ob, sl.all, sl.nall, res);
 	baselines(&ob, &d, res);
-	res->seconds = glint_now() - t0;
+	res->seconds = glint_clock_monotonic() - t0;
 out:
 	objective_free(&ob);
 	selections_free(&sl);

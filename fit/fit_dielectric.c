@@ -13,6 +13,7 @@
 #include "fit.h"
 #include "fit_data.h"
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/log.h"
 
@@ -263,7 +264,7 @@ static int anneal_search(struct dobj *ob, const struct glint_fit_opts *o,
 	ao.max_evals = o->anneal_evals;
 	ao.stall_evals = o->anneal_evals / 3;
 	set_pixels(ob, coarse, ncoarse, pix);
-	double ts = glint_now();
+	double ts = glint_clock_monotonic();
 	int e0 = ob->evals;
 	int ret =
 		glint_anneal(1, lo + 3, hi + 3, ior_cost, ob, &ao, p + 3, &ar);
@@ -279,7 +280,7 @@ static int anneal_search(struct dobj *ob, const struct glint_fit_opts *o,
 	ps->evaluations = ob->evals - e0;
 	ps->cost0 = ar.cost0;
 	ps->cost = ar.cost;
-	ps->seconds = glint_now() - ts;
+	ps->seconds = glint_clock_monotonic() - ts;
 	glint_log_info("anneal: %d evaluations (%d accepted, %d re-anneals), "
 		       "cost %.4g -> %.4g: %s",
 		       ar.evals, ar.accepted, ar.reanneals, ar.cost0, ar.cost,
@@ -339,7 +340,7 @@ static int lm_stage(struct dobj *ob, struct fit_data *d,
 			lr->se[k] = NAN;
 		return ret;
 	}
-	double ts = glint_now();
+	double ts = glint_clock_monotonic();
 	int e0 = ob->evals;
 	ret = glint_lm_solve(&pr, &lo_, p, lr);
 	for (int it = 0; it < 2 && ret == 0 && !weight &&
@@ -357,7 +358,7 @@ static int lm_stage(struct dobj *ob, struct fit_data *d,
 	ps->evaluations = ob->evals - e0;
 	ps->cost0 = lr->cost0;
 	ps->cost = lr->cost;
-	ps->seconds = glint_now() - ts;
+	ps->seconds = glint_clock_monotonic() - ts;
 	return ret;
 }
 
@@ -416,7 +417,7 @@ int glint_fit_dielectric(struct glint_renderer *r,
 	int *all = NULL, *coarse = NULL;
 	int32_t *pix = NULL;
 	double lo[4], hi[4], p[4];
-	double t0 = glint_now();
+	double t0 = glint_clock_monotonic();
 
 	memset(res, 0, sizeof(*res));
 	memset(&ob, 0, sizeof(ob));
@@ -465,7 +466,7 @@ int glint_fit_dielectric(struct glint_renderer *r,
 		       : o->start ? o->start[k]
 				  : model->params[k].def;
 	}
-	res->setup_seconds = glint_now() - t0;
+	res->setup_seconds = glint_clock_monotonic() - t0;
 	if (!eval_p && o->optimizer != GLINT_OPT_LM)
 		ret = anneal_search(&ob, o, lo, hi, coarse, ncoarse, pix, p,
 				    res);
@@ -475,7 +476,7 @@ int glint_fit_dielectric(struct glint_renderer *r,
 	}
 	if (ret == 0)
 		ret = statistics(&ob, p, &lr, res);
-	res->seconds = glint_now() - t0;
+	res->seconds = glint_clock_monotonic() - t0;
 out:
 	drop_caches(&ob);
 	free(ob.rgb);

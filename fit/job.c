@@ -13,6 +13,7 @@
 #include "select.h"
 #include "export/export.h"
 #include "fit/render/compare.h"
+#include "core/clock.h"
 #include "core/atomic_dir.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -367,7 +368,7 @@ static int render_final(struct glint_renderer *r,
 			struct glint_image *cov, json_t **info)
 {
 	const struct glint_image *w = job->weight;
-	double t0 = glint_now(), q1, q2 = NAN;
+	double t0 = glint_clock_monotonic(), q1, q2 = NAN;
 	struct glint_image *b = NULL, *more = NULL;
 	long nv = 0;
 	int ret, factor = 0;
@@ -396,20 +397,20 @@ static int render_final(struct glint_renderer *r,
 	double f1 = 1, qp = NAN;
 	const char *first_limit = NULL;
 	if (img->height >= RENDER_PILOT_MIN_ROWS) {
-		double tp = glint_now();
+		double tp = glint_clock_monotonic();
 		ret = render_pair(r, job, model, p, 1, 0, RENDER_PILOT_STEP,
 				  img, b, cov, &qp, &nv);
 		if (ret < 0)
 			goto out;
 		f1 = glint_render_first_factor(
-			qp, (glint_now() - tp) * RENDER_PILOT_STEP, budget_s,
+			qp, (glint_clock_monotonic() - tp) * RENDER_PILOT_STEP, budget_s,
 			&first_limit);
 	}
-	double t1 = glint_now();
+	double t1 = glint_clock_monotonic();
 	ret = render_pair(r, job, model, p, f1, 0, 1, img, b, cov, &q1, &nv);
 	if (ret < 0)
 		goto out;
-	double q = q1, pair_s = glint_now() - t1;
+	double q = q1, pair_s = glint_clock_monotonic() - t1;
 	const char *limited_by;
 	factor = glint_render_factor(q1, pair_s, budget_s, &limited_by);
 	if (!factor && first_limit)
@@ -455,7 +456,7 @@ static int render_final(struct glint_renderer *r,
 		"light_samples", total_l, "brdf_samples", total_b, "noise",
 		glint_json_real_or_null(q), "noise_target", RENDER_NOISE_TARGET,
 		"below_target", q <= RENDER_NOISE_TARGET, "values",
-		(json_int_t)nv, "seconds", glint_now() - t0, "budget_seconds",
+		(json_int_t)nv, "seconds", glint_clock_monotonic() - t0, "budget_seconds",
 		budget_s, "limited_by",
 		q <= RENDER_NOISE_TARGET ? NULL : limited_by, "steps", steps);
 	if (*info && img->height >= RENDER_PILOT_MIN_ROWS)
@@ -471,7 +472,7 @@ static int render_final(struct glint_renderer *r,
 	glint_log_info(
 		"final render: %d + %d samples, its noise %.2f of the "
 		"photo's variance (target %.2f), %.1f s%s%s",
-		total_l, total_b, q, RENDER_NOISE_TARGET, glint_now() - t0,
+		total_l, total_b, q, RENDER_NOISE_TARGET, glint_clock_monotonic() - t0,
 		q > RENDER_NOISE_TARGET && limited_by ? "; limited by " : "",
 		q > RENDER_NOISE_TARGET && limited_by ? limited_by : "");
 out:

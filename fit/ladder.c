@@ -3,6 +3,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "ladder.h"
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/log.h"
 
@@ -118,7 +119,7 @@ static int fit_at(struct ladder *l, const struct glint_ladder_setting *s,
 	struct glint_envmap *env;
 	const struct glint_image *photo = NULL, *weight = NULL;
 	char what[64];
-	double t0 = glint_now();
+	double t0 = glint_clock_monotonic();
 
 	glint_ladder_apply(s, &sc, &o);
 	/* Every pixel on the sphere up to 16384 (a 512 px photo: every
@@ -151,7 +152,7 @@ static int fit_at(struct ladder *l, const struct glint_ladder_setting *s,
 		return ret;
 	ret = glint_fit(&r, l->model, photo, weight, &o, res);
 	glint_renderer_release(&r);
-	*seconds = glint_now() - t0;
+	*seconds = glint_clock_monotonic() - t0;
 	return ret;
 }
 

@@ -18,6 +18,7 @@
 #include "board_sim.h"
 #include "world.h"
 
+#include "core/clock.h"
 #include "core/json.h"
 #include "core/path.h"
 
@@ -46,9 +47,7 @@ struct sim_board {
 
 static double now_s(void)
 {
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+	return glint_clock_monotonic();
 }
 
 static int add_edge(struct sim_board *s, double t, int v)

@@ -11,46 +11,6 @@
 #include <string.h>
 #include <time.h>
 
-static double real_now(void *ctx)
-{
-	struct timespec ts;
-	(void)ctx;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static void real_sleep_until(void *ctx, double t)
-{
-	struct timespec ts;
-	ts.tv_sec = (time_t)t;
-	ts.tv_nsec = (long)((t - (double)ts.tv_sec) * 1e9);
-	(void)ctx;
-	while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) ==
-	       EINTR)
-		;
-}
-
-const struct glint_clock glint_clock_real = { real_now, real_sleep_until,
-					      NULL };
-
-static double fake_now(void *ctx)
-{
-	return ((struct glint_fake_clock *)ctx)->t;
-}
-
-static void fake_sleep_until(void *ctx, double t)
-{
-	struct glint_fake_clock *fc = ctx;
-	if (t > fc->t)
-		fc->t = t;
-}
-
-struct glint_clock glint_clock_fake(struct glint_fake_clock *fc)
-{
-	struct glint_clock c = { fake_now, fake_sleep_until, fc };
-	return c;
-}
-
 void glint_frame_release(struct glint_frame *f)
 {
 	free(f->data);

@@ -12,27 +12,13 @@
  * timing (frame period >= exposure) runs instantly in tests.
  */
 
+#include "core/clock.h"
+
 #include <stdint.h>
 
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-/* Time source: seconds on a monotonic clock, and a sleep until then. */
-struct glint_clock {
-	double (*now)(void *ctx);
-	void (*sleep_until)(void *ctx, double t);
-	void *ctx;
-};
-
-/* The real clock (CLOCK_MONOTONIC, nanosleep). */
-extern const struct glint_clock glint_clock_real;
-
-/* A fake clock for tests: time only moves when someone sleeps. */
-struct glint_fake_clock {
-	double t;
-};
-struct glint_clock glint_clock_fake(struct glint_fake_clock *fc);
 
 #define GLINT_CAMERA_MAX_FORMATS 128 /* vivid offers over 80 */
 

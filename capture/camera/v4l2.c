@@ -35,6 +35,7 @@
 #include "capture/camera/camera.h"
 #include "capture/camera/v4l2_format.h"
 
+#include "core/clock.h"
 #include "core/error.h"
 
 #include <errno.h>
@@ -102,9 +103,7 @@ struct v4l2_cam {
 
 static double monotonic_now(void)
 {
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+	return glint_clock_monotonic();
 }
 
 static int xioctl(int fd, unsigned long req, void *arg)

@@ -7,6 +7,7 @@
 #include "core/log.h"
 #include "core/formats.h"
 #include "core/path.h"
+#include "core/optics.h"
 #include "core/pinhole.h"
 
 #include <math.h>
@@ -280,19 +281,6 @@ void glint_unwrap_default_opts(struct glint_unwrap_opts *o)
 	}
 	o->grazing_deg = 80;
 	o->camera_cone_deg = 6;
-}
-
-double glint_fresnel_conductor(double n, double k, double c)
-{
-	c = fmin(fmax(c, 0), 1);
-	double c2 = c * c, s2 = 1 - c2;
-	double t0 = n * n - k * k - s2;
-	double a2b2 = sqrt(t0 * t0 + 4 * n * n * k * k);
-	double a = sqrt(fmax(0, 0.5 * (a2b2 + t0)));
-	double rs = (a2b2 + c2 - 2 * a * c) / (a2b2 + c2 + 2 * a * c);
-	double t1 = c2 * a2b2 + s2 * s2, t2 = 2 * a * c * s2;
-	double rp = rs * (t1 - t2) / (t1 + t2);
-	return 0.5 * (rs + rp);
 }
 
 /* The ball's frame: camera at the origin looking along -Z, x right, y up;

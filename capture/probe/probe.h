@@ -107,8 +107,6 @@ int glint_probe_unwrap_write(const struct glint_image *photo,
 			     const struct glint_unwrap_opts *o,
 			     const char *env_path, int *width, int *height);
 
-/* Fresnel reflectance of a conductor (n, k) at cos(incidence) c. */
-double glint_fresnel_conductor(double n, double k, double c);
 
 /*
  * The ball's circle in o->ball_cx, ball_cy, ball_r: found by the sphere

@@ -4,6 +4,7 @@
 
 /* Pieces of the microfacet and rough-diffuse models, exposed for tests. */
 
+#include "core/optics.h"
 #include "core/vec.h"
 
 /*
@@ -13,12 +14,6 @@
  */
 double glint_beckmann_d(double cos_h, double m);
 
-/*
- * Exact Fresnel reflectance of unpolarised light at a smooth dielectric
- * interface of relative index n >= 1, incidence from the outside at angle
- * with cosine c (Cook & Torrance 1982, eq. 8; equals (Rs + Rp) / 2).
- */
-double glint_fresnel_dielectric(double c, double n);
 
 /*
  * Torrance-Sparrow V-cavity shadowing and masking:

@@ -8,36 +8,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-double glint_fresnel_interface(double cos_i, double eta, double *cos_t)
-{
-	double sin2_t = (1 - cos_i * cos_i) / (eta * eta);
-	if (sin2_t >= 1) {
-		if (cos_t)
-			*cos_t = 0;
-		return 1;
-	}
-	double ct = sqrt(1 - sin2_t);
-	double rs = (cos_i - eta * ct) / (cos_i + eta * ct);
-	double rp = (eta * cos_i - ct) / (eta * cos_i + ct);
-	if (cos_t)
-		*cos_t = ct;
-	return 0.5 * (rs * rs + rp * rp);
-}
-
-struct vec3 glint_reflect(struct vec3 d, struct vec3 n)
-{
-	return v3_sub(d, v3_scale(n, 2 * v3_dot(d, n)));
-}
-
-int glint_refract(struct vec3 d, struct vec3 n, double eta, struct vec3 *t)
-{
-	double ci = -v3_dot(d, n), ct;
-	if (glint_fresnel_interface(ci, eta, &ct) >= 1)
-		return 0;
-	*t = v3_norm(v3_add(v3_scale(d, 1 / eta), v3_scale(n, ci / eta - ct)));
-	return 1;
-}
-
 void glint_dielectric_default_opts(struct glint_dielectric_opts *o)
 {
 	/* Measured (tests/unit/test_dielectric.c): against 1e-7 the image

@@ -28,18 +28,8 @@
 #include "tracer.h"
 
 #include "core/image.h"
+#include "core/optics.h"
 
-/* Fresnel reflectance of a smooth dielectric interface for unpolarised
- * light: cos_i > 0 the cosine of incidence, eta = n_transmitted /
- * n_incident.  1 beyond the critical angle.  *cos_t (may be NULL) gets
- * the cosine of the refracted ray (0 on total internal reflection). */
-double glint_fresnel_interface(double cos_i, double eta, double *cos_t);
-
-/* Directions at an interface with unit normal n facing the incident unit
- * direction d (dot(d, n) < 0): the mirror direction, and the refracted one
- * for eta = n_t / n_i (returns 0 on total internal reflection). */
-struct vec3 glint_reflect(struct vec3 d, struct vec3 n);
-int glint_refract(struct vec3 d, struct vec3 n, double eta, struct vec3 *t);
 
 struct glint_dielectric_opts {
 	double min_weight; /* drop a branch below this Fresnel weight */

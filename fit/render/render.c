@@ -4,6 +4,7 @@
 
 #include "sampling.h"
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/parallel.h"
 
@@ -237,7 +238,7 @@ int glint_renderer_init_env(struct glint_renderer *r,
 		ret = glint_tracer_commit(r->tracer);
 	if (ret < 0)
 		goto err;
-	double t0 = glint_now();
+	double t0 = glint_clock_monotonic();
 	double dense_mb = (double)scene->cam.width * scene->cam.height *
 			  scene->spp * sizeof(struct glint_hit) / 1048576;
 	if (dense_mb > glint_gbuffer_dense_mb())
@@ -247,7 +248,7 @@ int glint_renderer_init_env(struct glint_renderer *r,
 	else
 		ret = glint_tracer_primary(r->tracer, &scene->cam, scene->spp,
 					   nthreads, progress, &r->gb);
-	r->trace_seconds = glint_now() - t0;
+	r->trace_seconds = glint_clock_monotonic() - t0;
 	if (ret < 0)
 		goto err;
 	return 0;

@@ -4,6 +4,7 @@
 #include "render_job.h"
 
 #include "render.h"
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/formats.h"
 #include "core/log.h"
@@ -43,11 +44,11 @@ int glint_render_job_run(const struct glint_render_job *job, json_t **result)
 		.nthreads = job->nthreads,
 		.progress = &prog,
 	};
-	double t0 = glint_now();
+	double t0 = glint_clock_monotonic();
 	glint_progress_start(&prog, "shade", sc->cam.height);
 	ret = glint_renderer_shade(&r, job->model, job->params, &so, img, cov);
 	glint_progress_finish(&prog);
-	double shade_s = glint_now() - t0;
+	double shade_s = glint_clock_monotonic() - t0;
 	if (ret < 0)
 		goto out;
 	ret = glint_image_check_finite(img, "rendered image", 1);

@@ -18,6 +18,7 @@
  */
 #include "test.h"
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "fit/fit.h"
 #include "sim/reference.h"
@@ -51,11 +52,11 @@ int main(int argc, char **argv)
 	struct glint_reference_opts ro;
 	glint_reference_default_opts(&ro);
 	ro.spp = 256;
-	double t0 = glint_now();
+	double t0 = glint_clock_monotonic();
 	CHECK(glint_reference_render(&r.scene, r.env, m, truth, &ro, photo) ==
 		      0,
 	      "%s", glint_error_msg());
-	double sim_s = glint_now() - t0;
+	double sim_s = glint_clock_monotonic() - t0;
 
 	struct glint_fit_opts o;
 	struct glint_fit_result res, lm;

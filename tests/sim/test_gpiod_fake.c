@@ -10,6 +10,7 @@
 #include "test.h"
 
 #include "board/board.h"
+#include "core/clock.h"
 #include "core/error.h"
 
 #include <stdio.h>
@@ -230,6 +231,34 @@ static void test_position_sensor(void)
 	glint_board_close(b);
 }
 
+/* The board's waits are on its injected clock: an hour's settle time
+ * and 40 steps at 2 Hz (20 s) pass at once on a fake clock, which moves
+ * by exactly what the board waited (the real clock barely moves). */
+static void test_fake_clock(void)
+{
+	struct glint_board_cfg c;
+	struct glint_board *b;
+	struct glint_fake_clock fc = { 100 };
+	struct glint_clock clk = glint_clock_fake(&fc);
+	cfg_default(&c);
+	c.settle_s = 3600;
+	c.step_hz = 2;
+	c.clock = &clk;
+	fake("");
+	CHECK(glint_board_open(&c, "glint test", &b) == 0, "%s",
+	      glint_error_msg());
+	if (!b)
+		return;
+	double t0 = glint_clock_monotonic();
+	CHECK(glint_board_turntable(b, 1, NULL) == 0, "%s", glint_error_msg());
+	double real = glint_clock_monotonic() - t0;
+	CHECK(fc.t >= 100 + 3600 + 9.9 && fc.t <= 100 + 3600 + 20.1,
+	      "fake clock at %.3f after a 3600 s settle and 20 steps at 2 Hz",
+	      fc.t);
+	CHECK(real < 5, "the move took %.2f s of real time", real);
+	glint_board_close(b);
+}
+
 int main(void)
 {
 	glint_backends_register();
@@ -244,6 +273,7 @@ int main(void)
 	RUN(test_refusals);
 	RUN(test_vanish);
 	RUN(test_position_sensor);
+	RUN(test_fake_clock);
 	remove(logpath);
 	return test_result();
 }

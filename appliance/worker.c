@@ -1,14 +1,16 @@
 /* SPDX-License-Identifier: MIT */
-#define _DEFAULT_SOURCE
+#define _GNU_SOURCE
 #include "appliance/worker.h"
 
 #include "appliance/queue.h"
+#include "appliance/session_fit.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "core/path.h"
 
 #include <errno.h>
 #include <fcntl.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -53,14 +55,67 @@ static void last_line(int fd, char *out, size_t n)
 	json_decref(doc);
 }
 
+/*
+ * The forked child: the session's fit as glint fit SESSION --wait runs
+ * it, through the library (appliance/session_fit.h), its logs as JSON
+ * lines into the job's .err file, the result document into .out, and the
+ * outcome's values (its json_t pointer cleared) into the pipe.  Returns
+ * the child's exit status.
+ */
+static int fit_child(const char *session, int fo, int fe, int pipe_fd)
+{
+	static struct glint_fit_request req;
+	static struct glint_fit_outcome o;
+	char *args[1] = { (char *)session };
+
+	if (dup2(fo, 1) < 0 || dup2(fe, 2) < 0)
+		return 126;
+	glint_log_set_mode(GLINT_LOG_JSON);
+	glint_fit_request_init(&req);
+	req.args = args;
+	req.nargs = 1;
+	req.wait = 1;
+	if (glint_session_fit(&req, &o) < 0) {
+		glint_log_error("fit: %s", glint_error_msg());
+		fflush(NULL);
+		return 1;
+	}
+	json_dumpf(o.doc, stdout, JSON_INDENT(2));
+	fputc('\n', stdout);
+	fflush(NULL);
+	json_decref(o.doc);
+	o.doc = NULL;
+	const char *p = (const char *)&o;
+	for (size_t done = 0; done < sizeof(o);) {
+		ssize_t w = write(pipe_fd, p + done, sizeof(o) - done);
+		if (w < 0 && errno == EINTR)
+			continue;
+		if (w <= 0)
+			return 1;
+		done += (size_t)w;
+	}
+	return 0;
+}
+
+/* The child's outcome, whole, from the pipe (after it exited). */
+static int read_outcome(int fd, struct glint_fit_outcome *o)
+{
+	char *p = (char *)o;
+	size_t done = 0;
+	while (done < sizeof(*o)) {
+		ssize_t r = read(fd, p + done, sizeof(*o) - done);
+		if (r < 0 && errno == EINTR)
+			continue;
+		if (r <= 0)
+			return -EIO;
+		done += (size_t)r;
+	}
+	o->doc = NULL;
+	return 0;
+}
+
 static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 {
-	char self[GLINT_PATH_MAX];
-
-	if (glint_path_self(self, sizeof(self)) < 0)
-		return glint_queue_finish(
-			queue, job, "failed",
-			json_pack("{s:s}", "error", glint_error_msg()));
 	/* A job file is data: its session must be an absolute path (as
 	 * glint queue add writes it), and it is passed after "--", so it
 	 * can never be taken for an option. */
@@ -85,28 +140,9 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 			json_pack("{s:s}", "error", glint_error_msg()));
 	}
 	glint_log_info("job %s: fitting %s", job->id, job->session);
-	pid_t worker = getpid();
-	pid_t pid = fork();
-	if (pid == 0) {
-		/* The fit dies with its worker (SIGTERM when the worker
-		 * exits, even by SIGKILL), in a process group of its own,
-		 * and holds the job's lock while it lives: no next worker
-		 * re-runs a job whose fit is still running. */
-		setpgid(0, 0);
-		prctl(PR_SET_PDEATHSIG, SIGTERM);
-		if (getppid() != worker)
-			_exit(127);
-		if (job->lock_fd >= 0)
-			fcntl(job->lock_fd, F_SETFD, 0);
-		if (dup2(fo, 1) < 0 || dup2(fe, 2) < 0)
-			_exit(126);
-		execl(self, "glint", "fit", "--wait", "--json", "--", session,
-		      (char *)NULL);
-		_exit(127);
-	}
-	if (pid > 0)
-		setpgid(pid, pid); /* as the child does: no race with kill */
-	if (pid < 0) {
+	/* The child's outcome comes back as values through a pipe. */
+	int pfd[2];
+	if (pipe2(pfd, O_CLOEXEC) < 0) {
 		int e = errno;
 		close(fo);
 		close(fe);
@@ -114,7 +150,39 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 			queue, job, "failed",
 			json_pack("{s:s}", "error", strerror(e)));
 	}
+	pid_t worker = getpid();
+	pid_t pid = fork();
+	if (pid == 0) {
+		/* The fit dies with its worker (SIGTERM when the worker
+		 * exits, even by SIGKILL), in a process group of its own,
+		 * and holds the job's lock (inherited) while it lives: no
+		 * next worker re-runs a job whose fit is still running. */
+		setpgid(0, 0);
+		/* The worker's handlers (a flag to stop after this job)
+		 * are not the fit's: SIGTERM ends it. */
+		signal(SIGTERM, SIG_DFL);
+		signal(SIGINT, SIG_DFL);
+		signal(SIGHUP, SIG_DFL);
+		prctl(PR_SET_PDEATHSIG, SIGTERM);
+		if (getppid() != worker)
+			_exit(127);
+		close(pfd[0]);
+		_exit(fit_child(session, fo, fe, pfd[1]));
+	}
+	close(pfd[1]);
+	if (pid > 0)
+		setpgid(pid, pid); /* as the child does: no race with kill */
+	if (pid < 0) {
+		int e = errno;
+		close(fo);
+		close(fe);
+		close(pfd[0]);
+		return glint_queue_finish(
+			queue, job, "failed",
+			json_pack("{s:s}", "error", strerror(e)));
+	}
 	int status = 0, cancelled = 0;
+	static struct glint_fit_outcome outcome;
 	struct rusage ru;
 	memset(&ru, 0, sizeof(ru));
 	for (;;) {
@@ -136,6 +204,7 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 		 * the next worker. */
 		close(fo);
 		close(fe);
+		close(pfd[0]);
 		glint_queue_drop_outputs(job);
 		glint_job_release(job);
 		glint_queue_recover(queue);
@@ -144,20 +213,15 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 	if (cancelled) {
 		state = "cancelled";
 		res = json_object();
-	} else if (WIFEXITED(status) && WEXITSTATUS(status) == 0) {
-		json_t *doc = lseek(fo, 0, SEEK_SET) == 0
-				      ? json_loadfd(fo, 0, NULL)
-				      : NULL;
+	} else if (WIFEXITED(status) && WEXITSTATUS(status) == 0 &&
+		   read_outcome(pfd[0], &outcome) == 0) {
 		state = "done";
-		/* (json_pack has no optional real: "f*" made the whole
-		 * result NULL, and the job kept none of it) */
 		res = json_object();
-		json_t *pa = json_object_get(doc, "parameters");
-		json_t *rr = json_object_get(doc, "relative_rmse");
-		json_object_set(res, "parameters", pa ? pa : json_null());
-		if (json_is_number(rr))
-			json_object_set(res, "relative_rmse", rr);
-		json_decref(doc);
+		json_object_set_new(res, "parameters",
+				    glint_fit_outcome_parameters(&outcome));
+		if (isfinite(outcome.relative_rmse))
+			json_object_set_new(res, "relative_rmse",
+					    json_real(outcome.relative_rmse));
 	} else {
 		char msg[1024];
 		last_line(fe, msg, sizeof(msg));
@@ -177,6 +241,7 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 		glint_log_info("job %s: %s", job->id, state);
 	close(fo);
 	close(fe);
+	close(pfd[0]);
 	return glint_queue_finish(queue, job, state, res);
 }
 

@@ -5,11 +5,16 @@
 #include "core/atomic.h"
 
 /*
- * A queue worker: claim jobs (appliance/queue.h) and run each as a child
- * `glint fit SESSION --wait --json` (so one session is fitted by one
- * process at a time whoever queued it), until *stop, or until the queue
- * is empty when until_empty.  A cancel request stops the child (SIGTERM).
- * Returns the number of jobs run, or a negative error.
+ * A queue worker: claim jobs (appliance/queue.h) and run each in a forked
+ * child that calls glint_session_fit() (appliance/session_fit.h) as
+ * `glint fit SESSION --wait` would (so one session is fitted by one
+ * process at a time whoever queued it; the child's outcome comes back as
+ * values through a pipe), until *stop, or until the queue is empty when
+ * until_empty.  A cancel request stops the child (SIGTERM to its process
+ * group).  Returns the number of jobs run, or a negative error.
+ *
+ * Threads: call from a process with no other threads (the child is
+ * forked and runs the fit without exec).
  */
 int glint_queue_work(const char *queue, int until_empty, atomic_int *stop);
 

@@ -153,7 +153,8 @@ int main(int argc, char **argv)
 					if (glint_fit(&r, m, photo, weight, &o,
 						      &res) < 0)
 						return 1;
-					double dt = glint_clock_monotonic() - t0;
+					double dt =
+						glint_clock_monotonic() - t0;
 					int out = WRONG;
 					if (within(res.p, ref.p))
 						out = CONVERGED;

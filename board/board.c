@@ -389,7 +389,8 @@ static int lights_set(struct glint_board *b, unsigned mask)
 			any = 1;
 		}
 	if (ret == 0 && any)
-		glint_clock_sleep(b->cfg.clock, b->cfg.settle_s); /* lamps warm up */
+		glint_clock_sleep(b->cfg.clock,
+				  b->cfg.settle_s); /* lamps warm up */
 	return ret;
 }
 

@@ -2,6 +2,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "cmd.h"
 #include "options.h"
+#include "appliance/session_fit.h"
 #include "capture/hdr/session.h"
 #include "fit/job.h"
 
@@ -356,147 +357,6 @@ static int add_weights(const char *arg, void *dest)
 
 /* What to fit: scene, photo and weights of each photo, from SCENE PHOTO
  * pairs or capture sessions (their fit locks held). */
-struct fit_inputs {
-	int n;
-	const char *scene[GLINT_FIT_MAX_VIEWS], *photo[GLINT_FIT_MAX_VIEWS];
-	const char *weights[GLINT_FIT_MAX_VIEWS];
-	struct glint_session_fit fs[GLINT_FIT_MAX_VIEWS];
-	int lock[GLINT_FIT_MAX_VIEWS];
-};
-
-static int is_dir(const char *path)
-{
-	struct stat st;
-
-	return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
-}
-
-/* Sessions: each one's scene, sample and merge weights, locked.  Returns
- * 0, or cmd_fail()'s status. */
-static int session_inputs(char **dirs, int n, int wait,
-			  const struct weights_list *wl, struct fit_inputs *in)
-{
-	for (int k = 0; k < n; k++) {
-		struct glint_session_fit *fs = &in->fs[k];
-		if (glint_session_fit_open(dirs[k], wait, fs, &in->lock[k]) < 0)
-			return cmd_fail("fit");
-		in->n = k + 1;
-		in->scene[k] = fs->scene;
-		in->photo[k] = fs->photo;
-		in->weights[k] = wl->n		  ? wl->path[k]
-				 : fs->weights[0] ? fs->weights
-						  : NULL;
-	}
-	return 0;
-}
-
-/*
- * The positional arguments: one SESSION, several SESSIONs (a joint fit of
- * their samples, -o required), or SCENE PHOTO pairs; --weights once per
- * photo.  *out_dir defaults to the session's fit folder, or fit-out.
- * Returns 0, or the command's exit status.
- */
-static int fit_inputs(const struct cmd_args *a, const struct weights_list *wl,
-		      int wait, struct fit_inputs *in, const char **out_dir)
-{
-	int sessions = a->argc >= 1, n;
-
-	for (int k = 0; k < GLINT_FIT_MAX_VIEWS; k++)
-		in->lock[k] = -1;
-	in->n = 0;
-	for (int k = 0; k < a->argc; k++)
-		sessions &= is_dir(a->argv[k]);
-	/* one argument can only be a session: its own error says what is
-	 * wrong with it */
-	sessions |= a->argc == 1;
-	if (!sessions && (a->argc < 2 || a->argc % 2))
-		return cmd_usage_error("fit",
-				       "expected SCENE.json and PHOTO (or "
-				       "several such pairs), or capture "
-				       "SESSIONs");
-	n = sessions ? a->argc : a->argc / 2;
-	/* a rig run: its samples, jointly, into RUN/fit */
-	_Static_assert(GLINT_RUN_MAX_SAMPLES <= GLINT_FIT_MAX_VIEWS,
-		       "a run's samples fit jointly");
-	static struct glint_run_samples rs;
-	int run = a->argc == 1 ? glint_run_read(a->argv[0], &rs) : 0;
-	if (run < 0)
-		return cmd_fail("fit");
-	if (run) {
-		char *dirs[GLINT_RUN_MAX_SAMPLES];
-		n = rs.n;
-		for (int k = 0; k < n; k++)
-			dirs[k] = rs.session[k];
-		if (wl->n && wl->n != n)
-			return cmd_usage_error("fit",
-					       "--weights given %d times for a "
-					       "run of %d samples",
-					       wl->n, n);
-		int ret = session_inputs(dirs, n, wait, wl, in);
-		if (ret == 0 && !*out_dir)
-			*out_dir = rs.out;
-		return ret;
-	}
-	if (n > GLINT_FIT_MAX_VIEWS)
-		return cmd_usage_error(
-			"fit", "%d photos: a joint fit takes at most %d", n,
-			GLINT_FIT_MAX_VIEWS);
-	if (wl->n && wl->n != n)
-		return cmd_usage_error("fit",
-				       "--weights given %d times for %d "
-				       "photo%s: once per photo, in their "
-				       "order, or not at all",
-				       wl->n, n, n > 1 ? "s" : "");
-	if (sessions && n > 1 && !*out_dir)
-		return cmd_usage_error("fit",
-				       "a joint fit of %d sessions writes "
-				       "into no session's folder: give -o "
-				       "DIR",
-				       n);
-	if (sessions) {
-		int ret = session_inputs(a->argv, n, wait, wl, in);
-		if (ret)
-			return ret;
-		if (!*out_dir)
-			*out_dir = in->fs[0].out;
-		return 0;
-	}
-	for (int k = 0; k < n; k++) {
-		in->scene[k] = a->argv[2 * k];
-		in->photo[k] = a->argv[2 * k + 1];
-		in->weights[k] = wl->n ? wl->path[k] : NULL;
-	}
-	in->n = n;
-	if (!*out_dir)
-		*out_dir = "fit-out";
-	return 0;
-}
-
-/* The job's photos loaded: the first into job, the others into also[]. */
-static int load_inputs(struct glint_fit_job *job, struct glint_fit_job *also,
-		       const struct fit_inputs *in)
-{
-	job->scene_path = in->scene[0];
-	job->photo_path = in->photo[0];
-	int ret = glint_fit_job_load(job, in->weights[0]);
-	if (ret == 0)
-		ret = glint_fit_job_crop(job);
-	job->also = also;
-	for (int k = 1; k < in->n && ret == 0; k++) {
-		struct glint_fit_job *a = &also[k - 1];
-		memset(a, 0, sizeof(*a));
-		a->scene_path = in->scene[k];
-		a->photo_path = in->photo[k];
-		a->srgb = job->srgb;
-		a->nthreads = job->nthreads;
-		job->nalso = k;
-		ret = glint_fit_job_load(a, in->weights[k]);
-		if (ret == 0)
-			ret = glint_fit_job_crop(a);
-	}
-	return ret;
-}
-
 /* The joint fit's photos, one line each. */
 static void print_photos(const json_t *doc)
 {
@@ -520,105 +380,95 @@ static void print_photos(const json_t *doc)
 int cmd_fit(int argc, char **argv)
 {
 	static const char *const weightings[] = { "poisson", "uniform", NULL };
-	struct glint_fit_job job = { .model = &glint_model_torrance_sparrow };
+	static struct glint_fit_request req;
+	struct glint_fit_job *job = &req.job;
 	struct weights_list wl = { .n = 0 };
-	static struct glint_fit_job also[GLINT_FIT_MAX_VIEWS - 1];
-	int wait = 0, samples = 0, sets = 0, seed = -1, ladder = 0;
+	int samples = 0, sets = 0, seed = -1, ladder = 0;
 	int method = -1, optimizer = -1, weighting = -1, nocoarse = 0;
 
-	glint_fit_default_opts(&job.opts);
+	glint_fit_request_init(&req);
 	const struct cmd_opt opts[] = {
-		CMD_STRING("output", 'o', &job.out_dir),
-		CMD_CALL("model", &job.model, parse_model),
+		CMD_STRING("output", 'o', &job->out_dir),
+		CMD_CALL("model", &job->model, parse_model),
 		CMD_CHOICE("method", &method, glint_fit_method_names),
 		CMD_CHOICE("optimizer", &optimizer, glint_fit_optimizer_names),
 		CMD_FLAG("no-coarse", 0, &nocoarse),
-		CMD_FLAG("faithful", 0, &job.opts.faithful),
+		CMD_FLAG("faithful", 0, &job->opts.faithful),
 		CMD_CALL("weights", &wl, add_weights),
 		CMD_CHOICE("weighting", &weighting, weightings),
-		CMD_REAL("mask-threshold", &job.opts.mask_threshold, 0, 1e6),
-		CMD_INT("max-pixels", &job.opts.max_pixels, 64, 1 << 24),
+		CMD_REAL("mask-threshold", &job->opts.mask_threshold, 0, 1e6),
+		CMD_INT("max-pixels", &job->opts.max_pixels, 64, 1 << 24),
 		CMD_INT("samples", &samples, 1, 4096),
-		CMD_INT("max-samples", &job.opts.max_samples, 1, 4096),
+		CMD_INT("max-samples", &job->opts.max_samples, 1, 4096),
 		CMD_INT("sample-sets", &sets, 1, 16),
-		CMD_REAL("level", &job.opts.level, 0.51, 0.999),
-		CMD_REAL("accept-rmse", &job.accept_rmse, 1e-9, 1e9),
-		CMD_FLAG("force", 0, &job.force),
-		CMD_FLAG("srgb", 0, &job.srgb),
-		CMD_CALL("export", &job.exports, parse_exports),
-		CMD_INT("max-iter", &job.opts.max_iter, 1, 10000),
-		CMD_INT("threads", &job.nthreads, 0, 256),
-		CMD_FLAG("wait", 0, &wait),
+		CMD_REAL("level", &job->opts.level, 0.51, 0.999),
+		CMD_REAL("accept-rmse", &job->accept_rmse, 1e-9, 1e9),
+		CMD_FLAG("force", 0, &job->force),
+		CMD_FLAG("srgb", 0, &job->srgb),
+		CMD_CALL("export", &job->exports, parse_exports),
+		CMD_INT("max-iter", &job->opts.max_iter, 1, 10000),
+		CMD_INT("threads", &job->nthreads, 0, 256),
+		CMD_FLAG("wait", 0, &req.wait),
 		CMD_INT("seed", &seed, 0, 2147483647),
-		CMD_INT("anneal-evals", &job.opts.anneal_evals, 10, 1000000),
+		CMD_INT("anneal-evals", &job->opts.anneal_evals, 10, 1000000),
 		CMD_FLAG("ladder", 0, &ladder),
-		CMD_REAL("ladder-limit", &job.ladder, 1e-6, 10),
-		CMD_CALL("ladder-knobs", &job.ladder_knobs, parse_knobs),
-		CMD_FLAG("select-model", 0, &job.select),
-		CMD_FLAG("no-select-model", 0, &job.no_auto_select),
+		CMD_REAL("ladder-limit", &job->ladder, 1e-6, 10),
+		CMD_CALL("ladder-knobs", &job->ladder_knobs, parse_knobs),
+		CMD_FLAG("select-model", 0, &job->select),
+		CMD_FLAG("no-select-model", 0, &job->no_auto_select),
 		{ 0 },
 	};
 	struct cmd_args a;
 	int r = cmd_options_parse("fit", cmd_fit_help, opts, argc, argv, &a);
 	if (r)
 		return cmd_options_exit(r);
-	int json = a.json;
 	if (method >= 0)
-		job.opts.method = (enum glint_fit_method)method;
+		job->opts.method = (enum glint_fit_method)method;
 	if (optimizer >= 0)
-		job.opts.optimizer = (enum glint_fit_optimizer)optimizer;
+		job->opts.optimizer = (enum glint_fit_optimizer)optimizer;
 	if (weighting >= 0)
-		job.opts.weighting =
+		job->opts.weighting =
 			weighting ? GLINT_WEIGHT_UNIFORM : GLINT_WEIGHT_POISSON;
 	if (nocoarse)
-		job.opts.coarse_to_fine = 0;
+		job->opts.coarse_to_fine = 0;
 	if (samples)
-		job.opts.light_samples = job.opts.lobe_samples = samples;
+		job->opts.light_samples = job->opts.lobe_samples = samples;
 	if (sets)
-		job.opts.mc_draws = sets - 1;
+		job->opts.mc_draws = sets - 1;
 	if (seed >= 0)
-		job.opts.seed = (uint64_t)seed;
-	if ((ladder || job.ladder_knobs) && !(job.ladder > 0))
-		job.ladder = 0.5;
-	static struct fit_inputs in;
-	int ret = fit_inputs(&a, &wl, wait, &in, &job.out_dir);
-	if (ret)
-		goto unlock;
-	json_t *doc = NULL;
-	job.opts.progress = cmd_fit_progress;
-	ret = load_inputs(&job, also, &in);
-	if (!ret)
-		ret = glint_fit_job_run(&job, &doc);
-	glint_fit_job_unload(&job);
-	for (int k = 0; k < job.nalso; k++)
-		glint_fit_job_unload(&also[k]);
-	ret = ret < 0 ? cmd_fail("fit") : 0;
-unlock:
-	for (int k = 0; k < GLINT_FIT_MAX_VIEWS; k++)
-		glint_lockfile_release(in.lock[k]);
-	if (ret)
-		return ret;
-	if (json) {
+		job->opts.seed = (uint64_t)seed;
+	if ((ladder || job->ladder_knobs) && !(job->ladder > 0))
+		job->ladder = 0.5;
+	job->opts.progress = cmd_fit_progress;
+	req.args = a.argv;
+	req.nargs = a.argc;
+	for (int k = 0; k < wl.n; k++)
+		req.weights[k] = wl.path[k];
+	req.nweights = wl.n;
+
+	struct glint_fit_outcome o;
+	if (glint_session_fit(&req, &o) < 0)
+		return o.usage ? cmd_usage_error("fit", "%s", glint_error_msg())
+			       : cmd_fail("fit");
+	json_t *doc = o.doc;
+	if (a.json) {
 		cmd_print_json(doc);
 		return GLINT_EXIT_OK;
 	}
-	const struct glint_model_ops *fm = glint_model_find(
-		json_string_value(json_object_get(doc, "model")));
 	printf("fit: %s, %s%s, %.2f s, relative RMSE %.4f on %d pixels\n",
-	       fm->name,
-	       !fm->transparent ? glint_fit_method_name(job.opts.method)
-	       : job.opts.optimizer == GLINT_OPT_LM ? "LM"
-						    : "annealing + LM polish",
-	       !fm->transparent && job.opts.coarse_to_fine ? " coarse-to-fine"
-							   : "",
-	       json_real_value(json_object_get(doc, "seconds")),
-	       json_real_value(json_object_get(doc, "relative_rmse")),
-	       (int)json_integer_value(json_object_get(doc, "pixels")));
+	       o.model,
+	       !o.transparent ? glint_fit_method_name(job->opts.method)
+	       : job->opts.optimizer == GLINT_OPT_LM ? "LM"
+						     : "annealing + LM polish",
+	       !o.transparent && job->opts.coarse_to_fine ? " coarse-to-fine"
+							  : "",
+	       o.seconds, o.relative_rmse, o.pixels);
 	cmd_print_params(doc, NULL);
 	cmd_print_verdicts(doc);
 	print_photos(doc);
 	printf("results: %s/params.json, render%s.exr, compare%s.png\n",
-	       job.out_dir, in.n > 1 ? "[-N]" : "", in.n > 1 ? "[-N]" : "");
+	       o.out_dir, o.nphotos > 1 ? "[-N]" : "",
+	       o.nphotos > 1 ? "[-N]" : "");
 	size_t k;
 	json_t *e;
 	json_array_foreach(json_object_get(doc, "exports"), k, e)
@@ -628,7 +478,7 @@ unlock:
 		if (file)
 			printf("export: %s/%s (%s), refit relative RMS "
 			       "%.4f\n",
-			       job.out_dir, file,
+			       o.out_dir, file,
 			       json_string_value(json_object_get(e, "format")),
 			       json_real_value(json_object_get(
 				       e, "refit_relative_rms")));

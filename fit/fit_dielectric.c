@@ -2,8 +2,8 @@
 /*
  * Fitting a transparent sphere: transmission RGB and ior against the photo
  * over the pixels wholly on the sphere.  A change of ior re-traces the
- * paths (fit/render/dielectric_paths.h; a few caches are kept, keyed by ior); a change
- * of transmission is a re-sum, and its Jacobian columns are exact.
+ * paths (fit/render/dielectric_paths.h; a few caches are kept, keyed by ior); a
+ * change of transmission is a re-sum, and its Jacobian columns are exact.
  * Optimiser: adaptive simulated annealing on a coarse pixel subset, then
  * an LM polish on all of them (the paper's choice for these spheres), or
  * LM alone from the start values.

@@ -403,8 +403,8 @@ static int render_final(struct glint_renderer *r,
 		if (ret < 0)
 			goto out;
 		f1 = glint_render_first_factor(
-			qp, (glint_clock_monotonic() - tp) * RENDER_PILOT_STEP, budget_s,
-			&first_limit);
+			qp, (glint_clock_monotonic() - tp) * RENDER_PILOT_STEP,
+			budget_s, &first_limit);
 	}
 	double t1 = glint_clock_monotonic();
 	ret = render_pair(r, job, model, p, f1, 0, 1, img, b, cov, &q1, &nv);
@@ -456,8 +456,8 @@ static int render_final(struct glint_renderer *r,
 		"light_samples", total_l, "brdf_samples", total_b, "noise",
 		glint_json_real_or_null(q), "noise_target", RENDER_NOISE_TARGET,
 		"below_target", q <= RENDER_NOISE_TARGET, "values",
-		(json_int_t)nv, "seconds", glint_clock_monotonic() - t0, "budget_seconds",
-		budget_s, "limited_by",
+		(json_int_t)nv, "seconds", glint_clock_monotonic() - t0,
+		"budget_seconds", budget_s, "limited_by",
 		q <= RENDER_NOISE_TARGET ? NULL : limited_by, "steps", steps);
 	if (*info && img->height >= RENDER_PILOT_MIN_ROWS)
 		json_object_set_new(*info, "pilot",
@@ -469,12 +469,13 @@ static int render_final(struct glint_renderer *r,
 		ret = glint_error_set(ENOMEM, "out of memory");
 		goto out;
 	}
-	glint_log_info(
-		"final render: %d + %d samples, its noise %.2f of the "
-		"photo's variance (target %.2f), %.1f s%s%s",
-		total_l, total_b, q, RENDER_NOISE_TARGET, glint_clock_monotonic() - t0,
-		q > RENDER_NOISE_TARGET && limited_by ? "; limited by " : "",
-		q > RENDER_NOISE_TARGET && limited_by ? limited_by : "");
+	glint_log_info("final render: %d + %d samples, its noise %.2f of the "
+		       "photo's variance (target %.2f), %.1f s%s%s",
+		       total_l, total_b, q, RENDER_NOISE_TARGET,
+		       glint_clock_monotonic() - t0,
+		       q > RENDER_NOISE_TARGET && limited_by ? "; limited by "
+							     : "",
+		       q > RENDER_NOISE_TARGET && limited_by ? limited_by : "");
 out:
 	glint_image_free(b);
 	glint_image_free(more);

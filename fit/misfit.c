@@ -44,7 +44,7 @@ struct vec3 glint_misfit_light(const struct glint_envmap *env)
 	}
 	return m3_mul(&env->rot,
 		      glint_latlong_uv_to_dir((bi + 0.5) / img->width,
-					     (bj + 0.5) / img->height));
+					      (bj + 0.5) / img->height));
 }
 
 static int band_of(const double *edges, double a)

@@ -122,8 +122,8 @@ static void shade(const struct ref_job *job, struct vec3 pos, struct vec3 d,
 
 /* Fresnel reflectance in its angle form (Rs = sin^2(i - t) / sin^2(i + t),
  * Rp = tan^2(i - t) / tan^2(i + t)), written independently of
- * fit/render/dielectric_paths.c's coefficient form.  n1 -> n2; sets *tt (angle of
- * refraction), returns 1 on total internal reflection. */
+ * fit/render/dielectric_paths.c's coefficient form.  n1 -> n2; sets *tt (angle
+ * of refraction), returns 1 on total internal reflection. */
 static double fresnel_angles(double ti, double n1, double n2, double *tt)
 {
 	double st = n1 / n2 * sin(ti);

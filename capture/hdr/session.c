@@ -347,7 +347,7 @@ void glint_session_list_free(char **list, int n)
 }
 
 int glint_session_fit_open(const char *dir, int wait,
-			   struct glint_session_fit *fs, int *lock)
+			   struct glint_session_fit_files *fs, int *lock)
 {
 	char path[GLINT_PATH_MAX];
 	int ret = glint_session_fit_inputs(dir, fs);
@@ -513,7 +513,7 @@ int glint_run_read(const char *dir, struct glint_run_samples *rs)
 int glint_fit_target_check(const char *dir)
 {
 	struct glint_run_samples *rs = malloc(sizeof(*rs));
-	struct glint_session_fit *fs = malloc(sizeof(*fs));
+	struct glint_session_fit_files *fs = malloc(sizeof(*fs));
 	int ret = rs && fs ? glint_run_read(dir, rs)
 			   : glint_error_set(ENOMEM, "out of memory");
 	if (ret == 0)

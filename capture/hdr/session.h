@@ -76,11 +76,12 @@ int glint_session_finish(struct glint_session *s, const struct glint_bracket *b,
  * GLINT_PATH_MAX bytes.  Anything else (a probe session, an incomplete
  * one, one without a scene) is an error saying what it is and what to do:
  * checked when a fit is queued, not when it runs. */
-struct glint_session_fit {
+struct glint_session_fit_files {
 	char scene[GLINT_PATH_MAX], photo[GLINT_PATH_MAX];
 	char weights[GLINT_PATH_MAX], out[GLINT_PATH_MAX];
 };
-int glint_session_fit_inputs(const char *dir, struct glint_session_fit *fs);
+int glint_session_fit_inputs(const char *dir,
+			     struct glint_session_fit_files *fs);
 
 /*
  * glint_session_fit_inputs(), then take the session's fit lock (one fit
@@ -90,7 +91,7 @@ int glint_session_fit_inputs(const char *dir, struct glint_session_fit *fs);
  * *lock is the caller's: release it with glint_lockfile_release().
  */
 int glint_session_fit_open(const char *dir, int wait,
-			   struct glint_session_fit *fs, int *lock);
+			   struct glint_session_fit_files *fs, int *lock);
 
 /* The sessions (folders holding a session.json) in root and one level
  * down (the daemon's run folders), sorted: *list holds *n paths; free it

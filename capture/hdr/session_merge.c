@@ -288,7 +288,8 @@ int glint_session_merge_write(const char *dir,
 	return glint_hdr_write(&raw, out, names, width, height, valid_px, NULL);
 }
 
-int glint_session_fit_inputs(const char *dir, struct glint_session_fit *fs)
+int glint_session_fit_inputs(const char *dir,
+			     struct glint_session_fit_files *fs)
 {
 	char path[GLINT_PATH_MAX];
 	struct stat st;

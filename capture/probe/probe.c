@@ -444,7 +444,7 @@ int glint_probe_unwrap(const struct glint_image *photo,
 	for (int y = 0; y < h; y++)
 		for (int x = 0; x < w; x++) {
 			struct vec3 d = glint_latlong_uv_to_dir((x + 0.5) / w,
-							       (y + 0.5) / h);
+								(y + 0.5) / h);
 			double px, py, ci;
 			float *pe = glint_image_px(e, x, y),
 			      *pm = glint_image_px(m, x, y),

@@ -107,7 +107,6 @@ int glint_probe_unwrap_write(const struct glint_image *photo,
 			     const struct glint_unwrap_opts *o,
 			     const char *env_path, int *width, int *height);
 
-
 /*
  * The ball's circle in o->ball_cx, ball_cy, ball_r: found by the sphere
  * detector (capture/probe/sphere_detect.h) unless `given`; a given circle is

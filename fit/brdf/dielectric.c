@@ -1,9 +1,9 @@
 /* SPDX-License-Identifier: MIT */
 /*
- * The smooth dielectric sphere (fit/render/dielectric_paths.h): RGB transmission per
- * traversal of the diameter and the index of refraction.  Not a BRDF: it
- * has no eval/sample (the renderer and the fitter follow its paths with
- * fit/render/dielectric_paths.c instead).
+ * The smooth dielectric sphere (fit/render/dielectric_paths.h): RGB
+ * transmission per traversal of the diameter and the index of refraction.  Not
+ * a BRDF: it has no eval/sample (the renderer and the fitter follow its paths
+ * with fit/render/dielectric_paths.c instead).
  */
 #include "model.h"
 

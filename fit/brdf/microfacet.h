@@ -14,7 +14,6 @@
  */
 double glint_beckmann_d(double cos_h, double m);
 
-
 /*
  * Torrance-Sparrow V-cavity shadowing and masking:
  * G = min(1, 2 (n.h)(n.o) / (o.h), 2 (n.h)(n.i) / (o.h)).

@@ -94,8 +94,9 @@ struct glint_model_ops {
 	 * hot texels over pixel footprints (fit/render/shade_cache.c). */
 	double (*lobe_width)(const double *p, int j);
 	void (*lobe_widen)(double *p, int j, double s);
-	/* A transparent sphere (fit/render/dielectric_paths.h): no BRDF (eval, sample
-	 * and pdf are NULL); rendered and fitted by following its paths. */
+	/* A transparent sphere (fit/render/dielectric_paths.h): no BRDF (eval,
+	 * sample and pdf are NULL); rendered and fitted by following its paths.
+	 */
 	int transparent;
 };
 

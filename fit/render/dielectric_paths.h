@@ -30,7 +30,6 @@
 #include "core/image.h"
 #include "core/optics.h"
 
-
 struct glint_dielectric_opts {
 	double min_weight; /* drop a branch below this Fresnel weight */
 	int max_depth;	   /* interfaces per path, a safety cap */

@@ -84,7 +84,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	/* As a session's session.json: what glint fit SESSION and the HDR
 	 * merge read from it. */
 	put(session_json, data, size);
-	struct glint_session_fit fs;
+	struct glint_session_fit_files fs;
 	glint_session_fit_inputs(dir, &fs);
 	struct glint_noise_model nm;
 	glint_session_noise(dir, &nm);

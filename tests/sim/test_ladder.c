@@ -36,9 +36,9 @@ static int write_sky(const char *path, int sun)
 	struct vec3 s = v3_norm(sun_dir);
 	for (int y = 0; y < img->height; y++)
 		for (int x = 0; x < img->width; x++) {
-			struct vec3 d =
-				glint_latlong_uv_to_dir((x + 0.5) / img->width,
-						       (y + 0.5) / img->height);
+			struct vec3 d = glint_latlong_uv_to_dir(
+				(x + 0.5) / img->width,
+				(y + 0.5) / img->height);
 			double up = 0.5 + 0.5 * d.y;
 			float *px = glint_image_px(img, x, y);
 			px[0] = (float)(0.10 + 0.15 * up);

@@ -24,8 +24,8 @@ static struct glint_envmap *disc_env(void)
 
 	for (int y = 0; y < 256; y++)
 		for (int x = 0; x < 512; x++) {
-			struct vec3 d = glint_latlong_uv_to_dir((x + 0.5) / 512,
-							       (y + 0.5) / 256);
+			struct vec3 d = glint_latlong_uv_to_dir(
+				(x + 0.5) / 512, (y + 0.5) / 256);
 			float *px = glint_image_px(img, x, y);
 			px[0] = px[1] = px[2] =
 				v3_dot(d, sun) > cos(0.1) ? 100 : 0.05f;

@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /*
- * The transparent sphere's physics (fit/render/dielectric_paths.c): Fresnel against
- * independently derived forms (Brewster, total internal reflection,
+ * The transparent sphere's physics (fit/render/dielectric_paths.c): Fresnel
+ * against independently derived forms (Brewster, total internal reflection,
  * energy conservation R + T = 1 from the transmission amplitudes), the
  * ray through the centre, a white furnace, the transmission convention
  * on the axis, and the measured effect of the branch cut-off.

@@ -40,7 +40,8 @@ static void test_uv_dir(void)
 		double u = glint_u01(glint_hash32(i)),
 		       v = glint_u01(glint_hash32(i + 999));
 		double u2, v2;
-		glint_latlong_dir_to_uv(glint_latlong_uv_to_dir(u, v), &u2, &v2);
+		glint_latlong_dir_to_uv(glint_latlong_uv_to_dir(u, v), &u2,
+					&v2);
 		CHECK(fabs(u - u2) < 1e-9 && fabs(v - v2) < 1e-9,
 		      "uv round trip (%g,%g) -> (%g,%g)", u, v, u2, v2);
 	}
@@ -52,7 +53,7 @@ static void test_lookup(void)
 	struct glint_envmap *env = make_env(64, 32, zero);
 	/* At a texel centre the bilinear lookup returns the texel. */
 	struct vec3 d = glint_latlong_uv_to_dir((64 / 3 + 0.5) / 64,
-					       (32 / 4 + 0.5) / 32);
+						(32 / 4 + 0.5) / 32);
 	glint_envmap_lookup(env, d, rgb);
 	CHECK_NEAR(rgb[0], 500, 1e-3, "texel centre");
 	/* Halfway between two texels: their mean. */
@@ -247,7 +248,7 @@ static double brute_irradiance(const struct glint_envmap *env, struct vec3 n)
 			struct vec3 d =
 				m3_mul(&env->rot,
 				       glint_latlong_uv_to_dir((i + 0.5) / W,
-							      (j + 0.5) / H));
+							       (j + 0.5) / H));
 			double c = v3_dot(n, d), l[3];
 			if (c <= 0)
 				continue;
@@ -291,7 +292,7 @@ static void test_irradiance_softboxes(void)
 			struct vec3 c = m3_mul(
 				&env->rot,
 				glint_latlong_uv_to_dir((b[0] + b[2]) / 2,
-						       (b[1] + b[3]) / 2));
+							(b[1] + b[3]) / 2));
 			struct vec3 t, s;
 			v3_frame(c, &t, &s);
 			double a = M_PI * k / 8 + 0.3;
@@ -350,8 +351,8 @@ static void test_hot_split(void)
 		double v = (j + 0.5) / m, sn = sin(M_PI * v);
 		for (int i = 0; i < n; i++) {
 			double u = (i + 0.5) / n;
-			struct vec3 d =
-				m3_mul(&env->rot, glint_latlong_uv_to_dir(u, v));
+			struct vec3 d = m3_mul(&env->rot,
+					       glint_latlong_uv_to_dir(u, v));
 			double all[3], rest[3], q[3], pdf;
 			glint_envmap_lookup(env, d, all);
 			glint_env_rest_lookup(env, hot, d, rest);
@@ -393,7 +394,8 @@ static void test_hot_split(void)
 	while (hot->is_hot[(size_t)(h / 4) * w + edge])
 		edge++;
 	double ue = (double)edge / w;
-	struct vec3 in = m3_mul(&env->rot, glint_latlong_uv_to_dir(ue - eps, v));
+	struct vec3 in =
+		m3_mul(&env->rot, glint_latlong_uv_to_dir(ue - eps, v));
 	struct vec3 out =
 		m3_mul(&env->rot, glint_latlong_uv_to_dir(ue + eps, v));
 	double ri[3], ro[3], ai[3];

@@ -1,0 +1,207 @@
+/* SPDX-License-Identifier: MIT */
+#ifndef GLINT_FIT_INTERNAL_H
+#define GLINT_FIT_INTERNAL_H
+
+/*
+ * What fit/'s parts share (private): the objective, the pixel selections
+ * and the functions one part calls in another.  Every function here
+ * works on one struct objective from one thread at a time (the
+ * renders inside use the objective's own worker threads); errors are
+ * negative errno values with glint_error_msg() set.
+ */
+
+#include "fit/fit.h"
+#include "fit/fit_data.h"
+#include "fit/misfit.h"
+#include "fit/optim/lm.h"
+#include "fit/optim/uncertainty.h"
+
+#define MAX_SETS 16
+
+/* One photo of the fit: its scene, and its pixels [off, off + n) of the
+ * joint data (glint_fit_views()). */
+struct view {
+	struct glint_renderer *r;
+	int off, n;
+	int interior, stride, frame_x, frame_y;
+	struct glint_shade_light *light; /* its map's, shared by its caches */
+};
+
+/* What one LM pass optimises. */
+struct objective {
+	struct glint_renderer *r;
+	struct glint_shade_cache *cache; /* NULL: faithful full renders */
+	const struct glint_model_ops *m;
+	const struct fit_data *d;
+	const int *sel;
+	int nsel;
+	double p[GLINT_MAX_PARAMS]; /* all parameters; free ones overwritten */
+	int nfree;
+	int free_idx[GLINT_MAX_PARAMS];
+	int varpro;	 /* free = nonlinear only; albedos solved inside */
+	double rough_lo; /* lower bound on the roughness parameter (coarse) */
+	/* which parameters are lobe albedos: lobe and channel, else -1 */
+	int lobe_of[GLINT_MAX_PARAMS], chan_of[GLINT_MAX_PARAMS];
+	/* memo of lobe integrals at the nonlinear parameters memo_p */
+	double *lobes, *lobes2;
+	double memo_p[GLINT_MAX_PARAMS];
+	int memo_valid;
+	/* faithful path */
+	const struct glint_fit_opts *o;
+	struct glint_image *img;
+	int evals;
+	/* independent sample sets of the final estimate (sets[0] = cache;
+	 * the others owned), whose mean the statistics use */
+	struct glint_shade_cache *sets[MAX_SETS];
+	int nsets;
+	/* each set's lobes at its last evaluation (sets_residuals()), at
+	 * the nonlinear parameters set_lobes_p, for the sets' Jacobians */
+	double *set_lobes[MAX_SETS];
+	double set_lobes_p[MAX_SETS][GLINT_MAX_PARAMS];
+	struct view views[GLINT_FIT_MAX_VIEWS];
+	int nviews;
+	/* The sets' mean weighted residuals at the final p over every
+	 * fitted pixel (uncertainty()), which the statistics reuse */
+	double *final_r;
+	int final_rows;
+	/* the shade caches' light and lobe samples are o's times this
+	 * (raised when the sample sets disagree by more than the noise) */
+	int sample_scale;
+	/* the sampling lean taken off each parameter (remove_lean()) and
+	 * the variance that adds */
+	double lean_fix[GLINT_MAX_PARAMS], lean_var[GLINT_MAX_PARAMS];
+	double mc_over_noise; /* the largest such ratio at the last check */
+	double model_noise;   /* the sets' variance over the residual's */
+};
+
+struct progress_ctx {
+	const struct glint_fit_opts *o;
+	const char *pass;
+};
+
+/* The pixel sets the passes run on, as indices into the fit's pixels. */
+struct selections {
+	int *all, *coarse, *spec, *diff;
+	int nall, ncoarse, nspec, ndiff;
+};
+
+/*
+ * The fit methods, one interface: a method is its coarse stage (what it
+ * optimises on the coarse pixel set, from the objective's start) and
+ * whether its fine pass solves the linear parameters exactly.  Indexed by
+ * enum glint_fit_method, named as glint_fit_method_names; annealing is the
+ * coarse stage --optimizer anneal puts in place of any method's.
+ */
+struct fit_method {
+	int (*coarse)(struct objective *ob, struct selections *sl,
+		      struct glint_fit_result *res);
+	int linear_fine; /* the fine pass projects out the albedos */
+};
+
+/* The coarse stage the options ask for (annealing when the optimizer is
+ * annealing, else the method's; NULL for an unknown method), and a
+ * method's entry by name (a valid enum value). */
+const struct fit_method *fit_method_of(const struct glint_fit_opts *o);
+const struct fit_method *fit_method_named(enum glint_fit_method m);
+
+int fit_view_of(const struct objective *ob, int s);
+
+int fit_nonlinear_same(const struct objective *ob, const double *a,
+		       const double *b);
+
+double fit_pixel_value(const struct objective *ob, const double *p,
+		       const double *lobes, int s, int c);
+
+int fit_render_full(struct objective *ob, const double *p);
+
+int fit_obj_residuals(void *ctx, const double *q, double *res);
+
+int fit_obj_jacobian(void *ctx, const double *q, const double *r, double *jac);
+
+int fit_scan_start(struct objective *ob, const int *sel, int nsel);
+
+void fit_add_pass(struct glint_fit_result *res, const char *name, int pixels,
+		  int iterations, int evaluations, double cost0, double cost,
+		  double t0);
+
+void fit_objective_lm_opts(struct glint_lm_opts *lo, int max_iter,
+			   struct progress_ctx *pc);
+
+int fit_anneal_pass(struct objective *ob, const int *sel, int nsel,
+		    struct glint_fit_result *res);
+
+int fit_run_pass(struct objective *ob, const char *name, const int *sel,
+		 int nsel, const int *freev, int varpro,
+		 struct glint_fit_result *res, struct glint_lm_result *lr);
+
+int fit_cmp_double(const void *a, const void *b);
+
+double fit_median_of(double *v, int n);
+
+void fit_baselines(const struct objective *ob, const struct fit_data *d,
+		   struct glint_fit_result *res);
+
+void fit_finish_stats(struct objective *ob, const int *sel, int nsel,
+		      struct glint_fit_result *res);
+
+void fit_selections_free(struct selections *s);
+
+void fit_objective_free(struct objective *ob);
+
+int fit_new_cache(const struct objective *ob, uint32_t seed,
+		  struct glint_shade_cache **out);
+
+int fit_objective_init(struct objective *ob, const struct view *views,
+		       int nviews, const struct glint_model_ops *model,
+		       const struct fit_data *d,
+		       const struct glint_fit_opts *o);
+
+int fit_make_selections(struct objective *ob, struct selections *sl);
+
+int fit_coarse_passes(struct objective *ob, struct selections *sl,
+		      struct glint_fit_result *res);
+
+int fit_fine_pass(struct objective *ob, const struct selections *sl,
+		  double coarse_rough_lo, double footprint,
+		  struct glint_fit_result *res);
+
+int fit_jacobian_fd(struct objective *ob, const double *q, const double *r,
+		    double *jac);
+
+int fit_pixel_blocks(const struct objective *ob, const int *sel, int nsel,
+		     int *block);
+
+int fit_sample_sets(struct objective *ob, int more,
+		    struct glint_shade_cache **sets, int *nsets);
+
+int fit_sets_residuals(void *ctx, const double *q, double *r);
+
+int fit_refine_on_sets(struct objective *ob,
+		       struct glint_shade_cache *const *sets, int nsets,
+		       const double *lo, const double *hi, double *each,
+		       double *r, double *jac, struct glint_fit_result *res);
+
+void fit_select_all(struct objective *ob, const struct selections *sl);
+
+int fit_reweight(struct objective *ob, struct fit_data *d, double *r);
+
+int fit_reweight_all(struct objective *ob, struct fit_data *d,
+		     const struct selections *sl);
+
+void fit_systematic(const struct glint_model_ops *m, const double *p,
+		    double *sys);
+
+void fit_discrepancy(const struct glint_model_ops *m, const double *p,
+		     double share, double *u);
+
+int fit_misfit_regions(const struct objective *ob, const struct selections *sl,
+		       const double *r, int *region, double *share);
+
+int fit_remove_lean(struct objective *ob, int nsets, const double *lo,
+		    const double *hi, double *each, double *r,
+		    const double *jac, const struct glint_uncertainty *u);
+
+int fit_uncertainty(struct objective *ob, struct fit_data *d,
+		    const struct selections *sl, struct glint_fit_result *res);
+
+#endif

@@ -4,6 +4,7 @@
 
 #include "appliance/queue.h"
 #include "appliance/session_fit.h"
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "core/path.h"
@@ -20,12 +21,6 @@
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
-
-static void nap(double s)
-{
-	struct timespec ts = { (time_t)s, (long)((s - (time_t)s) * 1e9) };
-	nanosleep(&ts, NULL);
-}
 
 /* The child's error message: the last non-empty line of its stderr, the
  * text of a JSON log line ({"level": ..., "msg": ...}) rather than the
@@ -195,7 +190,7 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 			cancelled = 1 + (*stop != 0);
 			kill(-pid, SIGTERM);
 		}
-		nap(0.1);
+		glint_clock_sleep(NULL, 0.1);
 	}
 	json_t *res;
 	const char *state;
@@ -261,7 +256,7 @@ int glint_queue_work(const char *queue, int until_empty, atomic_int *stop)
 		if (!got) {
 			if (until_empty)
 				break;
-			nap(0.5);
+			glint_clock_sleep(NULL, 0.5);
 			continue;
 		}
 		int ret = run_job(queue, &job, stop);

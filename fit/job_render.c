@@ -1,0 +1,298 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * The job's final render: a pilot pair of renders, then samples enough to keep
+ * the render's own noise below a share of the photo's, within a budget of
+ * the fit's time (job.h).
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "fit/job.h"
+#include "fit/job_internal.h"
+
+#include "fit/ladder.h"
+#include "fit/misfit.h"
+#include "fit/select.h"
+#include "export/export.h"
+#include "fit/render/compare.h"
+#include "core/clock.h"
+#include "core/atomic_dir.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/path.h"
+#include "core/formats.h"
+#include "core/json.h"
+#include "core/log.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/*
+ * The final render, with its own Monte Carlo noise held below the photo's
+ * where the photo has a noise model (a weight image of 1/variance), so
+ * that the residual judged in misfit and compare.png is the photo's noise
+ * and the model's misfit, not the render's.  Two renders on independent
+ * sample sets give the noise of their mean, (a - b)^2 / 4 per value; in
+ * the photo's variance units, averaged over the sphere's weighted values,
+ * that is q.  At the scene's sample counts q is measured; when it is above
+ * RENDER_NOISE_TARGET (the render's noise at most half the photo's, adding
+ * at most a quarter to chi^2) one more pair is rendered with the samples
+ * that should bring the two together to the target (q falls as 1 /
+ * samples), at most RENDER_MAX_FACTOR times the scene's, and the two
+ * means are combined by inverse variance.  The second pair also keeps to
+ * a time budget, twice the fit's time and at least RENDER_MIN_BUDGET_S,
+ * predicted from the first pair's time (a pair's time grows with its
+ * samples): a large photo (a 1 MP frame's sphere is 220,000 pixels) would
+ * otherwise spend minutes on a preview after a fit of seconds.  What
+ * limited the render is said in params.json.  Without a noise model the
+ * scene's counts are used as they are.
+ */
+#define RENDER_NOISE_TARGET 0.25
+
+#define RENDER_MAX_FACTOR 4
+
+#define RENDER_MIN_BUDGET_S 20.0
+
+/* The first pair's pilot: every 16th row, on images of 512 rows or more;
+ * its samples are cut at most to an eighth. */
+#define RENDER_PILOT_STEP 16
+
+#define RENDER_PILOT_MIN_ROWS 512
+
+#define RENDER_MIN_FACTOR 0.125
+
+double glint_render_first_factor(double q_pilot, double pair_s, double budget_s,
+				 const char **limited_by)
+{
+	double f = 1;
+
+	*limited_by = NULL;
+	/* aimed at half the target, so that the pair lands below it */
+	if (q_pilot >= 0 && isfinite(q_pilot))
+		f = fmin(1, q_pilot / (0.5 * RENDER_NOISE_TARGET));
+	if (pair_s > 0 && f * pair_s > budget_s) {
+		f = budget_s / pair_s;
+		*limited_by = "time: the budget_seconds it may take";
+	}
+	return fmax(f, RENDER_MIN_FACTOR);
+}
+
+int glint_render_factor(double q1, double pair_s, double budget_s,
+			const char **limited_by)
+{
+	*limited_by = NULL;
+	if (!(q1 > RENDER_NOISE_TARGET))
+		return 0;
+	int want = (int)ceil(q1 / RENDER_NOISE_TARGET - 1 - 1e-9);
+	int factor = want;
+	if (factor > RENDER_MAX_FACTOR) {
+		factor = RENDER_MAX_FACTOR;
+		*limited_by = "samples: at most 4 times the scene's per pair";
+	}
+	/* The second pair at `factor` takes about factor * pair_s. */
+	int afford = pair_s > 0 ? (int)floor(budget_s / pair_s) : factor;
+	if (afford < factor) {
+		factor = afford > 0 ? afford : 0;
+		*limited_by = "time: the budget_seconds it may take";
+	}
+	return factor;
+}
+
+static double render_noise(const struct glint_image *a,
+			   const struct glint_image *b,
+			   const struct glint_image *cov,
+			   const struct glint_image *w, long *nv)
+{
+	double sum = 0;
+	long n = 0;
+	size_t np = (size_t)a->width * a->height;
+	for (size_t i = 0; i < np; i++) {
+		if (cov->data[3 * i] < 1)
+			continue; /* rim or backdrop */
+		for (int c = 0; c < 3; c++) {
+			double wi = w->data[3 * i + c];
+			double d = a->data[3 * i + c] - b->data[3 * i + c];
+			if (!(wi > 0) || !isfinite(wi) || !isfinite(d))
+				continue;
+			sum += d * d / 4 * wi;
+			n++;
+		}
+	}
+	*nv = n;
+	return n ? sum / n : NAN;
+}
+
+/* The scene's count n times factor, at least 1 when n is not 0. */
+static int scaled(int n, double factor)
+{
+	return n ? (int)fmax(1, floor(n * factor + 0.5)) : 0;
+}
+
+/* One render at `factor` times the scene's samples, on sample sets
+ * `seed`, of every row_step-th row. */
+static int shade(struct glint_renderer *r, const struct glint_fit_job *job,
+		 const struct glint_model_ops *model, const double *p,
+		 double factor, uint32_t seed, int row_step,
+		 struct glint_image *out, struct glint_image *cov)
+{
+	struct glint_shade_opts so = {
+		.light_samples = scaled(job->scene.light_samples, factor),
+		.brdf_samples = scaled(job->scene.brdf_samples, factor),
+		.background = 1,
+		.nthreads = job->nthreads,
+		.seed = seed,
+		.row_step = row_step,
+	};
+	return glint_renderer_shade(r, model, p, &so, out, cov);
+}
+
+/* Into img, the mean of a pair of renders at `factor` times the scene's
+ * samples; b receives the second.  *q: the mean's noise. */
+static int render_pair(struct glint_renderer *r,
+		       const struct glint_fit_job *job,
+		       const struct glint_model_ops *model, const double *p,
+		       double factor, uint32_t seed, int row_step,
+		       struct glint_image *img, struct glint_image *b,
+		       struct glint_image *cov, double *q, long *nv)
+{
+	int ret = shade(r, job, model, p, factor, seed, row_step, img, cov);
+	if (ret == 0)
+		ret = shade(r, job, model, p, factor, seed + 1, row_step, b,
+			    NULL);
+	if (ret < 0)
+		return ret;
+	*q = render_noise(img, b, cov, job->weight, nv);
+	for (size_t i = 0; i < (size_t)img->width * img->height * 3; i++)
+		img->data[i] = 0.5f * (img->data[i] + b->data[i]);
+	return 0;
+}
+
+static json_t *render_step(const struct glint_fit_job *job, double factor,
+			   double q)
+{
+	return json_pack("{s:i, s:i, s:o}", "light_samples",
+			 2 * scaled(job->scene.light_samples, factor),
+			 "brdf_samples",
+			 2 * scaled(job->scene.brdf_samples, factor), "noise",
+			 glint_json_real_or_null(q));
+}
+
+int job_render_final(struct glint_renderer *r, const struct glint_fit_job *job,
+		     const struct glint_model_ops *model, const double *p,
+		     double fit_s, struct glint_image *img,
+		     struct glint_image *cov, json_t **info)
+{
+	const struct glint_image *w = job->weight;
+	double t0 = glint_clock_monotonic(), q1, q2 = NAN;
+	struct glint_image *b = NULL, *more = NULL;
+	long nv = 0;
+	int ret, factor = 0;
+
+	*info = NULL;
+	if (!w || model->transparent || w->width != img->width ||
+	    w->height != img->height) {
+		ret = shade(r, job, model, p, 1, 0, 1, img, cov);
+		if (ret < 0)
+			return ret;
+		*info = json_pack("{s:i, s:i, s:s}", "light_samples",
+				  job->scene.light_samples, "brdf_samples",
+				  job->scene.brdf_samples, "noise",
+				  "not compared: the photo has no noise model");
+		return *info ? 0 : glint_error_set(ENOMEM, "out of memory");
+	}
+	b = glint_image_new(img->width, img->height);
+	if (!b) {
+		ret = glint_error_set(ENOMEM, "out of memory");
+		goto out;
+	}
+	double budget_s = fmax(2 * fit_s, RENDER_MIN_BUDGET_S);
+	/* A large image's first pair is sized by a pilot of every 16th row:
+	 * fewer samples where the render is already far below the photo's
+	 * noise, and within the time budget. */
+	double f1 = 1, qp = NAN;
+	const char *first_limit = NULL;
+	if (img->height >= RENDER_PILOT_MIN_ROWS) {
+		double tp = glint_clock_monotonic();
+		ret = render_pair(r, job, model, p, 1, 0, RENDER_PILOT_STEP,
+				  img, b, cov, &qp, &nv);
+		if (ret < 0)
+			goto out;
+		f1 = glint_render_first_factor(
+			qp, (glint_clock_monotonic() - tp) * RENDER_PILOT_STEP,
+			budget_s, &first_limit);
+	}
+	double t1 = glint_clock_monotonic();
+	ret = render_pair(r, job, model, p, f1, 0, 1, img, b, cov, &q1, &nv);
+	if (ret < 0)
+		goto out;
+	double q = q1, pair_s = glint_clock_monotonic() - t1;
+	const char *limited_by;
+	factor = glint_render_factor(q1, pair_s, budget_s, &limited_by);
+	if (!factor && first_limit)
+		limited_by = first_limit;
+	if (factor && !(more = glint_image_new(img->width, img->height))) {
+		ret = glint_error_set(ENOMEM, "out of memory");
+		goto out;
+	}
+	if (factor) {
+		ret = render_pair(r, job, model, p, f1 * factor, 2, 1, more, b,
+				  cov, &q2, &nv);
+		if (ret < 0)
+			goto out;
+		/* Inverse-variance weights, one for the whole image: the
+		 * pixels' variances all fall with the samples alike. */
+		double w1 = 1 / q1, w2 = 1 / q2;
+		if (!(w2 > 0) || !isfinite(w2))
+			w1 = 0, w2 = 1; /* a noiseless second pair */
+		for (size_t i = 0; i < (size_t)img->width * img->height * 3;
+		     i++)
+			img->data[i] = (float)((w1 * img->data[i] +
+						w2 * more->data[i]) /
+					       (w1 + w2));
+		q = 1 / (w1 + w2);
+	}
+	int total_l =
+		2 * scaled(job->scene.light_samples, f1) +
+		(factor ? 2 * scaled(job->scene.light_samples, f1 * factor)
+			: 0);
+	int total_b =
+		2 * scaled(job->scene.brdf_samples, f1) +
+		(factor ? 2 * scaled(job->scene.brdf_samples, f1 * factor) : 0);
+	json_t *steps = json_array();
+	if (steps) {
+		json_array_append_new(steps, render_step(job, f1, q1));
+		if (factor)
+			json_array_append_new(
+				steps, render_step(job, f1 * factor, q2));
+	}
+	*info = json_pack(
+		"{s:i, s:i, s:o, s:f, s:b, s:I, s:f, s:f, s:s?, "
+		"s:o*}",
+		"light_samples", total_l, "brdf_samples", total_b, "noise",
+		glint_json_real_or_null(q), "noise_target", RENDER_NOISE_TARGET,
+		"below_target", q <= RENDER_NOISE_TARGET, "values",
+		(json_int_t)nv, "seconds", glint_clock_monotonic() - t0,
+		"budget_seconds", budget_s, "limited_by",
+		q <= RENDER_NOISE_TARGET ? NULL : limited_by, "steps", steps);
+	if (*info && img->height >= RENDER_PILOT_MIN_ROWS)
+		json_object_set_new(*info, "pilot",
+				    json_pack("{s:i, s:o, s:f}", "row_step",
+					      RENDER_PILOT_STEP, "noise",
+					      glint_json_real_or_null(qp),
+					      "first_pair_factor", f1));
+	if (!*info) {
+		ret = glint_error_set(ENOMEM, "out of memory");
+		goto out;
+	}
+	glint_log_info("final render: %d + %d samples, its noise %.2f of the "
+		       "photo's variance (target %.2f), %.1f s%s%s",
+		       total_l, total_b, q, RENDER_NOISE_TARGET,
+		       glint_clock_monotonic() - t0,
+		       q > RENDER_NOISE_TARGET && limited_by ? "; limited by "
+							     : "",
+		       q > RENDER_NOISE_TARGET && limited_by ? limited_by : "");
+out:
+	glint_image_free(b);
+	glint_image_free(more);
+	return ret;
+}

@@ -8,6 +8,11 @@
  * idle / busy / done / error on the LED.  A press during a run cancels it;
  * *stop (set by a signal handler) ends the loop with the outputs safe and
  * the current session closed as incomplete.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the step
+ * ("step i/n (name)").  Threads: the loop runs on the caller's thread and
+ * watches the button on one of its own during a run; *stop and *cancel
+ * may be set from a signal handler.  Nothing returned needs freeing.
  */
 
 #include "board/board.h"

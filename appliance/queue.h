@@ -24,6 +24,12 @@
  * (SIGKILL, power cut) leaves running/ID.json with no lock held: the next
  * claim puts it back in pending/, so it is re-run with no manual clean-up.
  * IDs sort by time added: "YYYYmmddTHHMMSSZ-PID-N".
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file.
+ * Threads: a claimed job (struct glint_job) belongs to one thread; the
+ * queue itself is shared through the file system only.  Who frees: a
+ * claimed job is finished (glint_queue_finish) or released
+ * (glint_job_release) by its claimer.
  */
 
 #include "core/path.h"

@@ -2,6 +2,16 @@
 #ifndef GLINT_APPLIANCE_RIG_H
 #define GLINT_APPLIANCE_RIG_H
 
+/*
+ * The rig file (docs/rig.md): camera, bracket, ROIs, optics, board lines,
+ * the sequence of steps and the output folder, validated whole on load.
+ *
+ * Errors: -EINVAL (or the read's errno) with glint_error_msg() naming the
+ * file and the key.  Threads: a loaded rig is read-only and may be shared.
+ * Who frees: glint_rig_free() after glint_rig_load(), also after a
+ * failed one.
+ */
+
 #include "board/board.h"
 #include "capture/run.h"
 #include "capture/hdr/session.h"

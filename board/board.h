@@ -20,6 +20,12 @@
  *   turntable_dir,    direction, enable), or, in relay mode, a relay
  *   turntable_enable  pulsed once per position on turntable_step
  *   position          optional input: 1 when the probe is in view
+ *
+ * Errors: a negative errno with glint_error_msg() naming the chip, line or
+ * role.  Threads: one thread drives a board (the LED thread is the
+ * board's own); glint_board_wait_press() may be cancelled from another
+ * thread through its flag.  Who frees: glint_board_close() after a
+ * successful glint_board_open(); it leaves every output safe.
  */
 
 #include "core/atomic.h"

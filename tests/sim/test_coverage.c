@@ -336,9 +336,9 @@ int main(int argc, char **argv)
 			if (!x->n)
 				continue;
 			/* The target, 90-98 %, is printed; what is asserted
-			 * is what is reached (README, "Uncertainty"): never
-			 * below the textbook intervals, and floors under the
-			 * coverage measured (quick, Venice: 62-100 %), so a
+			 * is what is reached (docs/tests.md, "Uncertainty"):
+			 * never below the textbook intervals, and floors under
+			 * the coverage measured (quick, Venice: 62-100 %), so a
 			 * change that loses coverage fails. */
 			double floor = g == 2 ? 0.5 : 0.7;
 			printf("%-11s %-10s target 90-98 %%: %s\n", "",

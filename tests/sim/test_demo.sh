@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The README's main job, `glint demo`, end to end: the simulated rig
+# The demo, `glint demo`, end to end: the simulated rig
 # photographs a Table-1 sphere, glint fits it, and the result files exist
 # and hold the truth within the demo's tolerances.
 set -u
@@ -15,7 +15,7 @@ import json, struct
 r = json.load(open("out.json"))
 assert r["material_name"] == "yellow-plastic", r["material_name"]
 truth, fit = r["truth"], r["material"]
-# Noise-free simulated photo at 256x256 (README: tolerances and why).
+# Noise-free simulated photo at 256x256 (docs/tests.md: tolerances and why).
 checks = []
 for i in range(3):
     checks.append(("diffuse", i, abs(fit["diffuse"][i] - truth["diffuse"][i]), 0.01))

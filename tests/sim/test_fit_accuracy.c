@@ -5,8 +5,8 @@
  * pseudo-random sampling, power heuristic; no shared sample sets) under a
  * real environment map, noise-free, then fitted with the paper's three-pass
  * method.  The issue's targets: albedos 0.01 absolute, roughness 5 %
- * relative, ior 0.05.  Reached at 192 px (README, "Fit accuracy"): diffuse
- * within 0.01 everywhere; roughness within 5 % in most cases and within
+ * relative, ior 0.05.  Reached at 192 px (docs/tests.md, "Fit accuracy"):
+ * diffuse within 0.01 everywhere; roughness within 5 % in most cases and within
  * 7.5 % in all (yellow plastic and teflon under Venice are the misses,
  * with a fitted cost *below* the truth's: the fast model's own optimum
  * sits there, so more pixels, not more iterations, would close it; at

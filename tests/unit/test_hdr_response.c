@@ -3,7 +3,7 @@
  * Response-curve recovery and the 8-bit merge on the real Memorial Church
  * stack (Debevec & Malik's own photographs, ../shared/data/exposures),
  * against OpenCV's regression data for the same stack and a published
- * merged radiance map.  The numbers printed here are the README's.
+ * merged radiance map.  The numbers printed here are docs/benchmarks.md's.
  */
 #include "test.h"
 

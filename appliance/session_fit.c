@@ -160,9 +160,9 @@ static double num(const json_t *o, const char *key)
 static void outcome_from(const json_t *doc, struct glint_fit_outcome *o)
 {
 	const char *model = json_string_value(json_object_get(doc, "model"));
-	const struct glint_model_ops *m = model ? glint_model_find(model) : 0;
+	const struct glint_model *m = model ? glint_model_find(model) : 0;
 	snprintf(o->model, sizeof(o->model), "%s", model ? model : "");
-	o->transparent = m && m->transparent;
+	o->transparent = m && glint_model_is_transparent(m);
 	o->relative_rmse = num(doc, "relative_rmse");
 	o->seconds = num(doc, "seconds");
 	o->pixels = (int)json_integer_value(json_object_get(doc, "pixels"));

@@ -171,7 +171,7 @@ static const char *base(const char *path)
  * a study of the fitter needs the same photos again. */
 static struct glint_image *reference(const struct glint_renderer *r,
 				     const char *map, const char *material,
-				     const struct glint_model_ops *m,
+				     const struct glint_model *m,
 				     const double *p, uint32_t seed)
 {
 	struct glint_image *img = NULL;
@@ -255,7 +255,7 @@ static double mc_noise(const struct glint_renderer *r,
  * first two: rms(a - b) / sqrt(2 n). */
 static struct glint_image *reference_mean(const struct glint_renderer *r,
 					  const char *map, const char *material,
-					  const struct glint_model_ops *m,
+					  const struct glint_model *m,
 					  const double *p, uint32_t seed, int n,
 					  double *noise)
 {
@@ -443,7 +443,7 @@ out:
  * any fitter: the within fraction such a fitter reaches on average.
  * (For a clean photo the noise is the reference render's Monte Carlo
  * noise, with the fast render's bias, if any, counted as noise too.) */
-static double ideal_within(const struct glint_model_ops *m, const double *truth,
+static double ideal_within(const struct glint_model *m, const double *truth,
 			   const struct glint_fit_result *res)
 {
 	int n = m->nparams, box[GLINT_MAX_PARAMS], nb = 0;
@@ -504,7 +504,7 @@ static double ideal_within(const struct glint_model_ops *m, const double *truth,
 
 /* Outcome of a fit against the truth; why: for a wrong one, the
  * parameter whose interval misses. */
-static int judge(const struct glint_model_ops *m, const double *truth,
+static int judge(const struct glint_model *m, const double *truth,
 		 const struct glint_fit_result *res, double *err, int *bound,
 		 char *why, size_t nwhy)
 {
@@ -569,7 +569,7 @@ static int load_map(const char *map, const struct glint_scene *sc,
 
 /* The fit's objective (weighted cost) at parameters p with roughness
  * set to rough: ACCURACY_PROFILE's points; NAN where it fails. */
-static double cost_at(struct glint_renderer *r, const struct glint_model_ops *m,
+static double cost_at(struct glint_renderer *r, const struct glint_model *m,
 		      const struct glint_image *photo,
 		      const struct glint_image *w,
 		      const struct glint_fit_opts *o, const double *p,
@@ -640,7 +640,7 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 		return;
 	}
 	for (int i = 0; i < nmats; i++) {
-		const struct glint_model_ops *m;
+		const struct glint_model *m;
 		double truth[GLINT_MAX_PARAMS];
 		if (!selected(getenv("ACCURACY_ONLY"), mats[i]))
 			continue;

@@ -109,7 +109,7 @@ static int dielectric_rows(int rounds)
 	for (int mi = 0; mi < 2; mi++) {
 		struct glint_scene sc;
 		struct glint_renderer r;
-		const struct glint_model_ops *m;
+		const struct glint_model *m;
 		double truth[GLINT_MAX_PARAMS];
 		char path[512];
 		fixture_scene(&sc, 256, NULL);
@@ -210,7 +210,7 @@ int main(int argc, char **argv)
 	const char *material = "yellow-plastic";
 	struct glint_scene sc;
 	struct glint_renderer r;
-	const struct glint_model_ops *m;
+	const struct glint_model *m;
 	double truth[GLINT_MAX_PARAMS];
 	char photo_path[512];
 

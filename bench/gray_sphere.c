@@ -178,7 +178,7 @@ static int load_light(int li, struct vec3 ldir, double cx, double cy,
 
 /* Fit models[m] to the shots (one: alone; several: jointly). */
 static int fit_shots(struct shot *const *shots, int n, int max_pixels,
-		     const struct glint_model_ops *model, struct row *row,
+		     const struct glint_model *model, struct row *row,
 		     struct glint_fit_result *out)
 {
 	struct glint_fit_view v[NLIGHTS];
@@ -217,7 +217,7 @@ static int cmp_double(const void *a, const void *b)
  * standard errors, and how many of their intervals hold it.
  */
 static int joint_fits(struct shot *const *shots, int n, int max_pixels,
-		      const struct glint_model_ops **models, int nmodels,
+		      const struct glint_model **models, int nmodels,
 		      struct row (*rows)[3], const int *use)
 {
 	struct glint_fit_result *res = malloc(sizeof(*res));
@@ -272,10 +272,9 @@ static int joint_fits(struct shot *const *shots, int n, int max_pixels,
 
 int main(int argc, char **argv)
 {
-	const struct glint_model_ops *models[] = {
-		&glint_model_lambert, &glint_model_oren_nayar,
-		&glint_model_torrance_sparrow
-	};
+	const struct glint_model *models[] = { &glint_model_lambert,
+					       &glint_model_oren_nayar,
+					       &glint_model_torrance_sparrow };
 	enum { NM = 3 };
 	struct vec3 lights[NLIGHTS];
 	static struct row rows[NLIGHTS][NM];

@@ -211,8 +211,8 @@ static const char *base(const char *path)
 	return s ? s + 1 : path ? path : "(none)";
 }
 
-static int fit_one(const char *map, double rot,
-		   const struct glint_model_ops *tm, struct one_fit *out)
+static int fit_one(const char *map, double rot, const struct glint_bxdf *tm,
+		   struct one_fit *out)
 {
 	struct glint_scene sc;
 	struct glint_renderer r;
@@ -231,8 +231,8 @@ static int fit_one(const char *map, double rot,
 	glint_reference_default_opts(&ro);
 	ro.spp = 4;
 	ro.samples = 128;
-	ret = photo ? glint_reference_render(&r.scene, r.env, tm,
-					     glint_tabulated_params, &ro, photo)
+	ret = photo ? glint_reference_render_bxdf(&r.scene, r.env, tm, &ro,
+						  photo)
 		    : -1;
 	if (!ret)
 		ret = fixture_add_noise(photo, &weight, 0.1);
@@ -360,12 +360,13 @@ static int run(struct material *mat, const char *const *maps, int nmaps,
 		fprintf(stderr, "%s: %s\n", mat->name, glint_error_msg());
 		return -1;
 	}
-	const struct glint_model_ops *tm = glint_tabulated_model(t, 0.1);
+	struct glint_tabulated tab;
+	struct glint_bxdf tm = glint_tabulated_bxdf(&tab, t, 0.1);
 	for (int i = 0; i < nmaps * nrot; i++) {
 		const char *map = maps[i / nrot];
 		double rot = -114 + 90 * (i % nrot);
 		struct one_fit *o = &out[i];
-		if (fit_one(map, rot, tm, o) < 0) {
+		if (fit_one(map, rot, &tm, o) < 0) {
 			printf("%-6s %s %4.0f: %s\n", mat->name, base(map), rot,
 			       glint_error_msg());
 			continue;

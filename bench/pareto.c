@@ -99,7 +99,7 @@ static struct outcome run_one(const struct config *c, const char *mat,
 			      const struct capture *cap)
 {
 	struct outcome out = { NAN, NAN, NAN, 0 };
-	const struct glint_model_ops *m;
+	const struct glint_model *m;
 	double truth[GLINT_MAX_PARAMS];
 	char env[256];
 	struct glint_scene sc;
@@ -179,7 +179,7 @@ int main(int argc, char **argv)
 	}
 	/* Reference photos first, in this process, so children only read. */
 	for (int i = 0; i < nm; i++) {
-		const struct glint_model_ops *m;
+		const struct glint_model *m;
 		double t[GLINT_MAX_PARAMS];
 		if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json",
 					materials[i], &m, t) < 0)

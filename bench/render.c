@@ -66,7 +66,7 @@ int main(int argc, char **argv)
 	struct glint_scene sc;
 	struct glint_renderer r;
 	double p[GLINT_MAX_PARAMS];
-	const struct glint_model_ops *model;
+	const struct glint_model *model;
 
 	if (rounds < 1)
 		rounds = 1;

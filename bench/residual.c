@@ -63,7 +63,7 @@ int main(int argc, char **argv)
 				"[ROUGHNESS...]\n");
 		return 2;
 	}
-	const struct glint_model_ops *m;
+	const struct glint_model *m;
 	double truth[GLINT_MAX_PARAMS];
 	struct glint_image *photo = NULL;
 	if (glint_material_load(GLINT_DATA_DIR "/paper-table1.json", argv[2],
@@ -117,11 +117,12 @@ int main(int argc, char **argv)
 		fprintf(stderr, "residual: %s\n", glint_error_msg());
 		return 1;
 	}
-	double *lobes = malloc((size_t)n * m->nlobes * 3 * sizeof(double));
+	double *lobes =
+		malloc((size_t)n * m->bxdf->nlobes * 3 * sizeof(double));
 	struct px *px = malloc((size_t)n * sizeof(*px));
 	double *vals = malloc((size_t)n * sizeof(double));
 	int nr = argc - 3;
-	if (nr > 1 && m->roughness_param < 0) {
+	if (nr > 1 && m->lobes->roughness_param < 0) {
 		fprintf(stderr, "residual: %s has no roughness\n", m->name);
 		return 1;
 	}
@@ -175,13 +176,14 @@ int main(int argc, char **argv)
 		if (at_s && k == nr - 1)
 			memcpy(p, at, sizeof(p));
 		else if (k)
-			p[m->roughness_param] = atof(argv[3 + k]);
+			p[m->lobes->roughness_param] = atof(argv[3 + k]);
 		glint_shade_cache_lobes(c, p, lobes);
 		if (getenv("RESIDUAL_LOBE_SUMS")) {
-			for (int j = 0; j < m->nlobes; j++) {
+			for (int j = 0; j < m->bxdf->nlobes; j++) {
 				double sj = 0;
 				for (int i = 0; i < n; i++)
-					sj += lobes[((size_t)i * m->nlobes +
+					sj += lobes[((size_t)i *
+							     m->bxdf->nlobes +
 						     j) *
 						    3];
 				printf("lobe %d sum %.6f\n", j, sj);
@@ -193,9 +195,10 @@ int main(int argc, char **argv)
 			const float *ph =
 				glint_image_px(photo, px[i].x, px[i].y);
 			double f = 0;
-			for (int j = 0; j < m->nlobes; j++)
-				f += p[m->lobe_param[j]] *
-				     lobes[((size_t)i * m->nlobes + j) * 3];
+			for (int j = 0; j < m->bxdf->nlobes; j++)
+				f += p[m->lobes->param[j]] *
+				     lobes[((size_t)i * m->bxdf->nlobes + j) *
+					   3];
 			px[i].fast = f;
 			px[i].photo = ph[0];
 			vals[i] = ph[0];
@@ -216,7 +219,7 @@ int main(int argc, char **argv)
 		}
 		printf("roughness %.5f: red channel, SSD highlight %.4g "
 		       "(%d px, total fast/photo %.4f) rest %.4g\n",
-		       p[m->roughness_param], ssd_hi, nhi, sum_f / sum_p,
+		       p[m->lobes->roughness_param], ssd_hi, nhi, sum_f / sum_p,
 		       ssd_lo);
 		/* All three channels by the view's angle to the normal:
 		 * Fresnel shows at grazing, the specular-ior ridge there. */
@@ -234,10 +237,11 @@ int main(int argc, char **argv)
 				photo, pix[i] % gb->width, pix[i] / gb->width);
 			for (int ch = 0; ch < 3; ch++) {
 				double f = 0;
-				for (int j = 0; j < m->nlobes; j++)
-					f += p[m->lobe_param[j] + ch] *
-					     lobes[((size_t)i * m->nlobes + j) *
-							   3 +
+				for (int j = 0; j < m->bxdf->nlobes; j++)
+					f += p[m->lobes->param[j] + ch] *
+					     lobes[((size_t)i *
+							    m->bxdf->nlobes +
+						    j) * 3 +
 						   ch];
 				band[b] += (f - ph[ch]) * (f - ph[ch]);
 			}

@@ -63,7 +63,7 @@ static const char *const outcome_names[NOUT] = { "converged", "hit a bound",
 						 "stalled", "wrong minimum" };
 
 static struct glint_image *
-photo_128(const char *mat, const struct glint_model_ops *m, const double *truth)
+photo_128(const char *mat, const struct glint_model *m, const double *truth)
 {
 	struct glint_image *big = bench_photo_512(mat, m, truth);
 	struct glint_image *img = big ? fixture_shrink(big, 4) : NULL;
@@ -93,7 +93,7 @@ int main(int argc, char **argv)
 	fprintf(csv, "method,material,noise_level,start,outcome,seconds,"
 		     "max_dev_tol\n");
 	for (int mi = 0; mi < NM; mi++) {
-		const struct glint_model_ops *m;
+		const struct glint_model *m;
 		double truth[GLINT_MAX_PARAMS];
 		struct glint_scene sc;
 		struct glint_renderer r;

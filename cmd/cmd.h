@@ -75,7 +75,7 @@ void cmd_print_verdicts(const json_t *doc);
  * exists, unless force); a transparent model needs the sphere's
  * diameter_m.  The result as JSON, or NULL with the error set. */
 json_t *cmd_export_write(enum glint_export_format format,
-			 const struct glint_model_ops *model, const double *p,
+			 const struct glint_model *model, const double *p,
 			 double diameter_m, const char *source,
 			 const char *name, const char *out, int force);
 

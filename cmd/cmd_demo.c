@@ -59,7 +59,7 @@ int cmd_demo(int argc, char **argv)
 	char scene_path[GLINT_PATH_MAX], table[GLINT_PATH_MAX];
 	char photo_path[GLINT_PATH_MAX], fit_dir[GLINT_PATH_MAX];
 	struct glint_fit_job job = { 0 };
-	const struct glint_model_ops *model;
+	const struct glint_model *model;
 	double truth[GLINT_MAX_PARAMS];
 	int noise = 0, method = -1, ret;
 
@@ -146,7 +146,7 @@ int cmd_demo(int argc, char **argv)
 		printf("  photo simulated in %.1f s; fit (%s) in %.2f s, "
 		       "relative RMSE %.4f\n",
 		       sim_s,
-		       model->transparent
+		       glint_model_is_transparent(model)
 			       ? "annealing + LM polish"
 			       : glint_fit_method_name(job.opts.method),
 		       json_real_value(json_object_get(doc, "seconds")),

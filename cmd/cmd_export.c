@@ -69,7 +69,7 @@ void cmd_export_help(void)
 }
 
 json_t *cmd_export_write(enum glint_export_format format,
-			 const struct glint_model_ops *model, const double *p,
+			 const struct glint_model *model, const double *p,
 			 double diameter_m, const char *source,
 			 const char *name, const char *out, int force)
 {
@@ -145,7 +145,7 @@ int cmd_export(int argc, char **argv)
 	if (!out)
 		return cmd_usage_error("export", "-o OUT is required");
 
-	const struct glint_model_ops *model;
+	const struct glint_model *model;
 	double p[GLINT_MAX_PARAMS];
 	if (glint_material_load(a.argv[0], entry, &model, p) < 0)
 		return cmd_fail("export");

@@ -310,7 +310,7 @@ void cmd_print_verdicts(const json_t *doc)
 
 static int parse_model(const char *arg, void *dest)
 {
-	const struct glint_model_ops **m = dest;
+	const struct glint_model **m = dest;
 	if (!strcmp(arg, "auto")) {
 		*m = NULL;
 		return 0;

@@ -37,7 +37,7 @@ static void blender_eval(const double *x, const struct glint_export *e,
 	blender_brdf(x, e->ggx, wo, wi, h, f);
 }
 
-static int blender_start(const struct glint_model_ops *model, const double *p,
+static int blender_start(const struct glint_model *model, const double *p,
 			 const struct glint_export *e, double *x, double *lo,
 			 double *hi)
 {
@@ -55,8 +55,7 @@ static int blender_start(const struct glint_model_ops *model, const double *p,
 /* The script after its constants: export/blender_preview.py, embedded
  * at build time. */
 static char *blender_text(const struct glint_export *e, const char *name,
-			  const char *source,
-			  const struct glint_model_ops *model)
+			  const char *source, const struct glint_model *model)
 {
 	const double *x = e->x;
 	char *s = NULL;

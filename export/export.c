@@ -112,10 +112,12 @@ struct dirs {
 	struct glint_export e;
 };
 
-static void dirs_build(const struct glint_model_ops *m, const double *p,
+static void dirs_build(const struct glint_model *m, const double *p,
 		       struct dirs *d)
 {
+	struct glint_bxdf bx = glint_model_bxdf(m, p);
 	double sum = 0;
+
 	for (int o = 0; o < NWO; o++) {
 		double t = (5 + 10 * o) * M_PI / 180;
 		struct vec3 wo = v3(sin(t), 0, cos(t));
@@ -127,13 +129,14 @@ static void dirs_build(const struct glint_model_ops *m, const double *p,
 			struct vec3 wi = v3(0, 0, 1);
 			if (k % 2)
 				glint_sample_cosine(u + 1, &wi);
-			else if (m->sample(p, wo, u, &wi) <= 0)
+			else if (glint_bxdf_sample(&bx, wo, u, &wi) <= 0)
 				glint_sample_cosine(u + 1, &wi);
-			double pdf = 0.5 * (m->pdf(p, wo, wi) + wi.z / M_PI);
+			double pdf = 0.5 * (glint_bxdf_pdf(&bx, wo, wi) +
+					    wi.z / M_PI);
 			d->wo[i] = wo;
 			d->wi[i] = wi;
 			d->w[i] = pdf > 0 ? wi.z / sqrt(pdf * NDIR) : 0;
-			m->eval(p, wo, wi, d->f + 3 * i);
+			glint_bxdf_eval(&bx, wo, wi, d->f + 3 * i);
 			for (int c = 0; c < 3; c++)
 				sum += d->f[3 * i + c] * d->w[i] *
 				       d->f[3 * i + c] * d->w[i];
@@ -169,9 +172,8 @@ static int lm_residuals(void *ctx, const double *x, double *r)
 	return 0;
 }
 /* The model's parameter called name, or fallback when it has none. */
-double glint_export_model_param(const struct glint_model_ops *m,
-				const double *p, const char *name,
-				double fallback)
+double glint_export_model_param(const struct glint_model *m, const double *p,
+				const char *name, double fallback)
 {
 	for (int k = 0; k < m->nparams; k++)
 		if (!strcmp(m->params[k].name, name))
@@ -187,15 +189,17 @@ void glint_export_set(double *x, double *lo, double *hi, int k, double v,
 	hi[k] = h;
 }
 
-void glint_export_lobes(const struct glint_model_ops *model, const double *p,
+void glint_export_lobes(const struct glint_model *model, const double *p,
 			double kd[3], double ks[3], double *ksm, double *w)
 {
-	*w = model->roughness_param >= 0 ? p[model->roughness_param] : 0.1;
-	int has_spec = model->nlobes > 1;
+	*w = model->lobes->roughness_param >= 0
+		     ? p[model->lobes->roughness_param]
+		     : 0.1;
+	int has_spec = model->bxdf->nlobes > 1;
 	*ksm = 0;
 	for (int c = 0; c < 3; c++) {
-		kd[c] = p[model->lobe_param[0] + c];
-		ks[c] = has_spec ? p[model->lobe_param[1] + c] : 0;
+		kd[c] = p[model->lobes->param[0] + c];
+		ks[c] = has_spec ? p[model->lobes->param[1] + c] : 0;
 		*ksm += ks[c] / 3;
 	}
 }
@@ -218,9 +222,8 @@ static double schlick_residual(double ior)
 
 /* A transparent sphere's parameters carried across (export.h). */
 static int dielectric_export(enum glint_export_format format,
-			     const struct glint_model_ops *model,
-			     const double *p, double diameter_m,
-			     struct glint_export *e)
+			     const struct glint_model *model, const double *p,
+			     double diameter_m, struct glint_export *e)
 {
 	static const char *const t[] = { "transmission.r", "transmission.g",
 					 "transmission.b" };
@@ -258,15 +261,15 @@ double glint_export_sigma_a_max(const struct glint_export *e)
 }
 
 int glint_export_refit(enum glint_export_format format,
-		       const struct glint_model_ops *model, const double *p,
+		       const struct glint_model *model, const double *p,
 		       double diameter_m, struct glint_export *e)
 {
 	if ((unsigned)format >= GLINT_EXPORT_NFORMATS)
 		return glint_error_set(EINVAL, "unknown export format %d",
 				       (int)format);
-	if (model->transparent)
+	if (glint_model_is_transparent(model))
 		return dielectric_export(format, model, p, diameter_m, e);
-	if (!model->eval || model->nlobes < 1)
+	if (!(model->bxdf->flags & GLINT_BXDF_LOBES) || model->bxdf->nlobes < 1)
 		return glint_error_set(EINVAL,
 				       "%s: the model has no BRDF to "
 				       "export",
@@ -274,7 +277,7 @@ int glint_export_refit(enum glint_export_format format,
 	memset(e, 0, sizeof(*e));
 	e->format = format;
 	e->ior = glint_export_model_param(model, p, "ior", 1.5);
-	e->ggx = model->name && strstr(model->name, "ggx") != NULL;
+	e->ggx = model->lobes->microfacet == &glint_microfacet_ggx;
 
 	double lo[GLINT_EXPORT_MAX_X], hi[GLINT_EXPORT_MAX_X];
 	int nx = targets[format]->start(model, p, e, e->x, lo, hi);
@@ -301,8 +304,8 @@ int glint_export_refit(enum glint_export_format format,
 	return ret;
 }
 
-double glint_export_residual(const struct glint_model_ops *model,
-			     const double *p, const struct glint_export *e)
+double glint_export_residual(const struct glint_model *model, const double *p,
+			     const struct glint_export *e)
 {
 	if (e->dielectric)
 		return targets[e->format]->schlick ? schlick_residual(e->ior)
@@ -344,7 +347,7 @@ const char *glint_export_note_of(const struct glint_export *e)
 }
 
 char *glint_export_text(const struct glint_export *e, const char *name,
-			const char *source, const struct glint_model_ops *model)
+			const char *source, const struct glint_model *model)
 {
 	const struct glint_export_target *t = glint_export_target_of(e->format);
 	char *safe = strdup(name && *name ? name : "material");

@@ -126,7 +126,7 @@ struct glint_export {
  * NAN when unknown refuses them).
  */
 int glint_export_refit(enum glint_export_format format,
-		       const struct glint_model_ops *model, const double *p,
+		       const struct glint_model *model, const double *p,
 		       double diameter_m, struct glint_export *e);
 
 /* The target's BRDF with e's parameters, f[3]; 0 below the surface (and
@@ -135,8 +135,8 @@ void glint_export_brdf(const struct glint_export *e, struct vec3 wo,
 		       struct vec3 wi, double f[3]);
 
 /* The relative RMS difference of e from (model, p) over the set above. */
-double glint_export_residual(const struct glint_model_ops *model,
-			     const double *p, const struct glint_export *e);
+double glint_export_residual(const struct glint_model *model, const double *p,
+			     const struct glint_export *e);
 
 /* The file name extension of a format's files (".gltf", ".xml", ".pbrt",
  * ".py", ".mtlx"). */
@@ -148,8 +148,7 @@ const char *glint_export_extension(enum glint_export_format format);
  * and '.' become '_'), with the refit's residual and its source.
  */
 char *glint_export_text(const struct glint_export *e, const char *name,
-			const char *source,
-			const struct glint_model_ops *model);
+			const char *source, const struct glint_model *model);
 
 /* The target's parameters by their names in the target, as JSON. */
 json_t *glint_export_params_json(const struct glint_export *e);

@@ -45,7 +45,7 @@ static void gltf_eval(const double *x, const struct glint_export *e,
 	gltf_brdf(x, e->ior, wo, wi, h, f);
 }
 
-static int gltf_start(const struct glint_model_ops *model, const double *p,
+static int gltf_start(const struct glint_model *model, const double *p,
 		      const struct glint_export *e, double *x, double *lo,
 		      double *hi)
 {
@@ -87,7 +87,7 @@ static json_t *gltf_dielectric(const struct glint_export *e, const char *name,
 
 static json_t *gltf_document(const struct glint_export *e, const char *name,
 			     const char *source,
-			     const struct glint_model_ops *model)
+			     const struct glint_model *model)
 {
 	const double *x = e->x;
 	json_t *glint = json_pack("{s:s, s:s, s:f, s:s}", "source", source,
@@ -111,7 +111,7 @@ static json_t *gltf_document(const struct glint_export *e, const char *name,
 }
 
 static char *gltf_text(const struct glint_export *e, const char *name,
-		       const char *source, const struct glint_model_ops *model)
+		       const char *source, const struct glint_model *model)
 {
 	json_t *doc = gltf_document(e, name, source, model);
 	char *text = doc ? json_dumps(doc, JSON_INDENT(2)) : NULL;

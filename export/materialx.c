@@ -95,7 +95,7 @@ static void materialx_eval(const double *x, const struct glint_export *e,
 	materialx_brdf(x, mx, wo, wi, h, f);
 }
 
-static int materialx_start(const struct glint_model_ops *model, const double *p,
+static int materialx_start(const struct glint_model *model, const double *p,
 			   const struct glint_export *e, double *x, double *lo,
 			   double *hi)
 {
@@ -123,8 +123,7 @@ struct mx_input {
 };
 
 static char *materialx_text(const struct glint_export *e, const char *name,
-			    const char *source,
-			    const struct glint_model_ops *model)
+			    const char *source, const struct glint_model *model)
 {
 	/* MaterialX names: letters, digits and '_', not led by a digit. */
 	char id[256];

@@ -60,7 +60,7 @@ static void mitsuba_eval(const double *x, const struct glint_export *e,
 	mitsuba_brdf(x, e->ior, e->ggx, wo, wi, h, f);
 }
 
-static int mitsuba_start(const struct glint_model_ops *model, const double *p,
+static int mitsuba_start(const struct glint_model *model, const double *p,
 			 const struct glint_export *e, double *x, double *lo,
 			 double *hi)
 {
@@ -104,7 +104,7 @@ static double mitsuba_split(const struct glint_export *e, double kd[3],
 
 static char *mitsuba_dielectric(const struct glint_export *e, const char *name,
 				const char *source,
-				const struct glint_model_ops *model)
+				const struct glint_model *model)
 {
 	/* sigma_t as a colour within [0, 1] (a bounded RGB in spectral
 	 * variants) times scale. */
@@ -143,8 +143,7 @@ static char *mitsuba_dielectric(const struct glint_export *e, const char *name,
 }
 
 static char *mitsuba_text(const struct glint_export *e, const char *name,
-			  const char *source,
-			  const struct glint_model_ops *model)
+			  const char *source, const struct glint_model *model)
 {
 	if (e->dielectric)
 		return mitsuba_dielectric(e, name, source, model);

@@ -33,7 +33,7 @@ static void pbrt_eval(const double *x, const struct glint_export *e,
 	pbrt_brdf(x, wo, wi, f);
 }
 
-static int pbrt_start(const struct glint_model_ops *model, const double *p,
+static int pbrt_start(const struct glint_model *model, const double *p,
 		      const struct glint_export *e, double *x, double *lo,
 		      double *hi)
 {
@@ -52,7 +52,7 @@ static int pbrt_start(const struct glint_model_ops *model, const double *p,
 
 static char *pbrt_dielectric(const struct glint_export *e, const char *name,
 			     const char *source,
-			     const struct glint_model_ops *model)
+			     const struct glint_model *model)
 {
 	char *s = NULL;
 
@@ -83,7 +83,7 @@ static char *pbrt_dielectric(const struct glint_export *e, const char *name,
 }
 
 static char *pbrt_text(const struct glint_export *e, const char *name,
-		       const char *source, const struct glint_model_ops *model)
+		       const char *source, const struct glint_model *model)
 {
 	const double *x = e->x;
 	char *s = NULL;

@@ -34,12 +34,12 @@ struct glint_export_target {
 	void (*view)(const double *x, double mu, void *view);
 	/* x's start and bounds from glint's (model, p): the number of
 	 * parameters. */
-	int (*start)(const struct glint_model_ops *model, const double *p,
+	int (*start)(const struct glint_model *model, const double *p,
 		     const struct glint_export *e, double *x, double *lo,
 		     double *hi);
 	/* The file: the material `name` (already a safe identifier). */
 	char *(*text)(const struct glint_export *e, const char *name,
-		      const char *source, const struct glint_model_ops *model);
+		      const char *source, const struct glint_model *model);
 	/* The target's own parameters for params.json. */
 	json_t *(*params)(const struct glint_export *e);
 	/* The target's dielectric interface is Schlick's approximation
@@ -59,12 +59,11 @@ glint_export_target_of(enum glint_export_format format);
 double glint_export_schlick_f0(double ior);
 /* glint's diffuse and specular albedos, their mean ksm and the lobe's
  * width w (0.1 without one). */
-void glint_export_lobes(const struct glint_model_ops *model, const double *p,
+void glint_export_lobes(const struct glint_model *model, const double *p,
 			double kd[3], double ks[3], double *ksm, double *w);
 /* The model's parameter called name, or fallback when it has none. */
-double glint_export_model_param(const struct glint_model_ops *m,
-				const double *p, const char *name,
-				double fallback);
+double glint_export_model_param(const struct glint_model *m, const double *p,
+				const char *name, double fallback);
 /* x[k] = v clamped to [l, h], with those bounds. */
 void glint_export_set(double *x, double *lo, double *hi, int k, double v,
 		      double l, double h);

@@ -33,31 +33,31 @@
  * Checked on the full study (every opaque Table-1 material, new
  * placements): README, "Uncertainty".
  */
-void fit_systematic(const struct glint_model_ops *m, const double *p,
-		    double *sys)
+void fit_systematic(const struct glint_model *m, const double *p, double *sys)
 {
 	for (int k = 0; k < m->nparams; k++) {
 		double rel = 0.011, floor = 0;
-		for (int j = 0; j < m->nlobes; j++)
-			if (k >= m->lobe_param[j] && k < m->lobe_param[j] + 3) {
-				rel = m->lobe_varies[j] ? 0.046 : 0.004;
+		for (int j = 0; j < m->bxdf->nlobes; j++)
+			if (k >= m->lobes->param[j] &&
+			    k < m->lobes->param[j] + 3) {
+				rel = m->lobes->varies[j] ? 0.046 : 0.004;
 				floor = 0.0005;
 			}
-		if (k == m->roughness_param)
+		if (k == m->lobes->roughness_param)
 			rel = 0.041;
 		sys[k] = hypot(rel * fabs(p[k]), floor);
 	}
 }
 
-double glint_fit_discrepancy_scale(const struct glint_model_ops *m,
-				   const double *p, int k, int *cls)
+double glint_fit_discrepancy_scale(const struct glint_model *m, const double *p,
+				   int k, int *cls)
 {
-	*cls = k == m->roughness_param ? 2 : 3;
-	for (int j = 0; j < m->nlobes && *cls == 3; j++) {
-		int a = m->lobe_param[j];
+	*cls = k == m->lobes->roughness_param ? 2 : 3;
+	for (int j = 0; j < m->bxdf->nlobes && *cls == 3; j++) {
+		int a = m->lobes->param[j];
 		if (k < a || k >= a + 3)
 			continue;
-		*cls = m->lobe_varies[j] ? 1 : 0;
+		*cls = m->lobes->varies[j] ? 1 : 0;
 		double mean =
 			(fabs(p[a]) + fabs(p[a + 1]) + fabs(p[a + 2])) / 3;
 		return fmax(fabs(p[k]), mean);
@@ -83,8 +83,8 @@ double glint_fit_discrepancy_scale(const struct glint_model_ops *m,
  * pairs' 95 %).  Held out: the Ashikhmin-Shirley sphere of
  * tests/sim/test_tabulated.c.
  */
-void fit_discrepancy(const struct glint_model_ops *m, const double *p,
-		     double share, double *u)
+void fit_discrepancy(const struct glint_model *m, const double *p, double share,
+		     double *u)
 {
 	/* diffuse albedo, specular albedo, roughness, other */
 	static const double coef[4] = { 1.15, 0, 2.79, 0.42 };

@@ -132,7 +132,7 @@ static int prepare_views(const struct glint_fit_view *in, int nviews,
 }
 
 static int fit_or_eval(const struct glint_fit_view *in, int nviews,
-		       const struct glint_model_ops *model,
+		       const struct glint_model *model,
 		       const struct glint_fit_opts *o, const double *eval_p,
 		       struct glint_fit_result *res)
 {
@@ -147,18 +147,18 @@ static int fit_or_eval(const struct glint_fit_view *in, int nviews,
 		return glint_error_set(EINVAL,
 				       "%d photos: a joint fit takes 1 to %d",
 				       nviews, GLINT_FIT_MAX_VIEWS);
-	if (nviews > 1 && (model->transparent || o->faithful))
+	if (nviews > 1 && (glint_model_is_transparent(model) || o->faithful))
 		return glint_error_set(
 			EINVAL,
 			"a joint fit of several photos needs the shade cache: "
 			"not %s",
 			o->faithful ? "--faithful" : "a transparent model");
-	if (model->transparent)
+	if (glint_model_is_transparent(model))
 		return glint_fit_dielectric(in->r, model, in->photo, in->weight,
 					    o, NULL, eval_p, res);
 	memset(res, 0, sizeof(*res));
 	res->model = model;
-	if (model->nlobes <= 0)
+	if (model->bxdf->nlobes <= 0)
 		return glint_error_set(EINVAL,
 				       "model %s cannot be fitted by LM here "
 				       "(no linear lobes)",
@@ -234,7 +234,7 @@ out:
 	return ret;
 }
 
-int glint_fit(struct glint_renderer *r, const struct glint_model_ops *model,
+int glint_fit(struct glint_renderer *r, const struct glint_model *model,
 	      const struct glint_image *photo, const struct glint_image *weight,
 	      const struct glint_fit_opts *o, struct glint_fit_result *res)
 {
@@ -244,7 +244,7 @@ int glint_fit(struct glint_renderer *r, const struct glint_model_ops *model,
 }
 
 int glint_fit_views(const struct glint_fit_view *views, int nviews,
-		    const struct glint_model_ops *model,
+		    const struct glint_model *model,
 		    const struct glint_fit_opts *o,
 		    struct glint_fit_result *res)
 {
@@ -252,7 +252,7 @@ int glint_fit_views(const struct glint_fit_view *views, int nviews,
 }
 
 int glint_fit_evaluate(struct glint_renderer *r,
-		       const struct glint_model_ops *model,
+		       const struct glint_model *model,
 		       const struct glint_image *photo,
 		       const struct glint_image *weight,
 		       const struct glint_fit_opts *o, const double *p,

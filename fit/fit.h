@@ -146,7 +146,7 @@ struct glint_fit_pass {
 };
 
 struct glint_fit_result {
-	const struct glint_model_ops *model;
+	const struct glint_model *model;
 	double p[GLINT_MAX_PARAMS];
 	double se[GLINT_MAX_PARAMS]; /* = unc.se: INFINITY if unseen */
 	int at_bound[GLINT_MAX_PARAMS];
@@ -198,13 +198,13 @@ struct glint_fit_result {
 /* The transparent models' fitter (fit_dielectric.c), which glint_fit()
  * hands them to. */
 int glint_fit_dielectric(struct glint_renderer *r,
-			 const struct glint_model_ops *model,
+			 const struct glint_model *model,
 			 const struct glint_image *photo,
 			 const struct glint_image *weight,
 			 const struct glint_fit_opts *o, const double *start,
 			 const double *eval_p, struct glint_fit_result *res);
 
-int glint_fit(struct glint_renderer *r, const struct glint_model_ops *model,
+int glint_fit(struct glint_renderer *r, const struct glint_model *model,
 	      const struct glint_image *photo, const struct glint_image *weight,
 	      const struct glint_fit_opts *o, struct glint_fit_result *res);
 
@@ -218,7 +218,7 @@ int glint_fit(struct glint_renderer *r, const struct glint_model_ops *model,
  * transparent models.  nviews 1 is glint_fit().
  */
 int glint_fit_views(const struct glint_fit_view *views, int nviews,
-		    const struct glint_model_ops *model,
+		    const struct glint_model *model,
 		    const struct glint_fit_opts *o,
 		    struct glint_fit_result *res);
 
@@ -230,7 +230,7 @@ int glint_fit_views(const struct glint_fit_view *views, int nviews,
  * fit against the truth, or a material against a photo.
  */
 int glint_fit_evaluate(struct glint_renderer *r,
-		       const struct glint_model_ops *model,
+		       const struct glint_model *model,
 		       const struct glint_image *photo,
 		       const struct glint_image *weight,
 		       const struct glint_fit_opts *o, const double *p,
@@ -245,7 +245,7 @@ int glint_fit_evaluate(struct glint_renderer *r,
  * albedo, 1 specular albedo, 2 roughness, 3 other.  bench/misfit
  * calibrates the coefficient per class with it.
  */
-double glint_fit_discrepancy_scale(const struct glint_model_ops *m,
-				   const double *p, int k, int *cls);
+double glint_fit_discrepancy_scale(const struct glint_model *m, const double *p,
+				   int k, int *cls);
 
 #endif

@@ -77,7 +77,7 @@ int fit_data_prepare_views(const struct glint_fit_view *in, int nviews,
 int fit_data_cache_new(const struct glint_fit_view *in, int nviews,
 		       const struct fit_data *d,
 		       const struct fit_data_part *parts,
-		       const struct glint_model_ops *m,
+		       const struct glint_model *m,
 		       const struct glint_shade_cache_opts *co,
 		       struct glint_shade_light *const *lights,
 		       struct glint_shade_cache **out);

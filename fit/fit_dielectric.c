@@ -130,7 +130,7 @@ static int jacobian(void *ctx, const double *p, const double *r, double *J)
 	/* ior: central difference on re-traced paths (one side at the
 	 * bounds). */
 	double h = ob->fd_h, lo = p[3] - h, hi = p[3] + h;
-	const struct glint_model_ops *md = &glint_model_dielectric;
+	const struct glint_model *md = &glint_model_dielectric;
 	if (lo < md->params[3].lo)
 		lo = p[3];
 	if (hi > md->params[3].hi)
@@ -403,7 +403,7 @@ static int statistics(struct dobj *ob, const double *p,
 }
 
 int glint_fit_dielectric(struct glint_renderer *r,
-			 const struct glint_model_ops *model,
+			 const struct glint_model *model,
 			 const struct glint_image *photo,
 			 const struct glint_image *weight,
 			 const struct glint_fit_opts *o, const double *start,

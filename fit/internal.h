@@ -31,7 +31,7 @@ struct view {
 struct objective {
 	struct glint_renderer *r;
 	struct glint_shade_cache *cache; /* NULL: faithful full renders */
-	const struct glint_model_ops *m;
+	const struct glint_model *m;
 	const struct fit_data *d;
 	const int *sel;
 	int nsel;
@@ -86,17 +86,25 @@ struct selections {
 };
 
 /*
- * The fit methods, one interface: a method is its coarse stage (what it
- * optimises on the coarse pixel set, from the objective's start) and
- * whether its fine pass solves the linear parameters exactly.  Indexed by
- * enum glint_fit_method, named as glint_fit_method_names; annealing is the
- * coarse stage --optimizer anneal puts in place of any method's.
+ * The fit methods, one interface and one file each (method_*.c): a method
+ * is its coarse stage (what it optimises on the coarse pixel set, from the
+ * objective's start, with fit_run_pass() and fit_scan_start()) and whether
+ * its fine pass solves the linear parameters exactly.  methods.c indexes
+ * them by enum glint_fit_method (named as glint_fit_method_names);
+ * annealing is the coarse stage --optimizer anneal puts in place of any
+ * method's.  Adding one: a method_*.c defining its struct fit_method, an
+ * enum value and name (fit.h), its line in methods.c and fit/meson.build.
  */
 struct fit_method {
 	int (*coarse)(struct objective *ob, struct selections *sl,
 		      struct glint_fit_result *res);
 	int linear_fine; /* the fine pass projects out the albedos */
 };
+
+extern const struct fit_method fit_method_three_pass;
+extern const struct fit_method fit_method_naive;
+extern const struct fit_method fit_method_varpro;
+extern const struct fit_method fit_method_anneal;
 
 /* The coarse stage the options ask for (annealing when the optimizer is
  * annealing, else the method's; NULL for an unknown method), and a
@@ -152,7 +160,7 @@ int fit_new_cache(const struct objective *ob, uint32_t seed,
 		  struct glint_shade_cache **out);
 
 int fit_objective_init(struct objective *ob, const struct view *views,
-		       int nviews, const struct glint_model_ops *model,
+		       int nviews, const struct glint_model *model,
 		       const struct fit_data *d,
 		       const struct glint_fit_opts *o);
 
@@ -188,11 +196,10 @@ int fit_reweight(struct objective *ob, struct fit_data *d, double *r);
 int fit_reweight_all(struct objective *ob, struct fit_data *d,
 		     const struct selections *sl);
 
-void fit_systematic(const struct glint_model_ops *m, const double *p,
-		    double *sys);
+void fit_systematic(const struct glint_model *m, const double *p, double *sys);
 
-void fit_discrepancy(const struct glint_model_ops *m, const double *p,
-		     double share, double *u);
+void fit_discrepancy(const struct glint_model *m, const double *p, double share,
+		     double *u);
 
 int fit_misfit_regions(const struct objective *ob, const struct selections *sl,
 		       const double *r, int *region, double *share);

@@ -43,8 +43,8 @@ static int sets_jr(struct objective *ob, int nsets, const double *each,
 			if (ob->set_lobes[s] &&
 			    fit_nonlinear_same(ob, ob->p, ob->set_lobes_p[s])) {
 				memcpy(ob->lobes, ob->set_lobes[s],
-				       (size_t)ob->nsel * ob->m->nlobes * 3 *
-					       sizeof(double));
+				       (size_t)ob->nsel * ob->m->bxdf->nlobes *
+					       3 * sizeof(double));
 				memcpy(ob->memo_p, ob->p, sizeof(ob->memo_p));
 				ob->memo_valid = 1;
 			}
@@ -74,7 +74,7 @@ static int covariance(struct objective *ob, const struct selections *sl,
 		      const int *region, int nregions, double share,
 		      struct glint_fit_result *res)
 {
-	const struct glint_model_ops *m = ob->m;
+	const struct glint_model *m = ob->m;
 	double sys[GLINT_MAX_PARAMS];
 
 	if (ob->o->no_systematic)
@@ -263,7 +263,7 @@ int fit_remove_lean(struct objective *ob, int nsets, const double *lo,
 int fit_uncertainty(struct objective *ob, struct fit_data *d,
 		    const struct selections *sl, struct glint_fit_result *res)
 {
-	const struct glint_model_ops *m = ob->m;
+	const struct glint_model *m = ob->m;
 	int n = m->nparams, rows = 3 * sl->nall, ret;
 	int nsets = ob->cache ? 1 + ob->o->mc_draws : 1;
 	double t0 = glint_clock_monotonic();

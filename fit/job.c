@@ -35,10 +35,10 @@
  */
 static int pick_model(struct glint_renderer *r, const struct glint_fit_job *job,
 		      const struct glint_fit_opts *base,
-		      const struct glint_model_ops **out, json_t **why)
+		      const struct glint_model **out, json_t **why)
 {
-	const struct glint_model_ops *cand[2] = { &glint_model_torrance_sparrow,
-						  &glint_model_dielectric };
+	const struct glint_model *cand[2] = { &glint_model_torrance_sparrow,
+					      &glint_model_dielectric };
 	double err[2];
 	struct glint_fit_opts o = *base;
 	o.max_pixels = 1024;
@@ -73,7 +73,7 @@ static int pick_model(struct glint_renderer *r, const struct glint_fit_job *job,
  */
 static int select_model(const struct glint_fit_view *views, int nv,
 			const struct glint_fit_opts *o, int richer,
-			const struct glint_model_ops **model,
+			const struct glint_model **model,
 			struct glint_fit_result *res, json_t **why)
 {
 	struct glint_selection *sel = calloc(1, sizeof(*sel));
@@ -112,7 +112,7 @@ static int select_model(const struct glint_fit_view *views, int nv,
  * their JSON (or stay NULL). */
 static int run_fit(const struct glint_fit_view *views, int nv,
 		   const struct glint_fit_job *job, struct glint_fit_opts *o,
-		   const struct glint_model_ops **model,
+		   const struct glint_model **model,
 		   struct glint_fit_result *res, json_t **why,
 		   json_t **selection, json_t **fidelity)
 {
@@ -125,9 +125,9 @@ static int run_fit(const struct glint_fit_view *views, int nv,
 		if (ret < 0)
 			return ret;
 	}
-	if (job->select && !(*model)->transparent)
+	if (job->select && !glint_model_is_transparent(*model))
 		return select_model(views, nv, o, 1, model, res, selection);
-	if (job->ladder > 0 && !(*model)->transparent) {
+	if (job->ladder > 0 && !glint_model_is_transparent(*model)) {
 		struct glint_ladder_result *lr = calloc(1, sizeof(*lr));
 		ret = lr ? glint_ladder_run(&job->scene, *model, job->photo,
 					    job->weight, o, job->ladder,
@@ -144,8 +144,9 @@ static int run_fit(const struct glint_fit_view *views, int nv,
 		return ret;
 	}
 	ret = glint_fit_views(views, nv, *model, o, res);
-	if (ret < 0 || job->no_auto_select || (*model)->transparent ||
-	    (*model)->nlobes < 2 || !glint_fit_needs_selection(res))
+	if (ret < 0 || job->no_auto_select ||
+	    glint_model_is_transparent(*model) || (*model)->bxdf->nlobes < 2 ||
+	    !glint_fit_needs_selection(res))
 		return ret;
 	glint_log_info("the photo%s not determine every parameter of %s: "
 		       "choosing the model by BIC (--select-model)",
@@ -159,7 +160,7 @@ static json_t *params_doc(const struct glint_fit_job *job,
 			  const struct glint_fit_opts *o,
 			  const struct glint_fit_result *res)
 {
-	const struct glint_model_ops *model = res->model;
+	const struct glint_model *model = res->model;
 	json_t *doc = json_pack(
 		"{s:s,s:s,s:o,s:o,s:{s:s,s:b,s:b,s:f,s:i,s:i},s:f,s:f,s:f,"
 		"s:i,s:i,s:i,s:o,s:f,s:f,s:{s:s,s:s,s:f},s:s}",
@@ -254,7 +255,7 @@ static int trace_view(const struct glint_fit_job *job, int k, int nviews,
 
 /* Photo k's final render, its record and its misfit by angle. */
 static int render_view(struct glint_renderer *r,
-		       const struct glint_model_ops *model,
+		       const struct glint_model *model,
 		       const struct glint_fit_result *res, struct view_out *vo)
 {
 	const struct glint_fit_job *job = vo->job;
@@ -346,7 +347,7 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 	struct glint_renderer *rs = NULL;
 	struct view_out *outs = NULL;
 	struct glint_fit_result res;
-	const struct glint_model_ops *model = NULL;
+	const struct glint_model *model = NULL;
 	json_t *fidelity = NULL, *selection = NULL, *why = NULL, *doc = NULL;
 	int ret;
 

@@ -17,9 +17,9 @@ struct glint_fit_job {
 	const char *weights_path; /* set by glint_fit_job_load(); may be NULL */
 	int srgb; /* the photo is 8-bit sRGB, to be linearised (--srgb) */
 	struct glint_scene scene;
-	const struct glint_model_ops *model; /* NULL: --model auto */
-	struct glint_image *photo;	     /* owned by the caller */
-	struct glint_image *weight;	     /* may be NULL */
+	const struct glint_model *model; /* NULL: --model auto */
+	struct glint_image *photo;	 /* owned by the caller */
+	struct glint_image *weight;	 /* may be NULL */
 	/* opts.progress (may be NULL) is called as passes run, and once
 	 * with pass NULL when they are done */
 	struct glint_fit_opts opts;

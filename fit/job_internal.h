@@ -28,7 +28,7 @@ struct view_out {
 const char *job_material_name(const struct glint_fit_job *job, char buf[256]);
 
 int job_render_final(struct glint_renderer *r, const struct glint_fit_job *job,
-		     const struct glint_model_ops *model, const double *p,
+		     const struct glint_model *model, const double *p,
 		     double fit_s, struct glint_image *img,
 		     struct glint_image *cov, json_t **info);
 
@@ -38,10 +38,10 @@ void job_view_file(int k, const char *stem, const char *ext, char *buf,
 int job_write_results(const struct glint_fit_job *job, const char *dir,
 		      const json_t *doc, const struct view_out *outs,
 		      int nviews, const struct glint_export *exports,
-		      const struct glint_model_ops *model);
+		      const struct glint_model *model);
 
 json_t *job_refit_exports(const struct glint_fit_job *job,
-			  const struct glint_model_ops *model, const double *p,
+			  const struct glint_model *model, const double *p,
 			  struct glint_export *exports);
 
 int job_check_outputs(const struct glint_fit_job *job);

@@ -113,7 +113,7 @@ static const char *const *output_names(void)
 int job_write_results(const struct glint_fit_job *job, const char *dir,
 		      const json_t *doc, const struct view_out *outs,
 		      int nviews, const struct glint_export *exports,
-		      const struct glint_model_ops *model)
+		      const struct glint_model *model)
 {
 	struct glint_atomic_dir ad;
 	char path[GLINT_PATH_MAX];
@@ -165,7 +165,7 @@ int job_write_results(const struct glint_fit_job *job, const char *dir,
  * (format k, or GLINT_EXPORT_NFORMATS when it has none); the list for
  * params.json. */
 json_t *job_refit_exports(const struct glint_fit_job *job,
-			  const struct glint_model_ops *model, const double *p,
+			  const struct glint_model *model, const double *p,
 			  struct glint_export *exports)
 {
 	json_t *list = json_array();

@@ -131,7 +131,7 @@ static int scaled(int n, double factor)
 /* One render at `factor` times the scene's samples, on sample sets
  * `seed`, of every row_step-th row. */
 static int shade(struct glint_renderer *r, const struct glint_fit_job *job,
-		 const struct glint_model_ops *model, const double *p,
+		 const struct glint_model *model, const double *p,
 		 double factor, uint32_t seed, int row_step,
 		 struct glint_image *out, struct glint_image *cov)
 {
@@ -150,7 +150,7 @@ static int shade(struct glint_renderer *r, const struct glint_fit_job *job,
  * samples; b receives the second.  *q: the mean's noise. */
 static int render_pair(struct glint_renderer *r,
 		       const struct glint_fit_job *job,
-		       const struct glint_model_ops *model, const double *p,
+		       const struct glint_model *model, const double *p,
 		       double factor, uint32_t seed, int row_step,
 		       struct glint_image *img, struct glint_image *b,
 		       struct glint_image *cov, double *q, long *nv)
@@ -178,7 +178,7 @@ static json_t *render_step(const struct glint_fit_job *job, double factor,
 }
 
 int job_render_final(struct glint_renderer *r, const struct glint_fit_job *job,
-		     const struct glint_model_ops *model, const double *p,
+		     const struct glint_model *model, const double *p,
 		     double fit_s, struct glint_image *img,
 		     struct glint_image *cov, json_t **info)
 {
@@ -189,7 +189,7 @@ int job_render_final(struct glint_renderer *r, const struct glint_fit_job *job,
 	int ret, factor = 0;
 
 	*info = NULL;
-	if (!w || model->transparent || w->width != img->width ||
+	if (!w || glint_model_is_transparent(model) || w->width != img->width ||
 	    w->height != img->height) {
 		ret = shade(r, job, model, p, 1, 0, 1, img, cov);
 		if (ret < 0)

@@ -18,7 +18,7 @@ static const char *const knob_names[GLINT_LADDER_NKNOBS] = {
 
 struct ladder {
 	struct glint_scene scene;
-	const struct glint_model_ops *model;
+	const struct glint_model *model;
 	const struct glint_image *photo, *weight;
 	struct glint_fit_opts base;
 	int nthreads;
@@ -219,13 +219,13 @@ static void set_levels(struct ladder *l, struct glint_ladder_result *out)
 		*knob_value(&out->reference, k) = out->knob[k].level[0].value;
 }
 
-static const char *param_name(const struct glint_model_ops *m, int k)
+static const char *param_name(const struct glint_model *m, int k)
 {
 	return k >= 0 ? m->params[k].name : "nothing";
 }
 
 static void explain(struct glint_ladder_knob *kn,
-		    const struct glint_model_ops *model, double threshold)
+		    const struct glint_model *model, double threshold)
 {
 	if (kn->nlevels < 2)
 		return;
@@ -308,7 +308,7 @@ static void try_levels(struct ladder *l, struct glint_ladder_result *out,
  * standard error or more, the knob whose own choice moved it most steps
  * back up. */
 static int combine(struct ladder *l, struct glint_ladder_result *out,
-		   const double *start, const struct glint_model_ops *model)
+		   const double *start, const struct glint_model *model)
 {
 	int which;
 
@@ -348,7 +348,7 @@ static int combine(struct ladder *l, struct glint_ladder_result *out,
 }
 
 int glint_ladder_run(const struct glint_scene *scene,
-		     const struct glint_model_ops *model,
+		     const struct glint_model *model,
 		     const struct glint_image *photo,
 		     const struct glint_image *weight,
 		     const struct glint_fit_opts *base, double threshold,
@@ -359,7 +359,7 @@ int glint_ladder_run(const struct glint_scene *scene,
 	int ret;
 
 	memset(out, 0, sizeof(*out));
-	if (model->transparent)
+	if (glint_model_is_transparent(model))
 		return glint_error_set(EINVAL,
 				       "the fidelity ladder is for opaque "
 				       "models; %s is fitted by following "

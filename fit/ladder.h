@@ -89,7 +89,7 @@ struct glint_ladder_result {
  * setting's fit ends in out->chosen_fit.
  */
 int glint_ladder_run(const struct glint_scene *scene,
-		     const struct glint_model_ops *model,
+		     const struct glint_model *model,
 		     const struct glint_image *photo,
 		     const struct glint_image *weight,
 		     const struct glint_fit_opts *base, double threshold,

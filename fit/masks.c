@@ -32,7 +32,7 @@ void fit_selections_free(struct selections *s)
 static int white_render(struct objective *ob, const int *all, double *white)
 {
 	const struct fit_data *d = ob->d;
-	const struct glint_model_ops *model = ob->m;
+	const struct glint_model *model = ob->m;
 
 	if (!ob->cache) {
 		double white_p[GLINT_MAX_PARAMS] = { 1, 1, 1 };
@@ -46,7 +46,7 @@ static int white_render(struct objective *ob, const int *all, double *white)
 						       d->xy[2 * s + 1])[c];
 		return ret;
 	}
-	int nj = model->nlobes;
+	int nj = model->bxdf->nlobes;
 	double *wl = malloc((size_t)d->n * nj * 3 * sizeof(double));
 	if (!wl)
 		return glint_error_set(ENOMEM, "out of memory");
@@ -55,7 +55,7 @@ static int white_render(struct objective *ob, const int *all, double *white)
 		for (int c = 0; c < 3; c++) {
 			double w = 0;
 			for (int j = 0; j < nj; j++)
-				if (!model->lobe_varies[j])
+				if (!model->lobes->varies[j])
 					w += wl[((size_t)s * nj + j) * 3 + c];
 			white[3 * s + c] = w;
 		}

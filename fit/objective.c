@@ -56,10 +56,10 @@ static const double *memo_lobes(struct objective *ob, const double *p)
 double fit_pixel_value(const struct objective *ob, const double *p,
 		       const double *lobes, int s, int c)
 {
-	int nj = ob->m->nlobes;
+	int nj = ob->m->bxdf->nlobes;
 	double v = 0;
 	for (int j = 0; j < nj; j++)
-		v += p[ob->m->lobe_param[j] + c] *
+		v += p[ob->m->lobes->param[j] + c] *
 		     lobes[((size_t)s * nj + j) * 3 + c];
 	return v;
 }
@@ -73,8 +73,8 @@ double fit_pixel_value(const struct objective *ob, const double *p,
 static void solve_albedos(struct objective *ob, double *p, const double *lobes,
 			  int c)
 {
-	const struct glint_model_ops *m = ob->m;
-	int nj = m->nlobes;
+	const struct glint_model *m = ob->m;
+	int nj = m->bxdf->nlobes;
 	double g[3][3] = { { 0 } }, b[3] = { 0 }, yy = 0;
 
 	for (int t = 0; t < ob->nsel; t++) {
@@ -98,7 +98,7 @@ static void solve_albedos(struct objective *ob, double *p, const double *lobes,
 		int st[3], fr[3], nf = 0, cc = code;
 		for (int j = 0; j < nj; j++) {
 			const struct glint_param *pi =
-				&m->params[m->lobe_param[j] + c];
+				&m->params[m->lobes->param[j] + c];
 			lo[j] = pi->lo;
 			hi[j] = pi->hi;
 			st[j] = cc % 3;
@@ -166,7 +166,7 @@ static void solve_albedos(struct objective *ob, double *p, const double *lobes,
 		}
 	}
 	for (int j = 0; j < nj; j++)
-		p[m->lobe_param[j] + c] = best_a[j];
+		p[m->lobes->param[j] + c] = best_a[j];
 }
 
 int fit_render_full(struct objective *ob, const double *p)
@@ -242,7 +242,7 @@ int fit_obj_residuals(void *ctx, const double *q, double *res)
 int fit_obj_jacobian(void *ctx, const double *q, const double *r, double *jac)
 {
 	struct objective *ob = ctx;
-	int nf = ob->nfree, nj = ob->m->nlobes;
+	int nf = ob->nfree, nj = ob->m->bxdf->nlobes;
 	double p[GLINT_MAX_PARAMS];
 
 	(void)r;
@@ -337,7 +337,7 @@ int fit_new_cache(const struct objective *ob, uint32_t seed,
 /* The objective over d at the start values: lobe buffers and the shade
  * cache (or the faithful path's image). */
 int fit_objective_init(struct objective *ob, const struct view *views,
-		       int nviews, const struct glint_model_ops *model,
+		       int nviews, const struct glint_model *model,
 		       const struct fit_data *d, const struct glint_fit_opts *o)
 {
 	memset(ob, 0, sizeof(*ob));
@@ -352,12 +352,12 @@ int fit_objective_init(struct objective *ob, const struct view *views,
 		ob->p[k] = o->start ? o->start[k] : model->params[k].def;
 		ob->lobe_of[k] = ob->chan_of[k] = -1;
 	}
-	for (int j = 0; j < model->nlobes; j++)
+	for (int j = 0; j < model->bxdf->nlobes; j++)
 		for (int c = 0; c < 3; c++) {
-			ob->lobe_of[model->lobe_param[j] + c] = j;
-			ob->chan_of[model->lobe_param[j] + c] = c;
+			ob->lobe_of[model->lobes->param[j] + c] = j;
+			ob->chan_of[model->lobes->param[j] + c] = c;
 		}
-	size_t nl = (size_t)d->n * model->nlobes * 3;
+	size_t nl = (size_t)d->n * model->bxdf->nlobes * 3;
 	ob->lobes = malloc(nl * sizeof(double));
 	ob->lobes2 = malloc(nl * sizeof(double));
 	if (!ob->lobes || !ob->lobes2)

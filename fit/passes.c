@@ -53,8 +53,8 @@ static double projected_cost(struct objective *ob, const int *sel, int nsel,
 static int rescan_roughness(struct objective *ob, const int *sel, int nsel,
 			    double lo, double hi, int n)
 {
-	const struct glint_model_ops *m = ob->m;
-	int rk = m->roughness_param;
+	const struct glint_model *m = ob->m;
+	int rk = m->lobes->roughness_param;
 	double *scratch = malloc((size_t)3 * nsel * sizeof(double));
 	double best_p[GLINT_MAX_PARAMS], p[GLINT_MAX_PARAMS];
 
@@ -91,13 +91,13 @@ static int rescan_roughness(struct objective *ob, const int *sel, int nsel,
 static int scan_range(struct objective *ob, const int *sel, int nsel, double lo,
 		      double hi)
 {
-	const struct glint_model_ops *m = ob->m;
+	const struct glint_model *m = ob->m;
 	/* The other nonlinear parameter (ior), if one: its start and four
 	 * values across its bounds, for specular x F(ior) trades off and LM
 	 * stays where it starts (naive from ior 4.86). */
 	int other = -1, nother = 0;
 	for (int k = 0; k < m->nparams; k++)
-		if (ob->lobe_of[k] < 0 && k != m->roughness_param) {
+		if (ob->lobe_of[k] < 0 && k != m->lobes->roughness_param) {
 			other = k;
 			nother++;
 		}
@@ -158,10 +158,10 @@ static int scan_range(struct objective *ob, const int *sel, int nsel, double lo,
 
 int fit_scan_start(struct objective *ob, const int *sel, int nsel)
 {
-	const struct glint_model_ops *m = ob->m;
-	if (m->roughness_param < 0 || !ob->cache || ob->o->no_start_scan)
+	const struct glint_model *m = ob->m;
+	if (m->lobes->roughness_param < 0 || !ob->cache || ob->o->no_start_scan)
 		return 0;
-	const struct glint_param *pr = &m->params[m->roughness_param];
+	const struct glint_param *pr = &m->params[m->lobes->roughness_param];
 	return scan_range(ob, sel, nsel, fmax(fmax(pr->lo, 1e-3), ob->rough_lo),
 			  fmin(pr->hi, 0.5));
 }
@@ -218,7 +218,7 @@ void fit_objective_lm_opts(struct glint_lm_opts *lo, int max_iter,
 int fit_anneal_pass(struct objective *ob, const int *sel, int nsel,
 		    struct glint_fit_result *res)
 {
-	const struct glint_model_ops *m = ob->m;
+	const struct glint_model *m = ob->m;
 	double q[GLINT_MAX_PARAMS], lo[GLINT_MAX_PARAMS], hi[GLINT_MAX_PARAMS];
 	struct glint_anneal_opts ao;
 	struct glint_anneal_result ar;
@@ -237,7 +237,7 @@ int fit_anneal_pass(struct objective *ob, const int *sel, int nsel,
 		ob->free_idx[k] = k;
 		q[k] = ob->p[k];
 		lo[k] = m->params[k].lo;
-		if (k == m->roughness_param)
+		if (k == m->lobes->roughness_param)
 			lo[k] = fmax(lo[k], ob->rough_lo);
 		hi[k] = m->params[k].hi;
 	}
@@ -266,7 +266,7 @@ int fit_run_pass(struct objective *ob, const char *name, const int *sel,
 		 int nsel, const int *freev, int varpro,
 		 struct glint_fit_result *res, struct glint_lm_result *lr)
 {
-	const struct glint_model_ops *m = ob->m;
+	const struct glint_model *m = ob->m;
 	double q[GLINT_MAX_PARAMS], lo[GLINT_MAX_PARAMS], hi[GLINT_MAX_PARAMS];
 	struct glint_lm_opts lo_opts;
 	struct progress_ctx pc = { ob->o, name };
@@ -283,7 +283,7 @@ int fit_run_pass(struct objective *ob, const char *name, const int *sel,
 			ob->free_idx[ob->nfree] = k;
 			q[ob->nfree] = ob->p[k];
 			lo[ob->nfree] = m->params[k].lo;
-			if (k == m->roughness_param)
+			if (k == m->lobes->roughness_param)
 				lo[ob->nfree] =
 					fmax(lo[ob->nfree], ob->rough_lo);
 			hi[ob->nfree] = m->params[k].hi;
@@ -348,7 +348,7 @@ static int leave_plateau(struct objective *ob, const struct selections *sl,
 			 double footprint, const int *freev, int vp,
 			 struct glint_fit_result *res)
 {
-	int rk = ob->m->roughness_param;
+	int rk = ob->m->lobes->roughness_param;
 	double keep[GLINT_MAX_PARAMS];
 	struct glint_lm_result lr;
 
@@ -377,16 +377,16 @@ int fit_fine_pass(struct objective *ob, const struct selections *sl,
 		  double coarse_rough_lo, double footprint,
 		  struct glint_fit_result *res)
 {
-	const struct glint_model_ops *model = ob->m;
+	const struct glint_model *model = ob->m;
 	struct glint_lm_result lr;
 	int freev[GLINT_MAX_PARAMS], ret;
 
 	ob->rough_lo = 0;
 	if (sl->ncoarse >= sl->nall)
 		return 0;
-	if (model->roughness_param >= 0) {
-		double lo =
-			fmax(model->params[model->roughness_param].lo, 1e-3);
+	if (model->lobes->roughness_param >= 0) {
+		double lo = fmax(
+			model->params[model->lobes->roughness_param].lo, 1e-3);
 		/* A near-mirror's ior, fitted where its lobe could not be
 		 * seen, can hold the coarse result in a wider lobe's basin
 		 * (copper through the sensor under quarry: roughness 0.070
@@ -406,7 +406,7 @@ int fit_fine_pass(struct objective *ob, const struct selections *sl,
 	for (int k = 0; k < model->nparams; k++)
 		freev[k] = vp ? ob->lobe_of[k] < 0 : 1;
 	ret = fit_run_pass(ob, "fine", sl->all, sl->nall, freev, vp, res, &lr);
-	int rk = model->roughness_param;
+	int rk = model->lobes->roughness_param;
 	if (ret == 0 && rk >= 0 && ob->cache && !ob->o->no_start_scan &&
 	    ob->p[rk] < footprint)
 		ret = leave_plateau(ob, sl, footprint, freev, vp, res);

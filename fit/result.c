@@ -22,7 +22,7 @@ static int undetermined(const struct glint_fit_result *r, int k)
 	       r->unc.hi[k] - r->unc.lo[k] >= 0.5 * (pi->hi - pi->lo);
 }
 
-static int param_index(const struct glint_model_ops *m, const char *name)
+static int param_index(const struct glint_model *m, const char *name)
 {
 	for (int k = 0; k < m->nparams; k++)
 		if (!strcmp(m->params[k].name, name))
@@ -48,7 +48,7 @@ static double footprint(const struct glint_fit_result *r)
 
 double glint_fit_roughness_bound(const struct glint_fit_result *r)
 {
-	int rk = r->model->roughness_param;
+	int rk = glint_model_roughness_param(r->model);
 
 	if (rk < 0 || !r->unc.n || !(r->unc.hi[rk] < footprint(r)))
 		return NAN;
@@ -57,9 +57,9 @@ double glint_fit_roughness_bound(const struct glint_fit_result *r)
 
 json_t *glint_fit_params_json(const struct glint_fit_result *r)
 {
-	const struct glint_model_ops *m = r->model;
+	const struct glint_model *m = r->model;
 	json_t *list = json_array();
-	int rk = m->roughness_param;
+	int rk = glint_model_roughness_param(m);
 
 	for (int k = 0; k < m->nparams; k++) {
 		const struct glint_param *pi = &m->params[k];
@@ -116,7 +116,7 @@ static json_t *matrix_json(const double *a, int n)
 int glint_fit_specular_f0(const struct glint_fit_result *r, double v[3],
 			  double se[3], double *corr)
 {
-	const struct glint_model_ops *m = r->model;
+	const struct glint_model *m = r->model;
 	int ki = param_index(m, "ior"), n = r->unc.n;
 	static const char *const ch[3] = { "specular.r", "specular.g",
 					   "specular.b" };
@@ -194,7 +194,7 @@ static void specular_fresnel(const struct glint_fit_result *r, json_t *find,
 
 int glint_fit_needs_selection(const struct glint_fit_result *r)
 {
-	const struct glint_model_ops *m = r->model;
+	const struct glint_model *m = r->model;
 	int n = r->unc.n, ki = param_index(m, "ior");
 
 	for (int k = 0; k < n; k++)
@@ -209,9 +209,9 @@ int glint_fit_needs_selection(const struct glint_fit_result *r)
 
 json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 {
-	const struct glint_model_ops *m = r->model;
+	const struct glint_model *m = r->model;
 	const struct glint_uncertainty *u = &r->unc;
-	int n = u->n, rk = m->roughness_param;
+	int n = u->n, rk = glint_model_roughness_param(m);
 	json_t *find, *comb, *tb, *sys, *me, *md, *lean;
 	char msg[320];
 

@@ -109,15 +109,15 @@ int fit_sets_residuals(void *ctx, const double *q, double *r)
 
 	so->have_res = 0;
 	/* The fitted set last: its lobes stay memoised for the Jacobian. */
-	size_t nl = (size_t)ob->nsel * ob->m->nlobes * 3 * sizeof(double);
+	size_t nl = (size_t)ob->nsel * ob->m->bxdf->nlobes * 3 * sizeof(double);
 	for (int k = so->nsets - 1; k >= 0 && !ret; k--) {
 		ob->cache = so->sets[k];
 		ob->memo_valid = 0;
 		ret = fit_obj_residuals(ob, q, so->each + (size_t)k * rows);
 		if (!ob->set_lobes[k])
 			ob->set_lobes[k] =
-				malloc((size_t)ob->d->n * ob->m->nlobes * 3 *
-				       sizeof(double));
+				malloc((size_t)ob->d->n * ob->m->bxdf->nlobes *
+				       3 * sizeof(double));
 		if (ret == 0 && ob->set_lobes[k] && ob->memo_valid) {
 			memcpy(ob->set_lobes[k], ob->lobes, nl);
 			memcpy(ob->set_lobes_p[k], ob->memo_p,

@@ -21,7 +21,7 @@ struct sel {
 	struct fit_data_part parts[GLINT_FIT_MAX_VIEWS];
 	struct fit_data d;
 	struct glint_shade_cache *cache;
-	const struct glint_model_ops *cache_model; /* the model of cache */
+	const struct glint_model *cache_model; /* the model of cache */
 	double *lobes; /* d.n x nlobes x 3 (up to 3 lobes) */
 	double x[4];   /* grey: the linear unknowns at the last call */
 	double xse[4];
@@ -38,18 +38,18 @@ static const char *const short_name[GLINT_SEL_N] = {
 };
 
 /* Weighted residuals sw (y - sum albedo_j A_j) of model m's lobes in
- * s->lobes, the albedos at p[m->lobe_param[j]]. */
-static double residuals(const struct sel *s, const struct glint_model_ops *m,
+ * s->lobes, the albedos at p[m->lobes->param[j]]. */
+static double residuals(const struct sel *s, const struct glint_model *m,
 			const double *p, double *r)
 {
-	int nj = m->nlobes;
+	int nj = m->bxdf->nlobes;
 	double cost = 0;
 	for (int i = 0; i < s->d.n; i++)
 		for (int c = 0; c < 3; c++) {
 			const double *a = s->lobes + (size_t)i * nj * 3;
 			double v = s->d.y[i * 3 + c];
 			for (int j = 0; j < nj; j++)
-				v -= p[m->lobe_param[j] + c] * a[j * 3 + c];
+				v -= p[m->lobes->param[j] + c] * a[j * 3 + c];
 			double e = s->d.sw[i * 3 + c] * v;
 			if (r)
 				r[i * 3 + c] = e;
@@ -171,7 +171,7 @@ static void score(struct glint_select_candidate *c, int n)
 
 /* Grey specular: LM over roughness and ior from the full fit's, the
  * albedos solved exactly at each step (into s->x). */
-static int fit_grey(struct sel *s, const struct glint_model_ops *ts,
+static int fit_grey(struct sel *s, const struct glint_model *ts,
 		    const struct glint_fit_result *full, int n, double *rv,
 		    struct glint_select_candidate *c)
 {
@@ -305,14 +305,14 @@ int glint_select_model_views(const struct glint_fit_view *views, int nviews,
 			     const struct glint_fit_opts *o, int richer,
 			     struct glint_selection *out)
 {
-	const struct glint_model_ops *ts = &glint_model_torrance_sparrow;
+	const struct glint_model *ts = &glint_model_torrance_sparrow;
 	struct sel s = { .views = views, .nviews = nviews };
 	int ret;
 	double *rv = NULL;
 	static const struct {
 		int k, n;
 		const char *name;
-		const struct glint_model_ops *m;
+		const struct glint_model *m;
 	} fitted[] = {
 		{ GLINT_SEL_RGB, 8, "torrance-sparrow (RGB specular)",
 		  &glint_model_torrance_sparrow },

@@ -46,7 +46,7 @@ struct glint_select_candidate {
 	double bic, aic;
 	/* the parameters, in the terms of `model` (the grey one as a
 	 * torrance-sparrow with equal specular channels) */
-	const struct glint_model_ops *model;
+	const struct glint_model *model;
 	double p[GLINT_MAX_PARAMS], se[GLINT_MAX_PARAMS];
 };
 

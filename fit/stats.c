@@ -114,7 +114,7 @@ void fit_baselines(const struct objective *ob, const struct fit_data *d,
 static void mean_lobes(struct objective *ob, const int *sel, int nsel,
 		       double *lobes)
 {
-	size_t sz = (size_t)nsel * ob->m->nlobes * 3;
+	size_t sz = (size_t)nsel * ob->m->bxdf->nlobes * 3;
 	double *tmp = ob->nsets > 1 ? malloc(sz * sizeof(double)) : NULL;
 
 	glint_shade_cache_lobes_sel(ob->cache, ob->p, sel, nsel, lobes);
@@ -142,9 +142,10 @@ void fit_finish_stats(struct objective *ob, const int *sel, int nsel,
 	/* The uncertainty stage's residuals are these pixels' at ob->p. */
 	const double *fr =
 		ob->final_r && ob->final_rows == 3 * nsel ? ob->final_r : NULL;
-	double *lobes = ob->cache && !fr ? malloc((size_t)nsel * ob->m->nlobes *
-						  3 * sizeof(double))
-					 : NULL;
+	double *lobes = ob->cache && !fr
+				? malloc((size_t)nsel * ob->m->bxdf->nlobes *
+					 3 * sizeof(double))
+				: NULL;
 
 	if (ob->cache && lobes)
 		mean_lobes(ob, sel, nsel, lobes);

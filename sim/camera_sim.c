@@ -314,7 +314,7 @@ static int render_sample(int w, int h, const char *material, unsigned lamps,
 	struct glint_scene sc;
 	struct glint_envmap *env = NULL;
 	struct glint_image *map = NULL;
-	const struct glint_model_ops *model;
+	const struct glint_model *model;
 	double p[GLINT_MAX_PARAMS], rot[3] = { 0, 0, 0 };
 	int ret = glint_sim_sample_scene_def(w, h, &sc);
 
@@ -567,7 +567,7 @@ static int rig_scenes(struct sim_cam *s)
 static int rig_check(const struct sim_cam *s)
 {
 	char path[GLINT_PATH_MAX];
-	const struct glint_model_ops *model;
+	const struct glint_model *model;
 	double p[GLINT_MAX_PARAMS];
 	struct stat st;
 	int ret =

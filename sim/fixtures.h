@@ -83,7 +83,7 @@ static inline struct glint_image *fixture_shrink(const struct glint_image *src,
 /* The 512 px reference photo of a material through a lens at fnum (0: a
  * pinhole; rendered once, cached). */
 static inline struct glint_image *
-bench_photo_512_lens(const char *mat, const struct glint_model_ops *m,
+bench_photo_512_lens(const char *mat, const struct glint_model *m,
 		     const double *truth, double fnum)
 {
 	char path[256];
@@ -116,9 +116,9 @@ bench_photo_512_lens(const char *mat, const struct glint_model_ops *m,
 }
 
 /* The same through a pinhole. */
-static inline struct glint_image *
-bench_photo_512(const char *mat, const struct glint_model_ops *m,
-		const double *truth)
+static inline struct glint_image *bench_photo_512(const char *mat,
+						  const struct glint_model *m,
+						  const double *truth)
 {
 	return bench_photo_512_lens(mat, m, truth, 0);
 }

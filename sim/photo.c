@@ -40,7 +40,7 @@ static int expose(struct glint_image *photo, struct glint_image **weight)
 }
 
 int glint_sim_photo(const struct glint_scene *scene,
-		    const struct glint_model_ops *model, const double *params,
+		    const struct glint_model *model, const double *params,
 		    const struct glint_sim_photo_opts *o,
 		    struct glint_image **photo, struct glint_image **weight)
 {
@@ -62,7 +62,9 @@ int glint_sim_photo(const struct glint_scene *scene,
 		goto out;
 	}
 	glint_reference_default_opts(&ro);
-	ro.spp = model->transparent ? 64 : 4; /* its paths branch at random */
+	ro.spp = glint_model_is_transparent(model)
+			 ? 64
+			 : 4; /* its paths branch at random */
 	ro.nthreads = o->nthreads;
 	ret = glint_reference_render(scene, env, model, params, &ro, img);
 	if (ret == 0 && o->noise)

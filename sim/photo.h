@@ -24,7 +24,7 @@ struct glint_sim_photo_opts {
  * NULL without noise); both new, the caller frees them with
  * glint_image_free().  On error neither is set. */
 int glint_sim_photo(const struct glint_scene *scene,
-		    const struct glint_model_ops *model, const double *params,
+		    const struct glint_model *model, const double *params,
 		    const struct glint_sim_photo_opts *o,
 		    struct glint_image **photo, struct glint_image **weight);
 

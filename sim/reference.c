@@ -52,8 +52,9 @@ static void rng_seed(struct rng *r, uint64_t seed)
 struct ref_job {
 	const struct glint_scene *sc;
 	const struct glint_envmap *env;
-	const struct glint_model_ops *m;
+	const struct glint_model *m; /* the transparent sphere's, or NULL */
 	const double *p;
+	struct glint_bxdf bx; /* an opaque sphere's */
 	const struct glint_reference_opts *o;
 	struct glint_image *out;
 	int failed; /* a thread ran out of memory */
@@ -74,7 +75,8 @@ static double hit_sphere(struct vec3 o, struct vec3 d, struct vec3 c, double r)
 static void shade(const struct ref_job *job, struct vec3 pos, struct vec3 d,
 		  struct rng *rng, double rgb[3])
 {
-	const struct glint_model_ops *m = job->m;
+	const struct glint_bxdf_ops *ops = job->bx.ops;
+	const void *self = job->bx.self;
 	int ns = job->o->samples;
 	struct vec3 n = v3_norm(v3_sub(pos, job->sc->sphere_centre)), t, b;
 	double lobes[GLINT_MAX_PARAMS], l[3];
@@ -82,8 +84,8 @@ static void shade(const struct ref_job *job, struct vec3 pos, struct vec3 d,
 	v3_frame(n, &t, &b);
 	struct vec3 wo = v3(-v3_dot(d, t), -v3_dot(d, b), -v3_dot(d, n));
 	rgb[0] = rgb[1] = rgb[2] = 0;
-	for (int j = 0; j < m->nlobes; j++) {
-		const double *alb = job->p + m->lobe_param[j];
+	for (int j = 0; j < ops->nlobes; j++) {
+		const double *alb = ops->albedo(self, j);
 		for (int k = 0; k < 2 * ns; k++) {
 			struct vec3 wi, ww;
 			double pl, pb;
@@ -95,10 +97,10 @@ static void shade(const struct ref_job *job, struct vec3 pos, struct vec3 d,
 					v3_dot(ww, n));
 				if (!(pl > 0) || !(wi.z > 0))
 					continue;
-				pb = m->pdf_lobe(job->p, j, wo, wi);
+				pb = ops->pdf_lobe(self, j, wo, wi);
 			} else { /* lobe sample */
 				double u[2] = { rng_u01(rng), rng_u01(rng) };
-				pb = m->sample_lobe(job->p, j, wo, u, &wi);
+				pb = ops->sample_lobe(self, j, wo, u, &wi);
 				if (!(pb > 0))
 					continue;
 				ww = v3_add(v3_add(v3_scale(t, wi.x),
@@ -106,7 +108,7 @@ static void shade(const struct ref_job *job, struct vec3 pos, struct vec3 d,
 					    v3_scale(n, wi.z));
 				pl = glint_envmap_pdf(job->env, ww);
 			}
-			m->eval_lobes(job->p, wo, wi, lobes);
+			ops->eval_lobes(self, wo, wi, lobes);
 			if (lobes[j] <= 0)
 				continue;
 			/* Power heuristic, one sample of ns per technique. */
@@ -265,7 +267,7 @@ static void ref_rows(void *ctx, int y0, int y1, int thread)
 						   job->sc->sphere_radius);
 				if (th < 0)
 					glint_envmap_lookup(job->env, d, rgb);
-				else if (job->m->transparent)
+				else if (job->m)
 					shade_dielectric(
 						job, v3_add(o, v3_scale(d, th)),
 						d, &rng, rgb);
@@ -282,31 +284,63 @@ static void ref_rows(void *ctx, int y0, int y1, int thread)
 	free(perm);
 }
 
-int glint_reference_render(const struct glint_scene *scene,
-			   const struct glint_envmap *env,
-			   const struct glint_model_ops *model, const double *p,
-			   const struct glint_reference_opts *opts,
-			   struct glint_image *out)
+static int render(struct ref_job *job)
 {
-	struct ref_job job = { scene, env, model, p, opts, out, 0 };
+	const struct glint_scene *scene = job->sc;
+	struct glint_image *out = job->out;
 
-	if (model->nlobes <= 0 && !model->transparent)
-		return glint_error_set(EINVAL,
-				       "reference renderer: model %s has no "
-				       "lobe structure",
-				       model->name);
 	if (out->width != scene->cam.width || out->height != scene->cam.height)
 		return glint_error_set(EINVAL,
 				       "reference render target %dx%d: "
 				       "expected %dx%d",
 				       out->width, out->height,
 				       scene->cam.width, scene->cam.height);
-	if (opts->spp < 1)
+	if (job->o->spp < 1)
 		return glint_error_set(
 			EINVAL, "reference renderer: %d samples per pixel",
-			opts->spp);
-	glint_parallel_for(out->height, 1, opts->nthreads, ref_rows, &job);
-	if (job.failed)
+			job->o->spp);
+	glint_parallel_for(out->height, 1, job->o->nthreads, ref_rows, job);
+	if (job->failed)
 		return glint_error_set(ENOMEM, "out of memory");
 	return 0;
+}
+
+int glint_reference_render_bxdf(const struct glint_scene *scene,
+				const struct glint_envmap *env,
+				const struct glint_bxdf *bxdf,
+				const struct glint_reference_opts *opts,
+				struct glint_image *out)
+{
+	struct ref_job job = {
+		.sc = scene, .env = env, .bx = *bxdf, .o = opts, .out = out
+	};
+
+	if (!(bxdf->ops->flags & GLINT_BXDF_LOBES) || bxdf->ops->nlobes <= 0)
+		return glint_error_set(EINVAL, "reference renderer: a BRDF "
+					       "without lobe structure");
+	return render(&job);
+}
+
+int glint_reference_render(const struct glint_scene *scene,
+			   const struct glint_envmap *env,
+			   const struct glint_model *model, const double *p,
+			   const struct glint_reference_opts *opts,
+			   struct glint_image *out)
+{
+	struct ref_job job = { .sc = scene,
+			       .env = env,
+			       .m = model,
+			       .p = p,
+			       .o = opts,
+			       .out = out };
+
+	if (glint_model_is_transparent(model))
+		return render(&job);
+	struct glint_bxdf bx = glint_model_bxdf(model, p);
+	if (!(bx.ops->flags & GLINT_BXDF_LOBES) || bx.ops->nlobes <= 0)
+		return glint_error_set(EINVAL,
+				       "reference renderer: model %s has no "
+				       "lobe structure",
+				       model->name);
+	return glint_reference_render_bxdf(scene, env, &bx, opts, out);
 }

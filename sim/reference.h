@@ -39,11 +39,19 @@ struct glint_reference_opts {
 void glint_reference_default_opts(struct glint_reference_opts *o);
 
 /* Render scene->cam's image of the sphere of material (model, p) into out
- * (allocated by the caller at the camera's size). */
+ * (allocated by the caller at the camera's size); _bxdf the same for an
+ * opaque sphere of any BRDF with lobe structure (GLINT_BXDF_LOBES: the
+ * measured tables of sim/tabulated.h).  Errors: -EINVAL (a BRDF without
+ * lobes, a target of the wrong size), -ENOMEM. */
 int glint_reference_render(const struct glint_scene *scene,
 			   const struct glint_envmap *env,
-			   const struct glint_model_ops *model, const double *p,
+			   const struct glint_model *model, const double *p,
 			   const struct glint_reference_opts *opts,
 			   struct glint_image *out);
+int glint_reference_render_bxdf(const struct glint_scene *scene,
+				const struct glint_envmap *env,
+				const struct glint_bxdf *bxdf,
+				const struct glint_reference_opts *opts,
+				struct glint_image *out);
 
 #endif

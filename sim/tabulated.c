@@ -202,98 +202,88 @@ void glint_ashikhmin_shirley_eval(void *ctx, struct vec3 wo, struct vec3 wi,
 			 spec;
 }
 
-/* The model: one table at a time. */
-static const struct glint_brdf_table *cur;
-static double cur_proposal = 0.1;
+/* Lobe c's albedo: the unit vector of channel c. */
+static const double unit_rgb[9] = { 1, 0, 0, 0, 1, 0, 0, 0, 1 };
 
-const double glint_tabulated_params[9] = { 1, 0, 0, 0, 1, 0, 0, 0, 1 };
-
-static const struct glint_param tab_params[9] = {
-	{ "red.r", "red", 0, 0, 1, 1 },	    { "red.g", "red", 1, 0, 1, 0 },
-	{ "red.b", "red", 2, 0, 1, 0 },	    { "green.r", "green", 0, 0, 1, 0 },
-	{ "green.g", "green", 1, 0, 1, 1 }, { "green.b", "green", 2, 0, 1, 0 },
-	{ "blue.r", "blue", 0, 0, 1, 0 },   { "blue.g", "blue", 1, 0, 1, 0 },
-	{ "blue.b", "blue", 2, 0, 1, 1 },
-};
-static const int tab_lobe_param[3] = { 0, 3, 6 };
-static const int tab_lobe_varies[3] = { 0, 0, 0 };
-
-static void tab_eval(const double *p, struct vec3 wo, struct vec3 wi,
-		     double f[3])
+static const double *tab_albedo(const void *self, int j)
 {
-	double rgb[3];
-
-	glint_brdf_table_eval(cur, wo, wi, rgb);
-	for (int c = 0; c < 3; c++)
-		f[c] = p[3 * 0 + c] * rgb[0] + p[3 * 1 + c] * rgb[1] +
-		       p[3 * 2 + c] * rgb[2];
+	(void)self;
+	return unit_rgb + 3 * j;
 }
 
-static void tab_lobes(const double *p, struct vec3 wo, struct vec3 wi,
+static void tab_eval(const void *self, struct vec3 wo, struct vec3 wi,
+		     double f[3])
+{
+	const struct glint_tabulated *tab = self;
+
+	glint_brdf_table_eval(tab->table, wo, wi, f);
+}
+
+static void tab_lobes(const void *self, struct vec3 wo, struct vec3 wi,
 		      double *b)
 {
-	(void)p;
-	glint_brdf_table_eval(cur, wo, wi, b);
+	const struct glint_tabulated *tab = self;
+
+	glint_brdf_table_eval(tab->table, wo, wi, b);
 }
 
 /* Half the cosine, half a Beckmann lobe about the mirror direction. */
-static double tab_pdf_lobe(const double *p, int j, struct vec3 wo,
+static double tab_pdf_lobe(const void *self, int j, struct vec3 wo,
 			   struct vec3 wi)
 {
-	(void)p;
+	const struct glint_tabulated *tab = self;
+
 	(void)j;
 	if (!(wi.z > 0) || !(wo.z > 0))
 		return 0;
 	return 0.5 * wi.z / M_PI +
-	       0.5 * glint_beckmann_pdf(cur_proposal, wo, wi);
+	       0.5 * glint_beckmann_pdf(tab->proposal, wo, wi);
 }
 
-static double tab_sample_lobe(const double *p, int j, struct vec3 wo,
+static double tab_sample_lobe(const void *self, int j, struct vec3 wo,
 			      const double u[2], struct vec3 *wi)
 {
+	const struct glint_tabulated *tab = self;
+
 	if (u[0] < 0.5) {
 		double r = sqrt(u[1]), a = 2 * M_PI * (2 * u[0]);
 		*wi = v3(r * cos(a), r * sin(a), sqrt(fmax(0, 1 - u[1])));
 	} else {
 		double uu[2] = { 2 * u[0] - 1, u[1] };
-		glint_beckmann_sample(cur_proposal, wo, uu, wi);
+		glint_beckmann_sample(tab->proposal, wo, uu, wi);
 	}
-	return tab_pdf_lobe(p, j, wo, *wi);
+	return tab_pdf_lobe(self, j, wo, *wi);
 }
 
-static double tab_sample(const double *p, struct vec3 wo, const double u[3],
+static double tab_sample(const void *self, struct vec3 wo, const double u[3],
 			 struct vec3 *wi)
 {
-	return tab_sample_lobe(p, 0, wo, u, wi);
+	return tab_sample_lobe(self, 0, wo, u, wi);
 }
 
-static double tab_pdf(const double *p, struct vec3 wo, struct vec3 wi)
+static double tab_pdf(const void *self, struct vec3 wo, struct vec3 wi)
 {
-	return tab_pdf_lobe(p, 0, wo, wi);
+	return tab_pdf_lobe(self, 0, wo, wi);
 }
 
-static const struct glint_model_ops tab_model = {
-	.name = "tabulated",
-	.conventions = "a measured isotropic BRDF in the MERL layout "
-		       "(sim/tabulated.h); RGB per steradian",
-	.nparams = 9,
-	.params = tab_params,
+static const struct glint_bxdf_ops tab_ops = {
+	.flags = GLINT_BXDF_REFLECTION | GLINT_BXDF_DIFFUSE |
+		 GLINT_BXDF_GLOSSY | GLINT_BXDF_LOBES,
 	.eval = tab_eval,
 	.sample = tab_sample,
 	.pdf = tab_pdf,
 	.nlobes = 3,
-	.lobe_param = tab_lobe_param,
-	.lobe_varies = tab_lobe_varies,
+	.albedo = tab_albedo,
 	.eval_lobes = tab_lobes,
 	.sample_lobe = tab_sample_lobe,
 	.pdf_lobe = tab_pdf_lobe,
-	.roughness_param = -1,
 };
 
-const struct glint_model_ops *
-glint_tabulated_model(const struct glint_brdf_table *t, double proposal)
+struct glint_bxdf glint_tabulated_bxdf(struct glint_tabulated *tab,
+				       const struct glint_brdf_table *t,
+				       double proposal)
 {
-	cur = t;
-	cur_proposal = proposal;
-	return &tab_model;
+	tab->table = t;
+	tab->proposal = proposal;
+	return (struct glint_bxdf){ &tab_ops, tab };
 }

@@ -50,16 +50,20 @@ void glint_brdf_table_eval(const struct glint_brdf_table *t, struct vec3 wo,
 			   struct vec3 wi, double rgb[3]);
 
 /*
- * The table as a model for the reference renderer: three lobes, one per
- * channel (lobe c's albedo is the unit vector of channel c, its value the
- * table's channel c), sampled half by the cosine and half by a Beckmann
- * lobe of roughness `proposal` about the mirror direction.  Its parameter
- * vector is glint_tabulated_params.  The model reads t, which must outlive
- * its use; one table at a time (a later call replaces it).  Not for
- * fitting: nothing in it varies.
+ * The table as a BRDF for the reference renderer
+ * (glint_reference_render_bxdf()): three lobes, one per channel (lobe c's
+ * albedo is the unit vector of channel c, its value the table's channel
+ * c), sampled half by the cosine and half by a Beckmann lobe of roughness
+ * `proposal` about the mirror direction.  The BxDF's state is *tab, which
+ * this fills; tab and t must outlive it.  Any number may coexist.  Not a
+ * model: nothing in it is fitted.
  */
-const struct glint_model_ops *
-glint_tabulated_model(const struct glint_brdf_table *t, double proposal);
-extern const double glint_tabulated_params[9];
+struct glint_tabulated {
+	const struct glint_brdf_table *table;
+	double proposal;
+};
+struct glint_bxdf glint_tabulated_bxdf(struct glint_tabulated *tab,
+				       const struct glint_brdf_table *t,
+				       double proposal);
 
 #endif

@@ -14,7 +14,7 @@
 
 #include "fit/brdf/model.h"
 
-static inline void albedo_quadrature(const struct glint_model_ops *m,
+static inline void albedo_quadrature(const struct glint_model *m,
 				     const double *p, struct vec3 wo,
 				     double out[3])
 {
@@ -34,7 +34,7 @@ static inline void albedo_quadrature(const struct glint_model_ops *m,
 			if (wi.z <= 0)
 				continue;
 			double f[3];
-			m->eval(p, wo, wi, f);
+			m->bxdf->eval(p, wo, wi, f);
 			double w = wi.z * 4 * oh * st * dth * (2 * M_PI / np);
 			for (int c = 0; c < 3; c++)
 				out[c] += f[c] * w;

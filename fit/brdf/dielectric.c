@@ -2,8 +2,8 @@
 /*
  * The smooth dielectric sphere (fit/render/dielectric_paths.h): RGB
  * transmission per traversal of the diameter and the index of refraction.  Not
- * a BRDF: it has no eval/sample (the renderer and the fitter follow its paths
- * with fit/render/dielectric_paths.c instead).
+ * a BRDF: it has no bxdf and no lobes (the renderer and the fitter follow its
+ * paths with fit/render/dielectric_paths.c instead).
  */
 #include "model.h"
 
@@ -14,7 +14,7 @@ static const struct glint_param dielectric_params[] = {
 	{ "ior", "ior", -1, 1.01, 4, 1.5 },
 };
 
-const struct glint_model_ops glint_model_dielectric = {
+const struct glint_model glint_model_dielectric = {
 	.name = "dielectric",
 	.conventions =
 		"smooth dielectric sphere: exact unpolarised Fresnel at each "
@@ -27,6 +27,4 @@ const struct glint_model_ops glint_model_dielectric = {
 		"losses are not part of it; ior relative to air",
 	.nparams = 4,
 	.params = dielectric_params,
-	.transparent = 1,
-	.roughness_param = -1,
 };

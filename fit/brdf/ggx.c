@@ -28,74 +28,88 @@ static const struct glint_param ggx_params[] = {
 static const int ggx_lobe_param[2] = { KD, KS };
 static const int ggx_lobe_varies[2] = { 0, 1 };
 
-static void ggx_lobes(const double *p, struct vec3 wo, struct vec3 wi,
+static void ggx_lobes(const void *self, struct vec3 wo, struct vec3 wi,
 		      double *b)
 {
+	const double *p = self;
+
 	b[0] = wo.z > 0 && wi.z > 0 ? 1 / M_PI : 0;
 	b[1] = glint_ggx_lobe(p[ROUGH], p[IOR], wo, wi);
 }
 
-static void ggx_eval(const double *p, struct vec3 wo, struct vec3 wi,
+static void ggx_eval(const void *self, struct vec3 wo, struct vec3 wi,
 		     double f[3])
 {
+	const double *p = self;
+
 	glint_lobes_eval(&glint_model_ggx, p, wo, wi, f);
 }
 
-static double ggx_pdf(const double *p, struct vec3 wo, struct vec3 wi)
+static double ggx_pdf(const void *self, struct vec3 wo, struct vec3 wi)
 {
+	const double *p = self;
+
 	return glint_lobes_pdf(&glint_model_ggx, p,
 			       glint_fresnel_or_one(wo.z, p[IOR]), wo, wi);
 }
 
-static double ggx_sample(const double *p, struct vec3 wo, const double u[3],
+static double ggx_sample(const void *self, struct vec3 wo, const double u[3],
 			 struct vec3 *wi)
 {
+	const double *p = self;
+
 	return glint_lobes_sample(&glint_model_ggx, p,
 				  glint_fresnel_or_one(wo.z, p[IOR]), wo, u,
 				  wi);
 }
 
-static double ggx_pdf_lobe(const double *p, int j, struct vec3 wo,
+static double ggx_pdf_lobe(const void *self, int j, struct vec3 wo,
 			   struct vec3 wi)
 {
-	return glint_lobe_shape_pdf(j ? GLINT_LOBE_GGX : GLINT_LOBE_COSINE,
-				    p[ROUGH], wo, wi);
+	const double *p = self;
+
+	return glint_lobe_shape_pdf(j ? &glint_microfacet_ggx : NULL, p[ROUGH],
+				    wo, wi);
 }
 
-static double ggx_sample_lobe(const double *p, int j, struct vec3 wo,
+static double ggx_sample_lobe(const void *self, int j, struct vec3 wo,
 			      const double u[2], struct vec3 *wi)
 {
-	return glint_lobe_shape_sample(j ? GLINT_LOBE_GGX : GLINT_LOBE_COSINE,
+	const double *p = self;
+
+	return glint_lobe_shape_sample(j ? &glint_microfacet_ggx : NULL,
 				       p[ROUGH], wo, u, wi);
 }
 
-/* D(t) / D(0) = a^4 / (a^2 cos^2 t + sin^2 t)^2 is below 1e-12 once
- * sin t > 1000 a: a bound only for the smoothest lobes. */
-static double ggx_lobe_extent(const double *p, int j)
+static const double *ggx_albedo(const void *self, int j)
 {
-	double s = 1000 * p[ROUGH];
-	return j == 1 && s < 1 ? 2 * asin(s) : -1;
+	return (const double *)self + ggx_lobe_param[j];
 }
 
-/* GGX's core: D falls to half at tan t_h = a sqrt(sqrt(2) - 1) =
- * 0.6436 a, the mirror direction's angle twice that, which a Gaussian
- * reaches at 1.1774 sigma: sigma = 1.0932 a.  Widening keeps that core
- * (its tails are not widened). */
-#define GGX_CORE 1.0932
+static const struct glint_bxdf_ops ggx_bxdf = {
+	.flags = GLINT_BXDF_REFLECTION | GLINT_BXDF_DIFFUSE |
+		 GLINT_BXDF_GLOSSY | GLINT_BXDF_LOBES,
+	.eval = ggx_eval,
+	.sample = ggx_sample,
+	.pdf = ggx_pdf,
+	.nlobes = 2,
+	.albedo = ggx_albedo,
+	.eval_lobes = ggx_lobes,
+	.sample_lobe = ggx_sample_lobe,
+	.pdf_lobe = ggx_pdf_lobe,
+};
 
-static double ggx_lobe_width(const double *p, int j)
-{
-	return j == 1 ? GGX_CORE * p[ROUGH] : -1;
-}
+static const int ggx_width_param[] = { -1, ROUGH };
 
-static void ggx_lobe_widen(double *p, int j, double s)
-{
-	if (j == 1)
-		p[ROUGH] = sqrt(p[ROUGH] * p[ROUGH] +
-				s * s / (GGX_CORE * GGX_CORE));
-}
+static const struct glint_fit_lobes ggx_fit = {
+	.param = ggx_lobe_param,
+	.varies = ggx_lobe_varies,
+	.roughness_param = ROUGH,
+	.microfacet = &glint_microfacet_ggx,
+	.width_param = ggx_width_param,
+};
 
-const struct glint_model_ops glint_model_ggx = {
+const struct glint_model glint_model_ggx = {
 	.name = "ggx",
 	.conventions =
 		"Microfacet with a Trowbridge-Reitz (GGX) lobe: f = "
@@ -108,17 +122,6 @@ const struct glint_model_ops glint_model_ggx = {
 		"Fresnel at cos = o.h with index ior.",
 	.nparams = 8,
 	.params = ggx_params,
-	.eval = ggx_eval,
-	.sample = ggx_sample,
-	.pdf = ggx_pdf,
-	.roughness_param = ROUGH,
-	.nlobes = 2,
-	.lobe_param = ggx_lobe_param,
-	.lobe_varies = ggx_lobe_varies,
-	.eval_lobes = ggx_lobes,
-	.sample_lobe = ggx_sample_lobe,
-	.pdf_lobe = ggx_pdf_lobe,
-	.lobe_extent = ggx_lobe_extent,
-	.lobe_width = ggx_lobe_width,
-	.lobe_widen = ggx_lobe_widen,
+	.bxdf = &ggx_bxdf,
+	.lobes = &ggx_fit,
 };

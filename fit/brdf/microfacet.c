@@ -215,34 +215,68 @@ void glint_ggx_sample(double a, struct vec3 wo, const double u[2],
 	reflect_about(a * a * u[0] / (1 - u[0]), u[1], wo, wi);
 }
 
-double glint_lobe_shape_pdf(enum glint_lobe_shape s, double w, struct vec3 wo,
-			    struct vec3 wi)
+/* Beckmann D falls below 1e-12 of its peak where tan^2(t_h) > 27.6 m^2;
+ * the reflected direction turns by twice the half-vector's angle. */
+static double beckmann_extent(double m)
+{
+	return 2 * atan(m * sqrt(27.6));
+}
+
+/* D(t) / D(0) = a^4 / (a^2 cos^2 t + sin^2 t)^2 is below 1e-12 once
+ * sin t > 1000 a: a bound only for the smoothest lobes. */
+static double ggx_extent(double a)
+{
+	double s = 1000 * a;
+	return s < 1 ? 2 * asin(s) : -1;
+}
+
+/* Beckmann's half-vector angle has variance m^2/2 per axis, the mirror
+ * direction twice the angle: standard deviation sqrt(2) m. */
+const struct glint_microfacet glint_microfacet_beckmann = {
+	.name = "beckmann",
+	.lobe = glint_beckmann_lobe,
+	.sample = glint_beckmann_sample,
+	.pdf = glint_beckmann_pdf,
+	.extent = beckmann_extent,
+	.core = 1.4142135623730951,
+	.widen_div = 2,
+};
+
+/* GGX's core: D falls to half at tan t_h = a sqrt(sqrt(2) - 1) =
+ * 0.6436 a, the mirror direction's angle twice that, which a Gaussian
+ * reaches at 1.1774 sigma: sigma = 1.0932 a.  Widening keeps that core
+ * (its tails are not widened). */
+#define GGX_CORE 1.0932
+
+const struct glint_microfacet glint_microfacet_ggx = {
+	.name = "ggx",
+	.lobe = glint_ggx_lobe,
+	.sample = glint_ggx_sample,
+	.pdf = glint_ggx_pdf,
+	.extent = ggx_extent,
+	.core = GGX_CORE,
+	.widen_div = GGX_CORE * GGX_CORE,
+};
+
+double glint_lobe_shape_pdf(const struct glint_microfacet *mf, double w,
+			    struct vec3 wo, struct vec3 wi)
 {
 	if (!(wo.z > 0 && wi.z > 0))
 		return 0;
-	switch (s) {
-	case GLINT_LOBE_BECKMANN:
-		return glint_beckmann_pdf(w, wo, wi);
-	case GLINT_LOBE_GGX:
-		return glint_ggx_pdf(w, wo, wi);
-	default:
-		return wi.z / M_PI;
-	}
+	return mf ? mf->pdf(w, wo, wi) : wi.z / M_PI;
 }
 
-double glint_lobe_shape_sample(enum glint_lobe_shape s, double w,
+double glint_lobe_shape_sample(const struct glint_microfacet *mf, double w,
 			       struct vec3 wo, const double u[2],
 			       struct vec3 *wi)
 {
 	if (!(wo.z > 0))
 		return 0;
-	if (s == GLINT_LOBE_BECKMANN)
-		glint_beckmann_sample(w, wo, u, wi);
-	else if (s == GLINT_LOBE_GGX)
-		glint_ggx_sample(w, wo, u, wi);
+	if (mf)
+		mf->sample(w, wo, u, wi);
 	else
 		glint_sample_cosine(u, wi);
 	if (!(wi->z > 0))
 		return 0;
-	return glint_lobe_shape_pdf(s, w, wo, *wi);
+	return glint_lobe_shape_pdf(mf, w, wo, *wi);
 }

@@ -69,19 +69,40 @@ double glint_beckmann_from_geometry(double m, double ior, const float g[4],
 				    double *pdf);
 
 /*
- * How a lobe is sampled: cosine-weighted (diffuse lobes), or by reflecting
- * about a Beckmann or GGX normal of width w (above).  _sample returns the
- * pdf at the direction drawn, 0 when it falls below the surface; both are
- * 0 for wo below it.  The pdf_lobe/sample_lobe of the models.
+ * A microfacet distribution as data: the lobe without its albedo and its
+ * sampling (above), with the lobe's extent and core width as functions
+ * of the distribution's width parameter w.  The microfacet models
+ * (torrance_sparrow.c, ggx.c, two_lobe.c, oren_nayar.c) name theirs in
+ * their struct glint_fit_lobes; the exports read which one a model uses.
  */
-enum glint_lobe_shape {
-	GLINT_LOBE_COSINE,
-	GLINT_LOBE_BECKMANN,
-	GLINT_LOBE_GGX,
+struct glint_microfacet {
+	const char *name; /* "beckmann", "ggx" */
+	double (*lobe)(double w, double ior, struct vec3 wo, struct vec3 wi);
+	void (*sample)(double w, struct vec3 wo, const double u[2],
+		       struct vec3 *wi);
+	double (*pdf)(double w, struct vec3 wo, struct vec3 wi);
+	/* Angle (radians) from the mirror direction beyond which the lobe
+	 * is below 1e-12 of its peak, or <= 0 when it has no such bound. */
+	double (*extent)(double w);
+	/* The lobe's core: the standard deviation of its reflected
+	 * directions about the mirror direction is core * w; widening it by
+	 * a Gaussian of s makes w sqrt(w^2 + s^2 / widen_div). */
+	double core, widen_div;
 };
-double glint_lobe_shape_pdf(enum glint_lobe_shape s, double w, struct vec3 wo,
-			    struct vec3 wi);
-double glint_lobe_shape_sample(enum glint_lobe_shape s, double w,
+
+extern const struct glint_microfacet glint_microfacet_beckmann;
+extern const struct glint_microfacet glint_microfacet_ggx;
+
+/*
+ * How a lobe is sampled: cosine-weighted (mf NULL: diffuse lobes), or by
+ * reflecting about a normal of distribution mf with width w.  _sample
+ * returns the pdf at the direction drawn, 0 when it falls below the
+ * surface; both are 0 for wo below it.  The pdf_lobe/sample_lobe of the
+ * models.
+ */
+double glint_lobe_shape_pdf(const struct glint_microfacet *mf, double w,
+			    struct vec3 wo, struct vec3 wi);
+double glint_lobe_shape_sample(const struct glint_microfacet *mf, double w,
 			       struct vec3 wo, const double u[2],
 			       struct vec3 *wi);
 

@@ -1,6 +1,8 @@
 /* SPDX-License-Identifier: MIT */
 #include "model.h"
 
+#include "microfacet.h"
+
 #include "core/error.h"
 #include "core/json.h"
 #include "core/suggest.h"
@@ -9,7 +11,7 @@
 #include <stdio.h>
 #include <string.h>
 
-static const struct glint_model_ops *const registry[] = {
+static const struct glint_model *const registry[] = {
 	&glint_model_lambert,
 	&glint_model_torrance_sparrow,
 	&glint_model_ts_constant_fresnel,
@@ -21,7 +23,7 @@ static const struct glint_model_ops *const registry[] = {
 
 #define NMODELS (sizeof(registry) / sizeof(registry[0]))
 
-const struct glint_model_ops *glint_model_find(const char *name)
+const struct glint_model *glint_model_find(const char *name)
 {
 	for (size_t i = 0; i < NMODELS; i++)
 		if (!strcmp(registry[i]->name, name))
@@ -55,10 +57,9 @@ const char *glint_model_names(void)
 }
 
 int glint_material_from_json(const char *file, const char *where, json_t *obj,
-			     const struct glint_model_ops **model,
-			     double *params)
+			     const struct glint_model **model, double *params)
 {
-	const struct glint_model_ops *m;
+	const struct glint_model *m;
 	const char *name = NULL;
 	const char *known[GLINT_MAX_PARAMS + 3] = { "model", "name" };
 	int nk = 2, ret;
@@ -107,7 +108,7 @@ int glint_material_from_json(const char *file, const char *where, json_t *obj,
 }
 
 int glint_material_load(const char *path, const char *entry,
-			const struct glint_model_ops **model, double *params)
+			const struct glint_model **model, double *params)
 {
 	json_t *root, *list;
 	int ret = glint_json_load(path, &root);
@@ -153,7 +154,7 @@ out:
 	return ret;
 }
 
-json_t *glint_material_to_json(const struct glint_model_ops *model,
+json_t *glint_material_to_json(const struct glint_model *model,
 			       const double *params)
 {
 	json_t *o = json_object();
@@ -176,7 +177,7 @@ json_t *glint_material_to_json(const struct glint_model_ops *model,
 	return o;
 }
 
-void glint_lobes_eval(const struct glint_model_ops *m, const double *p,
+void glint_lobes_eval(const struct glint_model *m, const double *p,
 		      struct vec3 wo, struct vec3 wi, double f[3])
 {
 	double b[GLINT_MAX_PARAMS];
@@ -184,37 +185,37 @@ void glint_lobes_eval(const struct glint_model_ops *m, const double *p,
 	f[0] = f[1] = f[2] = 0;
 	if (!(wo.z > 0 && wi.z > 0))
 		return;
-	m->eval_lobes(p, wo, wi, b);
-	for (int j = 0; j < m->nlobes; j++)
+	m->bxdf->eval_lobes(p, wo, wi, b);
+	for (int j = 0; j < m->bxdf->nlobes; j++)
 		for (int c = 0; c < 3; c++)
-			f[c] += p[m->lobe_param[j] + c] * b[j];
+			f[c] += p[m->lobes->param[j] + c] * b[j];
 }
 
-double glint_lobe_value_pdf(const struct glint_model_ops *m, const double *p,
-			    int j, struct vec3 wo, struct vec3 wi, double *pdf)
+double glint_lobe_value_pdf(const struct glint_model *m, const double *p, int j,
+			    struct vec3 wo, struct vec3 wi, double *pdf)
 {
 	double b[GLINT_MAX_PARAMS];
 
-	if (m->lobe_value_pdf)
-		return m->lobe_value_pdf(p, j, wo, wi, pdf);
-	m->eval_lobes(p, wo, wi, b);
+	if (m->lobes->value_pdf)
+		return m->lobes->value_pdf(p, j, wo, wi, pdf);
+	m->bxdf->eval_lobes(p, wo, wi, b);
 	if (pdf)
-		*pdf = m->pdf_lobe(p, j, wo, wi);
+		*pdf = m->bxdf->pdf_lobe(p, j, wo, wi);
 	return b[j];
 }
 
-double glint_lobe_sample_value(const struct glint_model_ops *m, const double *p,
+double glint_lobe_sample_value(const struct glint_model *m, const double *p,
 			       int j, struct vec3 wo, const double u[2],
 			       struct vec3 *wi, double *bj)
 {
 	double b[GLINT_MAX_PARAMS];
 
-	if (m->sample_lobe_value)
-		return m->sample_lobe_value(p, j, wo, u, wi, bj);
+	if (m->lobes->sample_value)
+		return m->lobes->sample_value(p, j, wo, u, wi, bj);
 	*bj = 0;
-	double pdf = m->sample_lobe(p, j, wo, u, wi);
+	double pdf = m->bxdf->sample_lobe(p, j, wo, u, wi);
 	if (pdf > 0) {
-		m->eval_lobes(p, wo, *wi, b);
+		m->bxdf->eval_lobes(p, wo, *wi, b);
 		*bj = b[j];
 	}
 	return pdf;
@@ -223,14 +224,14 @@ double glint_lobe_sample_value(const struct glint_model_ops *m, const double *p,
 /* Lobe j's share of the samples: w[j] / sum w, at least 5 % for every
  * lobe with weight (none is starved), all alike when no lobe has any;
  * w[j] the luminance of lobe j's albedo, times spec_scale past lobe 0. */
-static void lobe_probs(const struct glint_model_ops *m, const double *p,
+static void lobe_probs(const struct glint_model *m, const double *p,
 		       double spec_scale, double *prob)
 {
 	double w[GLINT_MAX_PARAMS], total = 0, floored = 0;
-	int used = 0, n = m->nlobes;
+	int used = 0, n = m->bxdf->nlobes;
 
 	for (int j = 0; j < n; j++) {
-		const double *a = p + m->lobe_param[j];
+		const double *a = p + m->lobes->param[j];
 		w[j] = rgb_luminance(a[0], a[1], a[2]) * (j ? spec_scale : 1);
 	}
 	for (int j = 0; j < n; j++)
@@ -248,7 +249,7 @@ static void lobe_probs(const struct glint_model_ops *m, const double *p,
 		prob[j] /= floored;
 }
 
-double glint_lobes_pdf(const struct glint_model_ops *m, const double *p,
+double glint_lobes_pdf(const struct glint_model *m, const double *p,
 		       double spec_scale, struct vec3 wo, struct vec3 wi)
 {
 	double prob[GLINT_MAX_PARAMS], pdf = 0;
@@ -256,13 +257,13 @@ double glint_lobes_pdf(const struct glint_model_ops *m, const double *p,
 	if (!(wo.z > 0 && wi.z > 0))
 		return 0;
 	lobe_probs(m, p, spec_scale, prob);
-	for (int j = 0; j < m->nlobes; j++)
+	for (int j = 0; j < m->bxdf->nlobes; j++)
 		if (prob[j] > 0)
-			pdf += prob[j] * m->pdf_lobe(p, j, wo, wi);
+			pdf += prob[j] * m->bxdf->pdf_lobe(p, j, wo, wi);
 	return pdf;
 }
 
-double glint_lobes_sample(const struct glint_model_ops *m, const double *p,
+double glint_lobes_sample(const struct glint_model *m, const double *p,
 			  double spec_scale, struct vec3 wo, const double u[3],
 			  struct vec3 *wi)
 {
@@ -272,9 +273,34 @@ double glint_lobes_sample(const struct glint_model_ops *m, const double *p,
 	if (!(wo.z > 0))
 		return 0;
 	lobe_probs(m, p, spec_scale, prob);
-	while (j < m->nlobes - 1 && u[0] >= acc + prob[j])
+	while (j < m->bxdf->nlobes - 1 && u[0] >= acc + prob[j])
 		acc += prob[j++];
-	if (m->sample_lobe(p, j, wo, u + 1, wi) <= 0 || !(wi->z > 0))
+	if (m->bxdf->sample_lobe(p, j, wo, u + 1, wi) <= 0 || !(wi->z > 0))
 		return 0;
 	return glint_lobes_pdf(m, p, spec_scale, wo, *wi);
+}
+
+double glint_lobe_extent(const struct glint_model *m, const double *p, int j)
+{
+	const struct glint_fit_lobes *l = m->lobes;
+	int w = l->microfacet ? l->width_param[j] : -1;
+
+	return w >= 0 ? l->microfacet->extent(p[w]) : -1;
+}
+
+double glint_lobe_width(const struct glint_model *m, const double *p, int j)
+{
+	const struct glint_fit_lobes *l = m->lobes;
+	int w = l->microfacet ? l->width_param[j] : -1;
+
+	return w >= 0 ? l->microfacet->core * p[w] : -1;
+}
+
+void glint_lobe_widen(const struct glint_model *m, double *p, int j, double s)
+{
+	const struct glint_fit_lobes *l = m->lobes;
+	int w = l->microfacet ? l->width_param[j] : -1;
+
+	if (w >= 0)
+		p[w] = sqrt(p[w] * p[w] + s * s / l->microfacet->widen_div);
 }

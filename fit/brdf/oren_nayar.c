@@ -31,27 +31,36 @@ static const struct glint_param on_params[] = {
 static const int on_lobe_param[2] = { KD, KS };
 static const int on_lobe_varies[2] = { 1, 1 };
 
-static void on_lobes(const double *p, struct vec3 wo, struct vec3 wi, double *b)
+static void on_lobes(const void *self, struct vec3 wo, struct vec3 wi,
+		     double *b)
 {
+	const double *p = self;
+
 	b[0] = glint_oren_nayar(p[SIGMA], wo, wi);
 	b[1] = glint_beckmann_lobe(p[ROUGH], p[IOR], wo, wi);
 }
 
-static void on_eval(const double *p, struct vec3 wo, struct vec3 wi,
+static void on_eval(const void *self, struct vec3 wo, struct vec3 wi,
 		    double f[3])
 {
+	const double *p = self;
+
 	glint_lobes_eval(&glint_model_oren_nayar, p, wo, wi, f);
 }
 
-static double on_pdf(const double *p, struct vec3 wo, struct vec3 wi)
+static double on_pdf(const void *self, struct vec3 wo, struct vec3 wi)
 {
+	const double *p = self;
+
 	return glint_lobes_pdf(&glint_model_oren_nayar, p,
 			       glint_fresnel_or_one(wo.z, p[IOR]), wo, wi);
 }
 
-static double on_sample(const double *p, struct vec3 wo, const double u[3],
+static double on_sample(const void *self, struct vec3 wo, const double u[3],
 			struct vec3 *wi)
 {
+	const double *p = self;
+
 	return glint_lobes_sample(&glint_model_oren_nayar, p,
 				  glint_fresnel_or_one(wo.z, p[IOR]), wo, u,
 				  wi);
@@ -59,39 +68,53 @@ static double on_sample(const double *p, struct vec3 wo, const double u[3],
 
 /* The rough-diffuse lobe is sampled by cosine: it stays within a factor
  * of a few of Lambert's shape for sigma <= 1. */
-static double on_pdf_lobe(const double *p, int j, struct vec3 wo,
+static double on_pdf_lobe(const void *self, int j, struct vec3 wo,
 			  struct vec3 wi)
 {
-	return glint_lobe_shape_pdf(j ? GLINT_LOBE_BECKMANN : GLINT_LOBE_COSINE,
+	const double *p = self;
+
+	return glint_lobe_shape_pdf(j ? &glint_microfacet_beckmann : NULL,
 				    p[ROUGH], wo, wi);
 }
 
-static double on_sample_lobe(const double *p, int j, struct vec3 wo,
+static double on_sample_lobe(const void *self, int j, struct vec3 wo,
 			     const double u[2], struct vec3 *wi)
 {
-	return glint_lobe_shape_sample(j ? GLINT_LOBE_BECKMANN
-					 : GLINT_LOBE_COSINE,
+	const double *p = self;
+
+	return glint_lobe_shape_sample(j ? &glint_microfacet_beckmann : NULL,
 				       p[ROUGH], wo, u, wi);
 }
 
-static double on_lobe_extent(const double *p, int j)
+static const double *on_albedo(const void *self, int j)
 {
-	return j == 1 ? 2 * atan(p[ROUGH] * sqrt(27.6)) : -1;
+	return (const double *)self + on_lobe_param[j];
 }
 
-/* The specular lobe is torrance_sparrow.c's: sqrt(2) m. */
-static double on_lobe_width(const double *p, int j)
-{
-	return j == 1 ? 1.4142135623730951 * p[ROUGH] : -1;
-}
+static const struct glint_bxdf_ops on_bxdf = {
+	.flags = GLINT_BXDF_REFLECTION | GLINT_BXDF_DIFFUSE |
+		 GLINT_BXDF_GLOSSY | GLINT_BXDF_LOBES,
+	.eval = on_eval,
+	.sample = on_sample,
+	.pdf = on_pdf,
+	.nlobes = 2,
+	.albedo = on_albedo,
+	.eval_lobes = on_lobes,
+	.sample_lobe = on_sample_lobe,
+	.pdf_lobe = on_pdf_lobe,
+};
 
-static void on_lobe_widen(double *p, int j, double s)
-{
-	if (j == 1)
-		p[ROUGH] = sqrt(p[ROUGH] * p[ROUGH] + s * s / 2);
-}
+static const int on_width_param[] = { -1, ROUGH };
 
-const struct glint_model_ops glint_model_oren_nayar = {
+static const struct glint_fit_lobes on_fit = {
+	.param = on_lobe_param,
+	.varies = on_lobe_varies,
+	.roughness_param = ROUGH,
+	.microfacet = &glint_microfacet_beckmann,
+	.width_param = on_width_param,
+};
+
+const struct glint_model glint_model_oren_nayar = {
 	.name = "oren-nayar",
 	.conventions =
 		"Oren-Nayar rough diffuse under a Torrance-Sparrow lobe: f = "
@@ -105,17 +128,6 @@ const struct glint_model_ops glint_model_oren_nayar = {
 		"RMS slope, G V-cavity, F exact dielectric Fresnel with ior.",
 	.nparams = 9,
 	.params = on_params,
-	.eval = on_eval,
-	.sample = on_sample,
-	.pdf = on_pdf,
-	.roughness_param = ROUGH,
-	.nlobes = 2,
-	.lobe_param = on_lobe_param,
-	.lobe_varies = on_lobe_varies,
-	.eval_lobes = on_lobes,
-	.sample_lobe = on_sample_lobe,
-	.pdf_lobe = on_pdf_lobe,
-	.lobe_extent = on_lobe_extent,
-	.lobe_width = on_lobe_width,
-	.lobe_widen = on_lobe_widen,
+	.bxdf = &on_bxdf,
+	.lobes = &on_fit,
 };

@@ -33,9 +33,11 @@ static double ts_spec(const double *p, struct vec3 wo, struct vec3 wi)
 	return glint_beckmann_lobe(p[ROUGH], p[IOR], wo, wi);
 }
 
-static void ts_eval(const double *p, struct vec3 wo, struct vec3 wi,
+static void ts_eval(const void *self, struct vec3 wo, struct vec3 wi,
 		    double f[3])
 {
+	const double *p = self;
+
 	if (!(wo.z > 0 && wi.z > 0)) {
 		f[0] = f[1] = f[2] = 0;
 		return;
@@ -61,8 +63,10 @@ static double spec_prob(const double *p, struct vec3 wo)
 	return ps < 0.05 ? 0.05 : ps > 0.95 ? 0.95 : ps;
 }
 
-static double ts_pdf(const double *p, struct vec3 wo, struct vec3 wi)
+static double ts_pdf(const void *self, struct vec3 wo, struct vec3 wi)
 {
+	const double *p = self;
+
 	if (!(wo.z > 0 && wi.z > 0))
 		return 0;
 	double ps = spec_prob(p, wo);
@@ -70,9 +74,11 @@ static double ts_pdf(const double *p, struct vec3 wo, struct vec3 wi)
 	       (1 - ps) * wi.z / M_PI;
 }
 
-static double ts_sample(const double *p, struct vec3 wo, const double u[3],
+static double ts_sample(const void *self, struct vec3 wo, const double u[3],
 			struct vec3 *wi)
 {
+	const double *p = self;
+
 	if (!(wo.z > 0))
 		return 0;
 	if (u[0] < spec_prob(p, wo))
@@ -87,24 +93,30 @@ static double ts_sample(const double *p, struct vec3 wo, const double u[3],
 static const int ts_lobe_param[2] = { KD, KS };
 static const int ts_lobe_varies[2] = { 0, 1 };
 
-static void ts_lobes(const double *p, struct vec3 wo, struct vec3 wi, double *b)
+static void ts_lobes(const void *self, struct vec3 wo, struct vec3 wi,
+		     double *b)
 {
+	const double *p = self;
+
 	b[0] = wo.z > 0 && wi.z > 0 ? 1 / M_PI : 0;
 	b[1] = ts_spec(p, wo, wi);
 }
 
-static double ts_pdf_lobe(const double *p, int j, struct vec3 wo,
+static double ts_pdf_lobe(const void *self, int j, struct vec3 wo,
 			  struct vec3 wi)
 {
-	return glint_lobe_shape_pdf(j ? GLINT_LOBE_BECKMANN : GLINT_LOBE_COSINE,
+	const double *p = self;
+
+	return glint_lobe_shape_pdf(j ? &glint_microfacet_beckmann : NULL,
 				    p[ROUGH], wo, wi);
 }
 
-static double ts_sample_lobe(const double *p, int j, struct vec3 wo,
+static double ts_sample_lobe(const void *self, int j, struct vec3 wo,
 			     const double u[2], struct vec3 *wi)
 {
-	return glint_lobe_shape_sample(j ? GLINT_LOBE_BECKMANN
-					 : GLINT_LOBE_COSINE,
+	const double *p = self;
+
+	return glint_lobe_shape_sample(j ? &glint_microfacet_beckmann : NULL,
 				       p[ROUGH], wo, u, wi);
 }
 
@@ -145,27 +157,39 @@ static double nf_lobe_from_geometry(const double *p, int j, const float g[4],
 	return glint_beckmann_from_geometry(p[ROUGH], 0, g, pdf);
 }
 
-/* Beckmann D falls below 1e-12 of its peak where tan^2(t_h) > 27.6 m^2;
- * the reflected direction turns by twice the half-vector's angle. */
-static double ts_lobe_extent(const double *p, int j)
+static const double *ts_albedo(const void *self, int j)
 {
-	return j == 1 ? 2 * atan(p[ROUGH] * sqrt(27.6)) : -1;
+	return (const double *)self + ts_lobe_param[j];
 }
 
-/* Beckmann's half-vector angle has variance m^2/2 per axis, the mirror
- * direction twice the angle: standard deviation sqrt(2) m. */
-static double ts_lobe_width(const double *p, int j)
-{
-	return j == 1 ? 1.4142135623730951 * p[ROUGH] : -1;
-}
+static const struct glint_bxdf_ops ts_bxdf = {
+	.flags = GLINT_BXDF_REFLECTION | GLINT_BXDF_DIFFUSE |
+		 GLINT_BXDF_GLOSSY | GLINT_BXDF_LOBES,
+	.eval = ts_eval,
+	.sample = ts_sample,
+	.pdf = ts_pdf,
+	.nlobes = 2,
+	.albedo = ts_albedo,
+	.eval_lobes = ts_lobes,
+	.sample_lobe = ts_sample_lobe,
+	.pdf_lobe = ts_pdf_lobe,
+};
 
-static void ts_lobe_widen(double *p, int j, double s)
-{
-	if (j == 1)
-		p[ROUGH] = sqrt(p[ROUGH] * p[ROUGH] + s * s / 2);
-}
+static const int ts_width_param[2] = { -1, ROUGH };
 
-const struct glint_model_ops glint_model_torrance_sparrow = {
+static const struct glint_fit_lobes ts_fit = {
+	.param = ts_lobe_param,
+	.varies = ts_lobe_varies,
+	.value_pdf = ts_lobe_value_pdf,
+	.sample_value = ts_sample_lobe_value,
+	.geometry = glint_beckmann_geometry,
+	.from_geometry = ts_lobe_from_geometry,
+	.roughness_param = ROUGH,
+	.microfacet = &glint_microfacet_beckmann,
+	.width_param = ts_width_param,
+};
+
+const struct glint_model glint_model_torrance_sparrow = {
 	.name = "torrance-sparrow",
 	.conventions =
 		"Torrance-Sparrow: f = diffuse/pi + specular*D*G*F/(4 cos_i "
@@ -175,23 +199,8 @@ const struct glint_model_ops glint_model_torrance_sparrow = {
 		"unpolarised dielectric Fresnel at cos = o.h with index ior.",
 	.nparams = 8,
 	.params = ts_params,
-	.eval = ts_eval,
-	.sample = ts_sample,
-	.pdf = ts_pdf,
-	.roughness_param = ROUGH,
-	.nlobes = 2,
-	.lobe_param = ts_lobe_param,
-	.lobe_varies = ts_lobe_varies,
-	.eval_lobes = ts_lobes,
-	.sample_lobe = ts_sample_lobe,
-	.pdf_lobe = ts_pdf_lobe,
-	.lobe_value_pdf = ts_lobe_value_pdf,
-	.sample_lobe_value = ts_sample_lobe_value,
-	.lobe_geometry = glint_beckmann_geometry,
-	.lobe_from_geometry = ts_lobe_from_geometry,
-	.lobe_extent = ts_lobe_extent,
-	.lobe_width = ts_lobe_width,
-	.lobe_widen = ts_lobe_widen,
+	.bxdf = &ts_bxdf,
+	.lobes = &ts_fit,
 };
 
 /*
@@ -204,28 +213,37 @@ const struct glint_model_ops glint_model_torrance_sparrow = {
 	memcpy(q, p, 7 * sizeof(double));                                      \
 	q[IOR] = 0
 
-static void nf_eval(const double *p, struct vec3 wo, struct vec3 wi,
+static void nf_eval(const void *self, struct vec3 wo, struct vec3 wi,
 		    double f[3])
 {
+	const double *p = self;
+
 	NF_P(q, p);
 	ts_eval(q, wo, wi, f);
 }
 
-static double nf_sample(const double *p, struct vec3 wo, const double u[3],
+static double nf_sample(const void *self, struct vec3 wo, const double u[3],
 			struct vec3 *wi)
 {
+	const double *p = self;
+
 	NF_P(q, p);
 	return ts_sample(q, wo, u, wi);
 }
 
-static double nf_pdf(const double *p, struct vec3 wo, struct vec3 wi)
+static double nf_pdf(const void *self, struct vec3 wo, struct vec3 wi)
 {
+	const double *p = self;
+
 	NF_P(q, p);
 	return ts_pdf(q, wo, wi);
 }
 
-static void nf_lobes(const double *p, struct vec3 wo, struct vec3 wi, double *b)
+static void nf_lobes(const void *self, struct vec3 wo, struct vec3 wi,
+		     double *b)
 {
+	const double *p = self;
+
 	NF_P(q, p);
 	ts_lobes(q, wo, wi, b);
 }
@@ -245,7 +263,32 @@ static double nf_sample_lobe_value(const double *p, int j, struct vec3 wo,
 	return ts_sample_lobe_value(q, j, wo, u, wi, bj);
 }
 
-const struct glint_model_ops glint_model_ts_constant_fresnel = {
+static const struct glint_bxdf_ops nf_bxdf = {
+	.flags = GLINT_BXDF_REFLECTION | GLINT_BXDF_DIFFUSE |
+		 GLINT_BXDF_GLOSSY | GLINT_BXDF_LOBES,
+	.eval = nf_eval,
+	.sample = nf_sample,
+	.pdf = nf_pdf,
+	.nlobes = 2,
+	.albedo = ts_albedo,
+	.eval_lobes = nf_lobes,
+	.sample_lobe = ts_sample_lobe,
+	.pdf_lobe = ts_pdf_lobe,
+};
+
+static const struct glint_fit_lobes nf_fit = {
+	.param = ts_lobe_param,
+	.varies = ts_lobe_varies,
+	.value_pdf = nf_lobe_value_pdf,
+	.sample_value = nf_sample_lobe_value,
+	.geometry = glint_beckmann_geometry,
+	.from_geometry = nf_lobe_from_geometry,
+	.roughness_param = ROUGH,
+	.microfacet = &glint_microfacet_beckmann,
+	.width_param = ts_width_param,
+};
+
+const struct glint_model glint_model_ts_constant_fresnel = {
 	.name = "torrance-sparrow-constant-fresnel",
 	.conventions =
 		"Torrance-Sparrow without Fresnel variation: f = diffuse/pi + "
@@ -254,21 +297,6 @@ const struct glint_model_ops glint_model_ts_constant_fresnel = {
 		"reflectance at every angle).",
 	.nparams = 7,
 	.params = ts_params,
-	.eval = nf_eval,
-	.sample = nf_sample,
-	.pdf = nf_pdf,
-	.roughness_param = ROUGH,
-	.nlobes = 2,
-	.lobe_param = ts_lobe_param,
-	.lobe_varies = ts_lobe_varies,
-	.eval_lobes = nf_lobes,
-	.sample_lobe = ts_sample_lobe,
-	.pdf_lobe = ts_pdf_lobe,
-	.lobe_value_pdf = nf_lobe_value_pdf,
-	.sample_lobe_value = nf_sample_lobe_value,
-	.lobe_geometry = glint_beckmann_geometry,
-	.lobe_from_geometry = nf_lobe_from_geometry,
-	.lobe_extent = ts_lobe_extent,
-	.lobe_width = ts_lobe_width,
-	.lobe_widen = ts_lobe_widen,
+	.bxdf = &nf_bxdf,
+	.lobes = &nf_fit,
 };

@@ -33,29 +33,37 @@ static const struct glint_param two_params[] = {
 static const int two_lobe_param[3] = { KD, KS, KS2 };
 static const int two_lobe_varies[3] = { 0, 1, 1 };
 
-static void two_lobes(const double *p, struct vec3 wo, struct vec3 wi,
+static void two_lobes(const void *self, struct vec3 wo, struct vec3 wi,
 		      double *b)
 {
+	const double *p = self;
+
 	b[0] = wo.z > 0 && wi.z > 0 ? 1 / M_PI : 0;
 	b[1] = glint_beckmann_lobe(p[ROUGH], p[IOR], wo, wi);
 	b[2] = glint_beckmann_lobe(p[ROUGH2], p[IOR], wo, wi);
 }
 
-static void two_eval(const double *p, struct vec3 wo, struct vec3 wi,
+static void two_eval(const void *self, struct vec3 wo, struct vec3 wi,
 		     double f[3])
 {
+	const double *p = self;
+
 	glint_lobes_eval(&glint_model_two_lobe, p, wo, wi, f);
 }
 
-static double two_pdf(const double *p, struct vec3 wo, struct vec3 wi)
+static double two_pdf(const void *self, struct vec3 wo, struct vec3 wi)
 {
+	const double *p = self;
+
 	return glint_lobes_pdf(&glint_model_two_lobe, p,
 			       glint_fresnel_or_one(wo.z, p[IOR]), wo, wi);
 }
 
-static double two_sample(const double *p, struct vec3 wo, const double u[3],
+static double two_sample(const void *self, struct vec3 wo, const double u[3],
 			 struct vec3 *wi)
 {
+	const double *p = self;
+
 	return glint_lobes_sample(&glint_model_two_lobe, p,
 				  glint_fresnel_or_one(wo.z, p[IOR]), wo, u,
 				  wi);
@@ -66,41 +74,53 @@ static double lobe_m(const double *p, int j)
 	return j == 1 ? p[ROUGH] : p[ROUGH2];
 }
 
-static double two_pdf_lobe(const double *p, int j, struct vec3 wo,
+static double two_pdf_lobe(const void *self, int j, struct vec3 wo,
 			   struct vec3 wi)
 {
-	return glint_lobe_shape_pdf(j ? GLINT_LOBE_BECKMANN : GLINT_LOBE_COSINE,
+	const double *p = self;
+
+	return glint_lobe_shape_pdf(j ? &glint_microfacet_beckmann : NULL,
 				    lobe_m(p, j), wo, wi);
 }
 
-static double two_sample_lobe(const double *p, int j, struct vec3 wo,
+static double two_sample_lobe(const void *self, int j, struct vec3 wo,
 			      const double u[2], struct vec3 *wi)
 {
-	return glint_lobe_shape_sample(j ? GLINT_LOBE_BECKMANN
-					 : GLINT_LOBE_COSINE,
+	const double *p = self;
+
+	return glint_lobe_shape_sample(j ? &glint_microfacet_beckmann : NULL,
 				       lobe_m(p, j), wo, u, wi);
 }
 
-static double two_lobe_extent(const double *p, int j)
+static const double *two_albedo(const void *self, int j)
 {
-	return j > 0 ? 2 * atan(lobe_m(p, j) * sqrt(27.6)) : -1;
+	return (const double *)self + two_lobe_param[j];
 }
 
-/* Each lobe Beckmann (torrance_sparrow.c): sqrt(2) m. */
-static double two_lobe_width(const double *p, int j)
-{
-	return j > 0 ? 1.4142135623730951 * lobe_m(p, j) : -1;
-}
+static const struct glint_bxdf_ops two_bxdf = {
+	.flags = GLINT_BXDF_REFLECTION | GLINT_BXDF_DIFFUSE |
+		 GLINT_BXDF_GLOSSY | GLINT_BXDF_LOBES,
+	.eval = two_eval,
+	.sample = two_sample,
+	.pdf = two_pdf,
+	.nlobes = 3,
+	.albedo = two_albedo,
+	.eval_lobes = two_lobes,
+	.sample_lobe = two_sample_lobe,
+	.pdf_lobe = two_pdf_lobe,
+};
 
-static void two_lobe_widen(double *p, int j, double s)
-{
-	if (j > 0) {
-		double *m = j == 1 ? &p[ROUGH] : &p[ROUGH2];
-		*m = sqrt(*m * *m + s * s / 2);
-	}
-}
+static const int two_width_param[] = { -1, ROUGH, ROUGH2 };
 
-const struct glint_model_ops glint_model_two_lobe = {
+static const struct glint_fit_lobes two_fit = {
+	.param = two_lobe_param,
+	.varies = two_lobe_varies,
+	.roughness_param = ROUGH,
+	.microfacet = &glint_microfacet_beckmann,
+	.width_param = two_width_param,
+};
+
+const struct glint_model glint_model_two_lobe = {
 	.name = "two-lobe",
 	.conventions =
 		"Torrance-Sparrow with two specular lobes: f = diffuse/pi + "
@@ -111,17 +131,6 @@ const struct glint_model_ops glint_model_two_lobe = {
 		"index ior.",
 	.nparams = 12,
 	.params = two_params,
-	.eval = two_eval,
-	.sample = two_sample,
-	.pdf = two_pdf,
-	.roughness_param = ROUGH,
-	.nlobes = 3,
-	.lobe_param = two_lobe_param,
-	.lobe_varies = two_lobe_varies,
-	.eval_lobes = two_lobes,
-	.sample_lobe = two_sample_lobe,
-	.pdf_lobe = two_pdf_lobe,
-	.lobe_extent = two_lobe_extent,
-	.lobe_width = two_lobe_width,
-	.lobe_widen = two_lobe_widen,
+	.bxdf = &two_bxdf,
+	.lobes = &two_fit,
 };

@@ -43,12 +43,13 @@ static int visible(struct glint_tracer *tracer, const struct glint_hit *h,
 void glint_shade_hit(const struct glint_hit *h, uint32_t seed,
 		     struct glint_tracer *tracer,
 		     const struct glint_envmap *env,
-		     const struct glint_model_ops *model, const double *params,
+		     const struct glint_model *model, const double *params,
 		     int nl, int nb, double rgb[3])
 {
 	struct vec3 n = hvec(h->n), t, b;
 	struct vec3 wo_w = v3_scale(hvec(h->d), -1);
 	double f[3], le[3];
+	struct glint_bxdf bx = glint_model_bxdf(model, params);
 
 	rgb[0] = rgb[1] = rgb[2] = 0;
 	v3_frame(n, &t, &b);
@@ -65,12 +66,12 @@ void glint_shade_hit(const struct glint_hit *h, uint32_t seed,
 		struct vec3 wi = to_local(wi_w, t, b, n);
 		if (!(pl > 0) || !(wi.z > 0))
 			continue;
-		model->eval(params, wo, wi, f);
+		glint_bxdf_eval(&bx, wo, wi, f);
 		if (f[0] + f[1] + f[2] <= 0)
 			continue;
 		if (!visible(tracer, h, n, wi_w))
 			continue;
-		double pb = nb ? model->pdf(params, wo, wi) : 0;
+		double pb = nb ? glint_bxdf_pdf(&bx, wo, wi) : 0;
 		double w = wi.z / (nl * pl + nb * pb);
 		glint_envmap_lookup(env, wi_w, le);
 		for (int c = 0; c < 3; c++)
@@ -82,11 +83,11 @@ void glint_shade_hit(const struct glint_hit *h, uint32_t seed,
 		glint_hammersley((uint32_t)k, (uint32_t)nb, seed ^ 0x68e31da4u,
 				 u + 1);
 		u[0] = glint_u01(glint_hash3(seed, (uint32_t)k, 0xb5297a4du));
-		double pb = model->sample(params, wo, u, &wi);
+		double pb = glint_bxdf_sample(&bx, wo, u, &wi);
 		if (!(pb > 0) || !(wi.z > 0))
 			continue;
 		struct vec3 wi_w = to_world(wi, t, b, n);
-		model->eval(params, wo, wi, f);
+		glint_bxdf_eval(&bx, wo, wi, f);
 		if (f[0] + f[1] + f[2] <= 0)
 			continue;
 		if (!visible(tracer, h, n, wi_w))
@@ -103,7 +104,7 @@ struct shade_job {
 	const struct glint_gbuffer *gb;
 	struct glint_tracer *tracer;
 	const struct glint_envmap *env;
-	const struct glint_model_ops *model;
+	const struct glint_model *model;
 	const double *params;
 	const struct glint_shade_opts *opts;
 	struct glint_image *out, *coverage;
@@ -179,8 +180,7 @@ static void shade_rows(void *ctx, int y0, int y1, int thread)
 int glint_render_shade(const struct glint_gbuffer *gb,
 		       struct glint_tracer *tracer,
 		       const struct glint_envmap *env,
-		       const struct glint_model_ops *model,
-		       const double *params,
+		       const struct glint_model *model, const double *params,
 		       const struct glint_shade_opts *opts,
 		       struct glint_image *out, struct glint_image *coverage)
 {
@@ -267,12 +267,11 @@ void glint_renderer_release(struct glint_renderer *r)
 }
 
 int glint_renderer_shade(struct glint_renderer *r,
-			 const struct glint_model_ops *model,
-			 const double *params,
+			 const struct glint_model *model, const double *params,
 			 const struct glint_shade_opts *opts,
 			 struct glint_image *out, struct glint_image *coverage)
 {
-	if (model->transparent) {
+	if (glint_model_is_transparent(model)) {
 		/* Its paths are traced for every pixel at once. */
 		int n = r->gb.width * r->gb.height;
 		int32_t *all =

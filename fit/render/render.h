@@ -43,8 +43,7 @@ struct glint_shade_opts {
 int glint_render_shade(const struct glint_gbuffer *gb,
 		       struct glint_tracer *tracer,
 		       const struct glint_envmap *env,
-		       const struct glint_model_ops *model,
-		       const double *params,
+		       const struct glint_model *model, const double *params,
 		       const struct glint_shade_opts *opts,
 		       struct glint_image *out, struct glint_image *coverage);
 
@@ -52,7 +51,7 @@ int glint_render_shade(const struct glint_gbuffer *gb,
 void glint_shade_hit(const struct glint_hit *h, uint32_t seed,
 		     struct glint_tracer *tracer,
 		     const struct glint_envmap *env,
-		     const struct glint_model_ops *model, const double *params,
+		     const struct glint_model *model, const double *params,
 		     int nl, int nb, double rgb[3]);
 
 /* Everything a render needs, built from a scene. */
@@ -80,8 +79,7 @@ void glint_renderer_release(struct glint_renderer *r);
  * glint_render_shade, transparent ones by following their paths) with
  * the renderer's G-buffer. */
 int glint_renderer_shade(struct glint_renderer *r,
-			 const struct glint_model_ops *model,
-			 const double *params,
+			 const struct glint_model *model, const double *params,
 			 const struct glint_shade_opts *opts,
 			 struct glint_image *out, struct glint_image *coverage);
 

@@ -10,7 +10,7 @@
 /* One render, as `glint render` and `glint demo` run it. */
 struct glint_render_job {
 	struct glint_scene scene;
-	const struct glint_model_ops *model;
+	const struct glint_model *model;
 	double params[GLINT_MAX_PARAMS];
 	const char *out_exr;	  /* required */
 	const char *out_png;	  /* may be NULL */

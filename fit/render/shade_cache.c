@@ -18,7 +18,7 @@ struct env_sample {
 	float l[3];
 	float pdf;	  /* the sampling pdf */
 	float pdf_smooth; /* continuous stand-in for the MIS weights */
-	float g[4];	  /* model->lobe_geometry() at wo, wi */
+	float g[4];	  /* model->lobes->geometry() at wo, wi */
 };
 
 /* One primary hit: its frame, its view direction, its sample shift. */
@@ -46,7 +46,7 @@ struct cache_foot {
 };
 
 struct glint_shade_cache {
-	const struct glint_model_ops *model;
+	const struct glint_model *model;
 	const struct glint_envmap *env;
 	/* The split of the map, and the irradiance of the non-hot texels
 	 * for constant 1/pi lobes. */
@@ -90,14 +90,14 @@ static void hot_quadrature(const struct glint_shade_cache *c,
 			   int by_area, double out[3])
 {
 	const struct glint_env_hot *hot = c->hot;
-	const struct glint_model_ops *m = c->model;
+	const struct glint_model *m = c->model;
 	struct vec3 wo = fv(h->wo);
 	int npts = by_area ? hot->npts : hot->npart;
 	const float *pts = by_area ? hot->pts : hot->part;
 
 	if (!npts)
 		return;
-	double ext = m->lobe_extent ? m->lobe_extent(p, j) : -1;
+	double ext = glint_lobe_extent(m, p, j);
 	if (ext > 0) {
 		struct vec3 r = local_to_world(h, v3(-wo.x, -wo.y, wo.z));
 		double a = acos(fmin(1, fmax(-1, v3_dot(r, hot->axis))));
@@ -170,7 +170,7 @@ static void lobe_sample(const struct glint_shade_cache *c,
 			int nl, int nb, const double uu[2], double w,
 			double out[3])
 {
-	const struct glint_model_ops *m = c->model;
+	const struct glint_model *m = c->model;
 	struct vec3 wi;
 	double bj;
 
@@ -203,7 +203,7 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 			int j, int with_hot, const struct spread *sp, int hs,
 			uint32_t pseed, double out[3])
 {
-	const struct glint_model_ops *m = c->model;
+	const struct glint_model *m = c->model;
 	struct vec3 wo = fv(h->wo);
 	double sx = 0, sy = 0;
 	uint32_t shift[2] = { 0, 0 };
@@ -215,7 +215,7 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 		sy = glint_u01(glint_hash32(h->seed ^ 0x9e3779b9u));
 	}
 
-	int geom = m->lobe_from_geometry && m->lobe_varies[j];
+	int geom = m->lobes->from_geometry && m->lobes->varies[j];
 
 	out[0] = out[1] = out[2] = 0;
 	if (with_hot)
@@ -224,8 +224,8 @@ static void lobe_at_hit(const struct glint_shade_cache *c,
 		const struct env_sample *e = &es[k];
 		struct vec3 wi = fv(e->wi);
 		double pb = 0;
-		double bj = geom ? m->lobe_from_geometry(p, j, e->g,
-							 nb ? &pb : NULL)
+		double bj = geom ? m->lobes->from_geometry(p, j, e->g,
+							   nb ? &pb : NULL)
 				 : glint_lobe_value_pdf(m, p, j, wo, wi,
 							nb ? &pb : NULL);
 		if (bj <= 0)
@@ -353,7 +353,7 @@ static void hot_grid(const struct glint_shade_cache *c,
 		     double ext, double out[3])
 {
 	const struct glint_env_hot *hot = c->hot;
-	const struct glint_model_ops *m = c->model;
+	const struct glint_model *m = c->model;
 	double cos_ext = cos(fmin(ext, M_PI));
 
 	out[0] = out[1] = out[2] = 0;
@@ -407,8 +407,8 @@ static void hot_hits(const struct glint_shade_cache *c, int i, const double *p,
 static double foot_level(const struct glint_shade_cache *c, int i,
 			 const double *p, int j)
 {
-	const struct glint_model_ops *m = c->model;
-	double sd = m->lobe_width ? m->lobe_width(p, j) : -1;
+	const struct glint_model *m = c->model;
+	double sd = glint_lobe_width(m, p, j);
 
 	if (c->no_footprint || !(sd > 0) || !(c->feet[i].turn > 0))
 		return -1;
@@ -446,21 +446,21 @@ static int hot_footprint(const struct glint_shade_cache *c, int i,
 			 const double *p, int j, double out[3])
 {
 	const struct cache_foot *f = &c->feet[i];
-	const struct glint_model_ops *m = c->model;
+	const struct glint_model *m = c->model;
 	double pw[GLINT_MAX_PARAMS];
 
-	if (c->no_footprint || !m->lobe_width || !m->lobe_widen ||
-	    !(f->turn > 0) || !c->hot->npart)
+	if (c->no_footprint || !m->lobes->microfacet || !(f->turn > 0) ||
+	    !c->hot->npart)
 		return 0;
 	memcpy(pw, p, (size_t)m->nparams * sizeof(*p));
-	m->lobe_widen(pw, j, c->light->spread);
-	double sd = m->lobe_width(pw, j);
+	glint_lobe_widen(m, pw, j, c->light->spread);
+	double sd = glint_lobe_width(m, pw, j);
 	double lv = sd > 0 ? log2(f->turn / sd) : 0;
 	if (!(lv > 0))
 		return 0;
 	/* Where a lobe has no bound (GGX's tails), 40 widths hold its
 	 * core; its tails there are the hits'. */
-	double ext = m->lobe_extent ? m->lobe_extent(pw, j) : -1;
+	double ext = glint_lobe_extent(m, pw, j);
 	if (!(ext > 0))
 		ext = 40 * sd;
 	out[0] = out[1] = out[2] = 0;
@@ -489,7 +489,7 @@ static int hot_footprint(const struct glint_shade_cache *c, int i,
  */
 static void draw_env_samples(const struct glint_envmap *env,
 			     const struct glint_env_hot *hot,
-			     const struct glint_model_ops *m,
+			     const struct glint_model *m,
 			     const struct cache_hit *h, int nl, uint32_t salt,
 			     int s, uint32_t seed, struct env_sample *es)
 {
@@ -518,8 +518,8 @@ static void draw_env_samples(const struct glint_envmap *env,
 		 * finite: fall back to the sampling pdf. */
 		if (!(e->pdf_smooth > 0))
 			e->pdf_smooth = e->pdf;
-		if (m->lobe_geometry)
-			m->lobe_geometry(fv(h->wo), wi, e->g);
+		if (m->lobes->geometry)
+			m->lobes->geometry(fv(h->wo), wi, e->g);
 	}
 }
 
@@ -534,7 +534,7 @@ static void setup_pixels(void *ctx, int i0, int i1, int thread)
 {
 	struct setup_job *job = ctx;
 	struct glint_shade_cache *c = job->c;
-	const struct glint_model_ops *m = c->model;
+	const struct glint_model *m = c->model;
 	int ns = job->static_samples;
 	struct env_sample *tmp = malloc((size_t)ns * sizeof(*tmp));
 	double(*u)[2] = malloc((size_t)ns * sizeof(*u));
@@ -558,9 +558,9 @@ static void setup_pixels(void *ctx, int i0, int i1, int thread)
 				c->hits[(size_t)i * c->spp].seed,
 				c->envs + ((size_t)i * c->spp + s) * c->nl);
 			int drawn = 0;
-			for (int j = 0; j < m->nlobes; j++) {
+			for (int j = 0; j < m->bxdf->nlobes; j++) {
 				double a[3] = { 0, 0, 0 }, e[3];
-				if (m->lobe_varies[j])
+				if (m->lobes->varies[j])
 					continue;
 				if (c->lambert[j]) {
 					/* Exact: hot texels + irradiance. */
@@ -580,8 +580,9 @@ static void setup_pixels(void *ctx, int i0, int i1, int thread)
 						    job->p0, j, 1, NULL, -1, 0,
 						    a);
 				}
-				double *dst = c->static_lobes +
-					      ((size_t)i * m->nlobes + j) * 3;
+				double *dst =
+					c->static_lobes +
+					((size_t)i * m->bxdf->nlobes + j) * 3;
 				for (int ch = 0; ch < 3; ch++)
 					dst[ch] += a[ch] / c->spp;
 			}
@@ -628,7 +629,7 @@ void glint_shade_light_free(struct glint_shade_light *l)
 
 int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 			  int n, const struct glint_envmap *env,
-			  const struct glint_model_ops *model,
+			  const struct glint_model *model,
 			  const struct glint_shade_cache_opts *opts,
 			  struct glint_shade_cache **out)
 {
@@ -636,7 +637,7 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 	double p0[GLINT_MAX_PARAMS];
 
 	*out = NULL;
-	if (model->nlobes <= 0)
+	if (model->bxdf->nlobes <= 0)
 		return glint_error_set(EINVAL,
 				       "model %s is not linear in its albedos: "
 				       "the shade cache cannot fit it",
@@ -661,7 +662,8 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 			 sizeof(*c->envs));
 	c->lobe_sobol = malloc((size_t)(c->nb ? c->nb : 1) * gb->spp *
 			       sizeof(*c->lobe_sobol));
-	c->static_lobes = calloc((size_t)n * model->nlobes * 3, sizeof(double));
+	c->static_lobes =
+		calloc((size_t)n * model->bxdf->nlobes * 3, sizeof(double));
 	if (!c->pix || !c->hits || !c->feet || !c->envs || !c->lobe_sobol ||
 	    !c->static_lobes) {
 		glint_shade_cache_free(c);
@@ -686,11 +688,12 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 	 * the irradiance of the rest of the map. */
 	for (int k = 0; k < model->nparams; k++)
 		p0[k] = model->params[k].def;
-	for (int j = 0; j < model->nlobes; j++) {
+	for (int j = 0; j < model->bxdf->nlobes; j++) {
 		double b[GLINT_MAX_PARAMS];
-		model->eval_lobes(p0, v3(0, 0.6, 0.8), v3(0.3, 0, 0.9539), b);
-		c->lambert[j] =
-			!model->lobe_varies[j] && fabs(b[j] - 1 / M_PI) < 1e-12;
+		model->bxdf->eval_lobes(p0, v3(0, 0.6, 0.8), v3(0.3, 0, 0.9539),
+					b);
+		c->lambert[j] = !model->lobes->varies[j] &&
+				fabs(b[j] - 1 / M_PI) < 1e-12;
 	}
 	for (int k = 0; k < c->nb * gb->spp; k++)
 		glint_sobol2_bits((uint32_t)k, c->lobe_sobol[k]);
@@ -811,8 +814,8 @@ struct lobes_job {
 static void lobes_pixels(void *ctx, int i0, int i1, int thread)
 {
 	struct lobes_job *job = ctx;
-	const struct glint_model_ops *m = job->c->model;
-	int nj = m->nlobes;
+	const struct glint_model *m = job->c->model;
+	int nj = m->bxdf->nlobes;
 
 	(void)thread;
 	glint_thread_ftz();
@@ -828,7 +831,7 @@ static void lobes_pixels(void *ctx, int i0, int i1, int thread)
 		memcpy(dst, c->static_lobes + (size_t)i * nj * 3,
 		       (size_t)nj * 3 * sizeof(double));
 		for (int j = 0; j < nj; j++) {
-			if (!m->lobe_varies[j])
+			if (!m->lobes->varies[j])
 				continue;
 			double hot[3];
 			int foot = hot_footprint(c, i, job->p, j, hot);

@@ -5,7 +5,7 @@
 /*
  * The fitter's fast path: trace once, re-shade only.
  *
- * For a model that is linear in its RGB albedos (model->nlobes > 0) a
+ * For a model that is linear in its RGB albedos (model->bxdf->nlobes > 0) a
  * pixel's radiance is  I = sum_j albedo_j * A_j(p),  where
  *   A_j = integral of L(wi) b_j(wo, wi; p) cos(theta_i) dwi
  * (RGB, averaged over the pixel's primary samples).  Lobes that depend on
@@ -78,7 +78,7 @@ void glint_shade_light_free(struct glint_shade_light *l);
  */
 int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 			  int n, const struct glint_envmap *env,
-			  const struct glint_model_ops *model,
+			  const struct glint_model *model,
 			  const struct glint_shade_cache_opts *opts,
 			  struct glint_shade_cache **out);
 void glint_shade_cache_free(struct glint_shade_cache *c);

@@ -73,7 +73,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	const char *path = fuzz_path(data, size);
 	struct glint_scene scene;
 	glint_scene_load(path, &scene);
-	const struct glint_model_ops *model;
+	const struct glint_model *model;
 	double params[GLINT_MAX_PARAMS];
 	glint_material_load(path, NULL, &model, params);
 	glint_material_load(path, "fuzz", &model, params);

@@ -30,7 +30,7 @@ static inline void sim_scene_192(struct glint_scene *s, const char *map,
 /* The reference photo of (m, p) in r's scene with spp samples per pixel
  * and `samples` per technique; NULL on failure. */
 static inline struct glint_image *sim_photo_spp(const struct glint_renderer *r,
-						const struct glint_model_ops *m,
+						const struct glint_model *m,
 						const double *p, int spp,
 						int samples)
 {
@@ -51,7 +51,7 @@ static inline struct glint_image *sim_photo_spp(const struct glint_renderer *r,
 
 /* The same at 4 samples per pixel, 64 per technique. */
 static inline struct glint_image *sim_photo(const struct glint_renderer *r,
-					    const struct glint_model_ops *m,
+					    const struct glint_model *m,
 					    const double *p)
 {
 	return sim_photo_spp(r, m, p, 4, 64);

@@ -116,7 +116,7 @@ static void one_case(const char *map, const char *material, int placement,
 	static const double wells[NLEVEL] = { 0, 10000, 1000 };
 	struct glint_scene sc;
 	struct glint_renderer r;
-	const struct glint_model_ops *m;
+	const struct glint_model *m;
 	double truth[GLINT_MAX_PARAMS];
 	double rot = 360 * urand();
 	char rots[32];
@@ -221,7 +221,7 @@ static void one_case(const char *map, const char *material, int placement,
 			/* Roughness below the pixel footprint: glint reports
 			 * an upper bound, not a value (fit/job.h); counted
 			 * apart, with whether the bound holds. */
-			double bound = k == m->roughness_param
+			double bound = k == m->lobes->roughness_param
 					       ? glint_fit_roughness_bound(&res)
 					       : NAN;
 			if (isfinite(bound)) {

@@ -56,7 +56,7 @@ int main(int argc, char **argv)
 {
 	struct glint_scene sc;
 	struct glint_renderer r;
-	const struct glint_model_ops *m;
+	const struct glint_model *m;
 	double truth[GLINT_MAX_PARAMS];
 
 	if (argc != 4 && argc != 5) {

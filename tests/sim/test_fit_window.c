@@ -113,7 +113,7 @@ static void same_render(const struct glint_image *ra, const char *dir, int wx,
 }
 
 static struct glint_fit_job job_of(const struct glint_scene *sc,
-				   const struct glint_model_ops *m,
+				   const struct glint_model *m,
 				   const struct glint_image *photo,
 				   const struct glint_image *weight)
 {
@@ -142,7 +142,7 @@ static struct glint_image *flat_weights(int w, int h)
 }
 
 /* Yellow plastic (Table 1) and the renderer of scene sc; 0 or -1. */
-static int setup(const struct glint_scene *sc, const struct glint_model_ops **m,
+static int setup(const struct glint_scene *sc, const struct glint_model **m,
 		 double *truth, struct glint_renderer *r)
 {
 	CHECK(mkdtemp(tmpdir) != NULL, "mkdtemp");
@@ -173,7 +173,7 @@ static int pilot(void)
 {
 	struct glint_scene sc;
 	struct glint_renderer r;
-	const struct glint_model_ops *m;
+	const struct glint_model *m;
 	double truth[GLINT_MAX_PARAMS];
 
 	sim_scene_192(&sc, GLINT_DATA_DIR "/env/venice_sunset_1k.hdr", -114);
@@ -239,7 +239,7 @@ int main(int argc, char **argv)
 		return pilot();
 	struct glint_scene sc;
 	struct glint_renderer r;
-	const struct glint_model_ops *m;
+	const struct glint_model *m;
 	double truth[GLINT_MAX_PARAMS];
 
 	sim_scene_192(&sc, GLINT_DATA_DIR "/env/venice_sunset_1k.hdr", -114);

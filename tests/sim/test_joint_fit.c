@@ -45,8 +45,8 @@ struct shot {
 };
 
 /* The sphere lit from `deg` degrees off the view axis (about y). */
-static int shoot(double deg, const struct glint_model_ops *m,
-		 const double *truth, struct shot *s)
+static int shoot(double deg, const struct glint_model *m, const double *truth,
+		 struct shot *s)
 {
 	struct glint_scene sc;
 	struct glint_envmap *env = NULL;
@@ -81,7 +81,7 @@ static void shot_free(struct shot *s)
 	glint_image_free(s->weight);
 }
 
-static int fit(struct shot **shots, int n, const struct glint_model_ops *m,
+static int fit(struct shot **shots, int n, const struct glint_model *m,
 	       struct glint_fit_result *res)
 {
 	struct glint_fit_view v[4];
@@ -99,7 +99,7 @@ static int fit(struct shot **shots, int n, const struct glint_model_ops *m,
 
 static void print(const char *what, const struct glint_fit_result *r)
 {
-	const struct glint_model_ops *m = r->model;
+	const struct glint_model *m = r->model;
 
 	printf("%-14s", what);
 	for (int k = 0; k < m->nparams; k++)
@@ -127,7 +127,7 @@ static int misses(const struct glint_fit_result *r, const double *truth)
 	return miss;
 }
 
-static void refusals(struct shot *front, const struct glint_model_ops *m)
+static void refusals(struct shot *front, const struct glint_model *m)
 {
 	struct glint_fit_result res;
 	struct glint_fit_opts o;
@@ -159,7 +159,7 @@ static void refusals(struct shot *front, const struct glint_model_ops *m)
 
 int main(void)
 {
-	const struct glint_model_ops *m;
+	const struct glint_model *m;
 	double truth[GLINT_MAX_PARAMS];
 	struct shot front, rim;
 	struct glint_fit_result one, twice, joint;

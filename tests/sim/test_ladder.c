@@ -69,7 +69,7 @@ static void scene_128(struct glint_scene *s, const char *map, double fnum)
 static int run_case(const char *name, const char *map, double fnum,
 		    unsigned knobs, struct glint_ladder_result *lr)
 {
-	const struct glint_model_ops *m;
+	const struct glint_model *m;
 	double truth[GLINT_MAX_PARAMS];
 	struct glint_scene sc;
 	struct glint_envmap *env;

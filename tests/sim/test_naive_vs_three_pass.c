@@ -34,7 +34,7 @@ int main(void)
 {
 	struct glint_scene sc;
 	struct glint_renderer r;
-	const struct glint_model_ops *m;
+	const struct glint_model *m;
 	double truth[GLINT_MAX_PARAMS];
 	struct glint_fit_result res[3];
 

@@ -30,7 +30,7 @@
 
 struct scase {
 	const char *name, *material;
-	const struct glint_model_ops *render_model;
+	const struct glint_model *render_model;
 	int expect;
 	int richer;	 /* also the three richer candidates */
 	double extra[4]; /* parameters past the eighth */
@@ -38,7 +38,7 @@ struct scase {
 
 static int run(const struct scase *cs)
 {
-	const struct glint_model_ops *m;
+	const struct glint_model *m;
 	double truth[GLINT_MAX_PARAMS];
 	struct glint_scene sc;
 	struct glint_renderer r;

@@ -29,7 +29,7 @@ int main(void)
 					 0.1632, 0.7122, 0.6889, 4.8603 };
 	static const enum glint_fit_method methods[2] = { GLINT_FIT_THREE_PASS,
 							  GLINT_FIT_NAIVE };
-	const struct glint_model_ops *m;
+	const struct glint_model *m;
 	double truth[GLINT_MAX_PARAMS];
 	struct glint_scene sc;
 	struct glint_renderer r;

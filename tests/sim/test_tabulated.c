@@ -178,7 +178,7 @@ static int disagreements(const struct map_fit *fits, int nmaps, int chosen,
 	return off;
 }
 
-static int fit_map(const char *map, const struct glint_model_ops *tm,
+static int fit_map(const char *map, const struct glint_bxdf *tm,
 		   struct map_fit *out)
 {
 	struct glint_scene sc;
@@ -197,8 +197,8 @@ static int fit_map(const char *map, const struct glint_model_ops *tm,
 	glint_reference_default_opts(&ro);
 	ro.spp = 4;
 	ro.samples = quick ? 32 : 128;
-	ret = photo ? glint_reference_render(&rr->scene, rr->env, tm,
-					     glint_tabulated_params, &ro, photo)
+	ret = photo ? glint_reference_render_bxdf(&rr->scene, rr->env, tm, &ro,
+						  photo)
 		    : -1;
 	if (!ret)
 		ret = fixture_add_noise(photo, &out->weight, 0.1);
@@ -250,7 +250,7 @@ static void joint_fit(struct map_fit *fits, int nmaps)
 	struct glint_fit_view v[8];
 	struct glint_fit_opts o;
 	struct glint_fit_result *res = malloc(sizeof(*res));
-	const struct glint_model_ops *m = &glint_model_torrance_sparrow;
+	const struct glint_model *m = &glint_model_torrance_sparrow;
 
 	for (int i = 0; i < nmaps; i++)
 		v[i] = (struct glint_fit_view){ &fits[i].r, fits[i].photo,
@@ -310,9 +310,10 @@ int main(int argc, char **argv)
 		return 1;
 	}
 	file_checks(t, &as, dir);
-	const struct glint_model_ops *tm = glint_tabulated_model(t, 0.1);
+	struct glint_tabulated tab;
+	struct glint_bxdf tm = glint_tabulated_bxdf(&tab, t, 0.1);
 	for (int i = 0; i < nmaps; i++) {
-		CHECK(fit_map(argv[1 + i], tm, &fits[i]) == 0, "%s",
+		CHECK(fit_map(argv[1 + i], &tm, &fits[i]) == 0, "%s",
 		      argv[1 + i]);
 		CHECK(fits[i].accepted, "%s: refused", argv[1 + i]);
 	}

@@ -79,7 +79,7 @@ static void test_beckmann_targets(void)
 	/* Each target's own BRDF, evaluated where glint's is known. */
 	double f[3], g[3];
 	struct vec3 wo = v3(0.5, 0, sqrt(0.75)), wi = v3(-0.5, 0, sqrt(0.75));
-	glint_model_torrance_sparrow.eval(p, wo, wi, g);
+	glint_model_torrance_sparrow.bxdf->eval(p, wo, wi, g);
 	glint_export_brdf(&e[GLINT_EXPORT_MITSUBA], wo, wi, f);
 	CHECK_NEAR(f[0], g[0], 0.03 * g[0], "mitsuba at the mirror angle");
 	glint_export_brdf(&e[GLINT_EXPORT_MITSUBA], wo, v3(0, 0, -1), f);
@@ -182,7 +182,7 @@ static void test_materialx(void)
 	/* Without a specular lobe the layered base is exactly Oren-Nayar. */
 	on[dr] = 0.4;
 	for (int c = 0; c < 3; c++)
-		on[glint_model_oren_nayar.lobe_param[1] + c] = 0;
+		on[glint_model_oren_nayar.lobes->param[1] + c] = 0;
 	CHECK(glint_export_refit(GLINT_EXPORT_MATERIALX,
 				 &glint_model_oren_nayar, on, NAN, &e) == 0,
 	      "%s", glint_error_msg());

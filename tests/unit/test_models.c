@@ -8,6 +8,7 @@
 #include "fit/brdf/microfacet.h"
 #include "fit/brdf/model.h"
 #include "fit/render/sampling.h"
+#include "sim/tabulated.h"
 
 static void test_beckmann_normalised(void)
 {
@@ -77,7 +78,7 @@ static struct vec3 dir_at(double theta_deg)
 }
 
 /* Integral of the pdf over the hemisphere, midpoint rule in (cos, phi). */
-static double pdf_integral(const struct glint_model_ops *m, const double *p,
+static double pdf_integral(const struct glint_model *m, const double *p,
 			   struct vec3 wo)
 {
 	int nc = 1500, np = 600;
@@ -88,7 +89,8 @@ static double pdf_integral(const struct glint_model_ops *m, const double *p,
 		double r = sqrt(fmax(0, 1 - z * z));
 		for (int i = 0; i < np; i++) {
 			double ph = (i + 0.5) * 2 * M_PI / np;
-			sum += m->pdf(p, wo, v3(r * cos(ph), r * sin(ph), z)) *
+			sum += m->bxdf->pdf(p, wo,
+					    v3(r * cos(ph), r * sin(ph), z)) *
 			       dz * (2 * M_PI / np);
 		}
 	}
@@ -98,7 +100,7 @@ static double pdf_integral(const struct glint_model_ops *m, const double *p,
 /* sample() draws from pdf() (chi-square over 20 x 16 bins of cos and
  * phi), pdf() integrates to the accepted fraction, and sample() returns
  * pdf()'s value. */
-static void check_sampling(const struct glint_model_ops *m, const double *p)
+static void check_sampling(const struct glint_model *m, const double *p)
 {
 	double angles[3] = { 0, 30, 60 };
 
@@ -115,12 +117,12 @@ static void check_sampling(const struct glint_model_ops *m, const double *p)
 					glint_u01(glint_hash3(s, k, 2)),
 					glint_u01(glint_hash3(s, k, 3)) };
 			struct vec3 wi;
-			double pdf = m->sample(p, wo, u, &wi);
+			double pdf = m->bxdf->sample(p, wo, u, &wi);
 			if (pdf == 0) {
 				rejected++;
 				continue;
 			}
-			if (fabs(pdf - m->pdf(p, wo, wi)) > 1e-9 * pdf)
+			if (fabs(pdf - m->bxdf->pdf(p, wo, wi)) > 1e-9 * pdf)
 				mismatch++;
 			int iz = (int)(wi.z * nz);
 			double ph = atan2(wi.y, wi.x);
@@ -145,10 +147,10 @@ static void check_sampling(const struct glint_model_ops *m, const double *p)
 							(ip + (a + 0.5) / sub) *
 								2 * M_PI / nphi;
 						double r = sqrt(1 - z * z);
-						acc += m->pdf(p, wo,
-							      v3(r * cos(ph),
-								 r * sin(ph),
-								 z));
+						acc += m->bxdf->pdf(
+							p, wo,
+							v3(r * cos(ph),
+							   r * sin(ph), z));
 					}
 				double e = ns * acc / (sub * sub) / nz *
 					   (2 * M_PI / nphi);
@@ -172,7 +174,7 @@ static void check_sampling(const struct glint_model_ops *m, const double *p)
 
 /* Every BRDF model, at parameters that give each lobe weight. */
 static const struct {
-	const struct glint_model_ops *m;
+	const struct glint_model *m;
 	double p[GLINT_MAX_PARAMS];
 } sampled[] = {
 	{ &glint_model_lambert, { 0.3, 0.2, 0.1 } },
@@ -206,19 +208,19 @@ static struct vec3 random_dir(uint64_t s, int k)
 static void test_reciprocity_and_lobes(void)
 {
 	for (int k = 0; k < NSAMPLED; k++) {
-		const struct glint_model_ops *m = sampled[k].m;
+		const struct glint_model *m = sampled[k].m;
 		const double *p = sampled[k].p;
 		int asym = 0, unlike = 0;
 		for (int s = 0; s < 5000; s++) {
 			struct vec3 o = random_dir(s, 1), i = random_dir(s, 2);
 			double f[3], g[3], b[GLINT_MAX_PARAMS];
-			m->eval(p, o, i, f);
-			m->eval(p, i, o, g);
-			m->eval_lobes(p, o, i, b);
+			m->bxdf->eval(p, o, i, f);
+			m->bxdf->eval(p, i, o, g);
+			m->bxdf->eval_lobes(p, o, i, b);
 			for (int c = 0; c < 3; c++) {
 				double sum = 0;
-				for (int j = 0; j < m->nlobes; j++)
-					sum += p[m->lobe_param[j] + c] * b[j];
+				for (int j = 0; j < m->bxdf->nlobes; j++)
+					sum += p[m->lobes->param[j] + c] * b[j];
 				asym += fabs(f[c] - g[c]) > 1e-9 * f[c];
 				unlike += fabs(f[c] - sum) > 1e-12 * f[c];
 			}
@@ -232,16 +234,16 @@ static void test_reciprocity_and_lobes(void)
 
 /* Lobe j's value at normal incidence, the light theta from the normal
  * (the mirror direction). */
-static double lobe_at(const struct glint_model_ops *m, const double *p, int j,
+static double lobe_at(const struct glint_model *m, const double *p, int j,
 		      double theta)
 {
 	double b[GLINT_MAX_PARAMS];
-	m->eval_lobes(p, v3(0, 0, 1), v3(sin(theta), 0, cos(theta)), b);
+	m->bxdf->eval_lobes(p, v3(0, 0, 1), v3(sin(theta), 0, cos(theta)), b);
 	return b[j];
 }
 
 /* The angle from the mirror direction where lobe j falls to half. */
-static double half_max(const struct glint_model_ops *m, const double *p, int j)
+static double half_max(const struct glint_model *m, const double *p, int j)
 {
 	double peak = lobe_at(m, p, j, 0), lo = 0, hi = 1;
 	for (int it = 0; it < 60; it++) {
@@ -255,8 +257,8 @@ static double half_max(const struct glint_model_ops *m, const double *p, int j)
 }
 
 /*
- * lobe_width is the standard deviation of the Gaussian with the lobe's
- * half-maximum (a Gaussian halves at 1.1774 sigma), and lobe_widen
+ * glint_lobe_width() is the standard deviation of the Gaussian with the lobe's
+ * half-maximum (a Gaussian halves at 1.1774 sigma), and glint_lobe_widen()
  * convolves a Gaussian of s into it: the widened lobe's width is
  * sqrt(width^2 + s^2) and its half-maximum that of the Gaussian of that
  * width (the footprint integral of shade_cache.c relies on both), for
@@ -266,21 +268,19 @@ static void test_lobe_width(void)
 {
 	int tested = 0;
 	for (int k = 0; k < NSAMPLED; k++) {
-		const struct glint_model_ops *m = sampled[k].m;
-		if (!m->lobe_width)
+		const struct glint_model *m = sampled[k].m;
+		if (!m->lobes->microfacet)
 			continue;
-		CHECK(m->lobe_widen != NULL, "%s: width without widen",
-		      m->name);
-		for (int j = 0; j < m->nlobes; j++)
+		for (int j = 0; j < m->bxdf->nlobes; j++)
 			for (double r = 0.003; r < 0.03; r *= 3) {
 				double p[GLINT_MAX_PARAMS],
 					pw[GLINT_MAX_PARAMS];
 				memcpy(p, sampled[k].p, sizeof(p));
-				if (m->roughness_param >= 0)
-					p[m->roughness_param] = r;
+				if (m->lobes->roughness_param >= 0)
+					p[m->lobes->roughness_param] = r;
 				if (m == &glint_model_two_lobe)
 					p[11] = 2 * r;
-				double w = m->lobe_width(p, j);
+				double w = glint_lobe_width(m, p, j);
 				if (!(w > 0))
 					continue;
 				tested++;
@@ -290,8 +290,8 @@ static void test_lobe_width(void)
 				      "%.5f (%.3f)",
 				      m->name, j, r, h, w, h / (1.1774 * w));
 				memcpy(pw, p, sizeof(pw));
-				m->lobe_widen(pw, j, 2 * w);
-				double ww = m->lobe_width(pw, j);
+				glint_lobe_widen(m, pw, j, 2 * w);
+				double ww = glint_lobe_width(m, pw, j);
 				CHECK_NEAR(ww, sqrt(5) * w, 1e-9 * w,
 					   "widened width");
 				double hw = half_max(m, pw, j);
@@ -309,38 +309,40 @@ static void test_lobe_width(void)
 static void test_lobe_value_ops(void)
 {
 	for (int k = 0; k < NSAMPLED; k++) {
-		const struct glint_model_ops *m = sampled[k].m;
+		const struct glint_model *m = sampled[k].m;
 		double p[GLINT_MAX_PARAMS];
 		int bad = 0, checked = 0, geom = 0;
-		if (!m->nlobes)
+		if (!m->bxdf->nlobes)
 			continue;
 		memcpy(p, sampled[k].p, sizeof(double) * (size_t)m->nparams);
 		for (int s = 0; s < 6000; s++) {
-			if (m->roughness_param >= 0)
-				p[m->roughness_param] = (s % 3 == 0)   ? 0.004
-							: (s % 3 == 1) ? 0.05
-								       : 0.4;
+			if (m->lobes->roughness_param >= 0)
+				p[m->lobes->roughness_param] =
+					(s % 3 == 0)   ? 0.004
+					: (s % 3 == 1) ? 0.05
+						       : 0.4;
 			struct vec3 o = random_dir(s, 7), i = random_dir(s, 8);
 			if (s % 7 == 0)
 				i.z = -i.z; /* below the surface */
 			double u[2] = { glint_u01(glint_hash3(s, 9, 1)),
 					glint_u01(glint_hash3(s, 9, 2)) };
-			for (int j = 0; j < m->nlobes; j++) {
+			for (int j = 0; j < m->bxdf->nlobes; j++) {
 				double b[GLINT_MAX_PARAMS], pdf, bj, wb, wpdf;
 				struct vec3 wi, wj;
-				m->eval_lobes(p, o, i, b);
-				wpdf = m->pdf_lobe(p, j, o, i);
+				m->bxdf->eval_lobes(p, o, i, b);
+				wpdf = m->bxdf->pdf_lobe(p, j, o, i);
 				bj = glint_lobe_value_pdf(m, p, j, o, i, &pdf);
 				bad += fabs(bj - b[j]) > 1e-9 * fabs(b[j]) ||
 				       fabs(pdf - wpdf) > 1e-9 * wpdf;
-				if (m->lobe_geometry && m->lobe_varies[j]) {
+				if (m->lobes->geometry && m->lobes->varies[j]) {
 					/* Kept in floats: tan^2 to 2^-24,
 					 * so D to (tan^2 / m^2) 2^-24. */
 					float g[4];
-					m->lobe_geometry(o, i, g);
-					bj = m->lobe_from_geometry(p, j, g,
-								   &pdf);
-					double mm = p[m->roughness_param];
+					m->lobes->geometry(o, i, g);
+					bj = m->lobes->from_geometry(p, j, g,
+								     &pdf);
+					double mm =
+						p[m->lobes->roughness_param];
 					double tol = 1e-6 +
 						     1.2e-7 * g[0] / (mm * mm);
 					/* (and subnormals aside) */
@@ -351,10 +353,11 @@ static void test_lobe_value_ops(void)
 						       tol * wpdf + 1e-300;
 					geom += b[j] > 0;
 				}
-				double ps = m->sample_lobe(p, j, o, u, &wi);
+				double ps =
+					m->bxdf->sample_lobe(p, j, o, u, &wi);
 				wb = 0;
 				if (ps > 0) {
-					m->eval_lobes(p, o, wi, b);
+					m->bxdf->eval_lobes(p, o, wi, b);
 					wb = b[j];
 				}
 				double pf = glint_lobe_sample_value(
@@ -369,7 +372,7 @@ static void test_lobe_value_ops(void)
 		      bad);
 		CHECK(checked > 1000, "%s: %d sampled lobes checked", m->name,
 		      checked);
-		CHECK(!m->lobe_geometry || geom > 1000,
+		CHECK(!m->lobes->geometry || geom > 1000,
 		      "%s: %d lobes from geometry checked", m->name, geom);
 	}
 }
@@ -377,8 +380,8 @@ static void test_lobe_value_ops(void)
 /* Without Fresnel variation: the full model's specular divided by F. */
 static void test_constant_fresnel(void)
 {
-	const struct glint_model_ops *nf = &glint_model_ts_constant_fresnel;
-	const struct glint_model_ops *ts = &glint_model_torrance_sparrow;
+	const struct glint_model *nf = &glint_model_ts_constant_fresnel;
+	const struct glint_model *ts = &glint_model_torrance_sparrow;
 	double p[8] = { 0, 0, 0, 0.5, 0.4, 0.3, 0.2, 1.5 };
 	int bad = 0, mismatch = 0;
 
@@ -390,13 +393,13 @@ static void test_constant_fresnel(void)
 				glint_u01(glint_hash3(s, 7, 3)) };
 		struct vec3 wo = dir_at(70 * glint_u01(glint_hash3(s, 7, 4)));
 		struct vec3 wi;
-		double pdf = nf->sample(p, wo, u, &wi);
+		double pdf = nf->bxdf->sample(p, wo, u, &wi);
 		if (pdf == 0)
 			continue;
-		mismatch += fabs(pdf - nf->pdf(p, wo, wi)) > 1e-9 * pdf;
+		mismatch += fabs(pdf - nf->bxdf->pdf(p, wo, wi)) > 1e-9 * pdf;
 		double fn[3], ft[3];
-		nf->eval(p, wo, wi, fn);
-		ts->eval(p, wo, wi, ft);
+		nf->bxdf->eval(p, wo, wi, fn);
+		ts->bxdf->eval(p, wo, wi, ft);
 		struct vec3 h = v3_norm(v3_add(wo, wi));
 		double F = glint_fresnel_dielectric(v3_dot(wo, h), p[7]);
 		for (int c = 0; c < 3; c++)
@@ -408,7 +411,7 @@ static void test_constant_fresnel(void)
 
 static void test_lambert(void)
 {
-	const struct glint_model_ops *m = &glint_model_lambert;
+	const struct glint_model *m = &glint_model_lambert;
 	double p[3] = { 0.2, 0.5, 0.8 }, a[3];
 	albedo_quadrature(m, p, dir_at(40), a);
 	for (int c = 0; c < 3; c++)
@@ -420,7 +423,7 @@ static void test_lambert(void)
 /* A white furnace: the directional albedo never exceeds 1. */
 static void test_ts_energy(void)
 {
-	const struct glint_model_ops *m = &glint_model_torrance_sparrow;
+	const struct glint_model *m = &glint_model_torrance_sparrow;
 	double rough[4] = { 0.05, 0.1, 0.3, 0.7 }, ior[3] = { 1.5, 2.34, 5 };
 	double worst = 0;
 	for (int r = 0; r < 4; r++)
@@ -503,7 +506,7 @@ static void test_ggx_smith_projected_area(void)
 /* Oren-Nayar: Lambert at sigma 0; viewed head-on, its albedo is A. */
 static void test_oren_nayar(void)
 {
-	const struct glint_model_ops *m = &glint_model_oren_nayar;
+	const struct glint_model *m = &glint_model_oren_nayar;
 	double sig[4] = { 0, 0.2, 0.5, 1.0 };
 	for (int k = 0; k < 4; k++) {
 		double s2 = sig[k] * sig[k], A = 1 - s2 / (2 * (s2 + 0.33));
@@ -529,8 +532,8 @@ static void test_oren_nayar(void)
 	for (int s = 0; s < 2000; s++) {
 		struct vec3 o = random_dir(s, 3), i = random_dir(s, 4);
 		double f[3], g[3];
-		m->eval(q, o, i, f);
-		glint_model_torrance_sparrow.eval(q, o, i, g);
+		m->bxdf->eval(q, o, i, f);
+		glint_model_torrance_sparrow.bxdf->eval(q, o, i, g);
 		for (int c = 0; c < 3; c++)
 			bad += fabs(f[c] - g[c]) > 1e-12 * g[c];
 	}
@@ -538,8 +541,8 @@ static void test_oren_nayar(void)
 	/* Rough diffuse is flatter: brighter back toward the light than
 	 * Lambert, darker across it. */
 	double r[9] = { 1, 1, 1, 0, 0, 0, 0.1, 1.5, 0.5 }, back[3], across[3];
-	m->eval(r, dir_at(60), dir_at(60), back);
-	m->eval(r, dir_at(60), v3(-sin(M_PI / 3), 0, 0.5), across);
+	m->bxdf->eval(r, dir_at(60), dir_at(60), back);
+	m->bxdf->eval(r, dir_at(60), v3(-sin(M_PI / 3), 0, 0.5), across);
 	CHECK(back[0] > 1 / M_PI && across[0] < 1 / M_PI,
 	      "retro %g, forward %g against Lambert %g", back[0], across[0],
 	      1 / M_PI);
@@ -588,13 +591,13 @@ static void test_two_lobe(void)
 	for (int s = 0; s < 2000; s++) {
 		struct vec3 o = random_dir(s, 5), i = random_dir(s, 6);
 		double f[3], g[3], t[8] = { 0, 0, 0, 0.5, 0.4, 0.3, 0.2, 1.5 };
-		glint_model_two_lobe.eval(q, o, i, f);
-		glint_model_torrance_sparrow.eval(q, o, i, g);
+		glint_model_two_lobe.bxdf->eval(q, o, i, f);
+		glint_model_torrance_sparrow.bxdf->eval(q, o, i, g);
 		for (int c = 0; c < 3; c++)
 			bad += fabs(f[c] - g[c]) > 1e-12 * g[c];
 		/* The lobes are interchangeable: lobe 2 alone is lobe 1. */
-		glint_model_two_lobe.eval(r, o, i, f);
-		glint_model_torrance_sparrow.eval(t, o, i, g);
+		glint_model_two_lobe.bxdf->eval(r, o, i, f);
+		glint_model_torrance_sparrow.bxdf->eval(t, o, i, g);
 		for (int c = 0; c < 3; c++)
 			swapped += fabs(f[c] - g[c]) > 1e-12 * g[c];
 	}
@@ -605,7 +608,7 @@ static void test_two_lobe(void)
 /* The new models' own keys read and write back; unknown keys refused. */
 static void test_new_models_json(void)
 {
-	const struct glint_model_ops *m;
+	const struct glint_model *m;
 	double p[GLINT_MAX_PARAMS];
 	json_error_t e;
 	json_t *o = json_loads("{\"model\": \"two-lobe\", \"specular2\":"
@@ -639,7 +642,7 @@ static void test_new_models_json(void)
 
 static void test_material_json(void)
 {
-	const struct glint_model_ops *m;
+	const struct glint_model *m;
 	double p[GLINT_MAX_PARAMS];
 	json_error_t e;
 	json_t *o = json_loads("{\"model\": \"torrance-sparrow\", \"diffuse\":"
@@ -684,7 +687,7 @@ static void test_material_json(void)
 
 static void test_paper_table(void)
 {
-	const struct glint_model_ops *m;
+	const struct glint_model *m;
 	double p[GLINT_MAX_PARAMS];
 	const char *table = GLINT_DATA_DIR "/paper-table1.json";
 	CHECK(glint_material_load(table, "copper", &m, p) == 0, "%s",
@@ -694,6 +697,122 @@ static void test_paper_table(void)
 	CHECK(glint_material_load(table, "unobtainium", &m, p) < 0,
 	      "unknown material found");
 	CHECK_MSG(glint_error_msg(), "no material named 'unobtainium'");
+}
+
+/*
+ * Every model's BxDF (fit/brdf/bxdf.h) is its lobes' sum, lobe by lobe
+ * through the BxDF's albedo hook, and a microfacet lobe is its
+ * distribution's (microfacet.h) at the lobe's width parameter; the
+ * transparent sphere has neither BRDF nor lobes.
+ */
+static void test_bxdf_interface(void)
+{
+	const char *const *names = glint_model_list();
+	int opaque = 0, microfacet = 0;
+
+	for (int k = 0; names[k]; k++) {
+		const struct glint_model *m = glint_model_find(names[k]);
+		double p[GLINT_MAX_PARAMS];
+		for (int i = 0; i < m->nparams; i++)
+			p[i] = m->params[i].def;
+		if (glint_model_is_transparent(m)) {
+			CHECK(m->bxdf == NULL && m->lobes == NULL &&
+				      glint_model_roughness_param(m) == -1,
+			      "%s: transparent with a BRDF", m->name);
+			continue;
+		}
+		opaque++;
+		struct glint_bxdf bx = glint_model_bxdf(m, p);
+		CHECK(bx.ops->flags & GLINT_BXDF_LOBES, "%s: no lobes",
+		      m->name);
+		for (int d = 0; d < 50; d++) {
+			double u[4];
+			for (int i = 0; i < 4; i++)
+				u[i] = glint_u01(glint_hash3(k, d, i));
+			struct vec3 wo, wi;
+			glint_sample_cosine(u, &wo);
+			glint_sample_cosine(u + 2, &wi);
+			double f[3], b[GLINT_MAX_PARAMS], sum[3] = { 0, 0, 0 };
+			glint_bxdf_eval(&bx, wo, wi, f);
+			bx.ops->eval_lobes(bx.self, wo, wi, b);
+			for (int j = 0; j < bx.ops->nlobes; j++) {
+				const double *a = bx.ops->albedo(bx.self, j);
+				CHECK(a == p + m->lobes->param[j],
+				      "%s: lobe %d's albedo", m->name, j);
+				for (int c = 0; c < 3; c++)
+					sum[c] += a[c] * b[j];
+				int w = m->lobes->microfacet
+						? m->lobes->width_param[j]
+						: -1;
+				if (w < 0 ||
+				    m == &glint_model_ts_constant_fresnel)
+					continue;
+				double ior =
+					p[7]; /* every microfacet model's */
+				double l = m->lobes->microfacet->lobe(p[w], ior,
+								      wo, wi);
+				CHECK(fabs(b[j] - l) <= 1e-12 * fabs(l),
+				      "%s lobe %d: %g against its "
+				      "distribution's %g",
+				      m->name, j, b[j], l);
+				microfacet += d == 0;
+			}
+			for (int c = 0; c < 3; c++)
+				CHECK(fabs(f[c] - sum[c]) <=
+					      1e-12 * fabs(sum[c]),
+				      "%s: f %g against its lobes' %g", m->name,
+				      f[c], sum[c]);
+		}
+	}
+	CHECK(opaque >= 6 && microfacet >= 5, "%d opaque models, %d lobes",
+	      opaque, microfacet);
+	CHECK(glint_model_ggx.lobes->microfacet == &glint_microfacet_ggx &&
+		      glint_model_torrance_sparrow.lobes->microfacet ==
+			      &glint_microfacet_beckmann,
+	      "the models name their distributions");
+}
+
+/* Measured tables as BxDFs hold their own state: two at once each read
+ * their own table. */
+static void test_tabulated_instances(void)
+{
+	struct glint_ashikhmin_shirley red = { 50, { 0.6, 0.1, 0.1 }, 0.05 };
+	struct glint_ashikhmin_shirley blue = { 500, { 0.1, 0.1, 0.6 }, 0.2 };
+	struct glint_brdf_table *tr = NULL, *tb = NULL;
+	struct glint_tabulated a, b;
+
+	CHECK(glint_brdf_table_from(glint_ashikhmin_shirley_eval, &red, &tr) ==
+			      0 &&
+		      glint_brdf_table_from(glint_ashikhmin_shirley_eval, &blue,
+					    &tb) == 0,
+	      "tables: %s", glint_error_msg());
+	if (!tr || !tb)
+		goto out;
+	struct glint_bxdf br = glint_tabulated_bxdf(&a, tr, 0.1);
+	struct glint_bxdf bb = glint_tabulated_bxdf(&b, tb, 0.05);
+	struct vec3 wo = v3(0.3, 0, sqrt(1 - 0.09));
+	struct vec3 wi = v3(-0.25, 0.1, sqrt(1 - 0.0725));
+	double fr[3], fb[3], tr3[3], tb3[3];
+	glint_bxdf_eval(&br, wo, wi, fr);
+	glint_bxdf_eval(&bb, wo, wi, fb);
+	glint_brdf_table_eval(tr, wo, wi, tr3);
+	glint_brdf_table_eval(tb, wo, wi, tb3);
+	for (int c = 0; c < 3; c++)
+		CHECK(fr[c] == tr3[c] && fb[c] == tb3[c],
+		      "channel %d: %g %g against %g %g", c, fr[c], fb[c],
+		      tr3[c], tb3[c]);
+	CHECK(fr[0] > fr[2] && fb[2] > fb[0], "each its own colour");
+	for (int j = 0; j < 3; j++) {
+		const double *al = br.ops->albedo(br.self, j);
+		CHECK(al[j] == 1 && al[(j + 1) % 3] == 0 &&
+			      al[(j + 2) % 3] == 0,
+		      "lobe %d's albedo", j);
+	}
+	CHECK(glint_bxdf_pdf(&br, wo, wi) != glint_bxdf_pdf(&bb, wo, wi),
+	      "each its own proposal");
+out:
+	glint_brdf_table_free(tr);
+	glint_brdf_table_free(tb);
 }
 
 int main(void)
@@ -716,5 +835,7 @@ int main(void)
 	RUN(test_new_models_json);
 	RUN(test_material_json);
 	RUN(test_paper_table);
+	RUN(test_bxdf_interface);
+	RUN(test_tabulated_instances);
 	return test_result();
 }

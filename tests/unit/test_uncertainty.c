@@ -104,7 +104,7 @@ static void ts_result(struct glint_fit_result *res)
 	static const double p[8] = {
 		0.3, 0.1, 0.03, 0.3, 0.27, 0.24, 0.04, 1.43
 	};
-	const struct glint_model_ops *m = glint_model_find("torrance-sparrow");
+	const struct glint_model *m = glint_model_find("torrance-sparrow");
 	struct glint_uncertainty *u = &res->unc;
 
 	memset(res, 0, sizeof(*res));

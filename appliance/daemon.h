@@ -12,7 +12,8 @@
  * Errors: a negative errno with glint_error_msg() naming the step
  * ("step i/n (name)").  Threads: the loop runs on the caller's thread and
  * watches the button on one of its own during a run; *stop and *cancel
- * may be set from a signal handler.  Nothing returned needs freeing.
+ * may be set from a signal handler.  Who frees: nothing (the loop returns
+ * a status).
  */
 
 #include "board/board.h"

@@ -109,7 +109,8 @@ static int read_outcome(int fd, struct glint_fit_outcome *o)
 	return 0;
 }
 
-static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
+static int run_job(const char *queue, struct glint_job *job, atomic_int *stop,
+		   const struct glint_clock *clock)
 {
 	/* A job file is data: its session must be an absolute path (as
 	 * glint queue add writes it), and it is passed after "--", so it
@@ -190,7 +191,7 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 			cancelled = 1 + (*stop != 0);
 			kill(-pid, SIGTERM);
 		}
-		glint_clock_sleep(NULL, 0.1);
+		glint_clock_sleep(clock, 0.1);
 	}
 	json_t *res;
 	const char *state;
@@ -240,7 +241,8 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop)
 	return glint_queue_finish(queue, job, state, res);
 }
 
-int glint_queue_work(const char *queue, int until_empty, atomic_int *stop)
+int glint_queue_work(const char *queue, int until_empty, atomic_int *stop,
+		     const struct glint_clock *clock)
 {
 	int ran = 0;
 	int r = glint_queue_recover(queue);
@@ -256,10 +258,10 @@ int glint_queue_work(const char *queue, int until_empty, atomic_int *stop)
 		if (!got) {
 			if (until_empty)
 				break;
-			glint_clock_sleep(NULL, 0.5);
+			glint_clock_sleep(clock, 0.5);
 			continue;
 		}
-		int ret = run_job(queue, &job, stop);
+		int ret = run_job(queue, &job, stop, clock);
 		if (ret < 0)
 			return ret;
 		ran++;

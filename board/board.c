@@ -189,9 +189,11 @@ struct glint_board {
 	int tt_known;
 };
 
-/* The LED thread and a press's deadline run on the host's monotonic
- * clock (the kernel's event waits do); settle times, relay pulses and
- * turntable steps on the board's clock (cfg.clock), which a test fakes. */
+/* The LED thread runs on the host's monotonic clock (a condition
+ * variable's timed wait does); a press's deadline, settle times, relay
+ * pulses and turntable steps on the board's clock (cfg.clock), which a
+ * test fakes: the backend's edge waits run on it (the gpiod backend's
+ * kernel waits on the real one, which it is given). */
 static double now_s(void)
 {
 	return glint_clock_monotonic();
@@ -415,13 +417,15 @@ int glint_board_light_only(struct glint_board *b, int k)
 int glint_board_wait_press(struct glint_board *b, double timeout_s,
 			   atomic_int *cancel)
 {
-	double t_end = timeout_s < 0 ? INFINITY : now_s() + timeout_s;
+	const struct glint_clock *clk = b->cfg.clock;
+	double t_end =
+		timeout_s < 0 ? INFINITY : glint_clock_now(clk) + timeout_s;
 	struct glint_edge e;
 
 	for (;;) {
 		if (cancel && *cancel)
 			return 0;
-		double left = t_end - now_s();
+		double left = t_end - glint_clock_now(clk);
 		if (left <= 0)
 			return 0;
 		int ret = b->ops->wait_edge(b->priv, GLINT_ROLE_BUTTON,

@@ -85,9 +85,11 @@ struct glint_board_cfg {
 	 * anchors relative paths in those keys. */
 	const json_t *backend_opts;
 	const char *rig_file;
-	/* Settle times, relay pulses and turntable steps wait on this clock
-	 * (NULL: the real one, core/clock.h); borrowed for the board's
-	 * life. */
+	/* A press's deadline, settle times, relay pulses and turntable
+	 * steps wait on this clock (NULL: the real one, core/clock.h), and
+	 * so do the backend's edge waits (the gpiod backend's kernel waits
+	 * move an injected clock by their timeouts); borrowed for the
+	 * board's life. */
 	const struct glint_clock *clock;
 };
 

@@ -229,8 +229,14 @@ static int gpiod_wait_edge(void *priv, enum glint_role r, double timeout_s,
 		return 0; /* a signal: the caller looks at its cancel flag */
 	if (ret < 0)
 		return line_error(b, r, "wait for an edge");
-	if (ret == 0)
+	if (ret == 0) {
+		/* The kernel waited on the real clock; an injected one (a
+		 * test's) is moved by the same timeout, so that the board's
+		 * deadlines on it pass. */
+		if (b->cfg.clock && b->cfg.clock != &glint_clock_real)
+			glint_clock_sleep(b->cfg.clock, timeout_s);
 		return 0;
+	}
 	if (gpiod_line_event_read(b->lines[r], &ev) < 0)
 		return line_error(b, r, "read its edge");
 	e->value = ev.event_type == GPIOD_LINE_EVENT_RISING_EDGE;

@@ -7,6 +7,11 @@
  * into a new session (every frame on disk before the next), the session
  * finished complete or incomplete, the merge, and then for a probe the
  * unwrap to env.exr, for a sample its scene.json lit by a probe session.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected; a failed stage stops the run, named.  Threads:
+ * one thread; cancel may be set from a signal handler.  Who frees: nothing
+ * (the run's results are files).
  */
 
 #include "capture/camera/bracket.h"

@@ -2,6 +2,12 @@
 #ifndef GLINT_CAPTURE_SCENE_FILE_H
 #define GLINT_CAPTURE_SCENE_FILE_H
 
+/*
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: re-entrant.  Who frees: nothing
+ * (results are files and values).
+ */
+
 #include "capture/probe/sphere_detect.h"
 #include "core/image.h"
 

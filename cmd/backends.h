@@ -7,6 +7,9 @@
  * V4L2, libcamera) and boards (sim, libgpiod), registered with capture/
  * and board/.  Called once at start by glint, and by the tests and benches
  * that open cameras or boards by name.
+ *
+ * Errors: none.  Threads: call once, before any other thread starts.  Who
+ * frees: nothing (the lists are static).
  */
 #ifdef __cplusplus
 extern "C" {

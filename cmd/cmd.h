@@ -2,7 +2,12 @@
 #ifndef GLINT_CMD_CMD_H
 #define GLINT_CMD_CMD_H
 
-/* The glint command: a thin layer over the libraries. */
+/*
+ * The glint command: a thin layer over the libraries.
+ *
+ * Errors: each command prints its one error and returns its exit status
+ * (0, 1, 2 for usage).  Threads: called from main.  Who frees: nothing.
+ */
 
 #include "core/error.h"
 #include "core/path.h"

@@ -265,8 +265,8 @@ int cmd_queue(int argc, char **argv)
 		sa.sa_handler = on_stop;
 		sigaction(SIGINT, &sa, NULL);
 		sigaction(SIGTERM, &sa, NULL);
-		int done =
-			glint_queue_work(q.queue, q.until_empty, &stop_worker);
+		int done = glint_queue_work(q.queue, q.until_empty,
+					    &stop_worker, NULL);
 		if (done < 0)
 			return cmd_fail("queue");
 		return GLINT_EXIT_OK;

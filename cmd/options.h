@@ -15,6 +15,10 @@
  * same way everywhere: one line naming the option and what was expected,
  * a suggestion for a misspelt name ("did you mean '--samples'?"), then
  * "Try 'glint CMD --help'." and exit status 2.
+ *
+ * Errors: a usage error prints one line and returns -EINVAL (exit 2).
+ * Threads: one thread (the option tables are the caller's).  Who frees:
+ * nothing (values point into argv).
  */
 
 #include <stddef.h>

@@ -10,6 +10,12 @@
  * under SIGKILL or a power cut; the old one is then removed.  On a file
  * system without the exchange the old one is moved aside first, and
  * glint_atomic_dir_sweep() puts it back after a crash between the two.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected; the target is never left half written.  Threads:
+ * a struct glint_atomic_dir belongs to one thread.  Who frees:
+ * glint_atomic_dir_commit() or _abort() ends one, the temporary folder
+ * removed on abort.
  */
 
 /* The longest target path accepted (bytes, without the NUL): leaves room

@@ -6,6 +6,11 @@
  * Files that are either wholly old or wholly new after a power cut: write to
  * a temporary file beside the target, fsync it, rename it over the target,
  * fsync the directory.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected; the target is never left half written.  Threads:
+ * re-entrant; one writer per file.  Who frees: commit or abort ends a
+ * write.
  */
 
 #include <stdio.h>

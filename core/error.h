@@ -8,6 +8,9 @@
  * human-readable message naming the file, the field or value seen and what
  * was expected.  The message lives in thread-local storage and stays valid
  * until the next glint_error_set() on the same thread.
+ *
+ * Errors: this is where they are kept.  Threads: the message is per
+ * thread.  Who frees: nothing (the message is the thread's).
  */
 
 #include <errno.h>

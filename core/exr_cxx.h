@@ -6,6 +6,10 @@
  * Fallback EXR reader on OpenEXR's C++ library, for compressions the C core
  * of OpenEXR 3.1 cannot decode (DWAA, DWAB).  Same contract as
  * glint_exr_read(); never throws.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected; never throws.  Threads: re-entrant.  Who frees:
+ * the image out with glint_image_free().
  */
 
 #include "image.h"

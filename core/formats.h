@@ -6,6 +6,10 @@
  * Individual image formats.  Readers return a new image in *out (caller
  * frees); writers are atomic (see atomic_file.h).  Every error message names
  * the file and what was wrong.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected (the file, the field, the size limit).  Threads:
+ * re-entrant.  Who frees: images out with glint_image_free().
  */
 
 #include "image.h"

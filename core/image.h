@@ -12,6 +12,11 @@
  * freed with glint_image_free() (which takes NULL); on failure nothing is
  * stored and nothing is to be freed.  Images passed as `const` are
  * borrowed for the call only.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected (NULL from the constructors when out of memory).
+ * Threads: an image is not locked: share it read only.  Who frees:
+ * glint_image_free() (NULL allowed).
  */
 
 #include <stddef.h>

@@ -6,6 +6,11 @@
  * Validated reads from JSON documents parsed by jansson.  Every failure names
  * the file, the dotted key path, the value seen and what was expected, e.g.
  *   scene.json: camera.focal_length_mm = -5: expected a number in (0, 10000]
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected (file, key path, expected type and range).
+ * Threads: re-entrant.  Who frees: json_decref() what a loader returns;
+ * strings out point into the document.
  */
 
 #include <jansson.h>

@@ -8,6 +8,11 @@
  * holder dies, even by SIGKILL or a power cut, so it never goes stale.
  * The holder writes "pid what" into the file so that whoever is refused
  * can be told who holds it.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected (-EBUSY naming the holder).  Threads: re-entrant;
+ * a lock belongs to its process.  Who frees: glint_lockfile_release()
+ * closes the descriptor and drops the lock.
  */
 
 /* Take the lock at `path` (created if missing).  wait = 0: fail at once

@@ -9,6 +9,9 @@
  * scripts.  Quiet: errors only.  When stderr is the systemd journal
  * (JOURNAL_STREAM names it), every line starts with its syslog priority,
  * "<3>" error, "<4>" warning, "<6>" info, "<7>" debug, for journald.
+ *
+ * Errors: none (a log line that cannot be written is dropped).  Threads:
+ * the configuration is set once at start.  Who frees: nothing.
  */
 
 #include "error.h"

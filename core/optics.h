@@ -11,6 +11,9 @@
  * its own, independently written forms on purpose.
  *
  * Pure functions: no errors, no allocation, safe from any thread.
+ *
+ * Errors: none (pure functions).  Threads: re-entrant.  Who frees:
+ * nothing.
  */
 
 #include "core/vec.h"

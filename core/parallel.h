@@ -7,6 +7,11 @@
  * in chunks of `chunk`, from `nthreads` threads (0 = one per online CPU).
  * Returns 0 or a negative errno if threads could not be started (the work
  * is then done on the calling thread).
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected when a worker thread cannot start.  Threads: the
+ * callback runs on up to n threads at once and must only write its own
+ * range.  Who frees: nothing.
  */
 typedef void (*glint_range_fn)(void *ctx, int begin, int end, int thread);
 

@@ -6,6 +6,11 @@
  * Paths built into caller-owned buffers.  Every function either writes the
  * whole path or fails with -ENAMETOOLONG and a message naming the start of
  * the path that did not fit: a path is never silently cut short.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected (a path too long is refused, never cut).  Threads:
+ * re-entrant; the data folder is set once at start.  Who frees: nothing
+ * (buffers are the caller's; the data folder is static).
  */
 
 #include "error.h"

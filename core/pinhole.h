@@ -7,6 +7,10 @@
  * World units are metres.  Camera frame: `fwd` is the optical axis, `right`
  * is image +x, `up` is image -y (image rows grow downwards).  The principal
  * point is the image centre (width / 2, height / 2) in pixel coordinates.
+ *
+ * Errors: the loader's are a negative errno with glint_error_msg(); the
+ * projections have none.  Threads: re-entrant.  Who frees: nothing
+ * (values).
  */
 
 #include "core/vec.h"

@@ -4,7 +4,11 @@
 
 /* The candidate (of a NULL-terminated list) closest to `word` by edit
  * distance, when close enough to be a likely misspelling; NULL
- * otherwise.  For "did you mean" in errors about names. */
+ * otherwise.  For "did you mean" in errors about names.
+ *
+ * Errors: none.  Threads: re-entrant (the hint is the caller's buffer or
+ * static text).  Who frees: nothing.
+ */
 const char *glint_suggest(const char *word, const char *const *candidates);
 
 /* The same as text for an error message: " (did you mean 'NAME'?)", or ""

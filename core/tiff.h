@@ -9,6 +9,11 @@
  * exports write it: value / 65535) and 8-bit (camera-encoded code values,
  * read only as such: glint_tiff_read_rgb8).  RGB or greyscale, with any
  * extra (alpha) samples ignored; any compression libtiff decodes.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected (libtiff's own message for the file).  Threads:
+ * re-entrant (messages per call).  Who frees: images with
+ * glint_image_free(), code values with free().
  */
 
 #include "image.h"

@@ -2,7 +2,12 @@
 #ifndef GLINT_CORE_VEC_H
 #define GLINT_CORE_VEC_H
 
-/* Small 3-vector and 3x3 matrix helpers in double precision. */
+/*
+ * Small 3-vector and 3x3 matrix helpers in double precision.
+ *
+ * Errors: none (inline arithmetic).  Threads: re-entrant.  Who frees:
+ * nothing.
+ */
 
 #include <math.h>
 

@@ -83,6 +83,11 @@
  * the target uses the exact term (Mitsuba, pbrt, Blender's sharp Glass
  * BSDF, MaterialX's dielectric_bsdf), Schlick's approximation's error for
  * glTF.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected (the format, the model, the file).  Threads:
+ * re-entrant; the format names are static.  Who frees: the text
+ * glint_export_text() returns, with free().
  */
 
 #include "fit/brdf/model.h"

@@ -12,6 +12,10 @@
  * All functions are pure (no state, safe from any thread); text() and
  * params() return new storage the caller frees (free(), json_decref()),
  * or NULL when out of memory.
+ *
+ * Errors: a target's start and file functions return a negative errno with
+ * glint_error_msg().  Threads: targets are static and re-entrant.  Who
+ * frees: file text with free().
  */
 
 #include "export/export.h"

@@ -22,6 +22,11 @@
  *     coarse scan of roughness.
  * Evaluation: the shade cache (trace once, re-shade), or with `faithful`
  * the paper's way, a full trace and render per evaluation (the baseline).
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: a fit runs on its own worker threads
+ * (opts.nthreads) and is called from one thread.  Who frees: nothing (a
+ * result is a value; the renderer stays the caller's).
  */
 
 #include "fit/optim/lm.h"

@@ -3,7 +3,12 @@
 #define GLINT_FIT_FIT_DATA_H
 
 /* The pixels a fit uses, shared by the opaque (fit.c) and transparent
- * (fit_dielectric.c) fitters. */
+ * (fit_dielectric.c) fitters.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: read only once built, shared by the
+ * fit's threads.  Who frees: free_data().
+ */
 
 #include "fit.h"
 #include "render/shade_cache.h"

@@ -5,6 +5,12 @@
 /*
  * One fit as `glint fit`, `glint demo` and the queue run it, and the
  * result folder it writes (docs/scene.md, "params.json").
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected; a failed stage stops the job, named, and nothing
+ * partial is left as a result.  Threads: called from one thread; it runs
+ * its own worker threads.  Who frees: glint_fit_job_unload() a loaded
+ * job's images; json_decref() a result document.
  */
 
 #include "fit.h"

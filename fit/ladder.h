@@ -24,6 +24,10 @@
  * (a lone convex opaque sphere sees only the map: one bounce is exact) and
  * the sample's stand (not modelled: the scene has no geometry for it).
  * Opaque models only; the transparent fitter has its own path depth.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: runs its own worker threads (nthreads).
+ * Who frees: json_decref() a document out.
  */
 
 #include "fit.h"

@@ -17,6 +17,10 @@
  * band whose mean is more than 5 standard errors from 0 is structure the
  * noise does not make.  Without weights the residual is relative to the
  * photo's mean on the sphere and chi^2 is not given.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: re-entrant.  Who frees: nothing
+ * (results are values).
  */
 
 #include "fit/render/tracer.h"

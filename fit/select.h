@@ -21,6 +21,10 @@
  * is part of what the models leave).  The lowest BIC is chosen; the
  * standard errors of the full fit are reported beside it (e.g. the
  * spread of the specular channels against their errors).
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: called from one thread; the fits run
+ * their own threads.  Who frees: json_decref() a document out.
  */
 
 #include "fit.h"

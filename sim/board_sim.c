@@ -45,9 +45,11 @@ struct sim_board {
 	pthread_mutex_t lock;
 };
 
-static double now_s(void)
+/* The board's clock (cfg.clock, NULL: the real one): the scenario's
+ * presses are played on it, and waits sleep on it. */
+static double now_s(const struct sim_board *s)
 {
-	return glint_clock_monotonic();
+	return glint_clock_now(s->cfg.clock);
 }
 
 static int add_edge(struct sim_board *s, double t, int v)
@@ -172,7 +174,7 @@ static int sim_open(const struct glint_board_cfg *cfg, const char *consumer,
 	if (!s)
 		return glint_error_set(ENOMEM, "out of memory");
 	s->cfg = *cfg;
-	s->t0 = now_s();
+	s->t0 = now_s(s);
 	s->angle = cfg->probe_deg;
 	ret = s->cfg.backend_opts ? load_paths(s) : 0;
 	if (!ret)
@@ -230,7 +232,7 @@ static int sim_set(void *priv, enum glint_role r, int v)
 		fprintf(s->log,
 			"{\"t\": %.4f, \"line\": \"%s\", \"value\": %d, "
 			"\"turntable_deg\": %.3f}\n",
-			now_s() - s->t0, glint_role_name(r), v, s->angle);
+			now_s(s) - s->t0, glint_role_name(r), v, s->angle);
 		fflush(s->log);
 	}
 	update_world(s);
@@ -251,7 +253,7 @@ static int sim_get(void *priv, enum glint_role r, int *v)
 	struct sim_board *s = priv;
 	pthread_mutex_lock(&s->lock);
 	if (r == GLINT_ROLE_BUTTON)
-		*v = level_at(s, now_s());
+		*v = level_at(s, now_s(s));
 	else if (r == GLINT_ROLE_POSITION) /* 1: the probe faces the camera */
 		*v = fabs(remainder(s->angle - s->cfg.probe_deg, 360)) < 1;
 	else
@@ -264,7 +266,7 @@ static int sim_wait_edge(void *priv, enum glint_role r, double timeout_s,
 			 struct glint_edge *e)
 {
 	struct sim_board *s = priv;
-	double t_end = now_s() + timeout_s;
+	double t_end = now_s(s) + timeout_s;
 
 	if (r != GLINT_ROLE_BUTTON)
 		return 0; /* the position sensor never moves by itself */
@@ -278,13 +280,8 @@ static int sim_wait_edge(void *priv, enum glint_role r, double timeout_s,
 	}
 	pthread_mutex_unlock(&s->lock);
 	double until = got ? e->t : t_end;
-	double dt = until - now_s();
-	if (dt > 0) {
-		struct timespec ts = { (time_t)dt,
-				       (long)((dt - floor(dt)) * 1e9) };
-		while (nanosleep(&ts, &ts) < 0 && errno == EINTR) {
-		}
-	}
+	double dt = until - now_s(s);
+	glint_clock_sleep(s->cfg.clock, dt);
 	return got;
 }
 

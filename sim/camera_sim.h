@@ -2,7 +2,15 @@
 #ifndef GLINT_SIM_CAMERA_SIM_H
 #define GLINT_SIM_CAMERA_SIM_H
 
-/* The simulated camera (a backend of capture/camera/camera.h) and its scene. */
+/*
+ * The simulated camera (a backend of capture/camera/camera.h) and its
+ * scene.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: as capture/camera/camera.h; the world
+ * it shows is read under its lock (sim/world.h).  Who frees:
+ * glint_camera_close(); images out with glint_image_free().
+ */
 
 #include "capture/camera/camera.h"
 #include "core/image.h"

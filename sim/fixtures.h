@@ -7,6 +7,11 @@
  * scene (a 10 cm sphere 180 / 512 of the width in radius under the Venice map),
  * its reference photos (cached in bench-out/), box-averaged lower
  * resolutions, and one noisy exposure of the sensor model.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: called from one test thread.  Who
+ * frees: images with glint_image_free(), renderers with
+ * glint_renderer_release().
  */
 
 #include "core/error.h"

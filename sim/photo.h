@@ -8,6 +8,10 @@
  * size, optionally through the sensor model as one 12-bit exposure set
  * for the diffuse body (highlights clip), with its per-pixel weights.
  * What glint demo and the tests fit.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: renders on its own threads (nthreads).
+ * Who frees: the photo with glint_image_free().
  */
 
 #include "fit/brdf/model.h"

@@ -10,6 +10,10 @@
  * reflected, and looked up in a lat-long map (bilinear), times the
  * conductor's Fresnel reflectance computed with complex arithmetic.
  * Background: 0.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: re-entrant.  Who frees: the image out
+ * with glint_image_free().
  */
 
 #include "core/image.h"

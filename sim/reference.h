@@ -13,6 +13,10 @@
  *     samples jittered in strata of the row coordinate.
  * What it shares with the fitter is the definition of the scene: the
  * camera model, the env map's lookup and sampler, the BRDF.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: renders on its own threads
+ * (opts.nthreads).  Who frees: nothing (the caller's image).
  */
 
 #include "fit/scene/envmap.h"

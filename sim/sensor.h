@@ -9,6 +9,10 @@
  * k (electrons per unit radiance per second) folds aperture, pixel area and
  * quantum efficiency together.  Noise-free mode: e = L k t exactly (still
  * clipped and quantised unless `quantise` is off).
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: re-entrant; a sensor's state is the
+ * caller's.  Who frees: nothing (the caller's images).
  */
 
 #include "core/image.h"

@@ -14,6 +14,11 @@
  * 1/1500, 1.15/1500 and 1.66/1500 on reading.  Values are looked up in
  * their nearest bin, as the database's own reader does.  Negative values
  * (the database's "not measured") read as 0.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: a table is read only once built; BxDFs
+ * over it may be used from any thread.  Who frees:
+ * glint_brdf_table_free().
  */
 
 #include "fit/brdf/model.h"

@@ -12,6 +12,9 @@
  * lights the scene with the rig's map turned about +Y by
  * glint_sim_lamp_turn(k) degrees (sim/camera_sim.h), so each lamp's sun
  * meets the sphere from its own side.
+ *
+ * Errors: none.  Threads: get and set are locked: any thread.  Who frees:
+ * nothing.
  */
 
 #include "board/board.h" /* GLINT_MAX_LIGHTS */

@@ -11,6 +11,12 @@
  * two goals bound it); when exposure reaches the
  * camera's maximum it raises gain instead, and says so.  Capped in frame
  * count and total time; every frame carries its applied exposure and gain.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected (-ECANCELED when cancelled).  Threads: one thread
+ * drives a bracket and its camera; cancel may be set from any thread or a
+ * signal handler.  Who frees: glint_bracket_release() frees a bracket's
+ * frames, also after an error.
  */
 
 #include "capture/camera/camera.h"

@@ -10,6 +10,12 @@
  *
  * Time comes from an injectable clock so that the simulated camera's frame
  * timing (frame period >= exposure) runs instantly in tests.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected (the device and the control).  Threads: a camera
+ * is driven by one thread; the backend list is set once before any camera
+ * opens.  Who frees: glint_camera_close() a camera, glint_frame_release()
+ * each captured frame (frames outlive their camera).
  */
 
 #include "core/clock.h"

@@ -11,6 +11,9 @@
  * Bayer at the highest bit depth (unpacked before packed at equal depth:
  * no unpacking cost), then 16- and 8-bit greyscale, then RGB24 and YUYV,
  * which the camera has already tone-mapped (`linear` = 0).
+ *
+ * Errors: none; an unknown format is NULL.  Threads: the table is static
+ * and read only.  Who frees: nothing (entries are static).
  */
 
 #include <stddef.h>

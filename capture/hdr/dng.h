@@ -22,6 +22,11 @@
  *    same as the frame's sidecar file, with the pixels' CRC-32.
  *
  * Written atomically (a temporary file renamed into place).
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected (sizes are checked against the file before
+ * anything is allocated).  Threads: re-entrant (libtiff handles are per
+ * call).  Who frees: the caller, as each function says.
  */
 
 #include "capture/camera/camera.h"

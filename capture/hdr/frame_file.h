@@ -11,6 +11,11 @@
  * same JSON as the frame's sidecar file).  Lossless, written atomically (temp +
  * fsync + rename + directory fsync); any PNG reader opens it.  docs/capture.md
  * documents the layout.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected (truncated, inconsistent or edited frames named).
+ * Threads: re-entrant.  Who frees: the caller frees the metadata text
+ * (free()) and a frame read (glint_frame_release()).
  */
 
 #include "capture/camera/camera.h"

@@ -7,6 +7,10 @@
  * 8-bit photos with their exposure times (capture/hdr/hdr_response.h), and
  * raw frames or a session's bracket (capture/hdr/session_merge.h) with the
  * merge's report written beside the result.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: re-entrant.  Who frees:
+ * glint_frames_free() the frames read; images with glint_image_free().
  */
 
 #include "capture/hdr/hdr_linear.h"

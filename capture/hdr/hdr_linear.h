@@ -16,6 +16,11 @@
  * inverse-variance weights; a sample at or above `saturation_dn` gets
  * weight zero (clipped highlights never leak in).  A site clipped in every
  * frame is invalid: its value is the lower bound from the shortest frame.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: re-entrant; a stream merge belongs to
+ * one thread.  Who frees: glint_raw_hdr_release() a merge's arrays,
+ * glint_hdr_stream_free() a stream.
  */
 
 #include "capture/camera/camera.h"

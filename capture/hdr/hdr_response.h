@@ -23,6 +23,10 @@
  * I(m) = mean over samples at code m of t_i E_j, with the weight
  * exp(-4 (z - 127.5)^2 / 127.5^2), all pixels, until the response changes
  * by less than `threshold`.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: re-entrant.  Who frees: images out with
+ * glint_image_free().
  */
 
 #include "core/image.h"

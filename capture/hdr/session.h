@@ -20,6 +20,12 @@
  * rename + directory fsync); a frame is on disk before the next is
  * requested, so an interrupted capture keeps every frame it got, and its
  * session.json still says "incomplete".
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected (the session folder and the file in it).  Threads:
+ * a session is written by one process at a time (its lock); the functions
+ * are re-entrant.  Who frees: glint_session_list_free() a listing; a lock
+ * with glint_lockfile_release().
  */
 
 #include "capture/camera/bracket.h"

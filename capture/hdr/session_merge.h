@@ -2,7 +2,13 @@
 #ifndef GLINT_CAPTURE_HDR_SESSION_MERGE_H
 #define GLINT_CAPTURE_HDR_SESSION_MERGE_H
 
-/* A session's raw bracket, merged (capture/hdr/hdr_linear.h) and written. */
+/*
+ * A session's raw bracket, merged (capture/hdr/hdr_linear.h) and written.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: re-entrant.  Who frees: images out with
+ * glint_image_free(), frames with glint_frames_free().
+ */
 
 #include "capture/camera/camera.h"
 #include "capture/hdr/hdr_linear.h"

@@ -24,6 +24,10 @@
  *            "mirrored ball" format): pixel (u, v) in the unit disk has
  *            normal (u, v, sqrt(1 - u^2 - v^2)) and shows the reflection
  *            of the view direction -Z
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: re-entrant; names are static strings.
+ * Who frees: images out with glint_image_free().
  */
 
 #include "core/image.h"

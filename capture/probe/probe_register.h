@@ -6,6 +6,10 @@
  * Two views of a probe (the second photo taken ~90 degrees away, so that
  * each covers the other's region behind the ball): the rotation R taking
  * view 2's map frame into view 1's (L1(d) = L2(R^T d)), and their blend.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: re-entrant.  Who frees: images out with
+ * glint_image_free().
  */
 
 #include "core/image.h"

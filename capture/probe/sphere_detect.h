@@ -20,6 +20,10 @@
  * The pinhole image of an off-axis sphere is an ellipse; this fits its
  * circle of best fit (centre and tangential radius to well under a pixel
  * for the rig's small angles; glint_pinhole_sphere_from_circle() inverts it).
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected (no circle found is an error that says why).
+ * Threads: re-entrant.  Who frees: nothing (results are values).
  */
 
 #include "core/image.h"

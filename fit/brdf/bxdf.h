@@ -15,8 +15,9 @@
  *
  * Errors: none; a direction that cannot be drawn gives pdf 0.
  * Threads: the functions are re-entrant; an instance may be shared by
- * threads while nothing writes its self.  Ownership: a struct glint_bxdf
- * borrows its self, which must outlive it; ops tables are static.
+ * threads while nothing writes its self.  Who frees: nothing: a struct
+ * glint_bxdf borrows its self, which must outlive it; ops tables are
+ * static.
  */
 
 #include "core/vec.h"

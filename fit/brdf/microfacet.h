@@ -2,7 +2,12 @@
 #ifndef GLINT_FIT_BRDF_MICROFACET_H
 #define GLINT_FIT_BRDF_MICROFACET_H
 
-/* Pieces of the microfacet and rough-diffuse models, exposed for tests. */
+/*
+ * Pieces of the microfacet and rough-diffuse models, exposed for tests.
+ *
+ * Errors: none (pure functions).  Threads: re-entrant; the descriptors are
+ * static.  Who frees: nothing.
+ */
 
 #include "core/optics.h"
 #include "core/vec.h"

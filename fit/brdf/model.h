@@ -16,8 +16,8 @@
  * Errors: the loaders return a negative errno with glint_error_msg() set
  * (file, key and bounds named); the evaluation functions have none.
  * Threads: everything here is re-entrant; models and parameter vectors
- * are read only.  Ownership: models are static; json_t results are the
- * caller's.
+ * are read only.  Who frees: nothing for models (static); json_decref()
+ * the json_t results.
  */
 
 #include "bxdf.h"

@@ -22,6 +22,10 @@
  *   - stop after max_evals evaluations, or when the best cost has not
  *     improved by a relative ftol over stall_evals evaluations.
  * The caller polishes the best point with Levenberg-Marquardt.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected from the objective.  Threads: calls the objective
+ * from the calling thread.  Who frees: nothing (the caller's arrays).
  */
 
 #include <stdint.h>

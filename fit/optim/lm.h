@@ -16,6 +16,11 @@
  * multifit_nlinear and cminpack have no bounds, levmar (which has) is not
  * packaged for Debian, and Ceres would bring Eigen, glog and SuiteSparse to
  * solve 8 parameters; GSL does the linear algebra here.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected from the objective (GSL's errors are turned into
+ * them).  Threads: calls the objective from the calling thread;
+ * re-entrant.  Who frees: nothing (the caller's arrays).
  */
 
 struct glint_lm_problem {

@@ -47,6 +47,10 @@
  * the specular albedo is 0) get an infinite standard error.  Coverage of
  * these intervals is measured, not assumed: tests/sim/test_coverage.c and
  * the README's coverage table.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: re-entrant.  Who frees: nothing (the
+ * caller's arrays).
  */
 
 #define GLINT_UNC_MAX_N 16

@@ -2,6 +2,12 @@
 #ifndef GLINT_FIT_RENDER_COMPARE_H
 #define GLINT_FIT_RENDER_COMPARE_H
 
+/*
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: re-entrant.  Who frees: nothing (the
+ * PNG is the result).
+ */
+
 #include "core/image.h"
 
 /*

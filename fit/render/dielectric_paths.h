@@ -22,6 +22,10 @@
  * inside and the radiance where they leave - do not depend on T, so they
  * are kept (a path cache) and a change of T is a re-sum:
  *   I_c = 1/spp * sum over paths  w * T_c^(L / d) * L_env,c.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: a cache is built by one thread, then
+ * read by many.  Who frees: glint_dielectric_cache_free().
  */
 
 #include "fit/scene/envmap.h"

@@ -21,6 +21,10 @@
  * wider than 256 are first reduced by an integer factor (cells whose
  * moments are the sums of their texels').  Texels flagged in `exclude`
  * (hot texels integrated elsewhere) are left out.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: built on nthreads threads, then read
+ * only.  Who frees: glint_irradiance_free().
  */
 
 #include "fit/scene/envmap.h"

@@ -10,6 +10,11 @@
  * (the same inputs always give the same image).  Only direct light from the
  * map: the sample is the only object.  Shadow rays are traced only when the
  * scene is not a single convex sphere.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: a renderer renders on its own threads
+ * (nthreads) and is driven by one thread.  Who frees:
+ * glint_renderer_release() a renderer's tracer, map and buffers.
  */
 
 #include "fit/scene/envmap.h"

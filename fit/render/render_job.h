@@ -2,6 +2,12 @@
 #ifndef GLINT_FIT_RENDER_RENDER_JOB_H
 #define GLINT_FIT_RENDER_RENDER_JOB_H
 
+/*
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: runs its own worker threads.  Who
+ * frees: json_decref() the result document.
+ */
+
 #include "fit/brdf/model.h"
 #include "fit/scene/scene.h"
 

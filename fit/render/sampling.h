@@ -2,7 +2,12 @@
 #ifndef GLINT_FIT_RENDER_SAMPLING_H
 #define GLINT_FIT_RENDER_SAMPLING_H
 
-/* Deterministic sample sequences: the same inputs give the same numbers. */
+/*
+ * Deterministic sample sequences: the same inputs give the same numbers.
+ *
+ * Errors: none (inline arithmetic).  Threads: re-entrant.  Who frees:
+ * nothing.
+ */
 
 #include <stdint.h>
 

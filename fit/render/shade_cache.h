@@ -28,6 +28,12 @@
  *
  * The cache holds a chosen set of pixels (e.g. the sphere's interior, or a
  * coarse subset of it).
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: built on its own threads, then
+ * evaluated by one caller at a time (each evaluation spreads over the
+ * cache's threads); a light may be shared by caches.  Who frees:
+ * glint_shade_cache_free(), glint_shade_light_free().
  */
 
 #include "fit/scene/envmap.h"

@@ -6,6 +6,12 @@
  * The sample's geometry in an Embree scene, and the primary-ray pass that
  * fills a G-buffer once per fit (the geometry never changes while a fit
  * re-shades).  Build: _new, _add_*, _commit; then trace.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected (Embree's own errors included).  Threads: a tracer
+ * is built by one thread; once committed its queries are safe from many
+ * (call glint_thread_ftz() once per thread).  Who frees:
+ * glint_tracer_free(), glint_gbuffer_free().
  */
 
 #include "core/pinhole.h"

@@ -12,6 +12,10 @@
  * ((i + 0.5) / W, (j + 0.5) / H)).  So the centre of the image is the -Z
  * direction, the default camera's view direction.  A rotation R takes map
  * directions to world directions: L_world(d) = scale * map(R^T d).
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected.  Threads: a map is built by one thread, then read
+ * by many.  Who frees: glint_envmap_free(), glint_env_hot_free().
  */
 
 #include "core/image.h"

@@ -6,6 +6,10 @@
  * A scene file (JSON, docs/scene.md): camera, sphere, environment map and
  * render settings.  Lengths in metres except where a key says _mm or _um;
  * angles in degrees; pixel coordinates with (0, 0) the top-left corner.
+ *
+ * Errors: a negative errno with glint_error_msg() naming the file or value
+ * and what was expected (file, key, value).  Threads: re-entrant.  Who
+ * frees: nothing (a scene is a value).
  */
 
 #include "core/pinhole.h"

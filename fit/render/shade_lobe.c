@@ -1,0 +1,379 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * One lobe's estimate at a hit of the shade cache: the hot texels'
+ * quadrature, env and lobe samples weighed against each other, and where
+ * the lobe is narrow against a pixel, its samples spread over the pixel's
+ * footprint or the hot part integrated over it (shade_cache_internal.h).
+ */
+#include "shade_cache_internal.h"
+
+#include "sampling.h"
+
+#include <math.h>
+#include <string.h>
+
+/* Lobe j over the hot texels, on their fixed points: the map's
+ * radiance on the hot texels' area (by_area: with the irradiance of the
+ * other texels) or the hot texels' part of the radiance wherever it
+ * reaches (with lobe and env samples of the rest: envmap.h). */
+void shade_hot_quadrature(const struct glint_shade_cache *c,
+			  const struct cache_hit *h, const double *p, int j,
+			  int by_area, double out[3])
+{
+	const struct glint_env_hot *hot = c->hot;
+	const struct glint_model *m = c->model;
+	struct vec3 wo = fv(h->wo);
+	int npts = by_area ? hot->npts : hot->npart;
+	const float *pts = by_area ? hot->pts : hot->part;
+
+	if (!npts)
+		return;
+	double ext = glint_lobe_extent(m, p, j);
+	if (ext > 0) {
+		struct vec3 r = local_to_world(h, v3(-wo.x, -wo.y, wo.z));
+		double a = acos(fmin(1, fmax(-1, v3_dot(r, hot->axis))));
+		if (a - hot->radius > ext)
+			return;
+	}
+	for (int k = 0; k < npts; k++) {
+		const float *pt = pts + 6 * (size_t)k;
+		struct vec3 d = v3(pt[0], pt[1], pt[2]);
+		struct vec3 wi = v3(v3_dot(d, fv(h->t)), v3_dot(d, fv(h->b)),
+				    v3_dot(d, fv(h->n)));
+		if (!(wi.z > 0))
+			continue;
+		double bj = glint_lobe_value_pdf(m, p, j, wo, wi, NULL);
+		if (bj <= 0)
+			continue;
+		for (int ch = 0; ch < 3; ch++)
+			out[ch] += bj * wi.z * pt[3 + ch];
+	}
+}
+
+/* Pixel i's normal and ray direction at (u, v) in it, and the mirror
+ * direction there. */
+static void foot_at(const struct cache_foot *f, double u, double v,
+		    struct vec3 *n, struct vec3 *d, struct vec3 *r)
+{
+	*n = v3_norm(v3_add(fv(f->n), v3_add(v3_scale(fv(f->nu), u),
+					     v3_scale(fv(f->nv), v))));
+	*d = v3_norm(v3_add(fv(f->d), v3_add(v3_scale(fv(f->du), u),
+					     v3_scale(fv(f->dv), v))));
+	*r = v3_sub(*d, v3_scale(*n, 2 * v3_dot(*d, *n)));
+}
+
+/* The hit seen at point at (centred) of footprint f: its frame and view
+ * direction; 0 where the view grazes away. */
+static int hit_at(const struct cache_foot *f, const double at[2],
+		  struct cache_hit *h)
+{
+	struct vec3 n, d, r, t, b;
+
+	foot_at(f, at[0], at[1], &n, &d, &r);
+	v3_frame(n, &t, &b);
+	struct vec3 wo = v3(-v3_dot(d, t), -v3_dot(d, b), -v3_dot(d, n));
+	if (!(wo.z > 0))
+		return 0;
+	h->t[0] = (float)t.x, h->t[1] = (float)t.y, h->t[2] = (float)t.z;
+	h->b[0] = (float)b.x, h->b[1] = (float)b.y, h->b[2] = (float)b.z;
+	h->n[0] = (float)n.x, h->n[1] = (float)n.y, h->n[2] = (float)n.z;
+	h->wo[0] = (float)wo.x, h->wo[1] = (float)wo.y, h->wo[2] = (float)wo.z;
+	return 1;
+}
+
+/* One lobe sample (uniforms uu) at hit h, weighted by the balance
+ * heuristic against nl env samples and by w, added to out. */
+static void lobe_sample(const struct glint_shade_cache *c,
+			const struct cache_hit *h, const double *p, int j,
+			int nl, int nb, const double uu[2], double w,
+			double out[3])
+{
+	const struct glint_model *m = c->model;
+	struct vec3 wi;
+	double bj;
+
+	double pb = glint_lobe_sample_value(m, p, j, fv(h->wo), uu, &wi, &bj);
+	if (!(pb > 0) || bj <= 0)
+		return;
+	struct vec3 ww = local_to_world(h, wi);
+	double l[3], ps = 0;
+	/* The rest's radiance, continuous across the hot texels' edges
+	 * (their part is shade_hot_quadrature()'s). */
+	glint_env_query(c->hot, ww, l, &ps);
+	if (!nl)
+		ps = 0;
+	w *= bj * wi.z / (nl * ps + nb * pb);
+	for (int ch = 0; ch < 3; ch++)
+		out[ch] += w * l[ch];
+}
+
+/*
+ * Estimate lobe j's integral at one hit: nl env samples, nb lobe samples,
+ * balance-heuristic weights with the smooth light pdf.  The lobe samples'
+ * uniforms: for hit hs >= 0 of its pixel, block hs of a Sobol sequence
+ * shifted by the pixel's seed pseed (as draw_env_samples()); for hs < 0
+ * (constant lobes at set-up), the pairs u[k] shifted by the hit's seed.
+ * env samples come from `es`, or are drawn afresh when es is NULL.
+ */
+void shade_lobe_at_hit(const struct glint_shade_cache *c,
+		       const struct cache_hit *h, const struct env_sample *es,
+		       int nl, int nb, const double (*u)[2], const double *p,
+		       int j, int with_hot, const struct spread *sp, int hs,
+		       uint32_t pseed, double out[3])
+{
+	const struct glint_model *m = c->model;
+	struct vec3 wo = fv(h->wo);
+	double sx = 0, sy = 0;
+	uint32_t shift[2] = { 0, 0 };
+
+	if (hs >= 0) {
+		glint_sobol2_shift(pseed, shift);
+	} else {
+		sx = glint_u01(glint_hash32(h->seed ^ 0x2545f491u));
+		sy = glint_u01(glint_hash32(h->seed ^ 0x9e3779b9u));
+	}
+
+	int geom = m->lobes->from_geometry && m->lobes->varies[j];
+
+	out[0] = out[1] = out[2] = 0;
+	if (with_hot)
+		shade_hot_quadrature(c, h, p, j, 0, out);
+	for (int k = 0; k < nl; k++) {
+		const struct env_sample *e = &es[k];
+		struct vec3 wi = fv(e->wi);
+		double pb = 0;
+		double bj = geom ? m->lobes->from_geometry(p, j, e->g,
+							   nb ? &pb : NULL)
+				 : glint_lobe_value_pdf(m, p, j, wo, wi,
+							nb ? &pb : NULL);
+		if (bj <= 0)
+			continue;
+		double w = bj * wi.z * e->pdf_smooth /
+			   (e->pdf * (nl * e->pdf_smooth + nb * pb));
+		for (int ch = 0; ch < 3; ch++)
+			out[ch] += w * e->l[ch];
+	}
+	double w_hit = sp ? 1 - sp->w : 1;
+	for (int k = 0; k < nb; k++) {
+		double uu[2];
+		if (hs >= 0) {
+			const uint32_t *q = c->lobe_sobol[hs * nb + k];
+			uu[0] = (q[0] ^ shift[0]) * (1.0 / 4294967296.0);
+			uu[1] = (q[1] ^ shift[1]) * (1.0 / 4294967296.0);
+		} else {
+			uu[0] = u[k][0] + sx;
+			uu[1] = u[k][1] + sy;
+			uu[0] -= uu[0] >= 1;
+			uu[1] -= uu[1] >= 1;
+		}
+		if (w_hit > 0)
+			lobe_sample(c, h, p, j, nl, nb, uu, w_hit, out);
+		if (sp && sp->w > 0) {
+			/* Point q of a (0, 2)-set over the pixel, shifted;
+			 * the points shuffled among the samples (by index,
+			 * x would follow the lobe sample's own first
+			 * uniform: one slice of the pixel x lobe domain). */
+			uint32_t q = glint_permute(
+				(uint32_t)(k * c->spp + sp->s),
+				(uint32_t)(nb * c->spp), sp->perm);
+			double x = (q + 0.5) / (nb * c->spp) + sp->shift[0];
+			double y = glint_radical2(q) + sp->shift[1];
+			double at[2] = { x - (x >= 1) - 0.5,
+					 y - (y >= 1) - 0.5 };
+			struct cache_hit hq;
+			if (hit_at(sp->f, at, &hq))
+				lobe_sample(c, &hq, p, j, nl, nb, uu, sp->w,
+					    out);
+		}
+	}
+}
+
+/*
+ * Fit pixel pix's footprint to its spp hits g (least squares over their
+ * positions in the pixel; glint_pixel_sample() places them as the tracer
+ * did).  Fewer than 3 hits, or hits in a line: no footprint (turn 0).
+ */
+void shade_foot_fit(const struct glint_gbuffer *gb, int32_t pix,
+		    const struct glint_hit *g, struct cache_foot *f)
+{
+	uint32_t fp = glint_gbuffer_frame_pixel(gb, (size_t)pix);
+	int fw = gb->frame_width ? gb->frame_width : gb->width;
+	double m[3][3] = { { 0 } }, rhs[6][3] = { { 0 } }, inv[3][3];
+
+	memset(f, 0, sizeof(*f));
+	if (gb->spp < 3)
+		return;
+	for (int s = 0; s < gb->spp; s++) {
+		double pos[2], lens[2];
+		glint_pixel_sample((int)(fp % (uint32_t)fw),
+				   (int)(fp / (uint32_t)fw), s, gb->spp, pos,
+				   lens);
+		double b[3] = { 1, pos[0] - 0.5, pos[1] - 0.5 };
+		for (int a = 0; a < 3; a++) {
+			for (int e = 0; e < 3; e++)
+				m[a][e] += b[a] * b[e];
+			for (int k = 0; k < 3; k++) {
+				rhs[k][a] += b[a] * g[s].n[k];
+				rhs[3 + k][a] += b[a] * g[s].d[k];
+			}
+		}
+	}
+	double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+		     m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+		     m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+	if (!(fabs(det) > 1e-9 * gb->spp * gb->spp * gb->spp))
+		return;
+	for (int a = 0; a < 3; a++)
+		for (int e = 0; e < 3; e++) {
+			int a1 = (e + 1) % 3, a2 = (e + 2) % 3;
+			int e1 = (a + 1) % 3, e2 = (a + 2) % 3;
+			inv[a][e] = (m[a1][e1] * m[a2][e2] -
+				     m[a1][e2] * m[a2][e1]) /
+				    det;
+		}
+	float *dst[6][3] = {
+		{ &f->n[0], &f->nu[0], &f->nv[0] },
+		{ &f->n[1], &f->nu[1], &f->nv[1] },
+		{ &f->n[2], &f->nu[2], &f->nv[2] },
+		{ &f->d[0], &f->du[0], &f->dv[0] },
+		{ &f->d[1], &f->du[1], &f->dv[1] },
+		{ &f->d[2], &f->du[2], &f->dv[2] },
+	};
+	for (int k = 0; k < 6; k++)
+		for (int a = 0; a < 3; a++) {
+			double x = 0;
+			for (int e = 0; e < 3; e++)
+				x += inv[a][e] * rhs[k][e];
+			*dst[k][a] = (float)x;
+		}
+	struct vec3 n, d, r, r0, r1;
+	foot_at(f, 0, 0, &n, &d, &r);
+	f->r[0] = (float)r.x;
+	f->r[1] = (float)r.y;
+	f->r[2] = (float)r.z;
+	foot_at(f, -0.5, 0, &n, &d, &r0);
+	foot_at(f, 0.5, 0, &n, &d, &r1);
+	double tu = angle(r0, r1);
+	foot_at(f, 0, -0.5, &n, &d, &r0);
+	foot_at(f, 0, 0.5, &n, &d, &r1);
+	f->turn = (float)fmax(tu, angle(r0, r1));
+}
+
+/* Lobe j's hot part, the mean over pixel i's footprint on a k x k grid;
+ * only hot points within ext of a point's mirror direction count. */
+static void hot_grid(const struct glint_shade_cache *c,
+		     const struct cache_foot *f, const double *p, int j, int k,
+		     double ext, double out[3])
+{
+	const struct glint_env_hot *hot = c->hot;
+	const struct glint_model *m = c->model;
+	double cos_ext = cos(fmin(ext, M_PI));
+
+	out[0] = out[1] = out[2] = 0;
+	for (int a = 0; a < k; a++)
+		for (int e = 0; e < k; e++) {
+			struct vec3 n, d, r, t, b;
+			foot_at(f, (a + 0.5) / k - 0.5, (e + 0.5) / k - 0.5, &n,
+				&d, &r);
+			v3_frame(n, &t, &b);
+			struct vec3 wo =
+				v3(-v3_dot(d, t), -v3_dot(d, b), -v3_dot(d, n));
+			if (!(wo.z > 0))
+				continue;
+			r = v3_norm(r);
+			for (int q = 0; q < hot->npart; q++) {
+				const float *pt = hot->part + 6 * (size_t)q;
+				struct vec3 l = v3(pt[0], pt[1], pt[2]);
+				if (v3_dot(l, r) < cos_ext)
+					continue;
+				struct vec3 wi = v3(v3_dot(l, t), v3_dot(l, b),
+						    v3_dot(l, n));
+				if (!(wi.z > 0))
+					continue;
+				double bj = glint_lobe_value_pdf(m, p, j, wo,
+								 wi, NULL);
+				if (bj <= 0)
+					continue;
+				for (int ch = 0; ch < 3; ch++)
+					out[ch] += bj * wi.z * pt[3 + ch];
+			}
+		}
+	for (int ch = 0; ch < 3; ch++)
+		out[ch] /= (double)k * k;
+}
+
+/* Lobe j's hot part, the mean over pixel i's hits. */
+static void hot_hits(const struct glint_shade_cache *c, int i, const double *p,
+		     int j, double out[3])
+{
+	out[0] = out[1] = out[2] = 0;
+	for (int s = 0; s < c->spp; s++) {
+		double a[3] = { 0, 0, 0 };
+		shade_hot_quadrature(c, &c->hits[(size_t)i * c->spp + s], p, j,
+				     0, a);
+		for (int ch = 0; ch < 3; ch++)
+			out[ch] += a[ch] / c->spp;
+	}
+}
+
+/* How many times (log2) pixel i's mirror direction turns across it by
+ * lobe j's width at p; -1 without a footprint. */
+double shade_foot_level(const struct glint_shade_cache *c, int i,
+			const double *p, int j)
+{
+	const struct glint_model *m = c->model;
+	double sd = glint_lobe_width(m, p, j);
+
+	if (c->no_footprint || !(sd > 0) || !(c->feet[i].turn > 0))
+		return -1;
+	return log2(c->feet[i].turn / sd);
+}
+
+/*
+ * Lobe j's hot part over pixel i where the lobe is narrow against the
+ * pixel's turn of mirror direction: a near-mirror's sun covers part of a
+ * pixel, which the hits' few points alias.  The lobe is widened by the
+ * spread of the hot texels' quadrature points (so that they integrate
+ * the texels' area, not points of light) and integrated on a grid whose
+ * cells turn by at most its width, blending two levels so that the
+ * result stays continuous in the parameters.  Returns 0 (out untouched)
+ * when the lobe is wide enough for the hits' own points
+ * (shade_hot_quadrature()).
+ */
+int shade_hot_footprint(const struct glint_shade_cache *c, int i,
+			const double *p, int j, double out[3])
+{
+	const struct cache_foot *f = &c->feet[i];
+	const struct glint_model *m = c->model;
+	double pw[GLINT_MAX_PARAMS];
+
+	if (c->no_footprint || !m->lobes->microfacet || !(f->turn > 0) ||
+	    !c->hot->npart)
+		return 0;
+	memcpy(pw, p, (size_t)m->nparams * sizeof(*p));
+	glint_lobe_widen(m, pw, j, c->light->spread);
+	double sd = glint_lobe_width(m, pw, j);
+	double lv = sd > 0 ? log2(f->turn / sd) : 0;
+	if (!(lv > 0))
+		return 0;
+	/* Where a lobe has no bound (GGX's tails), 40 widths hold its
+	 * core; its tails there are the hits'. */
+	double ext = glint_lobe_extent(m, pw, j);
+	if (!(ext > 0))
+		ext = 40 * sd;
+	out[0] = out[1] = out[2] = 0;
+	if (angle(fv(f->r), c->hot->axis) - c->hot->radius > ext + f->turn)
+		return 1;
+	lv = fmin(lv, 3);
+	int lo = (int)lv;
+	double w = lv - lo, a[3], b[3] = { 0, 0, 0 };
+	if (lo)
+		hot_grid(c, f, pw, j, 2 << lo, ext, a);
+	else
+		hot_hits(c, i, p, j, a);
+	if (w > 0)
+		hot_grid(c, f, pw, j, 4 << lo, ext, b);
+	for (int ch = 0; ch < 3; ch++)
+		out[ch] = (1 - w) * a[ch] + w * b[ch];
+	return 1;
+}

@@ -8,7 +8,8 @@
  * (an indexing table: each pulse goes to the other position).  The sim
  * camera's scene=rig shows what is then in view.
  *
- * Scenario (JSON):
+ * Scenario (JSON, sim/scenario.h; the sim camera reads the same file's
+ * "camera", and shares the file's world):
  *   {"presses": [{"at_s": 0.5, "hold_s": 0.2, "bounces": 3}, ...]}
  * at_s counts from the board's opening; each press starts with `bounces`
  * extra 2 ms toggles (contact bounce) before the level settles at 1, and
@@ -16,6 +17,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "board_sim.h"
+#include "scenario.h"
 #include "world.h"
 
 #include "core/clock.h"
@@ -43,6 +45,10 @@ struct sim_board {
 	double angle; /* turntable, degrees */
 	FILE *log;
 	pthread_mutex_t lock;
+	/* The world: its scenario's when the scenario also describes the
+	 * camera (shared), else that of the cameras without a scenario. */
+	struct glint_sim_world *world;
+	int shared;
 };
 
 /* The board's clock (cfg.clock, NULL: the real one): the scenario's
@@ -63,7 +69,6 @@ static int add_edge(struct sim_board *s, double t, int v)
 
 static int load_scenario(struct sim_board *s)
 {
-	static const char *const top[] = { "presses", NULL };
 	static const char *const keys[] = { "at_s", "hold_s", "bounces", NULL };
 	const char *f = s->scenario;
 	json_t *doc, *arr;
@@ -71,16 +76,11 @@ static int load_scenario(struct sim_board *s)
 
 	if (!f[0])
 		return 0;
-	ret = glint_json_load(f, &doc);
+	ret = glint_sim_scenario_load(f, &doc);
 	if (ret < 0)
 		return ret;
-	ret = glint_json_known_keys(f, "", doc, top);
-	arr = json_object_get(doc, "presses");
-	if (!ret && !json_is_array(arr))
-		ret = glint_error_set(EINVAL,
-				      "%s: presses: expected an array of "
-				      "{at_s, hold_s, bounces}",
-				      f);
+	arr = json_object_get(doc, "presses"); /* none: never pressed */
+	s->shared = json_object_get(doc, "camera") != NULL;
 	double last = -1;
 	for (size_t i = 0; !ret && i < json_array_size(arr); i++) {
 		json_t *p = json_array_get(arr, i);
@@ -121,9 +121,9 @@ static int load_scenario(struct sim_board *s)
 
 static void update_world(struct sim_board *s)
 {
-	struct glint_sim_world w;
+	struct glint_sim_state w;
 	const struct glint_board_cfg *c = &s->cfg;
-	glint_sim_world_get(&w);
+	glint_sim_world_get(s->world, &w);
 	/* no lights line: the lab's lamp is always on */
 	w.lights = c->lines[GLINT_ROLE_LIGHTS].used ? 0 : 1;
 	for (int k = 1; k <= GLINT_MAX_LIGHTS; k++)
@@ -139,7 +139,7 @@ static void update_world(struct sim_board *s)
 		w.view = GLINT_SIM_VIEW_SAMPLE;
 	else
 		w.view = GLINT_SIM_VIEW_NONE;
-	glint_sim_world_set(&w);
+	glint_sim_world_set(s->world, &w);
 }
 
 /* board.scenario and board.log, relative to the rig file. */
@@ -179,6 +179,9 @@ static int sim_open(const struct glint_board_cfg *cfg, const char *consumer,
 	ret = s->cfg.backend_opts ? load_paths(s) : 0;
 	if (!ret)
 		ret = load_scenario(s);
+	if (!ret)
+		ret = glint_sim_world_open(s->shared ? s->scenario : NULL,
+					   &s->world);
 	if (!ret && s->log_path[0]) {
 		s->log = fopen(s->log_path, "a");
 		if (!s->log)
@@ -186,6 +189,7 @@ static int sim_open(const struct glint_board_cfg *cfg, const char *consumer,
 					      strerror(errno));
 	}
 	if (ret < 0) {
+		glint_sim_world_close(s->world);
 		free(s);
 		return glint_error_prefix(ret, "sim board");
 	}
@@ -203,7 +207,8 @@ static void sim_close(void *priv)
 	if (s->log)
 		fclose(s->log);
 	pthread_mutex_destroy(&s->lock);
-	glint_sim_world_reset();
+	glint_sim_world_reset(s->world);
+	glint_sim_world_close(s->world);
 	free(s);
 }
 

@@ -36,9 +36,11 @@
 #include "sensor.h"
 
 #include "reference.h"
+#include "scenario.h"
 #include "world.h"
 
 #include "core/error.h"
+#include "core/json.h"
 #include "core/path.h"
 
 #include <math.h>
@@ -63,6 +65,8 @@ struct sim_cam {
 	int scene_scale;
 	char material[48]; /* the sample's Table-1 name */
 	char world[256];   /* scene=rig: what is in view, from this file */
+	char scenario[GLINT_PATH_MAX]; /* sim/scenario.h; "" none */
+	struct glint_sim_world *wobj;  /* the scenario's world */
 	struct glint_sensor sensor;
 	struct glint_image *radiance;
 	int width, height, latency, manual;
@@ -72,6 +76,117 @@ struct sim_cam {
 	double next_frame_t;
 	uint64_t sequence;
 };
+
+/* A numeric option (the device string's key=value, or the scenario's
+ * "camera" key); `where` names the device string or the file. */
+static int set_number(struct sim_cam *s, const char *where, const char *key,
+		      double v)
+{
+	if (!strcmp(key, "width") && v >= 2 && v <= 8192)
+		s->width = (int)v;
+	else if (!strcmp(key, "height") && v >= 2 && v <= 8192)
+		s->height = (int)v;
+	else if (!strcmp(key, "latency") && v >= 0 && v <= 7)
+		s->latency = (int)v;
+	else if (!strcmp(key, "manual"))
+		s->manual = v != 0;
+	else if (!strcmp(key, "seed"))
+		s->sensor.seed = (uint64_t)v;
+	else if (!strcmp(key, "noise"))
+		s->sensor.noise = v != 0;
+	else if (!strcmp(key, "decades") && v >= 0 && v <= 8)
+		s->decades = v;
+	else if (!strcmp(key, "timescale") && v > 0 && v <= 1)
+		s->timescale = v;
+	else if (!strcmp(key, "scene_scale") && v >= 1 && v <= 64)
+		s->scene_scale = (int)v;
+	else
+		return glint_error_set(EINVAL,
+				       "sim camera %s: option "
+				       "%s=%g: expected width, height "
+				       "(2..8192), latency (0..7), "
+				       "manual, seed, noise, decades "
+				       "(0..8), timescale (0..1] or "
+				       "scene_scale (1..64)",
+				       where, key, v);
+	return 0;
+}
+
+static int set_scene(struct sim_cam *s, const char *where, const char *word)
+{
+	static const char *const names[] = { "card", "probe", "sample", "rig" };
+	int k = 0;
+
+	while (k < 4 && strcmp(word, names[k]))
+		k++;
+	if (k == 4)
+		return glint_error_set(EINVAL,
+				       "sim camera %s: scene '%s': expected "
+				       "card, probe, sample or rig",
+				       where, word);
+	s->scene = k;
+	return 0;
+}
+
+/* The scenario's "camera" (sim/scenario.h): the device string's keys as
+ * JSON (numbers, booleans for manual and noise, strings for scene and
+ * material). */
+static int apply_scenario(struct sim_cam *s)
+{
+	static const char *const keys[] = {
+		"width",       "height", "latency",  "manual",
+		"seed",	       "noise",	 "decades",  "timescale",
+		"scene_scale", "scene",	 "material", NULL
+	};
+	const char *f = s->scenario;
+	json_t *doc, *cam, *v;
+	const char *key;
+	int ret = glint_sim_scenario_load(f, &doc);
+
+	if (ret < 0)
+		return ret;
+	cam = json_object_get(doc, "camera");
+	if (cam)
+		ret = glint_json_known_keys(f, "camera", cam, keys);
+	json_object_foreach(cam, key, v)
+	{
+		char where[GLINT_PATH_MAX + 16];
+		if (ret < 0)
+			break;
+		snprintf(where, sizeof(where), "%s: camera", f);
+		if (!strcmp(key, "scene") || !strcmp(key, "material")) {
+			const char *str = json_string_value(v);
+			if (!str)
+				ret = glint_error_set(EINVAL,
+						      "%s.%s: expected a "
+						      "string",
+						      where, key);
+			else if (!strcmp(key, "scene"))
+				ret = set_scene(s, where, str);
+			else if (strlen(str) >= sizeof(s->material) ||
+				 strspn(str, "abcdefghijklmnopqrstuvwxyz-") !=
+					 strlen(str))
+				ret = glint_error_set(EINVAL,
+						      "%s.material: expected "
+						      "a Table-1 name such as "
+						      "yellow-plastic",
+						      where);
+			else
+				snprintf(s->material, sizeof(s->material), "%s",
+					 str);
+		} else if (json_is_boolean(v) &&
+			   (!strcmp(key, "manual") || !strcmp(key, "noise"))) {
+			ret = set_number(s, where, key, json_is_true(v));
+		} else if (json_is_number(v)) {
+			ret = set_number(s, where, key, json_number_value(v));
+		} else {
+			ret = glint_error_set(
+				EINVAL, "%s.%s: expected a number", where, key);
+		}
+	}
+	json_decref(doc);
+	return ret;
+}
 
 static int parse_device(const char *dev, struct sim_cam *s)
 {
@@ -89,21 +204,12 @@ static int parse_device(const char *dev, struct sim_cam *s)
 		double v;
 		int n = 0;
 		if (!strncmp(p, "scene=", 6)) {
-			static const char *const names[] = { "card", "probe",
-							     "sample", "rig" };
-			char word[16];
-			int k = 4;
-			if (sscanf(p + 6, "%15[a-z]%n", word, &n) == 1)
-				for (k = 0; k < 4 && strcmp(word, names[k]);)
-					k++;
-			if (k == 4)
-				return glint_error_set(
-					EINVAL,
-					"sim camera device '%s': "
-					"scene: expected card, probe, "
-					"sample or rig",
-					dev);
-			s->scene = k;
+			char word[16] = "";
+			if (sscanf(p + 6, "%15[a-z]%n", word, &n) != 1)
+				n = 0;
+			int ret = set_scene(s, dev, word);
+			if (ret < 0)
+				return ret;
 			p += 6 + n;
 			if (*p == ',')
 				p++;
@@ -122,6 +228,17 @@ static int parse_device(const char *dev, struct sim_cam *s)
 				p++;
 			continue;
 		}
+		if (!strncmp(p, "scenario=", 9)) {
+			if (!p[9] || strlen(p + 9) >= sizeof(s->scenario))
+				return glint_error_set(
+					EINVAL,
+					"sim camera device '%s': scenario: "
+					"expected a file's path (the last "
+					"option)",
+					dev);
+			snprintf(s->scenario, sizeof(s->scenario), "%s", p + 9);
+			return apply_scenario(s);
+		}
 		if (!strncmp(p, "world=", 6)) {
 			if (!p[6] || strlen(p + 6) >= sizeof(s->world))
 				return glint_error_set(
@@ -138,33 +255,9 @@ static int parse_device(const char *dev, struct sim_cam *s)
 					       "sim camera device '%s': bad "
 					       "option at '%s'",
 					       dev, p);
-		if (!strcmp(key, "width") && v >= 2 && v <= 8192)
-			s->width = (int)v;
-		else if (!strcmp(key, "height") && v >= 2 && v <= 8192)
-			s->height = (int)v;
-		else if (!strcmp(key, "latency") && v >= 0 && v <= 7)
-			s->latency = (int)v;
-		else if (!strcmp(key, "manual"))
-			s->manual = v != 0;
-		else if (!strcmp(key, "seed"))
-			s->sensor.seed = (uint64_t)v;
-		else if (!strcmp(key, "noise"))
-			s->sensor.noise = v != 0;
-		else if (!strcmp(key, "decades") && v >= 0 && v <= 8)
-			s->decades = v;
-		else if (!strcmp(key, "timescale") && v > 0 && v <= 1)
-			s->timescale = v;
-		else if (!strcmp(key, "scene_scale") && v >= 1 && v <= 64)
-			s->scene_scale = (int)v;
-		else
-			return glint_error_set(EINVAL,
-					       "sim camera device '%s': option "
-					       "%s=%g: expected width, height "
-					       "(2..8192), latency (0..7), "
-					       "manual, seed, noise, decades "
-					       "(0..8), timescale (0..1] or "
-					       "scene_scale (1..64)",
-					       dev, key, v);
+		int ret = set_number(s, dev, key, v);
+		if (ret < 0)
+			return ret;
 		p += n;
 		if (*p == ',')
 			p++;
@@ -536,14 +629,14 @@ static int scene_image(const struct sim_cam *s, int sample,
 	return ret;
 }
 
-static void world_now(const struct sim_cam *s, struct glint_sim_world *w);
+static void world_now(const struct sim_cam *s, struct glint_sim_state *w);
 
 /* scene=rig: its two views lit by the lamps on now (lamp 1 while none
  * is); the sensor looks at one of them in place (a 12 MP view is
  * 148 MB), a lights-off or empty one is made on first need (rig_view). */
 static int rig_scenes(struct sim_cam *s)
 {
-	struct glint_sim_world w;
+	struct glint_sim_state w;
 	world_now(s, &w);
 	glint_image_free(s->probe_img);
 	glint_image_free(s->sample_img);
@@ -601,6 +694,8 @@ static int sim_open(const char *device, const struct glint_clock *clock,
 	s->manual = 1;
 	snprintf(s->material, sizeof(s->material), "yellow-plastic");
 	ret = parse_device(device, s);
+	if (!ret)
+		ret = glint_sim_world_open(s->scenario, &s->wobj);
 	if (ret < 0) {
 		free(s);
 		return ret;
@@ -621,6 +716,7 @@ static int sim_open(const char *device, const struct glint_clock *clock,
 						     s->decades)))
 		ret = glint_error_set(ENOMEM, "out of memory");
 	if (ret < 0) {
+		glint_sim_world_close(s->wobj);
 		free(s);
 		return glint_error_prefix(ret, "sim camera");
 	}
@@ -645,13 +741,14 @@ static void sim_close(void *priv)
 	glint_image_free(s->probe_img);
 	glint_image_free(s->sample_img);
 	glint_image_free(s->scratch);
+	glint_sim_world_close(s->wobj);
 	free(s);
 }
 
 /* world=PATH: "LIGHTS DEGREES" as a board outside this process left them
  * (LIGHTS: bit k - 1 for lamp k, so 1 is the one lamp on); a view only
  * within a degree of the probe (0) or the sample (180). */
-static void world_from_file(const char *path, struct glint_sim_world *w)
+static void world_from_file(const char *path, struct glint_sim_state *w)
 {
 	FILE *f = fopen(path, "r");
 	int lights = 0;
@@ -674,12 +771,12 @@ static void world_from_file(const char *path, struct glint_sim_world *w)
 	fclose(f);
 }
 
-static void world_now(const struct sim_cam *s, struct glint_sim_world *w)
+static void world_now(const struct sim_cam *s, struct glint_sim_state *w)
 {
 	if (s->world[0])
 		world_from_file(s->world, w);
 	else
-		glint_sim_world_get(w);
+		glint_sim_world_get(s->wobj, w);
 }
 
 /* scene=rig, before the stream: the views for the lamps on now, so that
@@ -687,7 +784,7 @@ static void world_now(const struct sim_cam *s, struct glint_sim_world *w)
 static int sim_start(void *priv)
 {
 	struct sim_cam *s = priv;
-	struct glint_sim_world w;
+	struct glint_sim_state w;
 
 	if (s->scene != SCENE_RIG)
 		return 0;
@@ -702,7 +799,7 @@ static int sim_start(void *priv)
  * views re-rendered when other lamps came on), dimmed with none. */
 static int rig_view(struct sim_cam *s)
 {
-	struct glint_sim_world w;
+	struct glint_sim_state w;
 	world_now(s, &w);
 	if (!s->probe_img || (w.lights && w.lights != s->lamps)) {
 		int ret = rig_scenes(s);

@@ -10,6 +10,7 @@
 
 #include "capture/camera/camera.h"
 #include "core/error.h"
+#include "sim/world.h"
 
 #include <dirent.h>
 #include <stdio.h>
@@ -317,6 +318,122 @@ static void test_view_cache(void)
 	unsetenv("GLINT_SIM_CACHE");
 }
 
+static void write_text(const char *path, const char *text)
+{
+	FILE *f = fopen(path, "w");
+	if (f) {
+		fputs(text, f);
+		fclose(f);
+	}
+}
+
+/*
+ * A scenario file (sim/scenario.h) configures the camera as its device
+ * string does, bad keys are named, and the world is the scenario's: a
+ * board's lights off in it darken its camera, not a camera of another
+ * world.
+ */
+static void test_scenario(void)
+{
+	struct glint_fake_clock fc = { 0 };
+	struct glint_clock clk = glint_clock_fake(&fc);
+	struct glint_camera *a = NULL, *b = NULL;
+	struct glint_camera_info in;
+	char path[64], dev[128];
+	snprintf(path, sizeof(path), "/tmp/glint-scenario-%d.json",
+		 (int)getpid());
+
+	write_text(path, "{\"camera\": {\"width\": 36, \"height\": 20, "
+			 "\"latency\": 1, \"noise\": false, \"seed\": 5, "
+			 "\"decades\": 3},\n \"presses\": [{\"at_s\": 0.1}]}\n");
+	snprintf(dev, sizeof(dev), "sim:scenario=%s", path);
+	CHECK(glint_camera_open("sim", dev, &clk, &a) == 0, "%s",
+	      glint_error_msg());
+	CHECK(glint_camera_open("sim",
+				"sim:width=36,height=20,latency=1,noise=0,"
+				"seed=5,decades=3",
+				&clk, &b) == 0,
+	      "%s", glint_error_msg());
+	if (a && b) {
+		struct glint_frame fa, fb;
+		int da, db;
+		glint_camera_describe(a, &in);
+		CHECK(in.width == 36 && in.height == 20, "%dx%d", in.width,
+		      in.height);
+		CHECK(glint_camera_capture(a, 0.004, 1, 4, &fa, &da) == 0 &&
+			      glint_camera_capture(b, 0.004, 1, 4, &fb, &db) ==
+				      0,
+		      "%s", glint_error_msg());
+		CHECK(da == 1 && db == 1, "dropped %d and %d, latency 1", da,
+		      db);
+		CHECK(!memcmp(fa.data, fb.data,
+			      (size_t)36 * 20 * sizeof(*fa.data)),
+		      "the scenario's camera differs from the device "
+		      "string's");
+		glint_frame_release(&fa);
+		glint_frame_release(&fb);
+	}
+	glint_camera_close(a);
+	glint_camera_close(b);
+	a = b = NULL;
+
+	static const struct {
+		const char *text, *named;
+	} bad[] = {
+		{ "{\"camera\": {\"widht\": 30}}", "widht" },
+		{ "{\"camera\": {\"scene\": \"moon\"}}", "moon" },
+		{ "{\"camera\": {\"width\": 1}}", "width" },
+		{ "{\"camera\": {\"noise\": \"yes\"}}", "noise" },
+		{ "{\"camera\": [1]}", "camera" },
+		{ "{\"lamps\": 3}", "lamps" },
+	};
+	for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); i++) {
+		write_text(path, bad[i].text);
+		CHECK(glint_camera_open("sim", dev, &clk, &a) < 0, "%s accepted",
+		      bad[i].text);
+		CHECK_MSG(glint_error_msg(), path);
+		CHECK_MSG(glint_error_msg(), bad[i].named);
+		glint_camera_close(a);
+		a = NULL;
+	}
+
+	/* The world: the scenario's, not the scenario-less cameras'. */
+	write_text(path, "{\"camera\": {\"width\": 40, \"height\": 30, "
+			 "\"scene\": \"rig\", \"noise\": false}}");
+	struct glint_sim_world *w = NULL, *w2 = NULL, *other = NULL;
+	CHECK(glint_sim_world_open(path, &w) == 0 &&
+		      glint_sim_world_open(path, &w2) == 0 &&
+		      glint_sim_world_open(NULL, &other) == 0,
+	      "%s", glint_error_msg());
+	CHECK(w && w == w2 && other != w, "one world per scenario");
+	CHECK(glint_camera_open("sim", dev, &clk, &a) == 0 &&
+		      glint_camera_open("sim",
+					"sim:width=40,height=30,scene=rig,"
+					"noise=0",
+					&clk, &b) == 0,
+	      "%s", glint_error_msg());
+	if (a && b && w) {
+		double lit = mean_signal(a), lit_b = mean_signal(b);
+		struct glint_sim_state st = { 0, GLINT_SIM_VIEW_PROBE, 0 };
+		glint_sim_world_set(w, &st);
+		double dark = mean_signal(a), still = mean_signal(b);
+		printf("scenario world: lit %.2f, lights off %.3f; the other "
+		       "world's camera %.2f then %.2f DN\n",
+		       lit, dark, lit_b, still);
+		CHECK(lit > 20 && dark < 0.01 * lit,
+		      "the scenario's lights off: %g of %g", dark, lit);
+		CHECK(fabs(still - lit_b) < 0.01 * lit_b,
+		      "another world's camera changed: %g then %g", lit_b,
+		      still);
+	}
+	glint_camera_close(a);
+	glint_camera_close(b);
+	glint_sim_world_close(w);
+	glint_sim_world_close(w2);
+	glint_sim_world_close(other);
+	remove(path);
+}
+
 int main(void)
 {
 	glint_backends_register();
@@ -326,5 +443,6 @@ int main(void)
 	RUN(test_world_file);
 	RUN(test_scene_scale);
 	RUN(test_view_cache);
+	RUN(test_scenario);
 	return test_result();
 }

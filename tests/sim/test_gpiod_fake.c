@@ -11,6 +11,7 @@
 
 #include "board/board.h"
 #include "core/clock.h"
+#include "sim/world.h"
 #include "core/error.h"
 
 #include <stdio.h>
@@ -259,6 +260,63 @@ static void test_fake_clock(void)
 	glint_board_close(b);
 }
 
+/*
+ * The sim board on a scenario that also describes the camera: its presses
+ * are played on the board's (fake) clock, and its lights move the
+ * scenario's world (sim/world.h), not the world of cameras without a
+ * scenario.
+ */
+static void test_sim_board_scenario(void)
+{
+	struct glint_board_cfg c;
+	struct glint_board *b = NULL;
+	struct glint_fake_clock fc = { 50 };
+	struct glint_clock clk = glint_clock_fake(&fc);
+	struct glint_sim_world *w = NULL, *none = NULL;
+	struct glint_sim_state st, st0;
+	char path[64];
+	snprintf(path, sizeof(path), "/tmp/glint-board-scenario-%d.json",
+		 (int)getpid());
+	FILE *f = fopen(path, "w");
+	if (f) {
+		fputs("{\"camera\": {\"scene\": \"rig\"}, \"presses\": "
+		      "[{\"at_s\": 30, \"hold_s\": 0.5}]}\n",
+		      f);
+		fclose(f);
+	}
+	cfg_default(&c);
+	snprintf(c.backend, sizeof(c.backend), "sim");
+	c.clock = &clk;
+	json_t *opts = json_pack("{s:s}", "scenario", path);
+	c.backend_opts = opts;
+	CHECK(glint_board_open(&c, "glint test", &b) == 0, "%s",
+	      glint_error_msg());
+	CHECK(glint_sim_world_open(path, &w) == 0 &&
+		      glint_sim_world_open(NULL, &none) == 0,
+	      "%s", glint_error_msg());
+	if (b && w && none) {
+		double t0 = glint_clock_monotonic();
+		int got = glint_board_wait_press(b, 120, NULL);
+		double real = glint_clock_monotonic() - t0;
+		CHECK(got == 1 && fc.t >= 50 + 30 && fc.t < 50 + 32,
+		      "press %d at fake %.3f s (%.2f s real)", got, fc.t,
+		      real);
+		CHECK(real < 5, "30 s of presses took %.2f s of real time",
+		      real);
+		CHECK(glint_board_lights(b, 0) == 0, "%s", glint_error_msg());
+		glint_sim_world_get(w, &st);
+		glint_sim_world_get(none, &st0);
+		CHECK(st.lights == 0 && st0.lights == 1,
+		      "lights off: the scenario's world %u, the other %u",
+		      st.lights, st0.lights);
+	}
+	glint_board_close(b);
+	glint_sim_world_close(w);
+	glint_sim_world_close(none);
+	json_decref(opts);
+	remove(path);
+}
+
 int main(void)
 {
 	glint_backends_register();
@@ -274,6 +332,7 @@ int main(void)
 	RUN(test_vanish);
 	RUN(test_position_sensor);
 	RUN(test_fake_clock);
+	RUN(test_sim_board_scenario);
 	remove(logpath);
 	return test_result();
 }

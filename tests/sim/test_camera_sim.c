@@ -343,9 +343,10 @@ static void test_scenario(void)
 	snprintf(path, sizeof(path), "/tmp/glint-scenario-%d.json",
 		 (int)getpid());
 
-	write_text(path, "{\"camera\": {\"width\": 36, \"height\": 20, "
-			 "\"latency\": 1, \"noise\": false, \"seed\": 5, "
-			 "\"decades\": 3},\n \"presses\": [{\"at_s\": 0.1}]}\n");
+	write_text(path,
+		   "{\"camera\": {\"width\": 36, \"height\": 20, "
+		   "\"latency\": 1, \"noise\": false, \"seed\": 5, "
+		   "\"decades\": 3},\n \"presses\": [{\"at_s\": 0.1}]}\n");
 	snprintf(dev, sizeof(dev), "sim:scenario=%s", path);
 	CHECK(glint_camera_open("sim", dev, &clk, &a) == 0, "%s",
 	      glint_error_msg());
@@ -389,8 +390,8 @@ static void test_scenario(void)
 	};
 	for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); i++) {
 		write_text(path, bad[i].text);
-		CHECK(glint_camera_open("sim", dev, &clk, &a) < 0, "%s accepted",
-		      bad[i].text);
+		CHECK(glint_camera_open("sim", dev, &clk, &a) < 0,
+		      "%s accepted", bad[i].text);
 		CHECK_MSG(glint_error_msg(), path);
 		CHECK_MSG(glint_error_msg(), bad[i].named);
 		glint_camera_close(a);

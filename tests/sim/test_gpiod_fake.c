@@ -299,8 +299,7 @@ static void test_sim_board_scenario(void)
 		int got = glint_board_wait_press(b, 120, NULL);
 		double real = glint_clock_monotonic() - t0;
 		CHECK(got == 1 && fc.t >= 50 + 30 && fc.t < 50 + 32,
-		      "press %d at fake %.3f s (%.2f s real)", got, fc.t,
-		      real);
+		      "press %d at fake %.3f s (%.2f s real)", got, fc.t, real);
 		CHECK(real < 5, "30 s of presses took %.2f s of real time",
 		      real);
 		CHECK(glint_board_lights(b, 0) == 0, "%s", glint_error_msg());

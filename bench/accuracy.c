@@ -8,7 +8,8 @@
  * per technique, before 2026-11-26) aliased a near-mirror's sun into
  * a photo no camera takes), noise-free and
  * through the sensor model twice: as glint's rig takes a photo (a bracket
- * metered on the sphere, merged by glint's raw merge: bracket_photo()) and
+ * planned by glint's own bracket planner on the sphere, merged by glint's
+ * raw merge: bracket_photo()) and
  * as one frame with the whole image's mean at 10 % of the ADC range (under
  * a map whose lights are in view the sphere sits far below it), both with
  * their 1/variance weights; each fitted with glint's defaults.
@@ -297,108 +298,200 @@ static double sphere_level(const struct glint_renderer *r,
 }
 
 /*
- * The photo as glint's rig takes it: a bracket metered on the sphere's
- * region (its bounding square, 2 px of margin: the rig's "sample" ROI),
- * by capture/camera/bracket.c's two goals: its shortest frame clips no sample
- * of the region (the brightest at 40-80 % of the full well: exposures are
- * powers of two of a second) and frames 1 EV apart follow until the
- * region's 1st percentile is floor_dn (16 DN) above black, at most 24
- * frames.  The planner meters on its own noisy frames; here on the
- * noise-free values, which a region of about 100 000 samples hardly
- * tells apart.
- * Each frame goes through the sensor (its own draw) and the frames are
- * merged by glint's raw merge (capture/hdr/hdr_linear.c: inverse-variance
- * weights, the variance at the merged value, a sample clipped in one
- * frame left out of it), a pixel's three channels as three photosites of
- * a mono frame.  photo becomes the merged radiance, *weight its
- * 1/variance (0 where clipped in every frame); *nframes the bracket's
- * length, *zrms the rms of the merged values' errors over the region in
- * their own standard deviations (1 when the weights are honest).
+ * A camera that photographs the bench's photo: a backend of
+ * capture/camera/camera.h local to this program, so that glint's own
+ * bracket planner (glint_bracket_capture()) chooses the exposures the
+ * matrix measures.  Its frames go through the sensor model (sim/sensor.h,
+ * each frame its own draw) with a pixel's three channels as three
+ * photosites of a mono frame (width 3 w); any exposure from 1 us to an
+ * hour, gain 1, no latency.  glint_camera_open() passes a device string
+ * only: the photo and the draw's seed are this program's (photo_src).
+ */
+static struct {
+	const struct glint_image *photo;
+	uint64_t seed;
+} photo_src;
+
+struct photo_cam {
+	const struct glint_image *radiance;
+	struct glint_sensor s;
+	struct glint_image *dn;
+	const struct glint_clock *clock;
+	uint64_t seed;
+	int n;
+	double exposure_s;
+};
+
+static int photo_open(const char *device, const struct glint_clock *clock,
+		      void **priv)
+{
+	struct photo_cam *c = calloc(1, sizeof(*c));
+
+	(void)device;
+	*priv = NULL;
+	if (!c || !photo_src.photo ||
+	    !(c->dn = glint_image_new(photo_src.photo->width,
+				      photo_src.photo->height))) {
+		free(c);
+		return glint_error_set(ENOMEM, "photo camera: out of memory");
+	}
+	c->radiance = photo_src.photo;
+	c->seed = photo_src.seed;
+	c->clock = clock;
+	glint_sensor_default(&c->s);
+	c->exposure_s = c->s.exposure_s;
+	*priv = c;
+	return 0;
+}
+
+static void photo_close(void *priv)
+{
+	struct photo_cam *c = priv;
+
+	if (c)
+		glint_image_free(c->dn);
+	free(c);
+}
+
+static int photo_describe(void *priv, struct glint_camera_info *in)
+{
+	const struct photo_cam *c = priv;
+
+	memset(in, 0, sizeof(*in));
+	snprintf(in->backend, sizeof(in->backend), "bench-photo");
+	snprintf(in->name, sizeof(in->name), "the accuracy matrix's photo");
+	in->width = 3 * c->radiance->width;
+	in->height = c->radiance->height;
+	in->nformats = 1;
+	snprintf(in->formats[0], sizeof(in->formats[0]), "MONO16");
+	in->bit_depth = c->s.bits;
+	in->manual_exposure = 1;
+	in->exposure_min_s = 1e-6;
+	in->exposure_max_s = 3600;
+	in->gain_min = in->gain_max = 1;
+	in->frame_period_min_s = 1.0 / 30;
+	return 0;
+}
+
+static int photo_configure(void *priv)
+{
+	(void)priv;
+	return 0;
+}
+
+static int photo_set_exposure(void *priv, double *exposure_s, double *gain)
+{
+	struct photo_cam *c = priv;
+
+	c->exposure_s = *exposure_s;
+	*gain = 1;
+	return 0;
+}
+
+static int photo_grab(void *priv, struct glint_frame *f)
+{
+	struct photo_cam *c = priv;
+	int w = c->radiance->width, h = c->radiance->height, ret;
+	size_t n = (size_t)3 * w * h;
+
+	c->s.exposure_s = c->exposure_s;
+	c->s.seed = c->seed * 64 + (uint64_t)c->n++;
+	if ((ret = glint_sensor_capture(&c->s, c->radiance, c->dn)) < 0)
+		return ret;
+	memset(f, 0, sizeof(*f));
+	if (!(f->data = malloc(n * sizeof(*f->data))))
+		return glint_error_set(ENOMEM, "photo camera: out of memory");
+	for (size_t i = 0; i < n; i++)
+		f->data[i] = (uint16_t)c->dn->data[i];
+	f->width = 3 * w;
+	f->height = h;
+	snprintf(f->format, sizeof(f->format), "MONO16");
+	f->channels = 1;
+	f->bit_depth = c->s.bits;
+	f->linear = 1;
+	f->exposure_s = c->exposure_s;
+	f->gain = 1;
+	f->black_level = c->s.black_level;
+	double t = glint_clock_now(c->clock);
+	glint_clock_sleep(c->clock, fmax(c->exposure_s, 1.0 / 30));
+	f->t_start = t;
+	f->t_end = t + c->exposure_s;
+	f->sequence = (uint64_t)c->n;
+	return 0;
+}
+
+static const struct glint_camera_ops photo_cam_ops = {
+	.name = "bench-photo",
+	.open = photo_open,
+	.close = photo_close,
+	.describe = photo_describe,
+	.configure = photo_configure,
+	.set_exposure = photo_set_exposure,
+	.grab = photo_grab,
+};
+
+/*
+ * The photo as glint's rig takes it: a bracket of the photo camera
+ * (above) planned by glint's own planner (capture/camera/bracket.c, its
+ * default options) on the sphere's region (its bounding square, 2 px of
+ * margin: the rig's "sample" ROI), merged by glint's raw merge
+ * (capture/hdr/hdr_linear.c: inverse-variance weights, the variance at
+ * the merged value, a sample clipped in one frame left out of it).  A
+ * bracket the planner does not call whole is an error.  photo becomes
+ * the merged radiance, *weight its 1/variance (0 where clipped in every
+ * frame); *nframes the bracket's length, *zrms the rms of the merged
+ * values' errors over the region in their own standard deviations (1
+ * when the weights are honest).
  */
 static int bracket_photo(const struct glint_renderer *r,
 			 struct glint_image *photo, struct glint_image **weight,
 			 uint64_t seed, int *nframes, double *zrms)
 {
+	static const struct glint_camera_ops *const backends[] = {
+		&photo_cam_ops, NULL
+	};
 	const struct glint_scene *sc = &r->scene;
 	double rad = sc->cam.fpx * sc->sphere_radius / -sc->sphere_centre.z + 2;
-	int w = photo->width, h = photo->height, n = 0, ret = 0;
+	int w = photo->width, h = photo->height, ret = 0;
 	int x0 = (int)fmax(0, floor(sc->cam.cx - rad));
 	int x1 = (int)fmin(w, ceil(sc->cam.cx + rad));
 	int y0 = (int)fmax(0, floor(sc->cam.cy - rad));
 	int y1 = (int)fmin(h, ceil(sc->cam.cy + rad));
-	size_t nroi = x1 > x0 && y1 > y0 ? (size_t)(x1 - x0) * (y1 - y0) * 3
-					 : 1,
-	       k = 0;
-	struct glint_frame frames[24];
-	struct glint_sensor s;
+	struct glint_fake_clock fc = { 0 };
+	struct glint_clock clk = glint_clock_fake(&fc);
+	struct glint_camera *cam = NULL;
+	struct glint_bracket br;
 	struct glint_bracket_opts bo;
 	struct glint_noise_model nm;
 	struct glint_raw_hdr hdr = { 0 };
-	struct glint_image *dn = glint_image_new(w, h);
-	double *roi = malloc(nroi * sizeof(*roi));
+	struct glint_sensor s;
 
 	*weight = NULL;
 	*nframes = 0;
-	memset(frames, 0, sizeof(frames));
-	if (x1 <= x0 || y1 <= y0) {
-		ret = glint_error_set(EINVAL, "bracket: the sphere is not in "
-					      "the frame");
-		goto out;
-	}
-	if (!dn || !roi) {
-		ret = glint_error_set(ENOMEM, "bracket: out of memory");
-		goto out;
-	}
+	memset(&br, 0, sizeof(br));
+	if (x1 <= x0 || y1 <= y0)
+		return glint_error_set(EINVAL, "bracket: the sphere is not in "
+					       "the frame");
 	glint_sensor_default(&s);
 	glint_bracket_default_opts(&bo);
 	glint_noise_default(&nm);
-	for (int y = y0; y < y1; y++)
-		for (int x = x0; x < x1; x++)
-			for (int c = 0; c < 3; c++)
-				roi[k++] =
-					fmax(0, glint_image_px(photo, x, y)[c]);
-	qsort(roi, nroi, sizeof(*roi), bench_cmp);
-	double lmax = roi[nroi - 1], l01 = roi[nroi / 100];
-	if (!(lmax > 0) || !isfinite(lmax)) {
-		ret = glint_error_set(EINVAL, "bracket: the sphere's region is "
-					      "black or not finite");
-		goto out;
-	}
-	/* electrons = L k t; the brightest at 80 % of the full well at most */
-	double t = exp2(floor(log2(0.8 * s.full_well_e / (s.k * lmax))));
-	for (; n < bo.max_frames; n++, t *= 2) {
-		struct glint_frame *f = &frames[n];
-		s.exposure_s = t;
-		s.seed = seed * 64 + (uint64_t)n;
-		if ((ret = glint_sensor_capture(&s, photo, dn)) < 0)
-			goto out;
-		f->width = 3 * w;
-		f->height = h;
-		snprintf(f->format, sizeof(f->format), "MONO16");
-		f->channels = 1;
-		f->bit_depth = s.bits;
-		f->linear = 1;
-		f->exposure_s = t;
-		f->gain = 1;
-		f->black_level = s.black_level;
-		f->data = malloc((size_t)3 * w * h * sizeof(*f->data));
-		if (!f->data) {
-			ret = glint_error_set(ENOMEM, "bracket: out of memory");
-			goto out;
-		}
-		for (size_t i = 0; i < (size_t)3 * w * h; i++)
-			f->data[i] = (uint16_t)dn->data[i];
-		if (s.gain * l01 * s.k * t >= bo.floor_dn) {
-			n++;
-			break;
-		}
-	}
-	if ((ret = glint_hdr_merge_raw(frames, n, &nm, &hdr, NULL)) < 0)
-		goto out;
-	if (!(*weight = glint_image_new(w, h))) {
+	/* The camera's time is simulated: no cap on it. */
+	bo.max_time_s = INFINITY;
+	photo_src.photo = photo;
+	photo_src.seed = seed;
+	glint_camera_backends_set(backends);
+	struct glint_roi roi = { 3 * x0, y0, 3 * x1, y1 };
+	ret = glint_camera_open("bench-photo", NULL, &clk, &cam);
+	if (!ret)
+		ret = glint_bracket_capture(cam, &roi, &bo, &clk, &br);
+	if (!ret)
+		ret = glint_bracket_verdict(&br, &bo);
+	if (!ret)
+		ret = glint_hdr_merge_raw(br.frames, br.n, &nm, &hdr, NULL);
+	if (!ret && !(*weight = glint_image_new(w, h)))
 		ret = glint_error_set(ENOMEM, "bracket: out of memory");
+	if (ret < 0)
 		goto out;
-	}
 	/* x = (DN - black) / t in DN per second = gain k L */
 	double scale = 1 / (s.gain * s.k), zz = 0;
 	long nz = 0;
@@ -417,14 +510,13 @@ static int bracket_photo(const struct glint_renderer *r,
 		}
 		photo->data[i] = (float)x;
 	}
-	*nframes = n;
+	*nframes = br.n;
 	*zrms = nz ? sqrt(zz / nz) : NAN;
 out:
-	for (int i = 0; i < 24; i++)
-		free(frames[i].data);
+	glint_bracket_release(&br);
+	glint_camera_close(cam);
+	photo_src.photo = NULL;
 	glint_raw_hdr_release(&hdr);
-	glint_image_free(dn);
-	free(roi);
 	if (ret < 0) {
 		glint_image_free(*weight);
 		*weight = NULL;

@@ -4,9 +4,8 @@
  * material, photos from the independent reference renderer (sim/) at
  * 256 px (64 jittered samples per pixel, 16 per technique: 1024 a pixel,
  * enough that the photo's own Monte Carlo noise does not move roughness;
- * a camera's pixel integrates its area, and 4 samples per pixel (at 256
- * per technique, before 2026-11-26) aliased a near-mirror's sun into
- * a photo no camera takes), noise-free and
+ * a camera's pixel integrates its area, and 4 samples per pixel alias a
+ * near-mirror's sun into a photo no camera takes), noise-free and
  * through the sensor model twice: as glint's rig takes a photo (a bracket
  * planned by glint's own bracket planner on the sphere, merged by glint's
  * raw merge: bracket_photo()) and

@@ -3,8 +3,7 @@
  * Where the fitter's objective differs from a photo: the shade cache's
  * image of a material (the fitter's own estimate, its default samples)
  * against a reference photo, pixel by pixel over the sphere's interior
- * as the fit takes it (before stop 41: every pixel whose own hits all
- * hit, rim pixels part backdrop among them).
+ * as the fit takes it.
  *
  *   bench/residual MAP MATERIAL PHOTO.exr [ROUGHNESS...]
  *

@@ -59,7 +59,7 @@ static int residual_z(const struct objective *ob, const struct fit_data *d,
  * a photo whose weights came with it (a weight image: a real noise model)
  * or without (the default signal-proportional variance, known up to its
  * scale, which residual_z() estimates; evaluated at the photo's own
- * values alone until 2026-11-27, it left a dark photo's albedos 20 % low)
+ * values alone, it would leave a dark photo's albedos 20 % low)
  * and for the values the fit explains to within 3 standard deviations:
  * there the photo's own noise is what is left, and weights made from it
  * bias the fit.  Elsewhere the misfit is far above the noise, its weight

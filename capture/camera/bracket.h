@@ -36,8 +36,8 @@ struct glint_bracket_opts {
 	 * reports them: glint_camera_seconds()), default 60 s. */
 	double max_time_s;
 	double start_s; /* 0: metered by the bracket's own frames */
-	/* Meter with frames of its own before the bracket starts, as glint
-	 * did until 2026-11 (bench/capture compares the two). */
+	/* Meter with frames of its own before the bracket starts
+	 * (bench/capture compares the two). */
 	int meter_apart;
 	double floor_dn; /* darkest ROI pixels must exceed black + this */
 	int max_drop;	 /* frames to wait for an exposure to land */

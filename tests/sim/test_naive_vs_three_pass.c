@@ -10,14 +10,11 @@
  * diffuse mask, then the lobe on the specular mask, and ends with a
  * roughness near the truth (0.139).  The test checks the naive pass is
  * far above in cost and far off in specular, not where it stops.
- * History: until stop 47 the case was aluminium bronze (roughness
- * 0.023), where the naive pass slid to a mirror (cost 45.7, roughness
- * 0.0001, against 10.55 and 0.0195), and since stop 41 stopped short of
- * it (cost 23.2 against 3.53, roughness 0.0158).  Since the lobe samples
- * spread over the pixel from a lobe of two turns of its mirror direction
- * (stop 47, shade_cache.c: SPREAD_FROM) it escapes there (cost 3.567, as
- * three-pass's): part of that valley was the hits' aliasing of a lobe
- * about a pixel wide.
+ * On aluminium bronze (roughness 0.023) the naive pass escapes (cost
+ * 3.567, as three-pass's), since the lobe samples spread over the pixel
+ * from a lobe of two turns of its mirror direction
+ * (fit/render/shade_cache_internal.h: SPREAD_FROM): silver is where it
+ * still fails.
  * The naive pass is run as the paper describes it, LM straight from the
  * initial values (no_start_scan); glint's naive method, which starts LM
  * from the best of a roughness and ior scan (fit.c, scan_start), must

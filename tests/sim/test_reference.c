@@ -96,8 +96,8 @@ static void test_highlight_pixels(void)
 	printf("  4 x 4 grid: %d highlight pixels, seeds apart by %.4f\n", nhi,
 	       grid);
 	CHECK(nhi >= 4, "%d highlight pixels", nhi);
-	/* Measured: 0.088 stratified, 0.171 with independent positions
-	 * (as before 2026-11-26). */
+	/* Measured: 0.088 stratified, 0.171 with independent
+	 * positions. */
 	CHECK(grid < 0.12, "4 x 4 grid: seeds apart by %.4f", grid);
 	double lhs = seed_spread(&sc, env, 15, &nhi);
 	printf("  15 Latin-hypercube rows: seeds apart by %.4f\n", lhs);

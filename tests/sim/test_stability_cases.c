@@ -9,11 +9,11 @@
  * the roughness scan before LM (fit.c, scan_start) both must agree with
  * the fit from the paper's start.
  * Variable projection from the second random start (roughness 0.60, ior
- * 4.97) stopped in a wrong minimum until 2026-11-26 (its scan is of
- * roughness only, at the start's ior, and LM then kept the ior where
- * specular x F(ior) trade off); the full-resolution scan's other iors
- * (fit.c, fine_pass) now bring it to the fit from the paper's start,
- * which the test holds it to.
+ * 4.97) can stop in a wrong minimum (its scan is of roughness only, at
+ * the start's ior, and LM keeps the ior where specular x F(ior) trade
+ * off); the full-resolution scan's other iors (fit/passes.c, the fine
+ * pass) bring it to the fit from the paper's start, which the test holds
+ * it to.
  *   test_stability_cases
  */
 #include "test.h"

@@ -34,6 +34,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "capture/camera/camera.h"
 #include "capture/camera/v4l2_format.h"
+#include "capture/camera/v4l2_internal.h"
 
 #include "core/clock.h"
 #include "core/error.h"
@@ -106,7 +107,7 @@ static double monotonic_now(void)
 	return glint_clock_monotonic();
 }
 
-static int xioctl(int fd, unsigned long req, void *arg)
+int glint_v4l2_xioctl(int fd, unsigned long req, void *arg)
 {
 	int r;
 	do
@@ -187,7 +188,7 @@ static void query_ctrl(struct v4l2_cam *c, struct ctrl *k, uint32_t id,
 	k->id = id;
 	k->name = name;
 	k->q.id = id;
-	k->present = xioctl(c->fd, VIDIOC_QUERYCTRL, &k->q) == 0 &&
+	k->present = glint_v4l2_xioctl(c->fd, VIDIOC_QUERYCTRL, &k->q) == 0 &&
 		     !(k->q.flags & V4L2_CTRL_FLAG_DISABLED);
 }
 
@@ -197,7 +198,7 @@ static int menu_has(struct v4l2_cam *c, uint32_t id, int index)
 	memset(&m, 0, sizeof(m));
 	m.id = id;
 	m.index = (uint32_t)index;
-	return xioctl(c->fd, VIDIOC_QUERYMENU, &m) == 0;
+	return glint_v4l2_xioctl(c->fd, VIDIOC_QUERYMENU, &m) == 0;
 }
 
 static void find_controls(struct v4l2_cam *c)
@@ -240,7 +241,7 @@ static int choose_format(struct v4l2_cam *c)
 		memset(&d, 0, sizeof(d));
 		d.index = i;
 		d.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-		if (xioctl(c->fd, VIDIOC_ENUM_FMT, &d) < 0) {
+		if (glint_v4l2_xioctl(c->fd, VIDIOC_ENUM_FMT, &d) < 0) {
 			if (errno == EINVAL)
 				break;
 			return ioctl_error(c, "VIDIOC_ENUM_FMT");
@@ -278,7 +279,7 @@ static void largest_size(struct v4l2_cam *c, uint32_t *w, uint32_t *h)
 		memset(&s, 0, sizeof(s));
 		s.index = i;
 		s.pixel_format = c->fmt->fourcc;
-		if (xioctl(c->fd, VIDIOC_ENUM_FRAMESIZES, &s) < 0)
+		if (glint_v4l2_xioctl(c->fd, VIDIOC_ENUM_FRAMESIZES, &s) < 0)
 			break;
 		if (s.type == V4L2_FRMSIZE_TYPE_DISCRETE) {
 			if ((uint64_t)s.discrete.width * s.discrete.height >
@@ -302,7 +303,7 @@ static int set_format(struct v4l2_cam *c)
 
 	memset(&f, 0, sizeof(f));
 	f.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-	if (xioctl(c->fd, VIDIOC_G_FMT, &f) < 0)
+	if (glint_v4l2_xioctl(c->fd, VIDIOC_G_FMT, &f) < 0)
 		return ioctl_error(c, "VIDIOC_G_FMT");
 	w = f.fmt.pix.width;
 	h = f.fmt.pix.height;
@@ -312,7 +313,7 @@ static int set_format(struct v4l2_cam *c)
 	f.fmt.pix.pixelformat = c->fmt->fourcc;
 	f.fmt.pix.field = V4L2_FIELD_NONE;
 	f.fmt.pix.bytesperline = 0;
-	if (xioctl(c->fd, VIDIOC_S_FMT, &f) < 0)
+	if (glint_v4l2_xioctl(c->fd, VIDIOC_S_FMT, &f) < 0)
 		return ioctl_error(c, "VIDIOC_S_FMT");
 	glint_fourcc_str(c->fmt->fourcc, want);
 	glint_fourcc_str(f.fmt.pix.pixelformat, got);
@@ -339,7 +340,7 @@ static int set_format(struct v4l2_cam *c)
 	memset(&p, 0, sizeof(p));
 	p.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
 	c->period_s = 1.0 / 30;
-	if (xioctl(c->fd, VIDIOC_G_PARM, &p) == 0 &&
+	if (glint_v4l2_xioctl(c->fd, VIDIOC_G_PARM, &p) == 0 &&
 	    p.parm.capture.timeperframe.denominator > 0 &&
 	    p.parm.capture.timeperframe.numerator > 0)
 		c->period_s = (double)p.parm.capture.timeperframe.numerator /
@@ -375,7 +376,7 @@ static int v4l2_open(const char *device, const struct glint_clock *clock,
 		goto err;
 	}
 	memset(&c->cap, 0, sizeof(c->cap));
-	if (xioctl(c->fd, VIDIOC_QUERYCAP, &c->cap) < 0) {
+	if (glint_v4l2_xioctl(c->fd, VIDIOC_QUERYCAP, &c->cap) < 0) {
 		ret = errno == ENOTTY
 			      ? glint_error_set(ENOTTY,
 						"%s is not a V4L2 device",
@@ -410,7 +411,7 @@ static void stop_streaming(struct v4l2_cam *c)
 {
 	if (c->streaming) {
 		int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-		xioctl(c->fd, VIDIOC_STREAMOFF, &type);
+		glint_v4l2_xioctl(c->fd, VIDIOC_STREAMOFF, &type);
 		c->streaming = 0;
 	}
 	for (int i = 0; i < c->nbuf; i++)
@@ -421,7 +422,7 @@ static void stop_streaming(struct v4l2_cam *c)
 		memset(&rb, 0, sizeof(rb));
 		rb.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
 		rb.memory = V4L2_MEMORY_MMAP;
-		xioctl(c->fd, VIDIOC_REQBUFS, &rb);
+		glint_v4l2_xioctl(c->fd, VIDIOC_REQBUFS, &rb);
 	}
 	c->nbuf = 0;
 }
@@ -493,7 +494,7 @@ static int start_streaming(struct v4l2_cam *c)
 	rb.count = (uint32_t)c->nbuf_req;
 	rb.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
 	rb.memory = V4L2_MEMORY_MMAP;
-	if (xioctl(c->fd, VIDIOC_REQBUFS, &rb) < 0)
+	if (glint_v4l2_xioctl(c->fd, VIDIOC_REQBUFS, &rb) < 0)
 		return ioctl_error(c, "VIDIOC_REQBUFS");
 	if (rb.count < 2)
 		return glint_error_set(ENOMEM,
@@ -507,7 +508,7 @@ static int start_streaming(struct v4l2_cam *c)
 		b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
 		b.memory = V4L2_MEMORY_MMAP;
 		b.index = (uint32_t)i;
-		if (xioctl(c->fd, VIDIOC_QUERYBUF, &b) < 0)
+		if (glint_v4l2_xioctl(c->fd, VIDIOC_QUERYBUF, &b) < 0)
 			return ioctl_error(c, "VIDIOC_QUERYBUF");
 		c->map_len[i] = b.length;
 		c->map[i] = mmap(NULL, b.length, PROT_READ | PROT_WRITE,
@@ -516,10 +517,10 @@ static int start_streaming(struct v4l2_cam *c)
 			c->map[i] = NULL;
 			return ioctl_error(c, "mmap");
 		}
-		if (xioctl(c->fd, VIDIOC_QBUF, &b) < 0)
+		if (glint_v4l2_xioctl(c->fd, VIDIOC_QBUF, &b) < 0)
 			return ioctl_error(c, "VIDIOC_QBUF");
 	}
-	if (xioctl(c->fd, VIDIOC_STREAMON, &type) < 0)
+	if (glint_v4l2_xioctl(c->fd, VIDIOC_STREAMON, &type) < 0)
 		return ioctl_error(c, "VIDIOC_STREAMON");
 	c->streaming = 1;
 	return 0;
@@ -535,7 +536,7 @@ static int v4l2_configure(void *priv)
 		/* the option, or 0 */
 	} else {
 		struct v4l2_control k = { V4L2_CID_BLACK_LEVEL, 0 };
-		if (xioctl(c->fd, VIDIOC_G_CTRL, &k) == 0)
+		if (glint_v4l2_xioctl(c->fd, VIDIOC_G_CTRL, &k) == 0)
 			c->black = k.value;
 	}
 	return 0;
@@ -545,14 +546,14 @@ static int write_ctrl(struct v4l2_cam *c, const struct ctrl *k, int32_t v,
 		      int32_t *applied)
 {
 	struct v4l2_control w = { k->id, v };
-	if (xioctl(c->fd, VIDIOC_S_CTRL, &w) < 0) {
+	if (glint_v4l2_xioctl(c->fd, VIDIOC_S_CTRL, &w) < 0) {
 		char what[96];
 		snprintf(what, sizeof(what), "setting %s to %d", k->name,
 			 (int)v);
 		return ioctl_error(c, what);
 	}
 	w.value = 0;
-	if (xioctl(c->fd, VIDIOC_G_CTRL, &w) < 0) {
+	if (glint_v4l2_xioctl(c->fd, VIDIOC_G_CTRL, &w) < 0) {
 		char what[96];
 		snprintf(what, sizeof(what), "reading back %s", k->name);
 		return ioctl_error(c, what);
@@ -711,7 +712,7 @@ static int v4l2_grab(void *priv, struct glint_frame *f)
 		memset(&b, 0, sizeof(b));
 		b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
 		b.memory = V4L2_MEMORY_MMAP;
-		if (xioctl(c->fd, VIDIOC_DQBUF, &b) < 0) {
+		if (glint_v4l2_xioctl(c->fd, VIDIOC_DQBUF, &b) < 0) {
 			if (errno == EAGAIN)
 				continue;
 			return ioctl_error(c, "VIDIOC_DQBUF");
@@ -720,7 +721,7 @@ static int v4l2_grab(void *priv, struct glint_frame *f)
 		    b.index < (uint32_t)c->nbuf)
 			break;
 		/* A corrupted frame: give the buffer back, wait for more. */
-		if (xioctl(c->fd, VIDIOC_QBUF, &b) < 0)
+		if (glint_v4l2_xioctl(c->fd, VIDIOC_QBUF, &b) < 0)
 			return ioctl_error(c, "VIDIOC_QBUF");
 	}
 	size_t n = (size_t)c->width * c->height * c->fmt->channels;
@@ -740,7 +741,7 @@ static int v4l2_grab(void *priv, struct glint_frame *f)
 	 * writes the queued buffer's state into b (vb2 zeroes its sequence
 	 * number; vivid showed every frame as number 0). */
 	const struct v4l2_buffer got = b;
-	if (xioctl(c->fd, VIDIOC_QBUF, &b) < 0 && ret == 0)
+	if (glint_v4l2_xioctl(c->fd, VIDIOC_QBUF, &b) < 0 && ret == 0)
 		ret = ioctl_error(c, "VIDIOC_QBUF");
 	if (ret < 0) {
 		glint_frame_release(f);
@@ -760,40 +761,6 @@ static int v4l2_grab(void *priv, struct glint_frame *f)
 	return 0;
 }
 
-static void found_path(const char *path, void (*found)(const char *, void *),
-		       void *ctx, int *n)
-{
-	found(path, ctx);
-	(*n)++;
-}
-
-static int v4l2_enumerate(void (*found)(const char *device, void *ctx),
-			  void *ctx)
-{
-	glob_t g;
-	int n = 0;
-
-	if (glob("/dev/video*", 0, NULL, &g) != 0)
-		return 0;
-	for (size_t i = 0; i < g.gl_pathc; i++) {
-		struct v4l2_capability cap;
-		int fd = open(g.gl_pathv[i], O_RDWR | O_NONBLOCK | O_CLOEXEC);
-		if (fd < 0)
-			continue;
-		memset(&cap, 0, sizeof(cap));
-		if (xioctl(fd, VIDIOC_QUERYCAP, &cap) == 0) {
-			uint32_t caps = cap.capabilities & V4L2_CAP_DEVICE_CAPS
-						? cap.device_caps
-						: cap.capabilities;
-			if (caps & V4L2_CAP_VIDEO_CAPTURE)
-				found_path(g.gl_pathv[i], found, ctx, &n);
-		}
-		close(fd);
-	}
-	globfree(&g);
-	return n;
-}
-
 const struct glint_camera_ops glint_camera_v4l2_ops = {
 	.name = "v4l2",
 	.open = v4l2_open,
@@ -802,5 +769,5 @@ const struct glint_camera_ops glint_camera_v4l2_ops = {
 	.configure = v4l2_configure,
 	.set_exposure = v4l2_set_exposure,
 	.grab = v4l2_grab,
-	.enumerate = v4l2_enumerate,
+	.enumerate = glint_v4l2_enumerate,
 };

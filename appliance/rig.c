@@ -352,8 +352,10 @@ static int load_bracket(const char *path, json_t *br,
 static int load_optics(const char *path, json_t *doc,
 		       struct glint_capture_setup *c)
 {
-	static const char *const opt_keys[] = { "focal_px", "principal",
-						"pixel_pitch_um", NULL };
+	static const char *const opt_keys[] = {
+		"focal_px",	"principal", "pixel_pitch_um",
+		"psf_sigma_px", "olpf",	     NULL
+	};
 	static const char *const sample_keys[] = { "diameter_m", NULL };
 	json_t *opt = NULL, *smp = NULL;
 	int ret;
@@ -385,6 +387,17 @@ static int load_optics(const char *path, json_t *doc,
 		ret = glint_json_number(
 			path, "optics", opt, "pixel_pitch_um", 0,
 			(struct glint_range){ 0, 1000, 1, 0 }, &c->pitch_um);
+	if (!ret)
+		ret = glint_json_number(path, "optics", opt, "psf_sigma_px", 0,
+					(struct glint_range){ 0, 8, 0, 0 },
+					&c->psf_sigma_px);
+	json_t *olpf = json_object_get(opt, "olpf");
+	if (!ret && olpf && !json_is_boolean(olpf))
+		ret = glint_error_set(EINVAL,
+				      "%s: optics.olpf: expected true or "
+				      "false",
+				      path);
+	c->olpf = json_is_true(olpf);
 	return ret;
 }
 

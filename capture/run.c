@@ -44,9 +44,26 @@ static int unwrap_probe(const char *dir, const struct glint_capture_setup *s,
 	glint_log_info("probe ball at (%.2f, %.2f), radius %.2f px "
 		       "(%d edge points, %.2f px rms)",
 		       c.cx, c.cy, c.r, c.points, c.rms_px);
-	ret = glint_path_join(path, sizeof(path), dir, GLINT_SESSION_ENV);
+	/* the merge's variance and weights, just written beside it: the
+	 * compact sources' noise and clipping */
+	struct glint_image *var = NULL, *wt = NULL;
+	ret = glint_path_join(path, sizeof(path), dir, "probe-variance.exr");
+	if (ret == 0)
+		ret = glint_image_read(path, &var);
+	if (ret == 0)
+		ret = glint_path_join(path, sizeof(path), dir,
+				      "probe-weights.exr");
+	if (ret == 0)
+		ret = glint_image_read(path, &wt);
+	o.variance = var;
+	o.weights = wt;
+	if (ret == 0)
+		ret = glint_path_join(path, sizeof(path), dir,
+				      GLINT_SESSION_ENV);
 	if (ret == 0)
 		ret = glint_probe_unwrap_write(probe, &o, path, NULL, NULL);
+	glint_image_free(var);
+	glint_image_free(wt);
 	return ret;
 }
 
@@ -59,10 +76,11 @@ static int sample_scene(const char *dir, const char *root, const char *probe,
 			size_t n)
 {
 	char found[GLINT_PATH_MAX];
-	struct glint_scene_optics o = { s->focal_px,
-					{ s->principal[0], s->principal[1] },
-					s->pitch_um,
-					s->diameter_m };
+	struct glint_scene_optics o = {
+		s->focal_px,	 { s->principal[0], s->principal[1] },
+		s->pitch_um,	 s->diameter_m,
+		s->psf_sigma_px, s->olpf
+	};
 	int ret = 0;
 
 	if (!probe) {
@@ -238,6 +256,7 @@ static int merge_session(const struct glint_capture_setup *s, const char *kind,
 				 GLINT_SESSION_ENV);
 			snprintf(files[(*nfiles)++], 64, "env-mask.png");
 			snprintf(files[(*nfiles)++], 64, "env-density.exr");
+			snprintf(files[(*nfiles)++], 64, "env-sources.json");
 		}
 	}
 	if (ret == 0 && !strcmp(kind, "sample") && s->focal_px > 0) {

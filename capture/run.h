@@ -31,7 +31,9 @@ struct glint_capture_setup {
 	struct glint_roi roi[2];       /* probe, sample */
 	double focal_px, principal[2]; /* optics; 0 = not given */
 	double pitch_um;	       /* optics.pixel_pitch_um */
-	double diameter_m;	       /* sample.diameter_m */
+	double psf_sigma_px; /* optics.psf_sigma_px: the camera's blur */
+	int olpf;	     /* optics.olpf */
+	double diameter_m;   /* sample.diameter_m */
 };
 
 struct glint_capture_result {

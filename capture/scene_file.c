@@ -132,6 +132,12 @@ int glint_sample_write_scene(const char *dir, const struct glint_image *sample,
 		o->focal_px * o->pitch_um * 1e-3, "pixel_pitch_um", o->pitch_um,
 		"sphere", "diameter_m", o->diameter_m, "circle_px", "cx", c.cx,
 		"cy", c.cy, "r", c.r, "environment", "path", env);
+	json_t *cam = doc ? json_object_get(doc, "camera") : NULL;
+	if (cam && o->psf_sigma_px > 0)
+		json_object_set_new(cam, "psf_sigma_px",
+				    json_real(o->psf_sigma_px));
+	if (cam && o->olpf)
+		json_object_set_new(cam, "olpf", json_true());
 	char *text =
 		doc ? json_dumps(doc, JSON_INDENT(2) | JSON_REAL_PRECISION(10))
 		    : NULL;

@@ -19,6 +19,10 @@ struct glint_scene_optics {
 	double principal[2]; /* -1 = the image centre */
 	double pitch_um;
 	double diameter_m;
+	/* the camera's blur (core/pinhole.h): written into the scene when
+	 * given, so that the fit renders the photo's pixels */
+	double psf_sigma_px;
+	int olpf;
 };
 
 /* The newest complete probe session with an env.exr under root. */

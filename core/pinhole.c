@@ -21,6 +21,8 @@ int glint_pinhole_init(struct glint_pinhole *cam, int width, int height,
 	cam->width = width;
 	cam->height = height;
 	cam->frame_x = cam->frame_y = cam->frame_width = 0;
+	cam->psf_sigma_px = 0;
+	cam->olpf = 0;
 	cam->fpx = focal_m / pitch_m;
 	cam->cx = width / 2.0;
 	cam->cy = height / 2.0;
@@ -31,6 +33,59 @@ int glint_pinhole_init(struct glint_pinhole *cam, int width, int height,
 	cam->right = v3_norm(right);
 	cam->up = v3_cross(cam->right, fwd);
 	return 0;
+}
+
+int glint_pixel_filter_on(const struct glint_pinhole *cam)
+{
+	return cam->psf_sigma_px > 0 || cam->olpf;
+}
+
+/* The cumulative distribution of the unit square (centred on 0)
+ * convolved with a Gaussian of sigma: sigma (Psi((x + 1/2) / sigma) -
+ * Psi((x - 1/2) / sigma)), Psi(z) = z Phi(z) + phi(z). */
+static double psi(double z)
+{
+	return z * 0.5 * erfc(-z / sqrt(2.0)) +
+	       exp(-0.5 * z * z) / sqrt(2 * M_PI);
+}
+
+static double box_gauss_cdf(double sigma, double x)
+{
+	if (sigma <= 0)
+		return fmin(1, fmax(0, x + 0.5));
+	return sigma * (psi((x + 0.5) / sigma) - psi((x - 0.5) / sigma));
+}
+
+void glint_pixel_filter_table(const struct glint_pinhole *cam,
+			      float table[GLINT_PIXEL_FILTER_N + 1])
+{
+	enum { GRID = 8192 };
+	double sigma = cam->psf_sigma_px > 0 ? cam->psf_sigma_px : 0;
+	double split = cam->olpf ? 0.5 : 0;
+	double half = 0.5 + split + 5 * sigma;
+	int j = 0;
+
+	/* Walk the distribution on a fine grid and read off each
+	 * quantile, interpolated between the grid's points. */
+	double x0 = -half, f0 = 0;
+	table[0] = (float)(0.5 - half);
+	for (int g = 1; g <= GRID && j < GLINT_PIXEL_FILTER_N; g++) {
+		double x1 = -half + 2 * half * g / GRID;
+		double f1 = split > 0
+				    ? 0.5 * (box_gauss_cdf(sigma, x1 - split) +
+					     box_gauss_cdf(sigma, x1 + split))
+				    : box_gauss_cdf(sigma, x1);
+		while (j + 1 < GLINT_PIXEL_FILTER_N &&
+		       f1 >= (double)(j + 1) / GLINT_PIXEL_FILTER_N) {
+			double q = (double)(j + 1) / GLINT_PIXEL_FILTER_N;
+			double t = f1 > f0 ? (q - f0) / (f1 - f0) : 0;
+			table[++j] = (float)(0.5 + x0 + t * (x1 - x0));
+		}
+		x0 = x1;
+		f0 = f1;
+	}
+	while (j < GLINT_PIXEL_FILTER_N)
+		table[++j] = (float)(0.5 + half);
 }
 
 /* Shirley-Chiu concentric map of the unit square onto the unit disk. */

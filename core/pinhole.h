@@ -27,7 +27,38 @@ struct glint_pinhole {
 	 * Only the per-pixel sample patterns and seeds use it, so that a
 	 * window's pixels get the frame's samples. */
 	int frame_x, frame_y, frame_width;
+	/* The camera's blur, which a rendered pixel takes in as a pixel
+	 * filter (glint_pixel_filter_*): a Gaussian of psf_sigma_px (the
+	 * lens and the demosaic) and, with olpf, the optical low-pass
+	 * filter's split of each ray into two, one pixel apart, along each
+	 * axis; 0 and 0: the pixel's own square. */
+	double psf_sigma_px;
+	int olpf;
 };
+
+/*
+ * The pixel filter as a sampling map: the inverse of the cumulative
+ * distribution, along one axis, of the pixel's square convolved with the
+ * camera's blur, tabulated at GLINT_PIXEL_FILTER_N + 1 points.  A
+ * stratified sample u in [0, 1) maps to the position
+ * glint_pixel_filter_map(table, u) in pixels from the pixel's corner (the
+ * square alone gives u itself), so that a pixel's samples average the
+ * blurred image: the photo's pixel, not the scene's.
+ */
+#define GLINT_PIXEL_FILTER_N 512
+
+/* Whether cam has a blur to sample (psf_sigma_px > 0 or olpf). */
+int glint_pixel_filter_on(const struct glint_pinhole *cam);
+void glint_pixel_filter_table(const struct glint_pinhole *cam,
+			      float table[GLINT_PIXEL_FILTER_N + 1]);
+static inline double glint_pixel_filter_map(const float *table, double u)
+{
+	double f = u * GLINT_PIXEL_FILTER_N;
+	int i = (int)f;
+	if (i >= GLINT_PIXEL_FILTER_N)
+		return table[GLINT_PIXEL_FILTER_N];
+	return table[i] + (f - i) * (table[i + 1] - table[i]);
+}
 
 /*
  * Build a camera: focal length and pixel pitch in metres, f_number 0 for a

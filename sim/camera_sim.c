@@ -19,9 +19,11 @@
  * sim/camera_sim.h), material (the sample's Table-1 name, default
  * yellow-plastic; rig: what the sim board put in view, sim/world.h),
  * decades (the test card's dynamic range, default 6, plus
- * its bright disk), timescale (real seconds per simulated second, default
- * 1: tests and demos run a 2 s exposure in 20 ms with 0.01), world
- * (scene=rig only: a file that says what is in view instead of the sim
+ * its bright disk), psf (the lens's Gaussian blur in pixels, default 0.6)
+ * and olpf (the optical low-pass filter, default 1: every view reaches the
+ * sensor through both, sim/sensor.h), timescale (real seconds per simulated
+ * second, default 1: tests and demos run a 2 s exposure in 20 ms with 0.01),
+ * world (scene=rig only: a file that says what is in view instead of the sim
  * board, for a rig whose board is real hardware: "LIGHTS DEGREES", the
  * lamps on (0 none, 1 the one lamp, bit k - 1 lamp k of a rig with
  * several) and the turntable's angle, 0 the probe and 180 the
@@ -98,14 +100,19 @@ static int set_number(struct sim_cam *s, const char *where, const char *key,
 		s->timescale = v;
 	else if (!strcmp(key, "scene_scale") && v >= 1 && v <= 64)
 		s->scene_scale = (int)v;
+	else if (!strcmp(key, "psf") && v >= 0 && v <= 8)
+		s->sensor.psf_sigma_px = v;
+	else if (!strcmp(key, "olpf"))
+		s->sensor.olpf = v != 0;
 	else
 		return glint_error_set(EINVAL,
 				       "sim camera %s: option "
 				       "%s=%g: expected width, height "
 				       "(2..8192), latency (0..7), "
 				       "manual, seed, noise, decades "
-				       "(0..8), timescale (0..1] or "
-				       "scene_scale (1..64)",
+				       "(0..8), timescale (0..1], "
+				       "scene_scale (1..64), psf (0..8 px) "
+				       "or olpf (0/1)",
 				       where, key, v);
 	return 0;
 }
@@ -132,9 +139,9 @@ static int set_scene(struct sim_cam *s, const char *where, const char *word)
 static int apply_scenario(struct sim_cam *s)
 {
 	static const char *const keys[] = {
-		"width",       "height", "latency",  "manual",
-		"seed",	       "noise",	 "decades",  "timescale",
-		"scene_scale", "scene",	 "material", NULL
+		"width",    "height",  "latency",   "manual",	   "seed",
+		"noise",    "decades", "timescale", "scene_scale", "scene",
+		"material", "psf",     "olpf",	    NULL
 	};
 	const char *f = s->scenario;
 	json_t *doc, *cam, *v;
@@ -173,7 +180,8 @@ static int apply_scenario(struct sim_cam *s)
 				snprintf(s->material, sizeof(s->material), "%s",
 					 str);
 		} else if (json_is_boolean(v) &&
-			   (!strcmp(key, "manual") || !strcmp(key, "noise"))) {
+			   (!strcmp(key, "manual") || !strcmp(key, "noise") ||
+			    !strcmp(key, "olpf"))) {
 			ret = set_number(s, where, key, json_is_true(v));
 		} else if (json_is_number(v)) {
 			ret = set_number(s, where, key, json_number_value(v));
@@ -383,8 +391,8 @@ static int cache_dir(char *buf, size_t n)
  * that a rebuilt glint or a changed map renders anew.  A cached file that
  * does not read back whole at the right size is rendered again.
  */
-static int scene_image(const struct sim_cam *s, int sample,
-		       struct glint_image **out)
+static int scene_image_raw(const struct sim_cam *s, int sample,
+			   struct glint_image **out)
 {
 	char dir[GLINT_PATH_MAX], path[GLINT_PATH_MAX], data[GLINT_PATH_MAX];
 	char key[2048], exe[64], map[64], table[64];
@@ -429,6 +437,21 @@ static int scene_image(const struct sim_cam *s, int sample,
 	 * nothing else. */
 	if (ret == 0 && glint_image_write(path, *out, NULL) < 0)
 		glint_error_clear();
+	return ret;
+}
+
+/* A view as the sensor receives it: through the lens and the OLPF
+ * (sim/sensor.h); the cache keeps the scene's own radiance. */
+static int scene_image(const struct sim_cam *s, int sample,
+		       struct glint_image **out)
+{
+	int ret = scene_image_raw(s, sample, out);
+	if (ret == 0)
+		ret = glint_sensor_optics(&s->sensor, *out);
+	if (ret < 0) {
+		glint_image_free(*out);
+		*out = NULL;
+	}
 	return ret;
 }
 
@@ -518,6 +541,8 @@ static int sim_open(const char *device, const struct glint_clock *clock,
 	else if (!(s->radiance = glint_sim_test_card(s->width, s->height,
 						     s->decades)))
 		ret = glint_error_set(ENOMEM, "out of memory");
+	else
+		ret = glint_sensor_optics(&s->sensor, s->radiance);
 	if (ret < 0) {
 		glint_sim_world_close(s->wobj);
 		free(s);

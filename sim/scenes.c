@@ -80,7 +80,7 @@ int glint_sim_probe_scene(int w, int h, unsigned lamps,
 	double f = glint_sim_probe_focal_px(w);
 	double r = 0.4 * (w < h ? w : h);
 	double d = 1 / sin(atan(r / f));
-	ret = glint_sim_mirror_ball(env, w, h, f, v3(0, 0, -d), 1, n, k, 3,
+	ret = glint_sim_mirror_ball(env, w, h, f, v3(0, 0, -d), 1, n, k, 12,
 				    out);
 	glint_image_free(env);
 	return ret;

@@ -7,6 +7,7 @@
 #include <gsl/gsl_rng.h>
 
 #include <math.h>
+#include <stdlib.h>
 
 void glint_sensor_default(struct glint_sensor *s)
 {
@@ -22,6 +23,89 @@ void glint_sensor_default(struct glint_sensor *s)
 	s->noise = 1;
 	s->quantise = 1;
 	s->seed = 1;
+	s->psf_sigma_px = 0.6;
+	s->olpf = 1;
+}
+
+/* The Gaussian's integral over [a, b]. */
+static double gauss_int(double sigma, double a, double b)
+{
+	if (sigma <= 0)
+		return (a <= 0 && 0 < b) ? 1 : 0;
+	double r = 1 / (sigma * sqrt(2.0));
+	return 0.5 * (erf(b * r) - erf(a * r));
+}
+
+int glint_sensor_psf_kernel(const struct glint_sensor *s, double k[65])
+{
+	double sigma = s->psf_sigma_px;
+	double split = s->olpf ? 0.5 : 0;
+	int radius = (int)ceil(4 * sigma + split + 0.5) - 1;
+
+	if (sigma <= 0 && !s->olpf) {
+		k[0] = 1;
+		return 0;
+	}
+	if (radius > 32)
+		radius = 32;
+	double sum = 0;
+	for (int i = -radius; i <= radius; i++) {
+		double a = i - 0.5, b = i + 0.5, v;
+		/* pixel box x (lens Gaussian * the split's two deltas) */
+		v = split > 0 ? 0.5 * (gauss_int(sigma, a - split, b - split) +
+				       gauss_int(sigma, a + split, b + split))
+			      : gauss_int(sigma, a, b);
+		k[i + radius] = v;
+		sum += v;
+	}
+	for (int i = 0; i <= 2 * radius; i++)
+		k[i] /= sum;
+	return radius;
+}
+
+int glint_sensor_optics(const struct glint_sensor *s, struct glint_image *img)
+{
+	double k[65];
+	int w = img->width, h = img->height;
+
+	if (!(s->psf_sigma_px >= 0 && s->psf_sigma_px <= 8))
+		return glint_error_set(EINVAL,
+				       "sensor optics: psf sigma %g px: "
+				       "expected 0..8",
+				       s->psf_sigma_px);
+	int r = glint_sensor_psf_kernel(s, k);
+	if (r == 0)
+		return 0;
+	int n = w > h ? w : h;
+	double *line = malloc((size_t)(n + 2 * r) * 3 * sizeof(double));
+	if (!line)
+		return glint_error_set(ENOMEM, "sensor optics: out of memory");
+	/* Rows, then columns; each line copied with its ends extended. */
+	for (int pass = 0; pass < 2; pass++) {
+		int len = pass ? h : w, count = pass ? w : h;
+		for (int j = 0; j < count; j++) {
+			for (int i = -r; i < len + r; i++) {
+				int ii = i < 0 ? 0 : i >= len ? len - 1 : i;
+				const float *p = pass ? glint_image_px(img, j, ii)
+						      : glint_image_px(img, ii, j);
+				for (int c = 0; c < 3; c++)
+					line[3 * (i + r) + c] = p[c];
+			}
+			for (int i = 0; i < len; i++) {
+				float *o = pass ? glint_image_px(img, j, i)
+						: glint_image_px(img, i, j);
+				for (int c = 0; c < 3; c++) {
+					double acc = 0;
+					for (int t = 0; t <= 2 * r; t++)
+						acc += k[t] *
+						       line[3 * (i + t) + c];
+					o[c] = (float)acc;
+				}
+			}
+		}
+	}
+	free(line);
+	return 0;
 }
 
 static double adc_max(const struct glint_sensor *s)

@@ -1,5 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 #include "capture/probe/probe.h"
+#include "capture/probe/probe_internal.h"
+#include "capture/probe/probe_sources.h"
 
 #include "capture/probe/sphere_detect.h"
 
@@ -283,26 +285,9 @@ void glint_unwrap_default_opts(struct glint_unwrap_opts *o)
 	o->camera_cone_deg = 6;
 }
 
-/* The ball's frame: camera at the origin looking along -Z, x right, y up;
- * lengths in ball radii. */
-struct ball {
-	double fpx, cx, cy;
-	struct vec3 c;	     /* centre */
-	double bcx, bcy, br; /* its image circle (orthographic mode) */
-	int ortho;
-};
-
-/*
- * Where the ball shows direction d: the point P = c + n whose mirror
- * reflection of the camera's ray i (unit, towards P) leaves along d, i.e.
- * n = normalize(d - i) with i = normalize(c + n): a fixed point, exact for
- * the perspective camera.  Orthographic (the peers' approximation): i is
- * the ray to the centre for every point, and the ball's image is its
- * outline scaled, P at ball_c + r (n . right, n . up).  Returns 0 if the
- * point is not visible; *ci = cos(incidence).
- */
-static int ball_image(const struct ball *b, struct vec3 d, double *x, double *y,
-		      double *ci)
+/* (capture/probe/probe_internal.h) */
+int glint_probe_ball_image(const struct probe_ball *b, struct vec3 d, double *x,
+			   double *y, double *ci)
 {
 	struct vec3 i = v3_norm(b->c), n = i;
 	if (b->ortho) {
@@ -332,6 +317,37 @@ static int ball_image(const struct ball *b, struct vec3 d, double *x, double *y,
 	return 1;
 }
 
+int glint_probe_ball_reflect(const struct probe_ball *b, double x, double y,
+			     struct vec3 *d, double *ci)
+{
+	struct vec3 r, n;
+	if (b->ortho) {
+		struct vec3 i = v3_norm(b->c);
+		struct vec3 right = v3_norm(v3_cross(i, v3(0, 1, 0)));
+		struct vec3 up = v3_cross(right, i);
+		double u = (x - b->bcx) / b->br, v = -(y - b->bcy) / b->br;
+		double w2 = 1 - u * u - v * v;
+		if (w2 <= 0)
+			return 0;
+		r = i;
+		n = v3_add(v3_add(v3_scale(right, u), v3_scale(up, v)),
+			   v3_scale(i, -sqrt(w2)));
+	} else {
+		r = v3_norm(
+			v3((x - b->cx) / b->fpx, -(y - b->cy) / b->fpx, -1));
+		double bq = v3_dot(r, b->c);
+		double disc = bq * bq - v3_dot(b->c, b->c) + 1;
+		if (disc <= 0)
+			return 0;
+		n = v3_sub(v3_scale(r, bq - sqrt(disc)), b->c);
+	}
+	*ci = -v3_dot(r, n);
+	if (*ci <= 0)
+		return 0;
+	*d = v3_add(r, v3_scale(n, 2 * *ci));
+	return 1;
+}
+
 /* The photo bilinearly at continuous pixel coordinates (px, py). */
 static void photo_bilinear(const struct glint_image *photo, double px,
 			   double py, float rgb[3])
@@ -352,27 +368,26 @@ static void photo_bilinear(const struct glint_image *photo, double px,
 
 /* Photo pixels per steradian around direction d (imaged at px, py): the
  * image of a small (dth x dth) patch. */
-static double pixel_density(const struct ball *b, struct vec3 d, double px,
-			    double py, double dth)
+static double pixel_density(const struct probe_ball *b, struct vec3 d,
+			    double px, double py, double dth)
 {
 	struct vec3 t1 = v3_norm(v3_cross(d, v3(0, 1, 0)));
 	if (v3_len(v3_cross(d, v3(0, 1, 0))) < 1e-6)
 		t1 = v3(1, 0, 0);
 	struct vec3 t2 = v3_cross(d, t1);
 	double ax, ay, bx, by, c1;
-	if (!ball_image(b, v3_norm(v3_add(d, v3_scale(t1, dth))), &ax, &ay,
-			&c1) ||
-	    !ball_image(b, v3_norm(v3_add(d, v3_scale(t2, dth))), &bx, &by,
-			&c1))
+	if (!glint_probe_ball_image(b, v3_norm(v3_add(d, v3_scale(t1, dth))),
+				    &ax, &ay, &c1) ||
+	    !glint_probe_ball_image(b, v3_norm(v3_add(d, v3_scale(t2, dth))),
+				    &bx, &by, &c1))
 		return 0;
 	return fabs((ax - px) * (by - py) - (ay - py) * (bx - px)) /
 	       (dth * dth);
 }
 
-/* The ball as the photo's pinhole camera sees it (its centre from its
- * circle, exact for the pinhole). */
-static int ball_setup(const struct glint_image *photo,
-		      const struct glint_unwrap_opts *o, struct ball *b)
+int glint_probe_ball_setup(const struct glint_image *photo,
+			   const struct glint_unwrap_opts *o,
+			   struct probe_ball *b)
 {
 	struct glint_pinhole cam;
 
@@ -413,7 +428,7 @@ int glint_probe_unwrap(const struct glint_image *photo,
 		       struct glint_image **env, struct glint_image **mask,
 		       struct glint_image **density)
 {
-	struct ball b;
+	struct probe_ball b;
 	int w = o->width, h = o->height;
 
 	*env = NULL;
@@ -421,7 +436,7 @@ int glint_probe_unwrap(const struct glint_image *photo,
 		*mask = NULL;
 	if (density)
 		*density = NULL;
-	int ret = ball_setup(photo, o, &b);
+	int ret = glint_probe_ball_setup(photo, o, &b);
 	if (ret < 0)
 		return ret;
 	if (w <= 0 || h <= 0) {
@@ -449,7 +464,7 @@ int glint_probe_unwrap(const struct glint_image *photo,
 			float *pe = glint_image_px(e, x, y),
 			      *pm = glint_image_px(m, x, y),
 			      *pd = glint_image_px(dn, x, y);
-			int ok = ball_image(&b, d, &px, &py, &ci) &&
+			int ok = glint_probe_ball_image(&b, d, &px, &py, &ci) &&
 				 px >= 0.5 && py >= 0.5 &&
 				 px <= photo->width - 0.5 &&
 				 py <= photo->height - 0.5;
@@ -534,17 +549,59 @@ static int check_light(struct glint_image *env, const char *path)
 	return 0;
 }
 
+/* What the log says of each compact source. */
+static void log_sources(const struct glint_light_sources *s)
+{
+	double ty = 0.2126 * s->total_flux[0] + 0.7152 * s->total_flux[1] +
+		    0.0722 * s->total_flux[2];
+	for (int i = 0; i < s->n; i++) {
+		const struct glint_light_source *l = &s->s[i];
+		double fy = 0.2126 * l->flux[0] + 0.7152 * l->flux[1] +
+			    0.0722 * l->flux[2];
+		glint_log_info(
+			"light source %d: azimuth %.1f, elevation %.1f deg "
+			"(+- %.2f), %.1f %% of the light, %.2f px in the "
+			"photo (%.2f deg per px)%s: a point in the map",
+			i + 1, atan2(l->dir.x, -l->dir.z) * 180 / M_PI,
+			asin(fmax(-1, fmin(1, l->dir.y))) * 180 / M_PI,
+			l->dir_sigma_deg, ty > 0 ? 100 * fy / ty : 0,
+			l->px_deg > 0 ? l->size_deg / l->px_deg : 0, l->px_deg,
+			l->saturated ? ", clipped: its flux is a lower bound"
+				     : "");
+	}
+}
+
 int glint_probe_unwrap_write(const struct glint_image *photo,
 			     const struct glint_unwrap_opts *o,
 			     const char *env_path, int *width, int *height)
 {
 	struct glint_image *env = NULL, *mask = NULL, *dens = NULL;
+	struct glint_image *cleaned = NULL;
 	struct glint_write_opts png = { 0 };
+	struct glint_light_sources src = { 0 };
+	struct glint_source_opts so;
 	char path[GLINT_PATH_MAX];
-	int ret = glint_probe_unwrap(photo, o, &env, &mask, &dens);
+	int ret = 0;
 
+	glint_source_default_opts(&so);
+	if (!o->no_sources)
+		ret = glint_probe_find_sources(photo, o->variance, o->weights,
+					       o, &so, &src, &cleaned);
+	if (ret == 0)
+		ret = glint_probe_unwrap(cleaned ? cleaned : photo, o, &env,
+					 &mask, &dens);
+	glint_image_free(cleaned);
+	if (ret == 0 && !o->no_sources) {
+		glint_probe_add_sources(env, &src);
+		log_sources(&src);
+	}
 	if (ret == 0)
 		ret = check_light(env, env_path);
+	if (ret == 0 && !o->no_sources)
+		ret = glint_path_sibling(path, sizeof(path), env_path,
+					 "-sources.json");
+	if (ret == 0 && !o->no_sources)
+		ret = glint_probe_sources_write(path, NULL, &src);
 	if (ret == 0)
 		ret = glint_image_write(env_path, env, NULL);
 	if (ret == 0)

@@ -82,6 +82,12 @@ struct glint_unwrap_opts {
 	int orthographic;	/* for comparison: the approximation peers
 				   use (parallel view rays) */
 	int width, height;	/* lat-long output (default 4 r x 2 r) */
+	/* Compact light sources (capture/probe/probe_sources.h): found and
+	 * put into the map as points unless no_sources; the merge's
+	 * variance and weights (may be NULL) give their noise and say which
+	 * are clipped. */
+	int no_sources;
+	const struct glint_image *variance, *weights;
 };
 
 /* Defaults: chrome (n 3.2, k 3.3: 55 % at normal incidence), 80 deg, 6 deg,
@@ -103,9 +109,10 @@ int glint_probe_unwrap(const struct glint_image *photo,
 
 /*
  * Unwrap and write the map to env_path, its reliability mask to
- * ENV-mask.png and its sampling density to ENV-density.exr beside it (ENV:
- * env_path without its extension), each atomically.  *width, *height (may
- * be NULL) get the map's size.
+ * ENV-mask.png, its sampling density to ENV-density.exr and its compact
+ * light sources to ENV-sources.json beside it (ENV: env_path without its
+ * extension; no sources file with o->no_sources), each atomically.
+ * *width, *height (may be NULL) get the map's size.
  */
 int glint_probe_unwrap_write(const struct glint_image *photo,
 			     const struct glint_unwrap_opts *o,

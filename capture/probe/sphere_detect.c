@@ -245,13 +245,22 @@ static int subpixel_edges(const struct edge_map *em, const double c[3],
 			       uy = em->gy[i] / em->m[i];
 			if (fabs((dx * ux + dy * uy) / d) < 0.9)
 				continue;
-			double a = sample(em->acc, w, h, x - ux, y - uy),
-			       b = em->acc[i],
-			       cc = sample(em->acc, w, h, x + ux, y + uy);
+			/* The linear gradient's peak along the gradient
+			 * line, within 2 px of the (log) edge pixel: the log
+			 * edge sits on the dark side of a blurred rim. */
+			double g[7];
+			int best = 3;
+			for (int t = -3; t <= 3; t++)
+				g[t + 3] = sample(em->acc, w, h, x + t * ux,
+						  y + t * uy);
+			for (int t = 1; t <= 5; t++)
+				if (g[t] > g[best])
+					best = t;
+			double a = g[best - 1], b = g[best], cc = g[best + 1];
 			double den = a - 2 * b + cc, off = 0;
 			if (den < 0)
 				off = 0.5 * (a - cc) / den;
-			off = fmax(-0.5, fmin(0.5, off));
+			off = fmax(-0.5, fmin(0.5, off)) + (best - 3);
 			px[np] = x + 0.5 + off * ux;
 			py[np] = y + 0.5 + off * uy;
 			np++;

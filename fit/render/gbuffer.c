@@ -25,6 +25,9 @@ struct pixel_pattern {
 	int spp;
 	double (*base)[2]; /* Hammersley points */
 	int *perm;	   /* lens index shuffle */
+	/* the camera's blur as a pixel filter (core/pinhole.h) */
+	int filtered;
+	float filter[GLINT_PIXEL_FILTER_N + 1];
 };
 
 static int pattern_init(struct pixel_pattern *pp, int spp)
@@ -84,6 +87,10 @@ static void pattern_sample(const struct pixel_pattern *pp,
 	pix[1] = frac(pp->base[s][1] + ps->pix[1]);
 	lens[0] = frac(pp->base[k][0] + ps->lens[0]);
 	lens[1] = frac(pp->base[k][1] + ps->lens[1]);
+	if (pp->filtered) {
+		pix[0] = glint_pixel_filter_map(pp->filter, pix[0]);
+		pix[1] = glint_pixel_filter_map(pp->filter, pix[1]);
+	}
 }
 
 void glint_pixel_sample(int x, int y, int s, int spp, double pix[2],
@@ -266,7 +273,24 @@ static int gbuffer_begin(struct glint_tracer *t,
 	}
 	gb->src->t = t;
 	gb->src->cam = *cam;
+	gb->src->pattern.filtered = glint_pixel_filter_on(cam);
+	if (gb->src->pattern.filtered)
+		glint_pixel_filter_table(cam, gb->src->pattern.filter);
 	return 0;
+}
+
+const float *glint_gbuffer_filter(const struct glint_gbuffer *gb)
+{
+	return gb->src && gb->src->pattern.filtered ? gb->src->pattern.filter
+						    : NULL;
+}
+
+void glint_gbuffer_pixel_sample(const struct glint_gbuffer *gb, int x, int y,
+				int s, double pix[2], double lens[2])
+{
+	struct pixel_shift ps;
+	pixel_shift(x, y, gb->spp, &ps);
+	pattern_sample(&gb->src->pattern, &ps, s, pix, lens);
 }
 
 static int gbuffer_trace(struct glint_gbuffer *gb, int nthreads,

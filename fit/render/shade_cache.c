@@ -192,6 +192,11 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 	c->pix = malloc((size_t)n * sizeof(*c->pix));
 	c->hits = calloc((size_t)n * gb->spp, sizeof(*c->hits));
 	c->feet = calloc((size_t)n, sizeof(*c->feet));
+	if (glint_gbuffer_filter(gb)) {
+		memcpy(c->filter_table, glint_gbuffer_filter(gb),
+		       sizeof(c->filter_table));
+		c->filter = c->filter_table;
+	}
 	c->envs = calloc((size_t)n * gb->spp * (c->nl ? c->nl : 1),
 			 sizeof(*c->envs));
 	c->lobe_sobol = malloc((size_t)(c->nb ? c->nb : 1) * gb->spp *
@@ -269,7 +274,7 @@ int glint_shade_cache_new(const struct glint_gbuffer *gb, const int32_t *pix,
 		}
 		shade_foot_fit(gb, pix[i],
 			       glint_gbuffer_pixel(gb, (size_t)pix[i]),
-			       &c->feet[i]);
+			       c->filter, &c->feet[i]);
 	}
 	struct setup_job job = { c, opts->static_samples, p0, 0 };
 	glint_parallel_for(n, 64, opts->nthreads, setup_pixels, &job);

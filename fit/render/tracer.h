@@ -149,4 +149,15 @@ void glint_tracer_intersect_raw(struct glint_tracer *t, const float *rays,
 void glint_pixel_sample(int x, int y, int s, int spp, double pix[2],
 			double lens[2]);
 
+/* Where gb's tracer put sample s of frame pixel (x, y): the position
+ * above mapped through the camera's pixel filter (core/pinhole.h), in
+ * pixels from the pixel's corner (outside [0, 1) when the camera
+ * blurs). */
+void glint_gbuffer_pixel_sample(const struct glint_gbuffer *gb, int x, int y,
+				int s, double pix[2], double lens[2]);
+
+/* gb's camera's pixel filter table (core/pinhole.h), NULL without one;
+ * it lives as long as gb. */
+const float *glint_gbuffer_filter(const struct glint_gbuffer *gb);
+
 #endif

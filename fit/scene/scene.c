@@ -33,8 +33,11 @@ static int load_camera(const char *file, json_t *o, struct glint_scene *s)
 					     "position",
 					     "look_at",
 					     "up",
+					     "psf_sigma_px",
+					     "olpf",
 					     NULL };
 	double focal = 0, sensor = 0, pitch_um = 0, fnum = 0, focus = 0;
+	double psf = 0;
 	double pos[3] = { 0, 0, 0 }, at[3] = { 0, 0, -1 }, up[3] = { 0, 1, 0 };
 	int w = 0, h = 0, ret;
 
@@ -63,6 +66,16 @@ static int load_camera(const char *file, json_t *o, struct glint_scene *s)
 		ret = glint_json_number(file, "camera", o, "focus_distance_m",
 					0, positive, &focus);
 	if (!ret)
+		ret = glint_json_number(file, "camera", o, "psf_sigma_px", 0,
+					(struct glint_range){ 0, 8, 0, 0 },
+					&psf);
+	json_t *olpf = json_object_get(o, "olpf");
+	if (!ret && olpf && !json_is_boolean(olpf))
+		ret = glint_error_set(EINVAL,
+				      "%s: camera.olpf: expected true or "
+				      "false",
+				      file);
+	if (!ret)
 		ret = glint_json_numbers(file, "camera", o, "position", 0, 3,
 					 any, pos);
 	if (!ret)
@@ -90,6 +103,8 @@ static int load_camera(const char *file, json_t *o, struct glint_scene *s)
 				 v3(up[0], up[1], up[2]));
 	if (ret < 0)
 		return glint_error_prefix(ret, "%s", file);
+	s->cam.psf_sigma_px = psf;
+	s->cam.olpf = json_is_true(olpf);
 	return 0;
 }
 

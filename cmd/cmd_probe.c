@@ -11,12 +11,14 @@
 #include "capture/probe/probe_register.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/path.h"
 
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 void cmd_probe_help(void)
 {
@@ -34,8 +36,14 @@ void cmd_probe_help(void)
 	       "orthographic\napproximation), divided by the ball's "
 	       "reflectance at each angle.  Also writes\nENV-mask.png "
 	       "(white = reliable: not grazing, not the camera's own "
-	       "reflection)\nand ENV-density.exr (photo pixels per "
-	       "steradian, for blending two views).\n"
+	       "reflection),\nENV-density.exr (photo pixels per "
+	       "steradian, for blending two views) and\n"
+	       "ENV-sources.json: light sources too small for the photo to "
+	       "resolve (the sun, a\nsmall lamp), found, measured (direction, "
+	       "flux, colour, their uncertainty) and\nput into the map as "
+	       "points (docs/hdr.md).  PHOTO-variance.exr and\n"
+	       "PHOTO-weights.exr beside the photo (a merge's) give their "
+	       "noise and clipping.\n"
 	       "  --focal-px F         focal length in pixels\n"
 	       "  --principal X,Y      principal point (default: the image "
 	       "centre)\n"
@@ -54,6 +62,8 @@ void cmd_probe_help(void)
 	       "  --size WxH           output size (default 4R x 2R)\n"
 	       "  --orthographic       the peers' approximation, for "
 	       "comparison\n"
+	       "  --no-sources         leave compact light sources as "
+	       "photographed\n"
 	       "\n"
 	       "convert: between latlong, angular (Debevec's light probe "
 	       "format), cross\n(vertical cube cross) and ball (ideal "
@@ -103,6 +113,35 @@ static int parse_numbers(const char *arg, void *dest)
 	return 0;
 }
 
+/* PHOTO-variance.exr or PHOTO-weights.exr beside a merged photo (PHOTO
+ * without its extension), when it is there and the photo's size; NULL
+ * else (the sources' flux then has no noise term, clipping is not seen). */
+static struct glint_image *merge_sibling(const char *photo_path,
+					 const char *suffix,
+					 const struct glint_image *photo)
+{
+	char path[GLINT_PATH_MAX];
+	struct glint_image *img = NULL;
+	struct stat st;
+	if (glint_path_sibling(path, sizeof(path), photo_path, suffix) < 0 ||
+	    stat(path, &st) < 0) {
+		glint_error_clear();
+		return NULL;
+	}
+	if (glint_image_read(path, &img) < 0 || img->width != photo->width ||
+	    img->height != photo->height) {
+		glint_log_warn("%s: not used (%s)", path,
+			       img ? "not the photo's size"
+				   : glint_error_msg());
+		glint_error_clear();
+		glint_image_free(img);
+		return NULL;
+	}
+	glint_log_info("%s: the merge's %s", path,
+		       suffix[1] == 'v' ? "variance" : "weights");
+	return img;
+}
+
 static int unwrap_main(int argc, char **argv)
 {
 	struct glint_unwrap_opts o;
@@ -121,6 +160,7 @@ static int unwrap_main(int argc, char **argv)
 		CMD_REAL("grazing", &o.grazing_deg, 0, 90),
 		CMD_CALL("size", &size, parse_numbers),
 		CMD_FLAG("orthographic", 0, &o.orthographic),
+		CMD_FLAG("no-sources", 0, &o.no_sources),
 		CMD_FLAG("srgb", 0, &srgb),
 		CMD_STRING("output", 'o', &out),
 		{ 0 },
@@ -163,12 +203,22 @@ static int unwrap_main(int argc, char **argv)
 	int ret = glint_image_read_radiance(argv[0], srgb, &photo);
 	if (ret == 0 && (ret = glint_probe_find_ball(photo, have_ball, &o)) < 0)
 		glint_error_prefix(ret, "%s", argv[0]);
+	struct glint_image *var = NULL, *wt = NULL;
+	if (ret == 0 && !o.no_sources) {
+		var = merge_sibling(argv[0], "-variance.exr", photo);
+		wt = merge_sibling(argv[0], "-weights.exr", photo);
+	}
+	o.variance = var;
+	o.weights = wt;
 	if (ret == 0)
 		ret = glint_probe_unwrap_write(photo, &o, out, &w, &h);
 	if (ret == 0)
-		glint_log_info("%s -> %s (%dx%d), mask and density beside it",
-			       argv[0], out, w, h);
+		glint_log_info("%s -> %s (%dx%d), mask, density%s beside it",
+			       argv[0], out, w, h,
+			       o.no_sources ? "" : " and sources");
 	glint_image_free(photo);
+	glint_image_free(var);
+	glint_image_free(wt);
 	return ret < 0 ? cmd_fail("probe") : GLINT_EXIT_OK;
 }
 

@@ -84,23 +84,37 @@ static int select_model(const struct glint_fit_view *views, int nv,
 		return glint_error_prefix(ret, "--select-model");
 	}
 	const struct glint_select_candidate *c = &sel->c[sel->chosen];
+	/* c: the candidate reported (below) */
 	if (sel->has_fit[sel->chosen]) {
 		*res = sel->fit[sel->chosen];
 	} else if (sel->chosen == GLINT_SEL_LAMBERT) {
 		ret = glint_fit_views(views, nv, &glint_model_lambert, o, res);
 	} else {
-		/* Grey: the reduced model's values and standard errors
-		 * (select.c); the full fit's intervals and covariance do
-		 * not apply to them. */
+		/* Grey specular: the reduced fit's standard errors are the
+		 * textbook ones (no sample sets, no model error, no
+		 * discrepancy), so the full model's fit is the result, with
+		 * its whole uncertainty: grey nests in it, and its specular
+		 * channels' intervals say how grey the material is.  The grey
+		 * values stay in model_selection. */
 		*res = sel->fit[GLINT_SEL_RGB];
-		memcpy(res->p, c->p, sizeof(res->p));
-		memcpy(res->se, c->se, sizeof(res->se));
-		res->unc.n = 0;
+		c = &sel->c[GLINT_SEL_RGB];
+		glint_log_info("--select-model: grey specular scores best; "
+			       "the full model's fit is reported, with its "
+			       "intervals (the grey fit's values are in "
+			       "model_selection)");
 	}
 	*model = c->model;
 	res->model = c->model;
 	glint_log_info("--select-model: %s", sel->why);
 	*why = glint_selection_to_json(sel);
+	if (*why && sel->chosen == GLINT_SEL_GREY)
+		json_object_set_new(
+			*why, "reported",
+			json_string("torrance-sparrow: grey specular scores "
+				    "best, and the full model's fit is "
+				    "reported with its whole uncertainty (a "
+				    "grey fit has textbook standard errors "
+				    "only)"));
 	free(sel);
 	return ret;
 }

@@ -58,11 +58,6 @@ struct glint_shade_cache {
 	struct glint_shade_light *own_light; /* when not shared */
 	int lambert[GLINT_MAX_PARAMS];	     /* lobe j is the constant 1/pi */
 	int n, spp, nl, nb, nthreads, no_footprint;
-	/* The camera's pixel filter (core/pinhole.h): footprints span it,
-	 * not the pixel's square; NULL without one (points into gbuffer's
-	 * copy below). */
-	const float *filter;
-	float filter_table[GLINT_PIXEL_FILTER_N + 1];
 	int32_t *pix;
 	struct cache_hit *hits;	   /* n * spp */
 	struct cache_foot *feet;   /* n */
@@ -132,20 +127,11 @@ void shade_lobe_at_hit(const struct glint_shade_cache *c,
 
 /*
  * Fit pixel pix's footprint to its spp hits g (least squares over their
- * positions in the pixel; glint_pixel_sample() places them as the tracer
- * did).  Fewer than 3 hits, or hits in a line: no footprint (turn 0).
+ * positions in the pixel; glint_gbuffer_pixel_sample() places them as the
+ * tracer did).  Fewer than 3 hits, or hits in a line: no footprint (turn 0).
  */
 void shade_foot_fit(const struct glint_gbuffer *gb, int32_t pix,
-		    const struct glint_hit *g, const float *filter,
-		    struct cache_foot *f);
-
-/* A footprint coordinate (-0.5 .. 0.5: the quantile of the pixel's
- * samples along an axis, less a half) as pixels from the pixel's centre:
- * itself for the pixel's square, through the camera's filter else. */
-static inline double shade_foot_pos(const float *filter, double u)
-{
-	return filter ? glint_pixel_filter_map(filter, u + 0.5) - 0.5 : u;
-}
+		    const struct glint_hit *g, struct cache_foot *f);
 
 /*
  * Lobe j's hot part over pixel i where the lobe is narrow against the

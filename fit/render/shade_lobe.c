@@ -178,10 +178,8 @@ void shade_lobe_at_hit(const struct glint_shade_cache *c,
 				(uint32_t)(nb * c->spp), sp->perm);
 			double x = (q + 0.5) / (nb * c->spp) + sp->shift[0];
 			double y = glint_radical2(q) + sp->shift[1];
-			double at[2] = {
-				shade_foot_pos(c->filter, x - (x >= 1) - 0.5),
-				shade_foot_pos(c->filter, y - (y >= 1) - 0.5)
-			};
+			double at[2] = { x - (x >= 1) - 0.5,
+					 y - (y >= 1) - 0.5 };
 			struct cache_hit hq;
 			if (hit_at(sp->f, at, &hq))
 				lobe_sample(c, &hq, p, j, nl, nb, uu, sp->w,
@@ -196,8 +194,7 @@ void shade_lobe_at_hit(const struct glint_shade_cache *c,
  * tracer did).  Fewer than 3 hits, or hits in a line: no footprint (turn 0).
  */
 void shade_foot_fit(const struct glint_gbuffer *gb, int32_t pix,
-		    const struct glint_hit *g, const float *filter,
-		    struct cache_foot *f)
+		    const struct glint_hit *g, struct cache_foot *f)
 {
 	uint32_t fp = glint_gbuffer_frame_pixel(gb, (size_t)pix);
 	int fw = gb->frame_width ? gb->frame_width : gb->width;
@@ -254,25 +251,12 @@ void shade_foot_fit(const struct glint_gbuffer *gb, int32_t pix,
 	f->r[0] = (float)r.x;
 	f->r[1] = (float)r.y;
 	f->r[2] = (float)r.z;
-	/* the turn across the footprint: the pixel, or the span of the
-	 * camera's filter that holds the same share of its samples (the
-	 * standard deviation's multiple the square has, sqrt 12) */
-	double half = 0.5;
-	if (filter) {
-		double m1 = 0, m2 = 0;
-		for (int k = 0; k < 64; k++) {
-			double x = shade_foot_pos(filter, (k + 0.5) / 64 - 0.5);
-			m1 += x / 64;
-			m2 += x * x / 64;
-		}
-		half = 0.5 * sqrt(12 * fmax(m2 - m1 * m1, 0));
-	}
-	foot_at(f, -half, 0, &n, &d, &r0);
-	foot_at(f, half, 0, &n, &d, &r1);
-	double tu = angle(r0, r1) / (2 * half);
-	foot_at(f, 0, -half, &n, &d, &r0);
-	foot_at(f, 0, half, &n, &d, &r1);
-	f->turn = (float)(fmax(tu, angle(r0, r1) / (2 * half)) * 2 * half);
+	foot_at(f, -0.5, 0, &n, &d, &r0);
+	foot_at(f, 0.5, 0, &n, &d, &r1);
+	double tu = angle(r0, r1);
+	foot_at(f, 0, -0.5, &n, &d, &r0);
+	foot_at(f, 0, 0.5, &n, &d, &r1);
+	f->turn = (float)fmax(tu, angle(r0, r1));
 }
 
 /* Lobe j's hot part, the mean over pixel i's footprint on a k x k grid;
@@ -289,10 +273,8 @@ static void hot_grid(const struct glint_shade_cache *c,
 	for (int a = 0; a < k; a++)
 		for (int e = 0; e < k; e++) {
 			struct vec3 n, d, r, t, b;
-			foot_at(f,
-				shade_foot_pos(c->filter, (a + 0.5) / k - 0.5),
-				shade_foot_pos(c->filter, (e + 0.5) / k - 0.5),
-				&n, &d, &r);
+			foot_at(f, (a + 0.5) / k - 0.5, (e + 0.5) / k - 0.5, &n,
+				&d, &r);
 			v3_frame(n, &t, &b);
 			struct vec3 wo =
 				v3(-v3_dot(d, t), -v3_dot(d, b), -v3_dot(d, n));

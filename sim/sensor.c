@@ -86,8 +86,9 @@ int glint_sensor_optics(const struct glint_sensor *s, struct glint_image *img)
 		for (int j = 0; j < count; j++) {
 			for (int i = -r; i < len + r; i++) {
 				int ii = i < 0 ? 0 : i >= len ? len - 1 : i;
-				const float *p = pass ? glint_image_px(img, j, ii)
-						      : glint_image_px(img, ii, j);
+				const float *p =
+					pass ? glint_image_px(img, j, ii)
+					     : glint_image_px(img, ii, j);
 				for (int c = 0; c < 3; c++)
 					line[3 * (i + r) + c] = p[c];
 			}

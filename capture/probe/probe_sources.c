@@ -284,8 +284,7 @@ static int measure(const struct glint_image *photo,
 		/* the background under the spot: the plane's own error, and
 		 * the sky's structure the plane leaves in the ring (its RMS),
 		 * taken as half correlated across the aperture */
-		double bg_mean = pl->rms[c] * geo[c] *
-				 sqrt(1.0 / pl->n + 0.25);
+		double bg_mean = pl->rms[c] * geo[c] * sqrt(1.0 / pl->n + 0.25);
 		double conv = f4[c] - f3[c];
 		s->flux[c] = fmax(0, f4[c]); /* no light is negative */
 		s->flux_sigma[c] =

@@ -70,7 +70,7 @@ check "... into SESSION/fit" test -s "$sess/fit/params.json" -a -s "$sess/fit/co
 # camera's blur): diffuse within 0.01, roughness within 0.02, ior within
 # 0.08, specular within 0.08 of yellow plastic (Table 1).  The sphere is
 # 42 px in radius here, where the sun's highlight spans under two pixels
-# and the roughness is at the photo's resolution (0.054 measured for
+# and the roughness is at the photo's resolution (0.035 measured for
 # 0.039); tests/sim/test_rig.sh checks the rig's 84 px sphere to 5 %.
 check "... recovers yellow plastic (Table 1)" python3 -c "
 import json, sys

@@ -6,6 +6,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/json.h"
 #include "core/lockfile.h"
 #include "core/log.h"
 #include "core/path.h"
@@ -278,18 +279,22 @@ static int job_name(const struct dirent *e)
 	       !strstr(e->d_name, ".tmp");
 }
 
+/* A job file is a few hundred bytes; a megabyte is no job. */
+#define GLINT_JOB_MAX_BYTES (1024 * 1024)
+
 static int load_job(const struct qdir *d, int state, const char *file,
 		    struct glint_job *job)
 {
-	json_error_t err;
-
 	memset(job, 0, sizeof(*job));
 	job->lock_fd = -1;
 	job->dir_fd = -1;
 	job->queue_uid = d->owner;
 	/* A link planted in the queue is never followed; the submitter is
 	 * the file's owner. */
-	int fd = openat(d->st[state], file, O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+	/* ... nor is a FIFO waited on (O_NONBLOCK until fstat says it is a
+	 * regular file), and a job file is read in blocks, up to a cap. */
+	int fd = openat(d->st[state], file,
+			O_RDONLY | O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK);
 	struct stat st;
 	if (fd < 0 || fstat(fd, &st) < 0 || !S_ISREG(st.st_mode)) {
 		int e = fd < 0 ? errno : EINVAL;
@@ -298,12 +303,23 @@ static int load_job(const struct qdir *d, int state, const char *file,
 		return glint_error_set(e, "%s/%s: not a job file: %s",
 				       states[state], file, strerror(e));
 	}
+	int fl = fcntl(fd, F_GETFL);
+	if (fl >= 0)
+		fcntl(fd, F_SETFL, fl & ~O_NONBLOCK);
 	job->uid = (unsigned)st.st_uid;
-	job->doc = json_loadfd(fd, 0, &err);
+	char name[GLINT_PATH_MAX];
+	snprintf(name, sizeof(name), "%s/%s", states[state], file);
+	int ret = st.st_size > GLINT_JOB_MAX_BYTES
+			  ? glint_error_set(EFBIG,
+					    "%s: %lld bytes: expected a job "
+					    "file of at most %d",
+					    name, (long long)st.st_size,
+					    GLINT_JOB_MAX_BYTES)
+			  : glint_json_load_fd(fd, name, GLINT_JOB_MAX_BYTES,
+					       &job->doc);
 	close(fd);
-	if (!job->doc)
-		return glint_error_set(EINVAL, "%s/%s: %s", states[state], file,
-				       err.text);
+	if (ret < 0)
+		return ret;
 	/* A waiting or running job's file is its submitter's; a finished
 	 * one was rewritten by the worker, which kept the submitter. */
 	json_t *by = json_object_get(job->doc, "submitter_uid");

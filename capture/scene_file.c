@@ -40,7 +40,7 @@ static int usable_probe(const char *dir)
 	if (!is_file(path))
 		return 0;
 	snprintf(path, sizeof(path), "%s/session.json", dir);
-	doc = json_load_file(path, 0, NULL);
+	doc = glint_json_read_quiet(path);
 	ok = doc && json_is_string(json_object_get(doc, "status")) &&
 	     !strcmp(json_string_value(json_object_get(doc, "status")),
 		     "complete");

@@ -6,6 +6,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/json.h"
 #include "core/log.h"
 #include "export/export.h"
 
@@ -110,7 +111,7 @@ json_t *cmd_export_write(enum glint_export_format format,
 /* The sphere's diameter a fit's params.json records, or NAN. */
 static double recorded_diameter(const char *path)
 {
-	json_t *doc = json_load_file(path, 0, NULL);
+	json_t *doc = glint_json_read_quiet(path);
 	double d = json_number_value(json_object_get(
 		json_object_get(doc, "inputs"), "sphere_diameter_m"));
 	json_decref(doc);

@@ -5,6 +5,7 @@
 #include "error.h"
 #include "formats.h"
 #include "log.h"
+#include "path.h"
 #include "tiff.h"
 
 #include <ctype.h>
@@ -213,7 +214,13 @@ static int image_read(const char *path, struct glint_image **out)
 int glint_image_read(const char *path, struct glint_image **out)
 {
 	double t0 = glint_clock_monotonic();
-	int ret = image_read(path, out);
+	/* the format libraries open the file by name: a FIFO or a device
+	 * would block them forever */
+	int ret = glint_check_regular(path);
+
+	*out = NULL;
+	if (ret == 0)
+		ret = image_read(path, out);
 	if (ret == 0)
 		glint_log_debug("read %s: %dx%d in %.3f s", path, (*out)->width,
 				(*out)->height, glint_clock_monotonic() - t0);
@@ -258,6 +265,8 @@ int glint_image_read_window(const char *path, int frame_width, int frame_height,
 	int w = 0, h = 0, ret;
 
 	*out = NULL;
+	if ((ret = glint_check_regular(path)) < 0)
+		return ret;
 	*cropped = 0;
 	glint_path_ext(path, ext, sizeof(ext));
 	if (!strcmp(ext, "exr")) {

@@ -1,28 +1,105 @@
 /* SPDX-License-Identifier: MIT */
 #include "json.h"
 #include "suggest.h"
+#include "path.h"
 
 #include "error.h"
 
+#include <errno.h>
 #include <math.h>
+#include <stdlib.h>
+#include <unistd.h>
 #include <stdio.h>
 #include <string.h>
 
-int glint_json_load(const char *path, json_t **out)
+int glint_json_load_fd(int fd, const char *name, size_t max, json_t **out)
 {
 	json_error_t err;
+	size_t cap = 4096, n = 0;
+	char *buf = malloc(cap);
 
-	*out = json_load_file(path, JSON_REJECT_DUPLICATES, &err);
+	*out = NULL;
+	if (!buf)
+		return glint_error_set(ENOMEM, "%s: out of memory", name);
+	/* in blocks, never past max (the size fstat gave may grow) */
+	for (;;) {
+		if (n == cap) {
+			char *nb = cap > max ? NULL : realloc(buf, 2 * cap);
+			if (!nb) {
+				free(buf);
+				return cap > max ? glint_error_set(
+							   EFBIG,
+							   "%s: more than %zu "
+							   "bytes: expected a "
+							   "JSON document of "
+							   "at most that",
+							   name, max)
+						 : glint_error_set(
+							   ENOMEM,
+							   "%s: out of memory",
+							   name);
+			}
+			buf = nb;
+			cap *= 2;
+		}
+		ssize_t r = read(fd, buf + n, cap - n);
+		if (r < 0 && errno == EINTR)
+			continue;
+		if (r < 0) {
+			int e = errno;
+			free(buf);
+			return glint_error_set(e, "%s: %s", name, strerror(e));
+		}
+		if (r == 0)
+			break;
+		n += (size_t)r;
+	}
+	if (n > max) {
+		free(buf);
+		return glint_error_set(EFBIG,
+				       "%s: %zu bytes: expected a JSON "
+				       "document of at most %zu",
+				       name, n, max);
+	}
+	*out = json_loadb(buf, n, JSON_REJECT_DUPLICATES, &err);
+	free(buf);
 	if (!*out)
-		return glint_error_set(EINVAL, "%s:%d:%d: %s", path, err.line,
+		return glint_error_set(EINVAL, "%s:%d:%d: %s", name, err.line,
 				       err.column, err.text);
 	if (!json_is_object(*out)) {
 		json_decref(*out);
 		*out = NULL;
 		return glint_error_set(
-			EINVAL, "%s: expected a JSON object at the top", path);
+			EINVAL, "%s: expected a JSON object at the top", name);
 	}
 	return 0;
+}
+
+int glint_json_load(const char *path, json_t **out)
+{
+	long long size = 0;
+	int fd = glint_open_regular(path, &size);
+
+	*out = NULL;
+	if (fd < 0)
+		return fd;
+	int ret = size > GLINT_JSON_MAX_BYTES
+			  ? glint_error_set(EFBIG,
+					    "%s: %lld bytes: expected a JSON "
+					    "document of at most %d",
+					    path, size, GLINT_JSON_MAX_BYTES)
+			  : glint_json_load_fd(fd, path, GLINT_JSON_MAX_BYTES,
+					       out);
+	close(fd);
+	return ret;
+}
+
+json_t *glint_json_read_quiet(const char *path)
+{
+	json_t *doc = NULL;
+	if (glint_json_load(path, &doc) < 0)
+		glint_error_clear();
+	return doc;
 }
 
 static void key_path(char *buf, size_t n, const char *where, const char *key)

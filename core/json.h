@@ -15,8 +15,24 @@
 
 #include <jansson.h>
 
-/* Parse a file; errors carry "file:line:column". Caller json_decref()s. */
+/* The largest JSON document glint reads (rig, scene, session, job and
+ * result files are kilobytes). */
+#define GLINT_JSON_MAX_BYTES (16 * 1024 * 1024)
+
+/* Parse a file; errors carry "file:line:column".  Only a regular file of
+ * at most GLINT_JSON_MAX_BYTES is read (a FIFO or a device is refused by
+ * name, core/path.h glint_open_regular), in blocks.  Caller
+ * json_decref()s. */
 int glint_json_load(const char *path, json_t **out);
+
+/* The same from an open descriptor (`name` for messages), read in blocks
+ * and refused past `max` bytes. */
+int glint_json_load_fd(int fd, const char *name, size_t max, json_t **out);
+
+/* glint_json_load() for a document whose absence or damage the caller
+ * reports itself (a session's summary): the document or NULL, no error
+ * left set. */
+json_t *glint_json_read_quiet(const char *path);
 
 /* Bounds for numbers: lo/hi inclusive unless the *_open flag is set. */
 struct glint_range {

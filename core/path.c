@@ -3,7 +3,10 @@
 #include "path.h"
 #include "error.h"
 
+#include <errno.h>
+#include <fcntl.h>
 #include <stdarg.h>
+#include <sys/stat.h>
 #include <stdlib.h>
 #include <unistd.h>
 #include <stdio.h>
@@ -97,4 +100,51 @@ const char *glint_data_dir(void)
 int glint_data_path(char *buf, size_t n, const char *name)
 {
 	return glint_path_join(buf, n, glint_data_dir(), name);
+}
+
+static const char *file_kind(mode_t m)
+{
+	return S_ISFIFO(m)   ? "a FIFO"
+	       : S_ISDIR(m)  ? "a folder"
+	       : S_ISCHR(m)  ? "a character device"
+	       : S_ISBLK(m)  ? "a block device"
+	       : S_ISSOCK(m) ? "a socket"
+			     : "not a plain file";
+}
+
+int glint_open_regular(const char *path, long long *size)
+{
+	struct stat st;
+	int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+
+	if (fd < 0)
+		return glint_error_set(errno, "%s: cannot open: %s", path,
+				       strerror(errno));
+	if (fstat(fd, &st) < 0) {
+		int e = errno;
+		close(fd);
+		return glint_error_set(e, "%s: %s", path, strerror(e));
+	}
+	if (!S_ISREG(st.st_mode)) {
+		close(fd);
+		return glint_error_set(EINVAL,
+				       "%s: %s, not a regular file: expected "
+				       "a file to read",
+				       path, file_kind(st.st_mode));
+	}
+	int fl = fcntl(fd, F_GETFL);
+	if (fl >= 0)
+		fcntl(fd, F_SETFL, fl & ~O_NONBLOCK);
+	if (size)
+		*size = (long long)st.st_size;
+	return fd;
+}
+
+int glint_check_regular(const char *path)
+{
+	int fd = glint_open_regular(path, NULL);
+	if (fd < 0)
+		return fd;
+	close(fd);
+	return 0;
 }

@@ -38,6 +38,20 @@ int glint_path_resolve(char *buf, size_t n, const char *base, const char *rel);
 int glint_path_sibling(char *buf, size_t n, const char *path,
 		       const char *suffix);
 
+/*
+ * An input file opened for reading only if it is a regular file: opened
+ * with O_NONBLOCK (a FIFO, a terminal or a device would otherwise block
+ * the open or the reads forever), checked with fstat, then set blocking
+ * again.  Returns the descriptor, or a negative errno with a message that
+ * names the file and what it is ("a FIFO, not a regular file").  *size
+ * (may be NULL) gets its size.
+ */
+int glint_open_regular(const char *path, long long *size);
+
+/* The same check alone, for readers a library opens by path: 0 or a
+ * negative errno naming the file. */
+int glint_check_regular(const char *path);
+
 /* The folder part of `path` ("." when it has none) into buf. */
 int glint_path_dirname(char *buf, size_t n, const char *path);
 

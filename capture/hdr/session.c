@@ -9,6 +9,7 @@
 #include "core/lockfile.h"
 #include "core/log.h"
 #include "core/error.h"
+#include "core/json.h"
 #include "core/path.h"
 
 #include <dirent.h>
@@ -385,7 +386,7 @@ void glint_session_summarize(const char *dir, struct glint_session_summary *s)
 
 	memset(s, 0, sizeof(*s));
 	if (glint_path_join(path, sizeof(path), dir, GLINT_SESSION_JSON) == 0)
-		doc = json_load_file(path, 0, NULL);
+		doc = glint_json_read_quiet(path);
 	const char *kind = json_string_value(json_object_get(doc, "kind"));
 	const char *status = json_string_value(json_object_get(doc, "status"));
 	const char *err = json_string_value(json_object_get(doc, "error"));
@@ -425,7 +426,7 @@ json_t *glint_session_fit_params(const char *dir)
 		glint_error_clear();
 		return NULL;
 	}
-	return json_load_file(path, 0, NULL);
+	return glint_json_read_quiet(path);
 }
 
 int glint_run_write(const char *dir, const struct glint_run_samples *rs)
@@ -457,7 +458,6 @@ int glint_run_write(const char *dir, const struct glint_run_samples *rs)
 int glint_run_read(const char *dir, struct glint_run_samples *rs)
 {
 	char path[GLINT_PATH_MAX];
-	json_error_t err;
 	struct stat st;
 	int ret = glint_path_join(path, sizeof(path), dir, GLINT_RUN_JSON);
 
@@ -468,10 +468,10 @@ int glint_run_read(const char *dir, struct glint_run_samples *rs)
 		return errno == ENOENT ? 0
 				       : glint_error_set(errno, "%s: %s", path,
 							 strerror(errno));
-	json_t *doc = json_load_file(path, 0, &err);
-	if (!doc)
-		return glint_error_set(EINVAL, "%s:%d: %s", path, err.line,
-				       err.text);
+	json_t *doc = NULL;
+	ret = glint_json_load(path, &doc);
+	if (ret < 0)
+		return ret;
 	json_t *list = json_object_get(doc, "samples");
 	size_t n = json_array_size(list);
 	if (n < 1 || n > GLINT_RUN_MAX_SAMPLES)

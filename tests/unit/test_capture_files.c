@@ -10,6 +10,11 @@
 #include "capture/hdr/frame_file.h"
 #include "capture/hdr/session.h"
 #include "core/error.h"
+#include "core/image.h"
+#include "core/json.h"
+
+#include <fcntl.h>
+#include <unistd.h>
 
 #include <jansson.h>
 #include <stdint.h>
@@ -230,6 +235,66 @@ static void test_run(const char *dir)
 	}
 }
 
+/*
+ * Special files where a reader expects a file: a FIFO (whose open would
+ * wait for a writer forever), a folder; each refused at once, naming the
+ * file and what it is.  A document over the cap is refused by size, read
+ * or not.  (Were the FIFO opened blocking, the test would hang and meet
+ * its timeout.)
+ */
+static void test_special_files(const char *dir)
+{
+	static const char *const names[] = { "fifo.json", "fifo.exr",
+					     "fifo.png", "fifo.hdr" };
+	char path[512];
+	json_t *doc = NULL;
+	struct glint_image *img = NULL;
+
+	for (int i = 0; i < 4; i++) {
+		snprintf(path, sizeof(path), "%s/%s", dir, names[i]);
+		CHECK(mkfifo(path, 0600) == 0, "mkfifo %s", path);
+		int ret = i == 0 ? glint_json_load(path, &doc)
+				 : glint_image_read(path, &img);
+		CHECK(ret < 0 && strstr(glint_error_msg(), path) &&
+			      strstr(glint_error_msg(), "a FIFO"),
+		      "%s: '%s'", names[i], glint_error_msg());
+		glint_error_clear();
+	}
+	snprintf(path, sizeof(path), "%s/folder.json", dir);
+	CHECK(mkdir(path, 0700) == 0, "mkdir");
+	CHECK(glint_json_load(path, &doc) < 0 &&
+		      strstr(glint_error_msg(), "a folder"),
+	      "'%s'", glint_error_msg());
+	glint_error_clear();
+	/* over the cap by its size (sparse: no 16 MiB written) */
+	snprintf(path, sizeof(path), "%s/huge.json", dir);
+	int fd = open(path, O_CREAT | O_WRONLY, 0600);
+	CHECK(fd >= 0 && ftruncate(fd, GLINT_JSON_MAX_BYTES + 1) == 0,
+	      "ftruncate");
+	if (fd >= 0)
+		close(fd);
+	CHECK(glint_json_load(path, &doc) < 0 &&
+		      strstr(glint_error_msg(), "at most"),
+	      "'%s'", glint_error_msg());
+	glint_error_clear();
+	/* and while read, past the cap given */
+	snprintf(path, sizeof(path), "%s/job.json", dir);
+	FILE *f = fopen(path, "w");
+	if (f) {
+		fprintf(f, "{\"kind\": \"fit\", \"pad\": \"%0100d\"}\n", 0);
+		fclose(f);
+	}
+	fd = open(path, O_RDONLY);
+	CHECK(fd >= 0 && glint_json_load_fd(fd, "job.json", 64, &doc) < 0 &&
+		      strstr(glint_error_msg(), "job.json"),
+	      "'%s'", glint_error_msg());
+	glint_error_clear();
+	if (fd >= 0)
+		close(fd);
+	CHECK(glint_json_load(path, &doc) == 0 && doc, "%s", glint_error_msg());
+	json_decref(doc);
+}
+
 int main(void)
 {
 	char dir[] = "/tmp/glint-capture-files-XXXXXX";
@@ -238,6 +303,7 @@ int main(void)
 	RUN_ARG(test_frames, dir);
 	RUN_ARG(test_session, dir);
 	RUN_ARG(test_run, dir);
+	RUN_ARG(test_special_files, dir);
 	char cmd[600];
 	snprintf(cmd, sizeof(cmd), "rm -rf '%s'", dir);
 	if (system(cmd) != 0)

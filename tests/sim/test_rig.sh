@@ -140,7 +140,7 @@ check "jobs lists the done job" run 0 "" jobs --root "$tmp/one"
 check "... done" grep -q " done " "$tmp/out"
 # A FIFO planted as a job file: its open would wait for a writer forever;
 # glint jobs must pass it by (timeout: a hang fails the check).
-mkfifo "$tmp/one/queue/pending/planted.json"
+mkdir -p "$tmp/one/queue/pending" && mkfifo "$tmp/one/queue/pending/planted.json"
 check "... a FIFO planted in the queue does not hang glint jobs" timeout 20 "$glint" jobs --root "$tmp/one"
 rm -f "$tmp/one/queue/pending/planted.json"
 check "... its record holds the parameters, relative RMSE and the fit's peak memory" bash -c "'$glint' jobs --root '$tmp/one' --json | python3 -c 'import json,sys; j=[x for x in json.load(sys.stdin)[\"jobs\"] if x[\"state\"] == \"done\"]; m=[x.get(\"peak_rss_mib\") for x in j]; print(\"  peak MiB\", m); sys.exit(not j or not all(v and 10 < v < 4096 for v in m) or not all(len(x.get(\"parameters\") or []) >= 4 and x.get(\"relative_rmse\", 0) > 0 for x in j))'"

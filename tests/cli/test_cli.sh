@@ -217,7 +217,11 @@ names=[p['name'] for p in r['parameters']]
 assert names[-1]=='diffuse_roughness' and len(names)==9, names
 assert abs(r['material']['diffuse'][0]-0.3)<0.03, r['material']
 assert abs(r['material']['diffuse_roughness']-0.6)<0.15, r['material']"
-check "a material key of another model is refused" run 1 "roughness2" render "$tmp/fscene.json" --material <(echo '{"model": "ggx", "roughness2": 0.3}') -o "$tmp/x.exr"
+echo '{"model": "ggx", "roughness2": 0.3}' >"$tmp/ggx-bad.json"
+check "a material key of another model is refused" run 1 "roughness2" render "$tmp/fscene.json" --material "$tmp/ggx-bad.json" -o "$tmp/x.exr"
+# Inputs are regular files: a pipe (here a process substitution) is
+# refused by name, as a FIFO planted where a file belongs would be.
+check "a pipe as an input is refused, named" run 1 "a FIFO, not a regular file" render "$tmp/fscene.json" --material <(echo '{"model": "ggx", "roughness": 0.3}') -o "$tmp/x.exr"
 check "fit --select-model" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fitsel" --select-model --json -q
 check "--select-model reports every candidate with AIC, BIC, errors" python3 -c "
 import json; r=json.load(open('$tmp/out'))['model_selection']

@@ -55,15 +55,10 @@ static int load_line(const char *path, const char *where, json_t *o,
 				       "(0..4095) or a line name",
 				       path, where);
 	}
-	json_t *al = json_object_get(o, "active_low");
-	if (al && !json_is_boolean(al))
-		return glint_error_set(EINVAL,
-				       "%s: %s.active_low: expected true or "
-				       "false",
-				       path, where);
-	l->active_low = json_is_true(al);
-	l->used = 1;
-	return 0;
+	l->active_low = 0;
+	ret = glint_json_bool(path, where, o, "active_low", &l->active_low);
+	l->used = ret == 0;
+	return ret;
 }
 
 /* board.lines.lights as a list: one line per lamp, lamp 1 first. */
@@ -391,13 +386,8 @@ static int load_optics(const char *path, json_t *doc,
 		ret = glint_json_number(path, "optics", opt, "psf_sigma_px", 0,
 					(struct glint_range){ 0, 8, 0, 0 },
 					&c->psf_sigma_px);
-	json_t *olpf = json_object_get(opt, "olpf");
-	if (!ret && olpf && !json_is_boolean(olpf))
-		ret = glint_error_set(EINVAL,
-				      "%s: optics.olpf: expected true or "
-				      "false",
-				      path);
-	c->olpf = json_is_true(olpf);
+	if (!ret)
+		ret = glint_json_bool(path, "optics", opt, "olpf", &c->olpf);
 	return ret;
 }
 

@@ -110,6 +110,23 @@ static void key_path(char *buf, size_t n, const char *where, const char *key)
 		snprintf(buf, n, "%s", key);
 }
 
+int glint_json_bool(const char *file, const char *where, json_t *obj,
+		    const char *key, int *out)
+{
+	json_t *v = json_object_get(obj, key);
+	char kp[256];
+
+	if (!v)
+		return 0;
+	if (!json_is_boolean(v)) {
+		key_path(kp, sizeof(kp), where, key);
+		return glint_error_set(EINVAL, "%s: %s: expected true or false",
+				       file, kp);
+	}
+	*out = json_is_true(v);
+	return 0;
+}
+
 static void range_text(char *buf, size_t n, struct glint_range r)
 {
 	if (isinf(r.hi) && isinf(r.lo))

@@ -57,6 +57,9 @@ int glint_json_numbers(const char *file, const char *where, json_t *obj,
 /* A string; *out points into obj and lives as long as obj. */
 int glint_json_string(const char *file, const char *where, json_t *obj,
 		      const char *key, int required, const char **out);
+/* true or false into *out (1 or 0); absent: *out keeps its value. */
+int glint_json_bool(const char *file, const char *where, json_t *obj,
+		    const char *key, int *out);
 /* An object; *out is borrowed (NULL if absent and not required). */
 int glint_json_object(const char *file, const char *where, json_t *obj,
 		      const char *key, int required, json_t **out);

@@ -84,6 +84,20 @@ struct plane {
 	int n;
 };
 
+/* Whether offset (dx, dy) from a candidate, pixel (x, y), is a usable
+ * pixel of its background ring: in the photo, on the ball's usable part. */
+static int ring_pixel(const struct glint_image *photo,
+		      const struct probe_ball *b,
+		      const struct glint_unwrap_opts *o, int dx, int dy, int x,
+		      int y)
+{
+	struct px_geom g;
+	int rr = dx * dx + dy * dy;
+	return rr >= RING_IN * RING_IN && rr <= RING_OUT * RING_OUT && x >= 0 &&
+	       y >= 0 && x < photo->width && y < photo->height &&
+	       pixel_geom(b, o, x, y, &g);
+}
+
 static int ring_plane(const struct glint_image *photo,
 		      const struct probe_ball *b,
 		      const struct glint_unwrap_opts *o, int x0, int y0,
@@ -94,12 +108,8 @@ static int ring_plane(const struct glint_image *photo,
 
 	for (int dy = -RING_OUT; dy <= RING_OUT; dy++)
 		for (int dx = -RING_OUT; dx <= RING_OUT; dx++) {
-			int rr = dx * dx + dy * dy, x = x0 + dx, y = y0 + dy;
-			struct px_geom g;
-			if (rr < RING_IN * RING_IN ||
-			    rr > RING_OUT * RING_OUT || x < 0 || y < 0 ||
-			    x >= photo->width || y >= photo->height ||
-			    !pixel_geom(b, o, x, y, &g))
+			int x = x0 + dx, y = y0 + dy;
+			if (!ring_pixel(photo, b, o, dx, dy, x, y))
 				continue;
 			const float *p = glint_image_px(photo, x, y);
 			double v[3] = { 1, dx, dy };
@@ -142,12 +152,8 @@ static int ring_plane(const struct glint_image *photo,
 	}
 	for (int dy = -RING_OUT; dy <= RING_OUT; dy++)
 		for (int dx = -RING_OUT; dx <= RING_OUT; dx++) {
-			int rr = dx * dx + dy * dy, x = x0 + dx, y = y0 + dy;
-			struct px_geom g;
-			if (rr < RING_IN * RING_IN ||
-			    rr > RING_OUT * RING_OUT || x < 0 || y < 0 ||
-			    x >= photo->width || y >= photo->height ||
-			    !pixel_geom(b, o, x, y, &g))
+			int x = x0 + dx, y = y0 + dy;
+			if (!ring_pixel(photo, b, o, dx, dy, x, y))
 				continue;
 			const float *p = glint_image_px(photo, x, y);
 			for (int c = 0; c < 3; c++) {

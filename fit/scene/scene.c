@@ -69,12 +69,9 @@ static int load_camera(const char *file, json_t *o, struct glint_scene *s)
 		ret = glint_json_number(file, "camera", o, "psf_sigma_px", 0,
 					(struct glint_range){ 0, 8, 0, 0 },
 					&psf);
-	json_t *olpf = json_object_get(o, "olpf");
-	if (!ret && olpf && !json_is_boolean(olpf))
-		ret = glint_error_set(EINVAL,
-				      "%s: camera.olpf: expected true or "
-				      "false",
-				      file);
+	int olpf = 0;
+	if (!ret)
+		ret = glint_json_bool(file, "camera", o, "olpf", &olpf);
 	if (!ret)
 		ret = glint_json_numbers(file, "camera", o, "position", 0, 3,
 					 any, pos);
@@ -104,7 +101,7 @@ static int load_camera(const char *file, json_t *o, struct glint_scene *s)
 	if (ret < 0)
 		return glint_error_prefix(ret, "%s", file);
 	s->cam.psf_sigma_px = psf;
-	s->cam.olpf = json_is_true(olpf);
+	s->cam.olpf = olpf;
 	return 0;
 }
 

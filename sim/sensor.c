@@ -30,8 +30,8 @@ void glint_sensor_default(struct glint_sensor *s)
 /* The Gaussian's integral over [a, b]. */
 static double gauss_int(double sigma, double a, double b)
 {
-	if (sigma <= 0)
-		return (a <= 0 && 0 < b) ? 1 : 0;
+	if (sigma <= 0) /* a delta on a pixel's border: half to each side */
+		return (a < 0 && 0 < b) ? 1 : (a == 0 || b == 0) ? 0.5 : 0;
 	double r = 1 / (sigma * sqrt(2.0));
 	return 0.5 * (erf(b * r) - erf(a * r));
 }
@@ -40,7 +40,9 @@ int glint_sensor_psf_kernel(const struct glint_sensor *s, double k[65])
 {
 	double sigma = s->psf_sigma_px;
 	double split = s->olpf ? 0.5 : 0;
-	int radius = (int)ceil(4 * sigma + split + 0.5) - 1;
+	/* pixel i ([i - 0.5, i + 0.5]) meets the support, |x| < 4 sigma +
+	 * split + 0.5, while i < 4 sigma + split + 1 */
+	int radius = (int)ceil(4 * sigma + split + 1) - 1;
 
 	if (sigma <= 0 && !s->olpf) {
 		k[0] = 1;

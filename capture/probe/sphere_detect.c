@@ -60,7 +60,11 @@ static float sobel_y(const float *p, int w)
 	       (p[-w - 1] + 2 * p[-w] + p[-w + 1]);
 }
 
-/* 1. log luminance, Sobel, thinning, strongest 6 %. */
+/* Weak edges kept where they join a strong one, as a share of the
+ * strong edges' threshold. */
+#define EDGE_WEAK 0.7
+
+/* 1. log luminance, Sobel, thinning, strongest 6 % grown by hysteresis. */
 static int edge_detect(const struct glint_image *img, struct edge_map *em)
 {
 	int w = img->width, h = img->height;
@@ -131,19 +135,56 @@ static int edge_detect(const struct glint_image *img, struct edge_map *em)
 				      "image)");
 		goto out;
 	}
+	/* Thinned pixels at or above the threshold are edges (1); those
+	 * above EDGE_WEAK of it (2) join them where they touch one, as in
+	 * Canny's hysteresis: a silhouette's rim is one contour whose
+	 * contrast falls where the background matches the ball (a blurred
+	 * rim's wider band takes more of the strongest 6 %). */
+	float weak = (float)(EDGE_WEAK * thr);
+	size_t top = 0;
 	for (int y = 1; y < h - 1; y++)
 		for (int x = 1; x < w - 1; x++) {
 			size_t i = (size_t)y * w + x;
 			const float *m = em->m;
-			if (m[i] < thr)
+			if (m[i] < weak)
 				continue;
 			double ux = em->gx[i] / m[i], uy = em->gy[i] / m[i];
 			if (m[i] >= sample(m, w, h, x + ux, y + uy) &&
-			    m[i] >= sample(m, w, h, x - ux, y - uy)) {
-				em->edge[i] = 1;
-				em->nedge++;
-			}
+			    m[i] >= sample(m, w, h, x - ux, y - uy))
+				em->edge[i] = m[i] >= thr ? 1 : 2;
 		}
+	/* The strong edges grow through the weak ones they touch (a stack
+	 * of pixel indices: each pixel enters it at most once). */
+	size_t *stack = malloc(n * sizeof(size_t));
+	if (!stack) {
+		ret = glint_error_set(ENOMEM,
+				      "sphere detection: out of memory");
+		goto out;
+	}
+	for (size_t i = 0; i < n; i++)
+		if (em->edge[i] == 1)
+			stack[top++] = i;
+	while (top) {
+		size_t i = stack[--top];
+		int x = (int)(i % (size_t)w), y = (int)(i / (size_t)w);
+		for (int dy = -1; dy <= 1; dy++)
+			for (int dx = -1; dx <= 1; dx++) {
+				int xx = x + dx, yy = y + dy;
+				if (xx < 0 || yy < 0 || xx >= w || yy >= h)
+					continue;
+				size_t j = (size_t)yy * w + xx;
+				if (em->edge[j] == 2) {
+					em->edge[j] = 1;
+					stack[top++] = j;
+				}
+			}
+	}
+	free(stack);
+	for (size_t i = 0; i < n; i++) {
+		if (em->edge[i] == 2)
+			em->edge[i] = 0;
+		em->nedge += em->edge[i];
+	}
 out:
 	free(tmp);
 	return ret;

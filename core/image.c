@@ -148,6 +148,12 @@ struct glint_image *glint_image_dup(const struct glint_image *img)
 int glint_image_check_finite(const struct glint_image *img, const char *what,
 			     int nonneg)
 {
+	return glint_image_check_finite_at(img, what, nonneg, 0, 0);
+}
+
+int glint_image_check_finite_at(const struct glint_image *img, const char *what,
+				int nonneg, int x0, int y0)
+{
 	size_t n = (size_t)img->width * img->height * 3, bad = 0, first = 0;
 
 	for (size_t i = 0; i < n; i++) {
@@ -166,8 +172,9 @@ int glint_image_check_finite(const struct glint_image *img, const char *what,
 		EINVAL,
 		"%s: pixel (%zu, %zu) channel %c is %g: expected a finite%s "
 		"value (%zu bad values in all)",
-		what, px % img->width, px / img->width, chan[first % 3],
-		(double)img->data[first], nonneg ? ", non-negative" : "", bad);
+		what, x0 + px % img->width, y0 + px / img->width,
+		chan[first % 3], (double)img->data[first],
+		nonneg ? ", non-negative" : "", bad);
 }
 
 const char *glint_path_ext(const char *path, char *buf, size_t n)

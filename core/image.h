@@ -85,6 +85,10 @@ long long glint_file_size(const char *path);
  */
 int glint_image_check_finite(const struct glint_image *img, const char *what,
 			     int nonneg);
+/* The same for a window of a file at (x0, y0): pixels named in the file's
+ * coordinates. */
+int glint_image_check_finite_at(const struct glint_image *img, const char *what,
+				int nonneg, int x0, int y0);
 
 /*
  * Read an image, choosing the format from the file extension (.exr, .hdr,

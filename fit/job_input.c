@@ -120,6 +120,15 @@ int glint_fit_job_load(struct glint_fit_job *job, const char *weights_path)
 	if (ret < 0)
 		return ret;
 	ret = read_photo(job, weights_path);
+	/* NaN or infinity in the photo, or a weight that is not a finite
+	 * non-negative number, is a broken file, not pixels to skip */
+	if (ret == 0)
+		ret = glint_image_check_finite_at(job->photo, job->photo_path,
+						  0, job->window.x,
+						  job->window.y);
+	if (ret == 0 && job->weight)
+		ret = glint_image_check_finite_at(job->weight, weights_path, 1,
+						  job->window.x, job->window.y);
 	if (ret == 0 && glint_image_encoded(job->photo_path))
 		glint_image_from_srgb(job->photo_path, job->photo);
 	return ret;

@@ -30,6 +30,12 @@ static uint32_t pixels_crc32(const uint16_t *data, size_t n)
 	return (uint32_t)crc;
 }
 
+uint32_t glint_frame_pixels_crc32(const struct glint_frame *f)
+{
+	return pixels_crc32(f->data, (size_t)f->width * f->height *
+					     (f->channels == 3 ? 3 : 1));
+}
+
 char *glint_frame_metadata_json(const struct glint_frame *f, int index)
 {
 	size_t n = (size_t)f->width * f->height * (f->channels == 3 ? 3 : 1);

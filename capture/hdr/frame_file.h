@@ -25,6 +25,10 @@
  * the samples as the PNG stores them (16-bit big-endian, row by row). */
 char *glint_frame_metadata_json(const struct glint_frame *f, int index);
 
+/* That CRC-32 of a frame's samples (what session.json also records for
+ * each frame, so that a frame from another session is told apart). */
+uint32_t glint_frame_pixels_crc32(const struct glint_frame *f);
+
 int glint_frame_write(const char *path, const struct glint_frame *f,
 		      const char *metadata_json);
 

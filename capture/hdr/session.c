@@ -214,10 +214,11 @@ int glint_session_add_frame(struct glint_session *s,
 	free(meta);
 	if (ret < 0)
 		return ret;
-	json_array_append_new(json_object_get(s->doc, "frames"),
-			      json_pack("{s:s, s:f, s:f}", "file", name,
-					"exposure_s", f->exposure_s, "gain",
-					f->gain));
+	json_array_append_new(
+		json_object_get(s->doc, "frames"),
+		json_pack("{s:s, s:f, s:f, s:I}", "file", name, "exposure_s",
+			  f->exposure_s, "gain", f->gain, "pixels_crc32",
+			  (json_int_t)glint_frame_pixels_crc32(f)));
 	glint_session_log(s, "frame %d: %g s, gain %g, sequence %llu", index,
 			  f->exposure_s, f->gain,
 			  (unsigned long long)f->sequence);

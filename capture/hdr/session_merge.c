@@ -62,8 +62,9 @@ int glint_session_noise(const char *dir, struct glint_noise_model *m)
  * Read frame `name` of a session and check it is the frame the session
  * recorded there: its own metadata gives the index in its name and the
  * exposure the session lists, its sequence number follows the previous
- * frame's, and its pixels match their checksum.  A frame copied over
- * another, swapped or edited is an error naming it.
+ * frame's, and its pixels match their checksum, both its own and the
+ * one session.json recorded.  A frame copied over another, swapped,
+ * edited or taken from another session is an error naming it.
  */
 static int frame_in_place(const char *path, const char *name,
 			  const json_t *listed, struct glint_frame *f,
@@ -87,6 +88,20 @@ static int frame_in_place(const char *path, const char *name,
 				       "lists %g s for it: a frame was copied "
 				       "or swapped",
 				       path, f->exposure_s, t);
+	/* the checksum session.json recorded as the frame was taken: a
+	 * frame of another session (same index, exposure and place in the
+	 * camera's sequence) has other pixels */
+	const json_t *crc = json_object_get(listed, "pixels_crc32");
+	if (json_is_integer(crc) &&
+	    (json_int_t)glint_frame_pixels_crc32(f) != json_integer_value(crc))
+		return glint_error_set(
+			EINVAL,
+			"%s: its pixels (CRC-32 %08x) are not "
+			"the ones this session recorded for "
+			"%s (%08llx): a frame from another "
+			"session was copied in",
+			path, glint_frame_pixels_crc32(f), name,
+			(unsigned long long)json_integer_value(crc));
 	if (prev && f->sequence && prev->sequence &&
 	    f->sequence <= prev->sequence)
 		return glint_error_set(EINVAL,

@@ -157,6 +157,29 @@ for f, x in e.items():
 for f in gltf xml pbrt py mtlx; do
 	check "... material.$f matches glint's BRDF within its stated residual" python3 "$here/check_export.py" "$tmp/fit1/params.json" "$tmp/fit1/material.$f"
 done
+# A photo or weights with NaN, infinity or (weights) a negative value is a
+# broken file, named with its first bad pixel in the file's coordinates.
+"$glint" convert "$tmp/photo.exr" "$tmp/photo.pfm" -q
+python3 - "$tmp" <<'PY2'
+import struct, sys
+t = sys.argv[1]
+d = open(t + "/photo.pfm", "rb").read()
+head = d[:d.index(b"\n", d.index(b"\n", 3) + 1) + 1]
+px = bytearray(d[len(head):])
+# PFM rows run bottom-up: row 48 from the top, column 40, channel G
+off = ((95 - 48) * 96 + 40) * 12 + 4
+px[off:off + 4] = struct.pack("<f", float("inf"))
+open(t + "/inf.pfm", "wb").write(head + bytes(px))
+w = bytearray(struct.pack("<f", 1.0) * (96 * 96 * 3))
+off = ((95 - 50) * 96 + 41) * 12
+w[off:off + 4] = struct.pack("<f", -0.5)
+open(t + "/negw.pfm", "wb").write(head + bytes(w))
+PY2
+"$glint" convert "$tmp/inf.pfm" "$tmp/inf.exr" --allow-nonfinite -q
+"$glint" convert "$tmp/negw.pfm" "$tmp/negw.exr" -q
+check "fit refuses a photo with infinity, naming the pixel" run 1 "inf.exr: pixel (40, 48) channel G is inf" fit "$tmp/fscene.json" "$tmp/inf.exr" -o "$tmp/fitinf"
+check "fit refuses negative weights, naming the pixel" run 1 "negw.exr: pixel (41, 50) channel R is -0.5: expected a finite, non-negative" fit "$tmp/fscene.json" "$tmp/photo.exr" --weights "$tmp/negw.exr" -o "$tmp/fitneg"
+check "... and writes no result" test ! -e "$tmp/fitinf" -a ! -e "$tmp/fitneg"
 check "fit --export of an unknown format: exit 2, nothing done" run 2 "did you mean 'mitsuba'" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fitx" --export gltf,mitsuba3
 check "... no folder" test ! -e "$tmp/fitx"
 check "render the fitted material from params.json" run 0 "" render "$tmp/fscene.json" --material "$tmp/fit1/params.json" -o "$tmp/refit.exr" -q

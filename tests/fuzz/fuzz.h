@@ -20,4 +20,8 @@ int LLVMFuzzerInitialize(int *argc, char ***argv);
  * /proc/self/fd/N (no extension), rewritten for each input. */
 const char *fuzz_path(const uint8_t *data, size_t size);
 
+/* The same as a regular file named input.EXT in a private folder (made
+ * once, removed at exit), for readers that choose by the extension. */
+const char *fuzz_path_ext(const uint8_t *data, size_t size, const char *ext);
+
 #endif

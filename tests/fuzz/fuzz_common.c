@@ -1,11 +1,12 @@
 /* SPDX-License-Identifier: MIT */
-#define _GNU_SOURCE /* memfd_create */
+#define _GNU_SOURCE /* memfd_create, mkdtemp */
 #include "fuzz.h"
 
 #include "core/log.h"
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <sys/mman.h>
 #include <unistd.h>
 
@@ -39,4 +40,34 @@ const char *fuzz_path(const uint8_t *data, size_t size)
 		abort();
 	}
 	return path;
+}
+
+static char ext_dir[64], ext_file[96];
+
+static void remove_ext_file(void)
+{
+	unlink(ext_file);
+	rmdir(ext_dir);
+}
+
+const char *fuzz_path_ext(const uint8_t *data, size_t size, const char *ext)
+{
+	if (!ext_dir[0]) {
+		snprintf(ext_dir, sizeof(ext_dir), "%s",
+			 "/tmp/glint-fuzz-ext.XXXXXX");
+		if (!mkdtemp(ext_dir)) {
+			perror("mkdtemp");
+			abort();
+		}
+		atexit(remove_ext_file);
+	}
+	if (ext_file[0])
+		unlink(ext_file);
+	snprintf(ext_file, sizeof(ext_file), "%s/input.%s", ext_dir, ext);
+	FILE *f = fopen(ext_file, "wb");
+	if (!f || (size && fwrite(data, 1, size, f) != size) || fclose(f)) {
+		perror(ext_file);
+		abort();
+	}
+	return ext_file;
 }

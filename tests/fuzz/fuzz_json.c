@@ -1,7 +1,8 @@
 /* SPDX-License-Identifier: MIT */
 /* glint's JSON files: the same bytes as a scene, a material (or a fit's
- * params.json), a rig file, a capture session's session.json and a queue's
- * job file. */
+ * params.json), a rig file, a probe's light sources (env-sources.json), a
+ * capture session's session.json, a run's run.json and a queue's job
+ * file. */
 #define _DEFAULT_SOURCE /* mkdtemp */
 #include "fuzz.h"
 
@@ -9,6 +10,7 @@
 #include "appliance/rig.h"
 #include "capture/hdr/session.h"
 #include "capture/hdr/session_merge.h"
+#include "capture/probe/probe_sources.h"
 #include "fit/brdf/model.h"
 #include "fit/scene/scene.h"
 
@@ -18,7 +20,7 @@
 #include <unistd.h>
 
 /* A session folder and a queue, made once, removed at exit. */
-static char dir[64], session_json[128], queue[128], job[160];
+static char dir[64], session_json[128], run_json[128], queue[128], job[160];
 
 static void remove_dirs(void)
 {
@@ -26,6 +28,7 @@ static void remove_dirs(void)
 					      "failed", "cancelled" };
 	char p[192];
 	unlink(session_json);
+	unlink(run_json);
 	unlink(job);
 	for (int i = 0; i < 5; i++) {
 		snprintf(p, sizeof(p), "%s/%s", queue, states[i]);
@@ -41,6 +44,7 @@ static int make_dirs(void)
 	if (!mkdtemp(dir))
 		return -1;
 	snprintf(session_json, sizeof(session_json), "%s/session.json", dir);
+	snprintf(run_json, sizeof(run_json), "%s/run.json", dir);
 	snprintf(queue, sizeof(queue), "%s/queue", dir);
 	snprintf(job, sizeof(job), "%s/pending/fuzz-job.json", queue);
 	atexit(remove_dirs);
@@ -80,6 +84,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	struct glint_rig rig;
 	glint_rig_load(path, &rig);
 	glint_rig_free(&rig);
+	struct glint_light_sources sources;
+	glint_probe_sources_read(path, &sources);
 
 	/* As a session's session.json: what glint fit SESSION and the HDR
 	 * merge read from it. */
@@ -92,6 +98,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	int n = 0;
 	glint_session_load_frames(dir, &frames, &n);
 	glint_frames_free(frames, n); /* the caller's, also on failure */
+
+	/* As a run's run.json (its samples' sessions). */
+	put(run_json, data, size);
+	struct glint_run_samples rs;
+	glint_run_read(dir, &rs);
+	unlink(run_json);
 
 	/* As a job file waiting in the queue. */
 	put(job, data, size);

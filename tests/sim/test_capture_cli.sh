@@ -104,6 +104,20 @@ cp -r "$sess" "$tmp/copied"
 cp "$tmp/copied/frame-007.dng" "$tmp/copied/frame-002.dng"
 check "hdr of a session with a frame copied over another: exit 1, named" \
 	run 1 "frame-002.dng: holds frame 7 of the bracket, not frame 2" hdr "$tmp/copied"
+# A frame of another session of the same scene (same index, exposure and
+# camera sequence; the sensor's noise seeded otherwise) is not the one
+# this session recorded.
+sed -e 's/decades=4"/decades=4,seed=2"/' -e "s|$tmp/caps\"|$tmp/caps3\"|" "$tmp/rig.json" >"$tmp/rig3.json"
+"$glint" capture sample --config "$tmp/rig3.json" -q
+sess3=$(only_session "$tmp/caps3")
+check "... the other session's frame 2: same exposure and sequence" python3 -c "
+import json, sys
+a, b = (json.load(open(d + '/frame-002.json')) for d in ('$sess', '$sess3'))
+sys.exit(not (a['exposure_s'] == b['exposure_s'] and a['sequence'] == b['sequence'] and a['pixels_crc32'] != b['pixels_crc32']))"
+cp -r "$sess" "$tmp/foreign"
+cp "$sess3/frame-002.dng" "$tmp/foreign/frame-002.dng"
+check "hdr of a session with another session's frame: exit 1, named" \
+	run 1 "frame-002.dng: its pixels (CRC-32 " hdr "$tmp/foreign"
 cp -r "$sess" "$tmp/edited"
 python3 - "$tmp/edited/frame-004.dng" <<'PY'
 import struct, sys

@@ -30,12 +30,13 @@ static double sample(const float *m, int w, int h, double x, double y)
  * strongest edges.  Every array is w x h. */
 struct edge_map {
 	int w, h;
-	float *l;	/* log luminance */
-	float *gx, *gy; /* its Sobel gradient */
-	float *m;	/* the gradient's magnitude */
-	float *acc;	/* the linear luminance's gradient magnitude */
-	unsigned char *edge;
-	long nedge;
+	float *l;	     /* log luminance */
+	float *gx, *gy;	     /* its Sobel gradient */
+	float *m;	     /* the gradient's magnitude */
+	float *acc;	     /* the linear luminance's gradient magnitude */
+	unsigned char *edge; /* 1: a strong edge; 3: a weak one joined to it */
+	long nedge;	     /* strong edges (the circle is found from them) */
+	long nrim;	     /* both kinds (the rim statistic counts them) */
 };
 
 static void edge_map_free(struct edge_map *em)
@@ -64,7 +65,8 @@ static float sobel_y(const float *p, int w)
  * strong edges' threshold. */
 #define EDGE_WEAK 0.7
 
-/* 1. log luminance, Sobel, thinning, strongest 6 % grown by hysteresis. */
+/* 1. log luminance, Sobel, thinning, strongest 6 % (and, for the rim
+ * statistic, grown by hysteresis). */
 static int edge_detect(const struct glint_image *img, struct edge_map *em)
 {
 	int w = img->width, h = img->height;
@@ -135,11 +137,14 @@ static int edge_detect(const struct glint_image *img, struct edge_map *em)
 				      "image)");
 		goto out;
 	}
-	/* Thinned pixels at or above the threshold are edges (1); those
-	 * above EDGE_WEAK of it (2) join them where they touch one, as in
-	 * Canny's hysteresis: a silhouette's rim is one contour whose
-	 * contrast falls where the background matches the ball (a blurred
-	 * rim's wider band takes more of the strongest 6 %). */
+	/* Thinned pixels at or above the threshold are strong edges (1);
+	 * those above EDGE_WEAK of it (2) join them (3) where they touch
+	 * one, as in Canny's hysteresis: a silhouette's rim is one contour
+	 * whose contrast falls where the background matches the ball (a
+	 * blurred rim's wider band takes more of the strongest 6 %).  The
+	 * joined ones count for the rim statistic only: the circle and its
+	 * sub-pixel fit come from the strong edges, which a ball's own
+	 * shading inside the rim reaches less. */
 	float weak = (float)(EDGE_WEAK * thr);
 	size_t top = 0;
 	for (int y = 1; y < h - 1; y++)
@@ -174,7 +179,7 @@ static int edge_detect(const struct glint_image *img, struct edge_map *em)
 					continue;
 				size_t j = (size_t)yy * w + xx;
 				if (em->edge[j] == 2) {
-					em->edge[j] = 1;
+					em->edge[j] = 3;
 					stack[top++] = j;
 				}
 			}
@@ -183,7 +188,8 @@ static int edge_detect(const struct glint_image *img, struct edge_map *em)
 	for (size_t i = 0; i < n; i++) {
 		if (em->edge[i] == 2)
 			em->edge[i] = 0;
-		em->nedge += em->edge[i];
+		em->nedge += em->edge[i] == 1;
+		em->nrim += em->edge[i] != 0;
 	}
 out:
 	free(tmp);
@@ -226,7 +232,7 @@ static int ransac_circle(const struct edge_map *em, double r_min, double r_max,
 		return glint_error_set(ENOMEM,
 				       "sphere detection: out of memory");
 	for (size_t i = 0; i < (size_t)w * em->h; i++)
-		if (em->edge[i])
+		if (em->edge[i] == 1)
 			ex[ne++] = (int)i;
 	c[0] = c[1] = c[2] = 0;
 	for (int it = 0; it < 4000 && ne >= 2; it++) {
@@ -276,7 +282,7 @@ static int subpixel_edges(const struct edge_map *em, const double c[3],
 	for (int y = 1; y < h - 1; y++)
 		for (int x = 1; x < w - 1; x++) {
 			size_t i = (size_t)y * w + x;
-			if (!em->edge[i])
+			if (em->edge[i] != 1)
 				continue;
 			double dx = x + 0.5 - c[0], dy = y + 0.5 - c[1],
 			       d = hypot(dx, dy);
@@ -439,7 +445,7 @@ static void rim_statistic(const struct edge_map *em, const double c[3],
 		*slope = steep[covered / 2];
 	}
 	free(steep);
-	double rho = (double)em->nedge / ((double)w * h);
+	double rho = (double)em->nrim / ((double)w * h);
 	double p0 = 1 - pow(1 - RIM_COS_SHARE * rho, 4);
 	*share = (double)covered / steps;
 	*z = (covered - steps * p0) / sqrt(fmax(steps * p0 * (1 - p0), 1e-9));

@@ -48,13 +48,14 @@ struct glint_circle {
  * texture, rectangles, checkerboards, gratings) and on real and simulated
  * spheres: tests/sim/test_sphere_detect.c measures both, docs/hdr.md
  * gives the numbers.  A steep rim (the slope keeps out a vignette's ring
- * of steepest fall-off, 0.075 at most, whose edges hysteresis joins into
- * a whole ring) covered on at least a tenth, and either z >= 45 (the
- * highest among the other frames with no sphere: 33.9; the lowest of a
- * correct find on the UW photos: 80.3) or, for a small sphere whose rim
- * is too short for such a z, a covered share >= 0.36 with z >= 20 (the
- * highest share among the other frames with no sphere: 0.32; the rig's
- * 25 px sample through its optics: 0.63 at z 45.5).
+ * of steepest fall-off, 0.082 at most, whose edges the hysteresis joins
+ * into most of a ring: share 0.59, z 45.9) covered on at least a tenth,
+ * and either z >= 45 (the highest among the other frames with no sphere:
+ * 33.9; the lowest of a find on the UW photos, 2.7 px from the mask's
+ * circle: 60.6) or, for a small sphere whose rim is too short for such a
+ * z, a covered share >= 0.36 with z >= 20 (the highest share among the
+ * other frames with no sphere: 0.32; the rig's 25 px sample through its
+ * optics: 0.64 at z 46.3).
  */
 #define GLINT_DETECT_MIN_RIM_SHARE 0.10
 #define GLINT_DETECT_MIN_RIM_Z	   45.0

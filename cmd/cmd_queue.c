@@ -114,8 +114,14 @@ static int print_job(const struct glint_job *j, void *ctx)
 		return 0;
 	}
 	const char *err = json_string_value(json_object_get(j->doc, "error"));
-	printf("%-34s %-9s %-4s %-10s %s%s%s\n", j->id, j->state, j->kind, user,
-	       j->session, err ? "  -- " : "", err ? err : "");
+	/* the job file's words are another user's: shown, never obeyed by
+	 * the terminal */
+	char id[4 * sizeof(j->id)], sess[4 * GLINT_PATH_MAX], e[1024];
+	printf("%-34s %-9s %-4s %-10s %s%s%s\n",
+	       glint_text_printable(j->id, id, sizeof(id)), j->state, j->kind,
+	       user, glint_text_printable(j->session, sess, sizeof(sess)),
+	       err ? "  -- " : "",
+	       glint_text_printable(err ? err : "", e, sizeof(e)));
 	return 0;
 }
 
@@ -159,6 +165,7 @@ int cmd_sessions(int argc, char **argv)
 		       "FIT", "SESSION");
 	for (int i = 0; i < n; i++) {
 		struct glint_session_summary ss;
+		char name[4 * GLINT_PATH_MAX], e[4 * sizeof(ss.error)];
 		glint_session_summarize(list[i], &ss);
 		if (q.json)
 			json_array_append_new(
@@ -176,7 +183,10 @@ int cmd_sessions(int argc, char **argv)
 			       ss.fitted       ? "yes"
 			       : ss.run_fitted ? "run"
 					       : "-",
-			       list[i], ss.error[0] ? "  -- " : "", ss.error);
+			       glint_text_printable(list[i], name,
+						    sizeof(name)),
+			       ss.error[0] ? "  -- " : "",
+			       glint_text_printable(ss.error, e, sizeof(e)));
 	}
 	glint_session_list_free(list, n);
 	if (q.json)

@@ -8,6 +8,7 @@
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
@@ -197,4 +198,55 @@ void glint_progress_finish(struct glint_progress *p)
 		return;
 	fprintf(stderr, "\r%*s\r", 72, "");
 	fflush(stderr);
+}
+
+/* The length of the valid UTF-8 sequence at p that is not a C1 control
+ * (U+0080..U+009F), or 0. */
+static int utf8_ok(const unsigned char *p)
+{
+	int len = p[0] >= 0xf0 && p[0] <= 0xf4	 ? 4
+		  : p[0] >= 0xe0 && p[0] <= 0xef ? 3
+		  : p[0] >= 0xc2 && p[0] <= 0xdf ? 2
+						 : 0;
+	for (int k = 1; k < len; k++)
+		if ((p[k] & 0xc0) != 0x80)
+			return 0;
+	if (len == 2 && p[0] == 0xc2 && p[1] < 0xa0)
+		return 0; /* C1 */
+	if (len == 3 &&
+	    ((p[0] == 0xe0 && p[1] < 0xa0) || (p[0] == 0xed && p[1] >= 0xa0)))
+		return 0; /* overlong, surrogate */
+	if (len == 4 &&
+	    ((p[0] == 0xf0 && p[1] < 0x90) || (p[0] == 0xf4 && p[1] >= 0x90)))
+		return 0; /* overlong, beyond U+10FFFF */
+	return len;
+}
+
+const char *glint_text_printable(const char *in, char *out, size_t n)
+{
+	const unsigned char *p = (const unsigned char *)in;
+	size_t o = 0;
+
+	if (!n)
+		return out;
+	while (*p) {
+		int len = *p >= 0x20 && *p < 0x7f ? 1
+			  : *p >= 0x80		  ? utf8_ok(p)
+						  : 0;
+		if (len) {
+			if (o + (size_t)len >= n)
+				break;
+			memcpy(out + o, p, (size_t)len);
+			o += (size_t)len;
+			p += len;
+			continue;
+		}
+		if (o + 4 >= n)
+			break;
+		snprintf(out + o, 5, "\\x%02x", *p);
+		o += 4;
+		p++;
+	}
+	out[o] = '\0';
+	return out;
 }

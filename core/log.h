@@ -2,6 +2,8 @@
 #ifndef GLINT_CORE_LOG_H
 #define GLINT_CORE_LOG_H
 
+#include <stddef.h>
+
 /*
  * Logs and progress on stderr.  Human mode: plain lines, and a live progress
  * bar only when stderr is a terminal.  JSON mode: one JSON object per line
@@ -38,6 +40,13 @@ void glint_log_error(const char *fmt, ...) GLINT_PRINTF(1, 2);
 void glint_log_debug(const char *fmt, ...) GLINT_PRINTF(1, 2);
 /* Shown even when quiet: something the user should act on. */
 void glint_log_warn(const char *fmt, ...) GLINT_PRINTF(1, 2);
+
+/* `in` made safe for a terminal, into out (n bytes, always terminated):
+ * control characters (C0, DEL, C1) and bytes that are not valid UTF-8
+ * become \xNN, so that text from a file another user wrote (a job's
+ * session or error) cannot move the cursor, retitle or recolour the
+ * reader's terminal.  Returns out. */
+const char *glint_text_printable(const char *in, char *out, size_t n);
 
 struct glint_progress {
 	const char *label;

@@ -143,6 +143,11 @@ check "... done" grep -q " done " "$tmp/out"
 mkdir -p "$tmp/one/queue/pending" && mkfifo "$tmp/one/queue/pending/planted.json"
 check "... a FIFO planted in the queue does not hang glint jobs" timeout 20 "$glint" jobs --root "$tmp/one"
 rm -f "$tmp/one/queue/pending/planted.json"
+# A record planted with terminal escapes (clear the screen, retitle the
+# window): glint jobs shows them as \x1b, never sends them.
+printf '{"id": "20261128T000000Z-1-1", "kind": "fit", "session": "/x/s\\u001b[2J", "error": "boom\\u001b]0;owned\\u0007"}\n' >"$tmp/one/queue/failed/20261128T000000Z-1-1.json"
+check "... a record's terminal escapes are shown, not sent" bash -c "'$glint' jobs --root '$tmp/one' >'$tmp/jobs.txt' && ! grep -q \$'\\x1b' '$tmp/jobs.txt' && grep -qF 'boom\\x1b]0;owned\\x07' '$tmp/jobs.txt'"
+rm -f "$tmp/one/queue/failed/20261128T000000Z-1-1.json"
 check "... its record holds the parameters, relative RMSE and the fit's peak memory" bash -c "'$glint' jobs --root '$tmp/one' --json | python3 -c 'import json,sys; j=[x for x in json.load(sys.stdin)[\"jobs\"] if x[\"state\"] == \"done\"]; m=[x.get(\"peak_rss_mib\") for x in j]; print(\"  peak MiB\", m); sys.exit(not j or not all(v and 10 < v < 4096 for v in m) or not all(len(x.get(\"parameters\") or []) >= 4 and x.get(\"relative_rmse\", 0) > 0 for x in j))'"
 
 # 1a. A probe bracket cut short by its cap: the run stops at that step,

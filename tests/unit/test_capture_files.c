@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/image.h"
 #include "core/json.h"
+#include "core/log.h"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -295,6 +296,30 @@ static void test_special_files(const char *dir)
 	json_decref(doc);
 }
 
+/* Text from another user's file shown safely: controls and broken UTF-8
+ * escaped, printable text and valid UTF-8 kept. */
+static void test_printable(void)
+{
+	char out[64];
+	CHECK(!strcmp(glint_text_printable("job-1 caf\xc3\xa9 \xe2\x82\xac",
+					   out, sizeof(out)),
+		      "job-1 caf\xc3\xa9 \xe2\x82\xac"),
+	      "plain text and UTF-8 changed: %s", out);
+	CHECK(!strcmp(glint_text_printable("a\x1b]0;owned\x07"
+					   "b\x7f",
+					   out, sizeof(out)),
+		      "a\\x1b]0;owned\\x07b\\x7f"),
+	      "C0/DEL not escaped: %s", out);
+	CHECK(!strcmp(glint_text_printable("\xc2\x9b"
+					   "31m \x9b \xff \xed\xa0\x80",
+					   out, sizeof(out)),
+		      "\\xc2\\x9b31m \\x9b \\xff \\xed\\xa0\\x80"),
+	      "C1, stray or surrogate bytes not escaped: %s", out);
+	/* cut at a whole escape, always terminated */
+	glint_text_printable("\x1b\x1b\x1b", out, 9);
+	CHECK(!strcmp(out, "\\x1b\\x1b"), "truncation: %s", out);
+}
+
 int main(void)
 {
 	char dir[] = "/tmp/glint-capture-files-XXXXXX";
@@ -304,6 +329,7 @@ int main(void)
 	RUN_ARG(test_session, dir);
 	RUN_ARG(test_run, dir);
 	RUN_ARG(test_special_files, dir);
+	RUN(test_printable);
 	char cmd[600];
 	snprintf(cmd, sizeof(cmd), "rm -rf '%s'", dir);
 	if (system(cmd) != 0)

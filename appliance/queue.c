@@ -272,11 +272,24 @@ static int one_session_allowed(const char *queue, const struct glint_job *job,
 			       real, (unsigned)st.st_uid, job->uid);
 }
 
+/* A job file's name: ID.json, the id at most 63 letters, digits, '.',
+ * '_' or '-' (what struct glint_job holds whole: a longer one would be
+ * claimed under one name and finished under another).  Anything else in
+ * a state folder is not a job, and no worker or listing touches it. */
 static int job_name(const struct dirent *e)
 {
 	size_t n = strlen(e->d_name);
-	return n > 5 && !strcmp(e->d_name + n - 5, ".json") &&
-	       !strstr(e->d_name, ".tmp");
+	if (n <= 5 || n - 5 >= sizeof(((struct glint_job *)0)->id) ||
+	    strcmp(e->d_name + n - 5, ".json") || strstr(e->d_name, ".tmp"))
+		return 0;
+	for (size_t i = 0; i < n - 5; i++) {
+		char c = e->d_name[i];
+		if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
+		      (c >= '0' && c <= '9') || c == '.' || c == '_' ||
+		      c == '-'))
+			return 0;
+	}
+	return 1;
 }
 
 /* A job file is a few hundred bytes; a megabyte is no job. */

@@ -329,6 +329,13 @@ echo '{"id": "zz-link", "kind": "fit", "session": "'"$tmp"'/one/not-a-session"}'
 ln -s "$tmp/victim.txt" "$tmp/one/queue/running/zz-link.out"
 ln -s "$tmp/victim.txt" "$tmp/one/queue/running/zz-link.err"
 check "links planted at a job's output files: not followed" bash -c "'$glint' queue run --until-empty --root '$tmp/one' -q && [ \"\$(cat '$tmp/victim.txt')\" = 'my notes' ] && '$glint' jobs --root '$tmp/one' | grep -q 'zz-link *failed'"
+# A file whose name is not a job id (over 63 characters) is not a job:
+# no worker claims it (it would be claimed under one name and finished
+# under another), no listing shows it.
+long=$(printf 'zz-long-%070d' 0)
+echo '{"kind": "fit", "session": "'"$tmp"'/one/not-a-session"}' >"$tmp/one/queue/pending/$long.json"
+check "a job file named past 63 characters is left alone" bash -c "'$glint' queue run --until-empty --root '$tmp/one' -q && test -f '$tmp/one/queue/pending/$long.json' && ! ls '$tmp'/one/queue/{running,failed,done} | grep -q zz-long && ! '$glint' jobs --root '$tmp/one' | grep -q zz-long"
+rm -f "$tmp/one/queue/pending/$long.json"
 # A job may only fit a session under the folder holding its queue.
 mkdir -p "$tmp/elsewhere"
 echo '{"id": "zz-out", "kind": "fit", "session": "'"$tmp"'/elsewhere"}' >"$tmp/one/queue/pending/zz-out.json"

@@ -152,6 +152,35 @@ static void utc_now(char *buf, size_t n, int compact)
 		strftime(buf, n, "%Y-%m-%dT%H:%M:%SZ", &tm);
 }
 
+static int in_group(unsigned uid, gid_t gid);
+
+/* The worker runs as the queue's owner and writes SESSION/fit: refused at
+ * once when that user cannot write the session folder (rather than the
+ * job failing later, unseen). */
+static int worker_can_write(const struct qdir *d, const char *session)
+{
+	struct stat st;
+	if (stat(session, &st) < 0)
+		return glint_error_set(errno, "session %s: %s", session,
+				       strerror(errno));
+	unsigned w = d->owner;
+	if (w == 0 || ((unsigned)st.st_uid == w && (st.st_mode & S_IWUSR)) ||
+	    ((unsigned)st.st_uid != w && (st.st_mode & S_IWGRP) &&
+	     in_group(w, st.st_gid)) ||
+	    ((unsigned)st.st_uid != w && !in_group(w, st.st_gid) &&
+	     (st.st_mode & S_IWOTH)))
+		return 0;
+	return glint_error_set(EACCES,
+			       "session %s (uid %u, group %u, mode %03o): "
+			       "the queue's worker (uid %u) cannot write its "
+			       "fit there: make it group-writable for a group "
+			       "the worker is in (chmod g+w), or fit it "
+			       "yourself with glint fit",
+			       session, (unsigned)st.st_uid,
+			       (unsigned)st.st_gid,
+			       (unsigned)(st.st_mode & 0777), w);
+}
+
 int glint_queue_add(const char *queue, const char *kind, const char *session,
 		    char *id_out)
 {
@@ -173,6 +202,11 @@ int glint_queue_add(const char *queue, const char *kind, const char *session,
 	ret = qopen(queue, &d, 1);
 	if (ret < 0)
 		return ret;
+	ret = worker_can_write(&d, session);
+	if (ret < 0) {
+		qclose(&d);
+		return ret;
+	}
 	utc_now(stamp, sizeof(stamp), 1);
 	utc_now(added, sizeof(added), 0);
 	snprintf(id, sizeof(id), "%s-%ld-%d", stamp, (long)getpid(), ++counter);

@@ -350,6 +350,14 @@ if [ "$(id -u)" = 0 ] && command -v setpriv >/dev/null; then
 	check "the queue's state folders are sticky (a user moves only his own jobs)" bash -c "[ \$(( 0\$(stat -c %a '$q/pending') & 01000 )) != 0 ]"
 	chmod 1777 "$q/pending" "$q/running" "$q/cancelled"
 	check "another user's session: queue add refuses" bash -c "! ${nobody[*]} '$glint' queue add '$sess' --root '$tmp/one' 2>'$tmp/err' && grep -q 'is not shared with the job.s submitter (uid 65534)' '$tmp/err'"
+	# A queue whose worker (its owner, uid 65533) cannot write the
+	# submitter's session: queue add refuses at once, naming the fix.
+	mkdir -p "$tmp/nq" && cp -r "$sess" "$tmp/nq/s1"
+	"$glint" queue add "$tmp/nq/s1" --root "$tmp/nq" >/dev/null 2>&1 || true
+	rm -f "$tmp"/nq/queue/pending/*.json
+	chown -R 65533:65533 "$tmp/nq/queue" && chmod 1777 "$tmp/nq/queue/pending"
+	chown -R 65534:65534 "$tmp/nq/s1" && chmod 0755 "$tmp/nq/s1" "$tmp/nq"
+	check "a session the queue's worker cannot write: queue add refuses" bash -c "! ${nobody[*]} '$glint' queue add '$tmp/nq/s1' --root '$tmp/nq' 2>'$tmp/err' && grep -q 'the queue.s worker (uid 65533) cannot write its fit there' '$tmp/err' && ! ls '$tmp/nq/queue/pending' | grep -q json"
 	${nobody[@]} bash -c "echo '{\"id\": \"zz-other\", \"kind\": \"fit\", \"session\": \"$sess\"}' >'$tmp/one/queue/pending/zz-other.json'"
 	check "... and a job file written by hand fails, its submitter named" bash -c "'$glint' queue run --until-empty --root '$tmp/one' -q && '$glint' jobs --root '$tmp/one' | grep 'zz-other' | grep -q 'failed *fit  nobody .*belongs to uid 0 and is not shared'"
 	# Another user may not steer a job: cancel it, move it, hold its

@@ -27,7 +27,8 @@ static const struct glint_cmd commands[] = {
 	{ "render", "render a sphere of a material under an environment map",
 	  cmd_render, cmd_render_help },
 	{ "export",
-	  "a fitted material for a renderer (glTF, Mitsuba, pbrt, Blender)",
+	  "a fitted material for a renderer (glTF, Mitsuba, pbrt, Blender, "
+	  "MaterialX)",
 	  cmd_export, cmd_export_help },
 	{ "convert",
 	  "convert an image between EXR, HDR, PFM, TIFF (and PNG out)",

@@ -147,8 +147,32 @@ int glint_material_load(const char *path, const char *entry,
 			goto out;
 		}
 	}
-	ret = glint_error_set(ENOENT, "%s: no material named '%s'", path,
-			      entry);
+	/* the names it holds, for a "did you mean" and the list */
+	const char *names[64];
+	char known[512] = "";
+	size_t nn = 0, kl = 0; /* kl == sizeof(known): full */
+	for (size_t i = 0; i < json_array_size(list) && nn < 63; i++) {
+		const char *nm = json_string_value(
+			json_object_get(json_array_get(list, i), "name"));
+		if (!nm)
+			continue;
+		names[nn++] = nm;
+		int w = kl == sizeof(known)
+				? 0
+				: snprintf(known + kl, sizeof(known) - kl,
+					   "%s%s", kl ? ", " : "", nm);
+		if (w > 0 && (size_t)w < sizeof(known) - kl) {
+			kl += (size_t)w;
+		} else if (kl < sizeof(known)) {
+			/* the list ends at a whole name */
+			snprintf(known + kl, sizeof(known) - kl, ", ...");
+			kl = sizeof(known);
+		}
+	}
+	names[nn] = NULL;
+	ret = glint_error_set(
+		ENOENT, "%s: no material named '%s'%s: it holds %s", path,
+		entry, glint_suggest_hint(entry, names), nn ? known : "none");
 out:
 	json_decref(root);
 	return ret;

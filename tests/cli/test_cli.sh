@@ -100,7 +100,8 @@ sed 's/"focal_length_mm": 100/"focal_length_mm": -5/' "$tmp/scene.json" >"$tmp/b
 check "out-of-range field" run 1 "camera.focal_length_mm = -5" render "$tmp/bad.json" --paper copper -o "$tmp/x.exr"
 sed 's/"diameter_m": 0.1, //' "$tmp/scene.json" >"$tmp/bad2.json"
 check "missing field" run 1 "sphere.diameter_m is missing" render "$tmp/bad2.json" --paper copper -o "$tmp/x.exr"
-check "unknown material" run 1 "no material named 'vibranium'" render "$tmp/scene.json" --paper vibranium -o "$tmp/x.exr"
+check "unknown material" run 1 "no material named 'vibranium': it holds satin-paint, " render "$tmp/scene.json" --paper vibranium -o "$tmp/x.exr"
+check "a misspelt material: did you mean" run 1 "no material named 'coper' (did you mean 'copper'?)" render "$tmp/scene.json" --paper coper -o "$tmp/x.exr"
 echo '{"model": "torrance-sparrow", "roughness": -1}' >"$tmp/m.json"
 check "material out of range" run 1 "roughness = -1" render "$tmp/scene.json" --material "$tmp/m.json" -o "$tmp/x.exr"
 

@@ -95,7 +95,34 @@ def preview_scene(mat, env=None, samples=64, size=512):
         layer.cycles.use_denoising = False
     scene.render.resolution_x = scene.render.resolution_y = size
     scene.render.resolution_percentage = 100
+    # Plain sRGB, as glint's own previews: no Filmic tone curve.
+    scene.view_settings.view_transform = "Standard"
+    scene.view_settings.look = "None"
     return scene
+
+
+# Output formats by the file's extension: (Blender's format, its depth).
+FORMATS = {".png": ("PNG", "8"), ".exr": ("OPEN_EXR", "32"),
+           ".hdr": ("HDR", None), ".tif": ("TIFF", "16"),
+           ".tiff": ("TIFF", "16"), ".jpg": ("JPEG", None),
+           ".jpeg": ("JPEG", None)}
+
+
+def set_output(scene, path):
+    """Write the render to exactly path, in the format its extension
+    names (EXR: 32-bit float, scene-linear)."""
+    ext = os.path.splitext(path)[1].lower()
+    if ext not in FORMATS:
+        sys.exit("glint: %s: unknown image extension '%s': expected one of "
+                 "%s" % (path, ext, ", ".join(sorted(FORMATS))))
+    fmt, depth = FORMATS[ext]
+    settings = scene.render.image_settings
+    settings.file_format = fmt
+    settings.color_mode = "RGB"
+    if depth:
+        settings.color_depth = depth
+    scene.render.use_file_extension = False
+    scene.render.filepath = path
 
 
 def main(argv):
@@ -104,8 +131,9 @@ def main(argv):
         prog="blender --background --python " + __file__ + " --",
         description="Build the material " + NAME + "; optionally render a "
         "preview sphere or save the .blend file.")
-    ap.add_argument("--render", metavar="OUT.png",
-                    help="render a sphere of the material (Cycles) to OUT")
+    ap.add_argument("--render", metavar="OUT",
+                    help="render a sphere of the material (Cycles) to OUT "
+                    "(.png, .exr, .hdr, .tif or .jpg, from its extension)")
     ap.add_argument("--env", metavar="MAP",
                     help="light the preview with this environment map")
     ap.add_argument("--samples", type=int, default=64)
@@ -113,13 +141,18 @@ def main(argv):
     ap.add_argument("--save", metavar="OUT.blend",
                     help="save the file with the material (and preview)")
     args = ap.parse_args(argv)
+    # Blender resolves relative paths against the .blend file, not the
+    # folder the command was given in.
+    for k in ("render", "env", "save"):
+        if getattr(args, k):
+            setattr(args, k, os.path.abspath(getattr(args, k)))
     mat = build_material()
     print("glint: material '%s' built" % mat.name)
     if args.save and os.path.lexists(args.save):
         sys.exit("glint: %s exists: refusing to replace it" % args.save)
     if args.render:
         scene = preview_scene(mat, args.env, args.samples, args.size)
-        scene.render.filepath = args.render
+        set_output(scene, args.render)
         bpy.ops.render.render(write_still=True, scene=scene.name)
         print("glint: rendered", args.render)
     if args.save:
@@ -128,4 +161,7 @@ def main(argv):
 
 
 if __name__ == "__main__":
-    main(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else [])
+    try:
+        main(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else [])
+    except Exception as e:  # Blender itself would exit 0 after a traceback
+        sys.exit("glint: %s" % e)

@@ -114,6 +114,30 @@ for env in "" "$data/env/venice_sunset_1k.hdr"; do
 		fail "preview render${env:+ under $(basename "$env")}"
 	fi
 done
+# The preview's format follows its extension (an EXR where .exr is asked
+# for, not a PNG beside it), in plain sRGB (view transform Standard).
+# Paths relative to the folder the command is given in.
+rm -f "$tmp"/preview.*
+if (cd "$tmp" && blender --background --python satin-paint.py -- \
+	--render preview.exr --samples 4 --size 64 \
+	--save preview.blend) >"$tmp/p.log" 2>&1 &&
+	[ "$(head -c 4 "$tmp/preview.exr" | od -An -tx1 | tr -d ' \n')" = 762f3101 ] &&
+	[ ! -e "$tmp/preview.exr.png" ] && [ ! -e "$tmp/preview.png" ] &&
+	blender --background "$tmp/preview.blend" --python-expr \
+		"import bpy; print('view:', bpy.data.scenes['glint-preview'].view_settings.view_transform)" \
+		2>&1 | grep -q "^view: Standard"; then
+	echo "ok   preview to .exr (relative paths) is an OpenEXR file, view transform Standard"
+else
+	tail -20 "$tmp/p.log"
+	fail "preview to .exr (format from the extension, Standard view)"
+fi
+if blender --background --python "$tmp/satin-paint.py" -- \
+	--render "$tmp/preview.gif" >"$tmp/p.log" 2>&1 ||
+	! grep -q "unknown image extension '.gif'" "$tmp/p.log"; then
+	fail "preview to .gif: not refused by name"
+else
+	echo "ok   preview to an unknown extension refused by name"
+fi
 # --save never replaces a file.
 echo "a user's file" >"$tmp/mine.blend"
 if blender --background --python "$tmp/satin-paint.py" -- \

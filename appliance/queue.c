@@ -181,6 +181,24 @@ static int worker_can_write(const struct qdir *d, const char *session)
 			       (unsigned)(st.st_mode & 0777), w);
 }
 
+/* A waiting or running job of the same session (glint_queue_list's
+ * callback): its id and state. */
+struct dup_find {
+	const char *session;
+	char id[64], state[16];
+};
+
+static int find_dup(const struct glint_job *j, void *ctx)
+{
+	struct dup_find *f = ctx;
+	if ((strcmp(j->state, "pending") && strcmp(j->state, "running")) ||
+	    strcmp(j->session, f->session))
+		return 0;
+	snprintf(f->id, sizeof(f->id), "%s", j->id);
+	snprintf(f->state, sizeof(f->state), "%s", j->state);
+	return 1;
+}
+
 int glint_queue_add(const char *queue, const char *kind, const char *session,
 		    char *id_out)
 {
@@ -203,6 +221,17 @@ int glint_queue_add(const char *queue, const char *kind, const char *session,
 	if (ret < 0)
 		return ret;
 	ret = worker_can_write(&d, session);
+	/* one fit of a session at a time: a second add is refused, naming
+	 * the job that will fit it */
+	struct dup_find dup = { session, "", "" };
+	if (ret == 0)
+		ret = glint_queue_list(queue, find_dup, &dup);
+	if (ret == 0 && dup.id[0])
+		ret = glint_error_set(EEXIST,
+				      "session %s is already queued: job %s "
+				      "(%s); glint queue cancel %s first to "
+				      "queue it again",
+				      session, dup.id, dup.state, dup.id);
 	if (ret < 0) {
 		qclose(&d);
 		return ret;

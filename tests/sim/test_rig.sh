@@ -391,6 +391,7 @@ check "a queue whose running/ is a link: refused" run 1 "running: not a folder (
 echo '{"id": "zz-evil", "kind": "fit", "session": "--help"}' >"$tmp/one/queue/pending/zz-evil.json"
 check "a job whose session is '--help' fails as a bad job" bash -c "'$glint' queue run --until-empty --root '$tmp/one' -q && '$glint' jobs --root '$tmp/one' --json | python3 -c 'import json,sys; j=[x for x in json.load(sys.stdin)[\"jobs\"] if x[\"id\"] == \"zz-evil\"]; print(\"  \", j); sys.exit(j[0][\"state\"] != \"failed\")'"
 id=$("$glint" queue add "$sess" --root "$tmp/one")
+check "queue add of a session already waiting: refused, the job named" run 1 "is already queued: job $id (pending)" queue add "$sess" --root "$tmp/one"
 check "cancel a pending job" run 0 "" queue cancel "$id" --root "$tmp/one"
 check "... listed as cancelled" bash -c "'$glint' jobs --root '$tmp/one' | grep -q '$id *cancelled'"
 check "... and says what it cancelled" grep -q "cancelled pending job $id" "$tmp/out"

@@ -4,7 +4,10 @@
 
 #include "capture/hdr/session.h"
 #include "core/error.h"
+#include "core/json.h"
 #include "core/lockfile.h"
+#include "core/log.h"
+#include "core/path.h"
 
 #include <errno.h>
 #include <math.h>
@@ -19,6 +22,7 @@ struct inputs {
 	const char *weights[GLINT_FIT_MAX_VIEWS];
 	struct glint_session_fit_files fs[GLINT_FIT_MAX_VIEWS];
 	int lock[GLINT_FIT_MAX_VIEWS];
+	int fitted_meanwhile; /* one session, fitted by the fit waited for */
 	struct glint_run_samples rs;
 };
 
@@ -43,6 +47,7 @@ static int session_inputs(char *const *dirs, int n,
 						 &in->lock[k]);
 		if (ret < 0)
 			return ret;
+		in->fitted_meanwhile = n == 1 && ret == 1;
 		in->n = k + 1;
 		in->scene[k] = fs->scene;
 		in->photo[k] = fs->photo;
@@ -211,9 +216,28 @@ int glint_session_fit(struct glint_fit_request *req,
 		in.lock[k] = -1;
 	int ret = choose_inputs(req, &in, &job->out_dir, out);
 	json_t *doc = NULL;
-	if (ret == 0)
+	/* --wait on a session whose running fit then wrote its result into
+	 * the same folder: that result is the answer, not a second fit */
+	int taken = ret == 0 && in.fitted_meanwhile && job->out_dir &&
+		    !strcmp(job->out_dir, in.fs[0].out);
+	if (taken) {
+		char path[GLINT_PATH_MAX];
+		ret = glint_path_join(path, sizeof(path), job->out_dir,
+				      "params.json");
+		if (ret == 0)
+			ret = glint_json_load(path, &doc);
+		if (ret == 0) {
+			json_object_set_new(doc, "output",
+					    json_string(job->out_dir));
+			glint_log_info("%s was fitted by the fit waited for: "
+				       "its result is the answer (run glint "
+				       "fit again without --wait to fit anew)",
+				       in.fs[0].out);
+		}
+	}
+	if (ret == 0 && !taken)
 		ret = load_inputs(job, also, &in);
-	if (ret == 0)
+	if (ret == 0 && !taken)
 		ret = glint_fit_job_run(job, &doc);
 	glint_fit_job_unload(job);
 	for (int k = 0; k < job->nalso; k++)

@@ -360,10 +360,14 @@ int glint_session_fit_open(const char *dir, int wait,
 	if (ret < 0)
 		return ret;
 	ret = glint_lockfile_acquire(path, "glint fit", 0, lock);
+	int waited = 0;
+	struct timespec since;
+	clock_gettime(CLOCK_REALTIME, &since);
 	if (ret == -EBUSY && wait) {
 		glint_log_info("%s", glint_error_msg());
 		glint_log_info("waiting for it to finish");
 		ret = glint_lockfile_acquire(path, "glint fit", 1, lock);
+		waited = ret == 0;
 	} else if (ret == -EBUSY) {
 		glint_error_prefix(ret,
 				   "%s is being fitted (use --wait to wait "
@@ -376,6 +380,15 @@ int glint_session_fit_open(const char *dir, int wait,
 	if (glint_atomic_dir_sweep(fs->out) > 0)
 		glint_log_info("%s: cleaned up after an interrupted fit",
 			       fs->out);
+	/* the fit waited for finished with a result: that is the answer */
+	struct stat st;
+	if (waited &&
+	    glint_path_join(path, sizeof(path), fs->out, "params.json") == 0 &&
+	    stat(path, &st) == 0 &&
+	    (st.st_mtim.tv_sec > since.tv_sec ||
+	     (st.st_mtim.tv_sec == since.tv_sec &&
+	      st.st_mtim.tv_nsec >= since.tv_nsec)))
+		return 1;
 	return 0;
 }
 

@@ -94,7 +94,9 @@ int glint_session_fit_inputs(const char *dir,
  * per session at a time): with `wait`, block until another fit is done;
  * without it, fail with -EBUSY saying the session is being fitted.  Once
  * the lock is held, what a killed fit left in the result folder is swept.
- * *lock is the caller's: release it with glint_lockfile_release().
+ * Returns 1 (lock held) when it waited and the fit it waited for left a
+ * whole result (fs->out/params.json written since the wait began), else
+ * 0.  *lock is the caller's: release it with glint_lockfile_release().
  */
 int glint_session_fit_open(const char *dir, int wait,
 			   struct glint_session_fit_files *fs, int *lock);

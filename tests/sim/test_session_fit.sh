@@ -105,7 +105,7 @@ check "... and no session's fit folder touched" test ! -e "$sess2/fit"
 check "a probe session is not fittable: named" run 1 "expected a complete sample session" fit "$(ls -d "$tmp"/caps/probe-*)"
 
 # Two fits of one session: the second is refused, naming the holder; with
-# --wait it waits and then runs.
+# --wait it waits and takes the result the first one left.
 "$glint" fit "$sess" -q --threads 1 --samples 32 &
 pid=$!
 # The holder writes its pid into the lock once it holds it (probing
@@ -113,7 +113,12 @@ pid=$!
 wait_until 30 grep -q "pid $pid:" "$sess/fit.lock"
 check "a second fit of the session is refused" run 1 "is being fitted" fit "$sess"
 check "... naming the holder" grep -q "pid $pid" "$tmp/err"
-check "... --wait waits, then fits" run 0 "waiting for it" fit "$sess" --wait
+check "... --wait waits, then takes the result of the fit it waited for" run 0 "was fitted by the fit waited for" fit "$sess" --wait --json
+check "... its --json is that result (not a second fit)" python3 -c "
+import json, sys
+a = json.load(open('$tmp/out'))
+b = json.load(open('$sess/fit/params.json'))
+sys.exit(a['parameters'] != b['parameters'])"
 wait $pid
 check "the first fit also completed" test $? = 0
 

@@ -638,10 +638,10 @@ static int lock_job(const struct qdir *d, const char *id, unsigned submitter,
 	if (jname(name, sizeof(name), id, ".lock") < 0)
 		return -1;
 	if (fstatat(d->st[RUNNING], name, &st, AT_SYMLINK_NOFOLLOW) == 0 &&
-	    (!S_ISREG(st.st_mode) ||
+	    (!S_ISREG(st.st_mode) || st.st_nlink != 1 ||
 	     !trusted(&who, d->owner, (unsigned)st.st_uid))) {
 		glint_log_warn("job %s: removing a lock file of uid %u, who "
-			       "may not hold it",
+			       "may not hold it (or a hard link)",
 			       id, (unsigned)st.st_uid);
 		unlinkat(d->st[RUNNING], name, 0);
 	}
@@ -718,13 +718,15 @@ int glint_queue_cancel_requested(const struct glint_job *job)
 	    jname(name, sizeof(name), job->id, ".cancel") < 0 ||
 	    fstatat(job->dir_fd, name, &st, AT_SYMLINK_NOFOLLOW) < 0)
 		return 0;
-	if (S_ISREG(st.st_mode) &&
+	/* a hard link carries its target's owner: only a file of one name
+	 * is a request */
+	if (S_ISREG(st.st_mode) && st.st_nlink == 1 &&
 	    trusted(job, job->queue_uid, (unsigned)st.st_uid))
 		return 1;
 	/* Someone else sharing the queue: not theirs to stop. */
 	glint_log_warn("job %s: ignoring a cancel request by uid %u (not its "
-		       "submitter)",
-		       job->id, (unsigned)st.st_uid);
+		       "submitter, or a hard link: %u names)",
+		       job->id, (unsigned)st.st_uid, (unsigned)st.st_nlink);
 	unlinkat(job->dir_fd, name, 0);
 	return 0;
 }

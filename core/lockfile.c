@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <string.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 int glint_lockfile_acquire(const char *path, const char *what, int wait,
@@ -43,6 +44,17 @@ int glint_lockfile_acquireat(int dirfd, const char *path, const char *what,
 		}
 		return glint_error_set(EBUSY, "%s: busy: held by %s", path,
 				       holder[0] ? holder : "another process");
+	}
+	/* A lock file with other names (a hard link to someone's file,
+	 * planted where the lock goes) is not ours to truncate. */
+	struct stat st;
+	if (fstat(f, &st) < 0 || !S_ISREG(st.st_mode) || st.st_nlink != 1) {
+		int links = fstat(f, &st) < 0 ? 0 : (int)st.st_nlink;
+		close(f);
+		return glint_error_set(EPERM,
+				       "%s: the lock file has %d names (a hard "
+				       "link to another file?): refused",
+				       path, links);
 	}
 	/* Ours: say who holds it. */
 	char line[300];

@@ -396,6 +396,20 @@ check "cancel a pending job" run 0 "" queue cancel "$id" --root "$tmp/one"
 check "... listed as cancelled" bash -c "'$glint' jobs --root '$tmp/one' | grep -q '$id *cancelled'"
 check "... and says what it cancelled" grep -q "cancelled pending job $id" "$tmp/out"
 check "cancel of an unknown job: named" run 1 "nosuchjob" queue cancel nosuchjob --root "$tmp/one"
+# Hard links carry their target's owner: a lock file that is a link to
+# the job's own file is removed (never truncated), and a cancel request
+# that is a link to it is ignored.
+hq="$tmp/one/queue"
+id=$("$glint" queue add "$sess" --root "$tmp/one")
+ln "$hq/pending/$id.json" "$hq/running/$id.lock"
+check "a lock file hard-linked to the job's file: removed, the job runs whole" bash -c "'$glint' queue run --until-empty --root '$tmp/one' 2>'$tmp/werr' && grep -q 'removing a lock file of uid' '$tmp/werr' && '$glint' jobs --root '$tmp/one' | grep -q '$id *done'"
+id=$("$glint" queue add "$sess" --root "$tmp/one")
+"$glint" queue run --until-empty --root "$tmp/one" 2>"$tmp/werr" &
+wpid=$!
+wait_until 30 exists "$hq/running/$id.err"
+ln "$hq/running/$id.json" "$hq/running/$id.cancel"
+wait $wpid
+check "a cancel request hard-linked to the job's file: ignored, the job done" bash -c "grep -q 'ignoring a cancel request by uid 0 (not its submitter, or a hard link: 2 names)' '$tmp/werr' && '$glint' jobs --root '$tmp/one' | grep -q '$id *done'"
 probe=$(ls -d "$tmp"/one/run-*/probe-* | head -1)
 check "queue add of a probe session: refused with the reason" run 1 "a probe session is the light of a sample's scene" queue add "$probe" --root "$tmp/one"
 # A job that fails when it runs keeps its reason as text.

@@ -399,7 +399,14 @@ static int load_job(const struct qdir *d, int state, const char *file,
 	/* A waiting or running job's file is its submitter's; a finished
 	 * one was rewritten by the worker, which kept the submitter. */
 	json_t *by = json_object_get(job->doc, "submitter_uid");
-	if (state != PENDING && state != RUNNING && json_is_integer(by))
+	/* ... but only a record the worker wrote (the queue's owner's or
+	 * root's, writable by its owner alone) is believed: one planted or
+	 * rewritten by someone else names its file's owner */
+	int worker_record =
+		((unsigned)st.st_uid == d->owner || st.st_uid == 0) &&
+		!(st.st_mode & (S_IWGRP | S_IWOTH));
+	if (state != PENDING && state != RUNNING && json_is_integer(by) &&
+	    worker_record)
 		job->uid = (unsigned)json_integer_value(by);
 	else
 		json_object_set_new(job->doc, "submitter_uid",
@@ -782,6 +789,14 @@ int glint_queue_finish(const char *queue, struct glint_job *job,
 			       : qopen(queue, &d, 0);
 	if (ret == 0) {
 		ret = write_job(d.st[s], job->id, job->doc);
+		/* a finished record says who submitted the job: the group
+		 * reads it, only the worker writes it */
+		char name[GLINT_PATH_MAX];
+		if (ret == 0 &&
+		    jname(name, sizeof(name), job->id, ".json") == 0 &&
+		    fchmodat(d.st[s], name, 0640, 0) < 0)
+			ret = glint_error_set(errno, "%s/%s: %s", state, name,
+					      strerror(errno));
 		qclose(&d);
 	}
 	if (ret == 0 && job->dir_fd >= 0)

@@ -359,6 +359,14 @@ if [ "$(id -u)" = 0 ] && command -v setpriv >/dev/null; then
 	chown -R 65534:65534 "$tmp/nq/s1" && chmod 0755 "$tmp/nq/s1" "$tmp/nq"
 	check "a session the queue's worker cannot write: queue add refuses" bash -c "! ${nobody[*]} '$glint' queue add '$tmp/nq/s1' --root '$tmp/nq' 2>'$tmp/err' && grep -q 'the queue.s worker (uid 65533) cannot write its fit there' '$tmp/err' && ! ls '$tmp/nq/queue/pending' | grep -q json"
 	${nobody[@]} bash -c "echo '{\"id\": \"zz-other\", \"kind\": \"fit\", \"session\": \"$sess\"}' >'$tmp/one/queue/pending/zz-other.json'"
+	# A finished record claims its submitter; only the worker's own
+	# (the queue owner's, not group-writable) is believed.
+	echo '{"id": "zz-claim", "kind": "fit", "session": "/x", "state": "done", "submitter_uid": 0}' >"$q/done/zz-claim.json"
+	chown 65534:65534 "$q/done/zz-claim.json"
+	echo '{"id": "zz-claim2", "kind": "fit", "session": "/x", "state": "done", "submitter_uid": 65534}' >"$q/done/zz-claim2.json"
+	chmod 0660 "$q/done/zz-claim2.json"
+	check "a finished record planted by another user, or rewritable by the group: its claimed submitter is not believed" bash -c "'$glint' jobs --root '$tmp/one' >'$tmp/jobs.txt' && grep -q 'zz-claim  *done *fit  nobody' '$tmp/jobs.txt' && grep -q 'zz-claim2  *done *fit  root' '$tmp/jobs.txt'"
+	rm -f "$q/done/zz-claim.json" "$q/done/zz-claim2.json"
 	check "... and a job file written by hand fails, its submitter named" bash -c "'$glint' queue run --until-empty --root '$tmp/one' -q && '$glint' jobs --root '$tmp/one' | grep 'zz-other' | grep -q 'failed *fit  nobody .*belongs to uid 0 and is not shared'"
 	# Another user may not steer a job: cancel it, move it, hold its
 	# lock, or ask its worker to stop it.

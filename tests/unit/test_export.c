@@ -139,8 +139,8 @@ static void test_transparent(void)
 			"KHR_materials_volume", "<medium type=\"homogeneous\"",
 			"\"string type\" \"dielectric\"",
 			"ShaderNodeVolumeAbsorption",
-			"name=\"transmission_depth\" type=\"float\" "
-			"value=\"0.05\""
+			("name=\"transmission_depth\" type=\"float\" "
+			 "value=\"0.05\"")
 		};
 		CHECK(t && strstr(t, must[k]), "%s: no '%s' in\n%s",
 		      glint_export_format_names[k], must[k], t ? t : "");

@@ -126,7 +126,8 @@ int glint_queue_init(const char *queue)
 	return ret;
 }
 
-static int write_job(int dirfd, const char *id, json_t *doc)
+/* mode: -1 (the umask's), or e.g. 0640 for a finished record */
+static int write_job(int dirfd, const char *id, json_t *doc, int mode)
 {
 	char name[GLINT_PATH_MAX];
 	int ret = jname(name, sizeof(name), id, ".json");
@@ -135,7 +136,7 @@ static int write_job(int dirfd, const char *id, json_t *doc)
 	char *text = json_dumps(doc, JSON_INDENT(2) | JSON_SORT_KEYS);
 	if (!text)
 		return glint_error_set(ENOMEM, "out of memory");
-	ret = glint_atomic_write_fileat(dirfd, name, text, strlen(text));
+	ret = glint_atomic_write_fileat(dirfd, name, text, strlen(text), mode);
 	free(text);
 	return ret;
 }
@@ -242,7 +243,7 @@ int glint_queue_add(const char *queue, const char *kind, const char *session,
 	json_t *doc = json_pack("{s:s, s:s, s:s, s:s, s:i}", "id", id, "kind",
 				kind, "session", session, "added", added,
 				"added_by_pid", (int)getpid());
-	ret = doc ? write_job(d.st[PENDING], id, doc)
+	ret = doc ? write_job(d.st[PENDING], id, doc, -1)
 		  : glint_error_set(ENOMEM, "out of memory");
 	json_decref(doc);
 	qclose(&d);
@@ -788,15 +789,9 @@ int glint_queue_finish(const char *queue, struct glint_job *job,
 	int ret = s <= RUNNING ? glint_error_set(EINVAL, "state %s", state)
 			       : qopen(queue, &d, 0);
 	if (ret == 0) {
-		ret = write_job(d.st[s], job->id, job->doc);
 		/* a finished record says who submitted the job: the group
 		 * reads it, only the worker writes it */
-		char name[GLINT_PATH_MAX];
-		if (ret == 0 &&
-		    jname(name, sizeof(name), job->id, ".json") == 0 &&
-		    fchmodat(d.st[s], name, 0640, 0) < 0)
-			ret = glint_error_set(errno, "%s/%s: %s", state, name,
-					      strerror(errno));
+		ret = write_job(d.st[s], job->id, job->doc, 0640);
 		qclose(&d);
 	}
 	if (ret == 0 && job->dir_fd >= 0)

@@ -132,7 +132,7 @@ int glint_atomic_write_file(const char *path, const void *data, size_t n)
 }
 
 int glint_atomic_write_fileat(int dirfd, const char *name, const void *data,
-			      size_t n)
+			      size_t n, int mode)
 {
 	char tmp[512];
 	int fd = -1, e;
@@ -166,7 +166,7 @@ int glint_atomic_write_fileat(int dirfd, const char *name, const void *data,
 		p += w;
 		left -= (size_t)w;
 	}
-	if (fsync(fd) < 0)
+	if ((mode >= 0 && fchmod(fd, (mode_t)mode) < 0) || fsync(fd) < 0)
 		goto fail;
 	close(fd);
 	fd = -1;

@@ -43,8 +43,10 @@ int glint_atomic_rename(const char *tmp, const char *path);
 int glint_atomic_write_file(const char *path, const void *data, size_t n);
 
 /* The same, as `name` in the folder open as dirfd, never following a
- * link (for shared folders: the temporary file is new, O_EXCL). */
+ * link (for shared folders: the temporary file is new, O_EXCL); mode
+ * (e.g. 0640) is set on it before it takes the name, or -1 for the
+ * umask's. */
 int glint_atomic_write_fileat(int dirfd, const char *name, const void *data,
-			      size_t n);
+			      size_t n, int mode);
 
 #endif

@@ -113,10 +113,12 @@ static int meta_from_text(const char *path, const char *text,
 
 /* The checks every frame file gets: pixels against their checksum. */
 static int check_crc(const char *path, const struct glint_frame *f,
-		     json_int_t crc)
+		     json_int_t crc, uint32_t *pixels_crc)
 {
 	uint32_t got = pixels_crc32(f->data,
 				    (size_t)f->width * f->height * f->channels);
+	if (pixels_crc)
+		*pixels_crc = got;
 	if (crc >= 0 && got != (uint32_t)crc)
 		return glint_error_set(EINVAL,
 				       "%s: the pixels do not match their "
@@ -127,7 +129,8 @@ static int check_crc(const char *path, const struct glint_frame *f,
 	return 0;
 }
 
-static int frame_read_dng(const char *path, struct glint_frame *f, int *index)
+static int frame_read_dng(const char *path, struct glint_frame *f, int *index,
+			  uint32_t *pixels_crc)
 {
 	char *meta = NULL, layout[16];
 	int idx = -1, ret = glint_dng_read(path, f, &meta);
@@ -148,7 +151,7 @@ static int frame_read_dng(const char *path, struct glint_frame *f, int *index)
 				      "%s",
 				      path, layout, f->format);
 	if (ret == 0)
-		ret = check_crc(path, f, crc);
+		ret = check_crc(path, f, crc, pixels_crc);
 	free(meta);
 	if (ret < 0)
 		glint_frame_release(f);
@@ -159,8 +162,14 @@ static int frame_read_dng(const char *path, struct glint_frame *f, int *index)
 
 int glint_frame_read(const char *path, struct glint_frame *f, int *index)
 {
+	return glint_frame_read_crc(path, f, index, NULL);
+}
+
+int glint_frame_read_crc(const char *path, struct glint_frame *f, int *index,
+			 uint32_t *pixels_crc)
+{
 	if (glint_dng_is_tiff(path))
-		return frame_read_dng(path, f, index);
+		return frame_read_dng(path, f, index, pixels_crc);
 	int idx = -1;
 	json_int_t crc = -1;
 	FILE *fp = fopen(path, "rb");
@@ -240,7 +249,7 @@ int glint_frame_read(const char *path, struct glint_frame *f, int *index)
 			d[i] = (uint16_t)(row[2 * i] << 8 | row[2 * i + 1]);
 	}
 	png_read_end(png, NULL);
-	ret = check_crc(path, f, crc);
+	ret = check_crc(path, f, crc, pixels_crc);
 	if (index)
 		*index = idx;
 out:

@@ -39,5 +39,9 @@ int glint_frame_write(const char *path, const struct glint_frame *f,
  * the pixels do not match their checksum (an edited frame).  *index (may
  * be NULL) is the index the metadata gives, -1 when it has none. */
 int glint_frame_read(const char *path, struct glint_frame *f, int *index);
+/* The same, with *pixels_crc (may be NULL) the CRC-32 of the samples read
+ * (glint_frame_pixels_crc32(), computed once for the checksum check). */
+int glint_frame_read_crc(const char *path, struct glint_frame *f, int *index,
+			 uint32_t *pixels_crc);
 
 #endif

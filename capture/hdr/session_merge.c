@@ -71,7 +71,8 @@ static int frame_in_place(const char *path, const char *name,
 			  const struct glint_frame *prev)
 {
 	int index, named;
-	int ret = glint_frame_read(path, f, &index);
+	uint32_t pixels_crc = 0;
+	int ret = glint_frame_read_crc(path, f, &index, &pixels_crc);
 	if (ret < 0)
 		return ret;
 	double t = json_number_value(json_object_get(listed, "exposure_s"));
@@ -93,14 +94,14 @@ static int frame_in_place(const char *path, const char *name,
 	 * camera's sequence) has other pixels */
 	const json_t *crc = json_object_get(listed, "pixels_crc32");
 	if (json_is_integer(crc) &&
-	    (json_int_t)glint_frame_pixels_crc32(f) != json_integer_value(crc))
+	    (json_int_t)pixels_crc != json_integer_value(crc))
 		return glint_error_set(
 			EINVAL,
 			"%s: its pixels (CRC-32 %08x) are not "
 			"the ones this session recorded for "
 			"%s (%08llx): a frame from another "
 			"session was copied in",
-			path, glint_frame_pixels_crc32(f), name,
+			path, pixels_crc, name,
 			(unsigned long long)json_integer_value(crc));
 	if (prev && f->sequence && prev->sequence &&
 	    f->sequence <= prev->sequence)

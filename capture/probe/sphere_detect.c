@@ -146,7 +146,7 @@ static int edge_detect(const struct glint_image *img, struct edge_map *em)
 	 * sub-pixel fit come from the strong edges, which a ball's own
 	 * shading inside the rim reaches less. */
 	float weak = (float)(EDGE_WEAK * thr);
-	size_t top = 0;
+	size_t top = 0, cand = 0;
 	for (int y = 1; y < h - 1; y++)
 		for (int x = 1; x < w - 1; x++) {
 			size_t i = (size_t)y * w + x;
@@ -155,12 +155,14 @@ static int edge_detect(const struct glint_image *img, struct edge_map *em)
 				continue;
 			double ux = em->gx[i] / m[i], uy = em->gy[i] / m[i];
 			if (m[i] >= sample(m, w, h, x + ux, y + uy) &&
-			    m[i] >= sample(m, w, h, x - ux, y - uy))
+			    m[i] >= sample(m, w, h, x - ux, y - uy)) {
 				em->edge[i] = m[i] >= thr ? 1 : 2;
+				cand++;
+			}
 		}
 	/* The strong edges grow through the weak ones they touch (a stack
-	 * of pixel indices: each pixel enters it at most once). */
-	size_t *stack = malloc(n * sizeof(size_t));
+	 * of pixel indices: each candidate enters it at most once). */
+	size_t *stack = malloc((cand ? cand : 1) * sizeof(size_t));
 	if (!stack) {
 		ret = glint_error_set(ENOMEM,
 				      "sphere detection: out of memory");

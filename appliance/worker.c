@@ -11,7 +11,9 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <grp.h>
 #include <math.h>
+#include <pwd.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -92,6 +94,69 @@ static int fit_child(const char *session, int fo, int fe, int pipe_fd)
 	return 0;
 }
 
+/*
+ * Whose rights a job runs with.  A worker that is not root runs every job
+ * as itself (the queue's owner): it can do no more for a submitter than
+ * it could do alone.  A worker running as root runs a job as its
+ * submitter (the job file's owner, from fstat), with the submitter's
+ * groups, never as root: root's reach would otherwise be lent to the
+ * submitter (a scene.json naming a root-only file rendered into the
+ * submitter's fit/, a session swapped for a link after the check making
+ * root write outside the captures root).  Looked up in the worker before
+ * the fork; the child only switches.
+ */
+#define GLINT_JOB_MAX_GROUPS 256
+
+struct job_identity {
+	int drop; /* 0: run as the worker */
+	uid_t uid;
+	gid_t gid;
+	gid_t groups[GLINT_JOB_MAX_GROUPS];
+	int ngroups;
+};
+
+static int job_identity(const struct glint_job *job, struct job_identity *id)
+{
+	memset(id, 0, sizeof(*id));
+	if (geteuid() != 0 || job->uid == 0)
+		return 0;
+	errno = 0;
+	struct passwd *pw = getpwuid((uid_t)job->uid);
+	if (!pw)
+		return glint_error_set(errno ? errno : ENOENT,
+				       "the job's submitter (uid %u) has no "
+				       "account: a worker running as root "
+				       "runs a job only as its submitter",
+				       job->uid);
+	id->drop = 1;
+	id->uid = pw->pw_uid;
+	id->gid = pw->pw_gid;
+	id->ngroups = GLINT_JOB_MAX_GROUPS;
+	if (getgrouplist(pw->pw_name, pw->pw_gid, id->groups, &id->ngroups) < 0)
+		return glint_error_set(E2BIG,
+				       "the job's submitter %s is in more than "
+				       "%d groups",
+				       pw->pw_name, GLINT_JOB_MAX_GROUPS);
+	return 0;
+}
+
+/* In the child: become the submitter, irrevocably (all three ids), or
+ * fail. */
+static int become(const struct job_identity *id)
+{
+	if (!id->drop)
+		return 0;
+	uid_t r, e, s;
+	if (setgroups((size_t)id->ngroups, id->groups) < 0 ||
+	    setresgid(id->gid, id->gid, id->gid) < 0 ||
+	    setresuid(id->uid, id->uid, id->uid) < 0)
+		return -errno;
+	if (getresuid(&r, &e, &s) < 0 || r != id->uid || e != id->uid ||
+	    s != id->uid || setresuid(0, 0, 0) == 0)
+		return -EPERM;
+	return 0;
+}
+
 /* The child's outcome, whole, from the pipe (after it exited). */
 static int read_outcome(int fd, struct glint_fit_outcome *o)
 {
@@ -135,7 +200,19 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop,
 			queue, job, "failed",
 			json_pack("{s:s}", "error", glint_error_msg()));
 	}
-	glint_log_info("job %s: fitting %s", job->id, job->session);
+	struct job_identity who;
+	if (job_identity(job, &who) < 0) {
+		close(fo);
+		close(fe);
+		return glint_queue_finish(
+			queue, job, "failed",
+			json_pack("{s:s}", "error", glint_error_msg()));
+	}
+	if (who.drop)
+		glint_log_info("job %s: fitting %s as uid %u", job->id,
+			       job->session, (unsigned)who.uid);
+	else
+		glint_log_info("job %s: fitting %s", job->id, job->session);
 	/* The child's outcome comes back as values through a pipe. */
 	int pfd[2];
 	if (pipe2(pfd, O_CLOEXEC) < 0) {
@@ -159,10 +236,18 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop,
 		signal(SIGTERM, SIG_DFL);
 		signal(SIGINT, SIG_DFL);
 		signal(SIGHUP, SIG_DFL);
+		close(pfd[0]);
+		int e = become(&who);
+		if (e < 0) {
+			dprintf(fe, "cannot run the job as uid %u: %s\n",
+				(unsigned)who.uid, strerror(-e));
+			_exit(126);
+		}
+		/* After the switch: a change of credentials clears the
+		 * parent-death signal. */
 		prctl(PR_SET_PDEATHSIG, SIGTERM);
 		if (getppid() != worker)
 			_exit(127);
-		close(pfd[0]);
 		_exit(fit_child(session, fo, fe, pfd[1]));
 	}
 	close(pfd[1]);

@@ -387,6 +387,35 @@ if [ "$(id -u)" = 0 ] && command -v setpriv >/dev/null; then
 	${nobody[@]} touch "$q/running/$id.cancel"
 	wait $wpid
 	check "a cancel request by another user is ignored: the job is done" bash -c "grep -q 'ignoring a cancel request by uid 65534' '$tmp/werr' && '$glint' jobs --root '$tmp/one' | grep -q '$id *done'"
+	# A worker running as root runs a job as its submitter: nobody's
+	# session whose scene.json names a root-only light probe is not
+	# fitted with it (as root it would be rendered into his fit/), and
+	# his own session's fit is written as him.
+	mine="$tmp/one/nobody-sess"
+	cp -r "$sess" "$mine" && rm -rf "$mine/fit"
+	# scene.json's probe path made absolute (the copy is elsewhere);
+	# with SECRET, a root-only copy of the probe.
+	env_to() { # SCENE [SECRET]
+		python3 - "$sess" "$@" <<'PY'
+import json, os, shutil, sys
+orig, scene = sys.argv[1:3]
+d = json.load(open(scene))
+env = os.path.join(orig, d["environment"]["path"])
+if len(sys.argv) > 3:
+    shutil.copy(env, sys.argv[3])
+    os.chmod(sys.argv[3], 0o600)
+    env = sys.argv[3]
+d["environment"]["path"] = os.path.abspath(env)
+json.dump(d, open(scene, "w"), indent=1)
+PY
+	}
+	env_to "$mine/scene.json" "$tmp/secret.exr"
+	chown -R 65534:65534 "$mine"
+	check "a root worker runs nobody's job as nobody: a root-only file his scene names is not read" bash -c "id=\$(${nobody[*]} '$glint' queue add '$mine' --root '$tmp/one') && '$glint' queue run --until-empty --root '$tmp/one' 2>'$tmp/werr' && grep -q 'as uid 65534' '$tmp/werr' && '$glint' jobs --root '$tmp/one' | grep \"\$id\" | grep -q 'failed.*secret.exr.*ermission denied' && ! ls '$mine/fit' 2>/dev/null | grep -q png"
+	rm -rf "$mine" && cp -r "$sess" "$mine" && rm -rf "$mine/fit"
+	env_to "$mine/scene.json"
+	chown -R 65534:65534 "$mine"
+	check "... and his own session is fitted, its results his" bash -c "id=\$(${nobody[*]} '$glint' queue add '$mine' --root '$tmp/one') && '$glint' queue run --until-empty --root '$tmp/one' -q && '$glint' jobs --root '$tmp/one' | grep -q \"\$id *done\" && [ \"\$(stat -c %u '$mine/fit/params.json')\" = 65534 ]"
 	chmod 0700 "$tmp"
 else
 	echo "skip two-user checks: not root or no setpriv"

@@ -6,6 +6,7 @@
 #include "exr_internal.h"
 
 #include "error.h"
+#include "path.h"
 #include "image.h"
 
 #include <stdint.h>
@@ -117,13 +118,12 @@ int glint_exr_check_attribute_sizes(const char *path)
 	enum { MAX_PARSED = 1 << 20 };
 	long long size = glint_file_size(path);
 	uint8_t buf[600], *val = NULL;
-	FILE *fp = fopen(path, "rb");
+	FILE *fp = glint_fopen_regular(path, "rb");
 	long long pos = 8;
 	int ret = 0, headers = 0;
 
 	if (!fp)
-		return glint_error_set(errno, "%s: cannot open: %s", path,
-				       strerror(errno));
+		return -errno;
 	while (ret == 0 && headers < 1024) {
 		if (fseek(fp, (long)pos, SEEK_SET) < 0)
 			break;

@@ -140,6 +140,23 @@ int glint_open_regular(const char *path, long long *size)
 	return fd;
 }
 
+FILE *glint_fopen_regular(const char *path, const char *mode)
+{
+	int fd = glint_open_regular(path, NULL);
+	if (fd < 0) {
+		errno = -fd;
+		return NULL;
+	}
+	FILE *fp = fdopen(fd, mode);
+	if (!fp) {
+		int e = errno;
+		close(fd);
+		glint_error_set(e, "%s: %s", path, strerror(e));
+		errno = e;
+	}
+	return fp;
+}
+
 int glint_check_regular(const char *path)
 {
 	int fd = glint_open_regular(path, NULL);

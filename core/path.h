@@ -16,6 +16,7 @@
 #include "error.h"
 
 #include <stddef.h>
+#include <stdio.h>
 
 /* GLINT_PATH_MAX: the buffer size glint uses for paths (PATH_MAX). */
 #define GLINT_PATH_MAX 4096
@@ -47,6 +48,10 @@ int glint_path_sibling(char *buf, size_t n, const char *path,
  * (may be NULL) gets its size.
  */
 int glint_open_regular(const char *path, long long *size);
+
+/* glint_open_regular as a stdio stream (mode "r" or "rb"): NULL with
+ * errno set and the message naming the file and what it is. */
+FILE *glint_fopen_regular(const char *path, const char *mode);
 
 /* The same check alone, for readers a library opens by path: 0 or a
  * negative errno naming the file. */

@@ -2,6 +2,7 @@
 /* Portable float map: "PF" (RGB) or "Pf" (grey), rows bottom to top. */
 #include "atomic_file.h"
 #include "error.h"
+#include "path.h"
 #include "formats.h"
 
 #include <stdint.h>
@@ -31,12 +32,11 @@ int glint_pfm_read(const char *path, struct glint_image **out)
 	double scale;
 	int w, h, nc, ret = 0;
 	float *row = NULL;
-	FILE *fp = fopen(path, "rb");
+	FILE *fp = glint_fopen_regular(path, "rb");
 
 	*out = NULL;
 	if (!fp)
-		return glint_error_set(errno, "%s: cannot open: %s", path,
-				       strerror(errno));
+		return -errno;
 	if (fscanf(fp, "%2s %d %d %lf", magic, &w, &h, &scale) != 4 ||
 	    (strcmp(magic, "PF") && strcmp(magic, "Pf")) || scale == 0 ||
 	    fgetc(fp) == EOF) {

@@ -2,6 +2,7 @@
 /* 8-bit sRGB PNG previews through libpng; tone map stated in formats.h. */
 #include "atomic_file.h"
 #include "error.h"
+#include "path.h"
 #include "formats.h"
 #include "vec.h"
 
@@ -173,12 +174,11 @@ int glint_png_check_chunks(const char *path)
 	static const uint8_t sig[8] = { 137, 'P', 'N', 'G', 13, 10, 26, 10 };
 	uint8_t head[8];
 	long long size = glint_file_size(path), pos = 8;
-	FILE *fp = fopen(path, "rb");
+	FILE *fp = glint_fopen_regular(path, "rb");
 	int ret = 0;
 
 	if (!fp)
-		return glint_error_set(errno, "%s: cannot open: %s", path,
-				       strerror(errno));
+		return -errno;
 	if (size < 0 || fread(head, 1, 8, fp) != 8 || memcmp(head, sig, 8))
 		goto out; /* not a PNG: libpng says so */
 	while (fread(head, 1, 8, fp) == 8) {

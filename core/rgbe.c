@@ -8,6 +8,7 @@
  */
 #include "atomic_file.h"
 #include "error.h"
+#include "path.h"
 #include "formats.h"
 
 #include <math.h>
@@ -182,10 +183,9 @@ int glint_rgbe_read(const char *path, struct glint_image **out)
 	int w, h, flip, ret;
 
 	*out = NULL;
-	r.fp = fopen(path, "rb");
+	r.fp = glint_fopen_regular(path, "rb");
 	if (!r.fp)
-		return glint_error_set(errno, "%s: cannot open: %s", path,
-				       strerror(errno));
+		return -errno;
 	ret = read_header(r.fp, path, &w, &h, &flip);
 	if (ret < 0)
 		goto out;

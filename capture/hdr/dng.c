@@ -5,6 +5,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/path.h"
 #include "core/image.h"
 #include "core/tiff.h"
 
@@ -159,9 +160,11 @@ int glint_dng_write(const char *path, const struct glint_frame *f,
 int glint_dng_is_tiff(const char *path)
 {
 	unsigned char b[4] = { 0 };
-	FILE *fp = fopen(path, "rb");
-	if (!fp)
+	FILE *fp = glint_fopen_regular(path, "rb");
+	if (!fp) {
+		glint_error_clear(); /* the reader that follows says why */
 		return 0;
+	}
 	size_t n = fread(b, 1, 4, fp);
 	fclose(fp);
 	return n == 4 &&

@@ -5,6 +5,7 @@
 
 #include "core/formats.h"
 #include "core/error.h"
+#include "core/path.h"
 
 #include <jansson.h>
 #include <png.h>
@@ -172,7 +173,7 @@ int glint_frame_read_crc(const char *path, struct glint_frame *f, int *index,
 		return frame_read_dng(path, f, index, pixels_crc);
 	int idx = -1;
 	json_int_t crc = -1;
-	FILE *fp = fopen(path, "rb");
+	FILE *fp = glint_fopen_regular(path, "rb");
 	png_structp png = NULL;
 	png_infop info = NULL;
 	uint8_t *volatile row = NULL; /* survives longjmp */
@@ -180,7 +181,7 @@ int glint_frame_read_crc(const char *path, struct glint_frame *f, int *index,
 
 	memset(f, 0, sizeof(*f));
 	if (!fp)
-		return glint_error_set(errno, "%s: %s", path, strerror(errno));
+		return -errno;
 	ret = glint_png_check_chunks(path);
 	if (ret < 0) {
 		fclose(fp);

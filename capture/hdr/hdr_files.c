@@ -39,11 +39,11 @@ static int parse_time(const char *s, double *t)
 static int times_from_file(const char *file, int n, double *t, int *k)
 {
 	char buf[8192];
-	FILE *f = fopen(file, "r");
+	FILE *f = glint_fopen_regular(file, "r");
 	int ret = 0;
 
 	if (!f)
-		return glint_error_set(errno, "%s: %s", file, strerror(errno));
+		return -errno;
 	while (ret == 0 && *k <= n && fgets(buf, sizeof(buf), f)) {
 		if (buf[0] == '\n' || buf[0] == '#')
 			continue;

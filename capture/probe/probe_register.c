@@ -306,10 +306,10 @@ int glint_register_points_file(const char *path, const struct glint_image *e1,
 	struct vec3 a[256], b[256];
 	double x1, y1, x2, y2;
 	int n = 0, ret = 0;
-	FILE *f = fopen(path, "r");
+	FILE *f = glint_fopen_regular(path, "r");
 
 	if (!f)
-		return glint_error_set(errno, "%s: %s", path, strerror(errno));
+		return -errno;
 	while (n < 256 &&
 	       fscanf(f, " %lf %lf %lf %lf", &x1, &y1, &x2, &y2) == 4) {
 		glint_probe_pixel_dir(GLINT_PROBE_LATLONG, e1->width,

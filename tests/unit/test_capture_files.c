@@ -238,7 +238,8 @@ static void test_run(const char *dir)
 
 /*
  * Special files where a reader expects a file: a FIFO (whose open would
- * wait for a writer forever), a folder; each refused at once, naming the
+ * wait for a writer forever) as a document, an image or a camera frame,
+ * a folder; each refused at once, naming the
  * file and what it is.  A document over the cap is refused by size, read
  * or not.  (Were the FIFO opened blocking, the test would hang and meet
  * its timeout.)
@@ -246,16 +247,20 @@ static void test_run(const char *dir)
 static void test_special_files(const char *dir)
 {
 	static const char *const names[] = { "fifo.json", "fifo.exr",
-					     "fifo.png", "fifo.hdr" };
+					     "fifo.png",  "fifo.hdr",
+					     "fifo.pfm",  "frame-fifo.png" };
 	char path[512];
 	json_t *doc = NULL;
 	struct glint_image *img = NULL;
+	struct glint_frame frame;
+	int index;
 
-	for (int i = 0; i < 4; i++) {
+	for (int i = 0; i < 6; i++) {
 		snprintf(path, sizeof(path), "%s/%s", dir, names[i]);
 		CHECK(mkfifo(path, 0600) == 0, "mkfifo %s", path);
-		int ret = i == 0 ? glint_json_load(path, &doc)
-				 : glint_image_read(path, &img);
+		int ret = i == 0   ? glint_json_load(path, &doc)
+			  : i == 5 ? glint_frame_read(path, &frame, &index)
+				   : glint_image_read(path, &img);
 		CHECK(ret < 0 && strstr(glint_error_msg(), path) &&
 			      strstr(glint_error_msg(), "a FIFO"),
 		      "%s: '%s'", names[i], glint_error_msg());

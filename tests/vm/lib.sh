@@ -20,6 +20,28 @@ finish() {
 	[ "$fails" = 0 ]
 }
 
+# udev_has DEV: udevd has processed the device node DEV (its database
+# entry exists, as libcamera and the ACL rules need).
+udev_has() {
+	local t
+	t=$(stat -c '%t:%T' "$1" 2>/dev/null) || return 1
+	test -e "/run/udev/data/c$((16#${t%%:*})):$((16#${t##*:}))"
+}
+
+# udev_ready DEV...: once udevd answers, trigger every device and wait for
+# those given (deadlines scaled to the VM's measured speed: under TCG a
+# trigger of the whole VM takes tens of seconds); then let the rest settle.
+udev_ready() {
+	# A trigger before udevd listens is lost: wait until it answers.
+	wait_until 30 udevadm control --ping --timeout=1 || return 1
+	udevadm trigger --action=add || return 1
+	local d
+	for d in "$@"; do
+		wait_until 60 udev_has "$d" || return 1
+	done
+	udevadm settle -t "$(scaled 60)"
+}
+
 in_vm() { # the modules scripts/vm built are only there inside its VM
 	[ -n "${GLINT_VM_MODULES:-}" ] && [ -d "$GLINT_VM_MODULES" ]
 }

@@ -59,9 +59,41 @@ static int state_of(const char *name)
 }
 
 /*
- * Open QUEUE (made with its folders when `create`).  New state folders
- * are sticky (01777 less the umask): in a queue shared through a group,
- * only a job's submitter and the queue's owner may move or remove it.
+ * A queue folder others may write must be sticky, or any of them could
+ * rename or remove what is in it (pending/ swapped for a folder of his
+ * own, where the next user's job would land): its owner makes it so,
+ * anyone else is refused, told the fix.
+ */
+static int sticky_if_shared(int fd, const char *queue, const char *name)
+{
+	const char *sep = name[0] ? "/" : "";
+	struct stat st;
+	if (fstat(fd, &st) < 0)
+		return glint_error_set(errno, "%s%s%s: %s", queue, sep, name,
+				       strerror(errno));
+	if (!(st.st_mode & (S_IWGRP | S_IWOTH)) || (st.st_mode & S_ISVTX))
+		return 0;
+	if (st.st_uid == geteuid() &&
+	    fchmod(fd, (st.st_mode & 07777) | S_ISVTX) == 0) {
+		glint_log_info("%s%s%s: writable by others: made sticky", queue,
+			       sep, name);
+		return 0;
+	}
+	return glint_error_set(EPERM,
+			       "%s%s%s: writable by others and not sticky "
+			       "(mode %04o): any user could rename or remove "
+			       "what is in it; its owner (uid %u) fixes it "
+			       "with chmod +t",
+			       queue, sep, name, (unsigned)(st.st_mode & 07777),
+			       (unsigned)st.st_uid);
+}
+
+/*
+ * Open QUEUE (made with its folders when `create`).  The queue folder and
+ * its state folders are sticky (01777 less the umask, and checked on
+ * every open: sticky_if_shared): in a queue shared through a group, only
+ * a job's submitter and the queue's owner may move or remove it, and no
+ * one else renames a state folder.
  */
 static int qopen(const char *queue, struct qdir *d, int create)
 {
@@ -70,13 +102,17 @@ static int qopen(const char *queue, struct qdir *d, int create)
 	d->root = -1;
 	for (int i = 0; i < NSTATES; i++)
 		d->st[i] = -1;
-	if (create && mkdir(queue, 0777) < 0 && errno != EEXIST)
+	if (create && mkdir(queue, 01777) < 0 && errno != EEXIST)
 		return glint_error_set(errno, "%s: cannot create the queue: %s",
 				       queue, strerror(errno));
 	d->root = open(queue, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
 	if (d->root < 0 || fstat(d->root, &st) < 0)
 		return glint_error_set(errno, "%s: the queue: %s", queue,
 				       strerror(errno));
+	if (sticky_if_shared(d->root, queue, "") < 0) {
+		qclose(d);
+		return -EPERM;
+	}
 	d->owner = (unsigned)st.st_uid;
 	for (int i = 0; i < NSTATES; i++) {
 		if (create && mkdirat(d->root, states[i], 01777) < 0 &&
@@ -104,6 +140,10 @@ static int qopen(const char *queue, struct qdir *d, int create)
 				return -ENOENT;
 			return glint_error_set(e, "%s/%s: %s", queue, states[i],
 					       strerror(e));
+		}
+		if (sticky_if_shared(d->st[i], queue, states[i]) < 0) {
+			qclose(d);
+			return -EPERM;
 		}
 	}
 	return 0;

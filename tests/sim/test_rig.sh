@@ -349,6 +349,15 @@ if [ "$(id -u)" = 0 ] && command -v setpriv >/dev/null; then
 	q="$tmp/one/queue"
 	check "the queue's state folders are sticky (a user moves only his own jobs)" bash -c "[ \$(( 0\$(stat -c %a '$q/pending') & 01000 )) != 0 ]"
 	chmod 1777 "$q/pending" "$q/running" "$q/cancelled"
+	# The queue folder itself, shared and not sticky (as a queue made
+	# by hand, or before glint made it sticky): another user is refused,
+	# told the fix; its owner's next glint makes it sticky; then the
+	# kernel refuses another user's rename of pending/.
+	chmod 0777 "$q" && chmod -t "$q"
+	check "a shared queue folder that is not sticky: another user's glint jobs refused, the fix named" bash -c "! ${nobody[*]} '$glint' jobs --root '$tmp/one' 2>'$tmp/err' && grep -q 'writable by others and not sticky.*chmod +t' '$tmp/err'"
+	check "... its owner's glint makes it sticky" bash -c "'$glint' jobs --root '$tmp/one' >/dev/null && [ \$(( 0\$(stat -c %a '$q') & 01000 )) != 0 ]"
+	check "... and another user cannot rename pending/" bash -c "! ${nobody[*]} mv '$q/pending' '$q/pending.x' 2>/dev/null && [ -d '$q/pending' ]"
+	chmod 0755 "$q"
 	check "another user's session: queue add refuses" bash -c "! ${nobody[*]} '$glint' queue add '$sess' --root '$tmp/one' 2>'$tmp/err' && grep -q 'is not shared with the job.s submitter (uid 65534)' '$tmp/err'"
 	# A queue whose worker (its owner, uid 65533) cannot write the
 	# submitter's session: queue add refuses at once, naming the fix.

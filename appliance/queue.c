@@ -109,9 +109,10 @@ static int qopen(const char *queue, struct qdir *d, int create)
 	if (d->root < 0 || fstat(d->root, &st) < 0)
 		return glint_error_set(errno, "%s: the queue: %s", queue,
 				       strerror(errno));
-	if (sticky_if_shared(d->root, queue, "") < 0) {
+	int ret = sticky_if_shared(d->root, queue, "");
+	if (ret < 0) {
 		qclose(d);
-		return -EPERM;
+		return ret;
 	}
 	d->owner = (unsigned)st.st_uid;
 	for (int i = 0; i < NSTATES; i++) {
@@ -141,9 +142,10 @@ static int qopen(const char *queue, struct qdir *d, int create)
 			return glint_error_set(e, "%s/%s: %s", queue, states[i],
 					       strerror(e));
 		}
-		if (sticky_if_shared(d->st[i], queue, states[i]) < 0) {
+		ret = sticky_if_shared(d->st[i], queue, states[i]);
+		if (ret < 0) {
 			qclose(d);
-			return -EPERM;
+			return ret;
 		}
 	}
 	return 0;

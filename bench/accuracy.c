@@ -943,6 +943,9 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 
 int main(int argc, char **argv)
 {
+	static const char usage[] = "bench/accuracy [quick|slice] "
+				    "[--check|--no-refusals|--within] [MAP...]";
+	bench_help(argc, argv, usage);
 	const char *const *mats = all_mats;
 	int nmats = 11, check = 0, no_refusals = 0, within = 0, a = 1;
 	const char *const *maps = default_maps;
@@ -963,6 +966,8 @@ int main(int argc, char **argv)
 		else
 			break;
 	}
+	if (argc > a && argv[a][0] == '-')
+		bench_refuse(argv[a], usage);
 	if (argc > a) {
 		maps = (const char *const *)argv + a;
 		nmaps = argc - a < 32 ? argc - a : 32;

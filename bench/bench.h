@@ -2,10 +2,40 @@
 #ifndef GLINT_BENCH_BENCH_H
 #define GLINT_BENCH_BENCH_H
 
-/* Shared helpers of the benchmark programs: medians, peak memory. */
+/* Shared helpers of the benchmark programs: arguments, medians, peak
+ * memory. */
 
+#include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <sys/resource.h>
+
+/* -h or --help anywhere: print `usage` and exit 0, before any work (a
+ * benchmark can run for minutes). */
+static inline void bench_help(int argc, char **argv, const char *usage)
+{
+	for (int i = 1; i < argc; i++)
+		if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help")) {
+			printf("usage: %s\n", usage);
+			exit(0);
+		}
+}
+
+/* A whole positive count of at most `max`, or -1. */
+static inline int bench_count(const char *s, int max)
+{
+	char *end;
+	long v = strtol(s, &end, 10);
+	return *s && !*end && v > 0 && v <= max ? (int)v : -1;
+}
+
+/* An argument the program does not take: say so with the usage, exit 2. */
+static inline int bench_refuse(const char *arg, const char *usage)
+{
+	fprintf(stderr, "%s: not an argument of this benchmark\nusage: %s\n",
+		arg, usage);
+	exit(2);
+}
 
 static int bench_cmp(const void *a, const void *b)
 {

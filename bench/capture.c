@@ -108,6 +108,8 @@ static int run_sequential(const char *dev, const struct glint_bracket *plan,
 
 int main(int argc, char **argv)
 {
+	static const char usage[] = "bench/capture [RUNS] [--device DEV]";
+	bench_help(argc, argv, usage);
 	glint_backends_register();
 	const char *dev = "sim:width=128,height=96";
 	int runs = 3;
@@ -117,14 +119,12 @@ int main(int argc, char **argv)
 	for (int i = 1; i < argc; i++) {
 		if (!strcmp(argv[i], "--device") && i + 1 < argc)
 			dev = argv[++i];
-		else if (atoi(argv[i]) > 0)
-			runs = atoi(argv[i]) > MAXRUNS ? MAXRUNS
-						       : atoi(argv[i]);
-		else {
-			fprintf(stderr, "usage: %s [RUNS] [--device DEV]\n",
-				argv[0]);
-			return 2;
-		}
+		else if (bench_count(argv[i], 1000) > 0)
+			runs = bench_count(argv[i], 1000) > MAXRUNS
+				       ? MAXRUNS
+				       : bench_count(argv[i], 1000);
+		else
+			bench_refuse(argv[i], usage);
 	}
 	printf("capture benchmark: %s, real clock, %d runs per mode\n", dev,
 	       runs);

@@ -206,6 +206,10 @@ static int dielectric_rows(int rounds)
 
 int main(int argc, char **argv)
 {
+	static const char usage[] =
+		"bench/fit [ROUNDS] [--no-faithful] [--no-dielectric] "
+		"[--material NAME] [--default-only]";
+	bench_help(argc, argv, usage);
 	int rounds = 3, faithful = 1, dielectric = 1, default_only = 0;
 	const char *material = "yellow-plastic";
 	struct glint_scene sc;
@@ -225,8 +229,10 @@ int main(int argc, char **argv)
 			default_only = 1;
 		else if (!strcmp(argv[i], "--material") && i + 1 < argc)
 			material = argv[++i];
+		else if (bench_count(argv[i], 1000) > 0)
+			rounds = bench_count(argv[i], 1000);
 		else
-			rounds = atoi(argv[i]) > 0 ? atoi(argv[i]) : 1;
+			bench_refuse(argv[i], usage);
 	}
 	glint_log_set_mode(GLINT_LOG_QUIET);
 	fixture_scene(&sc, 512, NULL);

@@ -29,6 +29,7 @@
  * Prints one row per light and model, then the spread of each parameter
  * across lights against the median reported standard error.
  */
+#include "bench.h"
 #include "sim/fixtures.h"
 #include "core/clock.h"
 #include "core/error.h"
@@ -272,6 +273,9 @@ static int joint_fits(struct shot *const *shots, int n, int max_pixels,
 
 int main(int argc, char **argv)
 {
+	static const char usage[] = "bench/gray_sphere [--response "
+				    "srgb|gamma:G] [--max-pixels N] [LIGHT...]";
+	bench_help(argc, argv, usage);
 	const struct glint_model *models[] = { &glint_model_lambert,
 					       &glint_model_oren_nayar,
 					       &glint_model_torrance_sparrow };
@@ -291,9 +295,12 @@ int main(int argc, char **argv)
 		} else if (!strcmp(argv[a], "--max-pixels") && a + 1 < argc) {
 			max_pixels = atoi(argv[++a]);
 		} else {
-			int k = atoi(argv[a]);
-			if (k >= 0 && k < NLIGHTS)
-				use[k] = 1, nuse++;
+			int k = !strcmp(argv[a], "0")
+					? 0
+					: bench_count(argv[a], NLIGHTS - 1);
+			if (k < 0)
+				bench_refuse(argv[a], usage);
+			use[k] = 1, nuse++;
 		}
 	}
 	if (!nuse)

@@ -163,6 +163,8 @@ static void zstats(const struct glint_raw_hdr *h, double *mean, double *sd)
 
 int main(int argc, char **argv)
 {
+	static const char usage[] = "bench/merge [ROUNDS] [WxH...]";
+	bench_help(argc, argv, usage);
 	int rounds = 3, nsz = 0, size[MAXSIZES][2];
 	static const int dflt[3][2] = { { 1014, 760 },
 					{ 2028, 1520 },
@@ -181,9 +183,7 @@ int main(int argc, char **argv)
 			rounds = atoi(argv[i]) > MAXROUNDS ? MAXROUNDS
 							   : atoi(argv[i]);
 		} else {
-			fprintf(stderr, "usage: %s [ROUNDS] [WxH...]\n",
-				argv[0]);
-			return 2;
+			bench_refuse(argv[i], usage);
 		}
 	}
 	if (!nsz)

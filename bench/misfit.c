@@ -389,6 +389,8 @@ static int run(struct material *mat, const char *const *maps, int nmaps,
 
 int main(int argc, char **argv)
 {
+	static const char usage[] = "bench/misfit [ROTATIONS]";
+	bench_help(argc, argv, usage);
 	static const char *const train[] = {
 		GLINT_SHARED_DATA "/probes/polyhaven_1k/royal_esplanade_1k.hdr",
 		GLINT_SHARED_DATA "/probes/polyhaven_1k/quarry_01_1k.hdr",
@@ -408,10 +410,10 @@ int main(int argc, char **argv)
 				      .eval = glint_ashikhmin_shirley_eval,
 				      .ctx = &as_brdf };
 	static struct one_fit held_fits[MAX_LIGHTS];
-	int nrot = argc > 1 ? atoi(argv[1]) : 4;
+	int nrot = argc > 1 ? bench_count(argv[1], MAX_LIGHTS / 4) : 4;
 
-	if (nrot < 1 || nrot > MAX_LIGHTS / 4)
-		nrot = 4;
+	if (nrot < 0 || argc > 2)
+		bench_refuse(argv[nrot < 0 ? 1 : 2], usage);
 	glint_log_set_mode(GLINT_LOG_QUIET);
 	mkdir("bench-out", 0777);
 	FILE *csv = fopen("bench-out/misfit.csv", "w");

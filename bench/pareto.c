@@ -169,7 +169,11 @@ static int small_env(int w)
 
 int main(int argc, char **argv)
 {
+	static const char usage[] = "bench/pareto [--quick]";
+	bench_help(argc, argv, usage);
 	int quick = argc > 1 && !strcmp(argv[1], "--quick");
+	if (argc > 1 + quick)
+		bench_refuse(argv[1 + quick], usage);
 	int nm = quick ? 1 : NM;
 	glint_log_set_mode(GLINT_LOG_QUIET);
 	mkdir("bench-out", 0777);

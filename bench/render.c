@@ -62,7 +62,11 @@ static struct glint_tracer *make_tracer(const struct glint_scene *s,
 
 int main(int argc, char **argv)
 {
-	int rounds = argc > 1 ? atoi(argv[1]) : 7;
+	static const char usage[] = "bench/render [ROUNDS]";
+	bench_help(argc, argv, usage);
+	int rounds = argc > 1 ? bench_count(argv[1], 100) : 7;
+	if (rounds < 0 || argc > 2)
+		bench_refuse(argv[rounds < 0 ? 1 : 2], usage);
 	struct glint_scene sc;
 	struct glint_renderer r;
 	double p[GLINT_MAX_PARAMS];

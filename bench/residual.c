@@ -38,6 +38,7 @@
 #include "fit/render/render.h"
 #include "fit/render/shade_cache.h"
 
+#include <ctype.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -57,9 +58,14 @@ static int by_diff(const void *a, const void *b)
 
 int main(int argc, char **argv)
 {
+	static const char usage[] =
+		"bench/residual MAP MATERIAL PHOTO.exr [ROUGHNESS...]";
+	bench_help(argc, argv, usage);
+	for (int i = 1; i < argc; i++)
+		if (argv[i][0] == '-' && argv[i][1] && !isdigit(argv[i][1]))
+			bench_refuse(argv[i], usage);
 	if (argc < 4) {
-		fprintf(stderr, "usage: bench/residual MAP MATERIAL PHOTO.exr "
-				"[ROUGHNESS...]\n");
+		fprintf(stderr, "usage: %s\n", usage);
 		return 2;
 	}
 	const struct glint_model *m;

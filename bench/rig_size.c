@@ -219,6 +219,8 @@ static int run(const char *glint, struct row *r)
 
 int main(int argc, char **argv)
 {
+	static const char usage[] = "bench/rig_size [WxH[/K] ...]";
+	bench_help(argc, argv, usage);
 	const char *def[] = { "1014x760", "2028x1520/2", "4056x3040/4" };
 	int n = argc > 1 ? argc - 1 : 3;
 	struct row rows[16];
@@ -239,6 +241,17 @@ int main(int argc, char **argv)
 			glint);
 		return 1;
 	}
+	for (int i = 1; i < argc; i++) {
+		int w, h, k = 1;
+		if (sscanf(argv[i], "%dx%d/%d", &w, &h, &k) < 2 || w < 64 ||
+		    h < 48 || w > 8192 || h > 8192 || k < 1 || k > 64) {
+			fprintf(stderr,
+				"%s: expected WxH or WxH/K "
+				"(64x48 .. 8192x8192, K 1..64)\n",
+				argv[i]);
+			bench_refuse(argv[i], usage);
+		}
+	}
 	printf("glint rig --once on the simulated rig, one process per size "
 	       "(peak RSS from wait4; of it the fit process's, from the "
 	       "job's log)\n\n");
@@ -255,10 +268,10 @@ int main(int argc, char **argv)
 		    r->w < 64 || r->h < 48 || r->w > 8192 || r->h > 8192 ||
 		    r->k < 1 || r->k > 64) {
 			fprintf(stderr,
-				"rig_size: '%s': expected WxH or WxH/K "
+				"%s: expected WxH or WxH/K "
 				"(64x48 .. 8192x8192, K 1..64)\n",
 				a);
-			return 2;
+			bench_refuse(a, usage);
 		}
 		r->mpx = r->w * (double)r->h / 1e6;
 		/* The sim camera's two views, float RGB: not the pipeline's. */

@@ -78,8 +78,18 @@ static int within(const double *p, const double *q)
 
 int main(int argc, char **argv)
 {
-	int starts = argc > 1 && atoi(argv[1]) > 0 ? atoi(argv[1]) : 6;
-	int anneal_starts = argc > 2 ? atoi(argv[2]) : 1;
+	static const char usage[] = "bench/stability [STARTS] [ANNEAL_STARTS]";
+	bench_help(argc, argv, usage);
+	int starts = argc > 1 ? bench_count(argv[1], 1000) : 6;
+	int anneal_starts = argc <= 2 ? 1
+			    : !strcmp(argv[2], "0")
+				    ? 0
+				    : bench_count(argv[2], 1000);
+	if (starts < 0 || anneal_starts < 0 || argc > 3)
+		bench_refuse(argv[starts < 0	      ? 1
+				  : anneal_starts < 0 ? 2
+						      : 3],
+			     usage);
 	int count[NMETH][NOUT] = { { 0 } };
 	/* The default method on every material, per noise level. */
 	int dconv[NNOISE] = { 0 }, dfits[NNOISE] = { 0 };

@@ -50,6 +50,15 @@ manpages() {
 	if command -v man >/dev/null; then
 		MANWIDTH=100 man --warnings -l "$man1/glint-fit.1" 2>&1 >/dev/null | grep . && return 1
 		MANWIDTH=100 man -l "$man1/glint-fit.1" | grep -q "glint-fit - recover" || return 1
+		# Each form of a command's usage is a SYNOPSIS line of its own
+		# (help2man ran them together into the description).
+		local forms lines
+		for c in $("$bin" --help | awk '/^commands:/ {t = 1; next} t && /^  [a-z]/ {print $1}'); do
+			forms=$("$bin" "$c" --help | sed -n '1,/^$/p' | grep -c -E '^(usage: |       )glint ')
+			lines=$(MANWIDTH=200 man -l "$man1/glint-$c.1" | sed -n '/^SYNOPSIS/,/^DESCRIPTION/p' | grep -c '^       glint ')
+			[ "$forms" -ge 1 ] && [ "$forms" = "$lines" ] ||
+				{ echo "glint-$c.1: $lines SYNOPSIS lines for $forms usage forms"; return 1; }
+		done
 	fi
 	echo "$n command pages"
 	[ "$n" -ge 14 ]

@@ -327,10 +327,13 @@ int main(int argc, char **argv)
 	for (int v = 0; v < NV; v++) {
 		if (isnan(med[v]))
 			continue;
-		printf("%-40s %9.2f %7.2f %8.1f %9.4f %8.1f%% %7.4f %6d\n",
-		       variants[v].name, med[v], med[v] / med[0],
-		       isnan(med[NV - 1]) ? NAN : med[NV - 1] / med[v], e[v][0],
-		       100 * e[v][1], e[v][2], iters[v]);
+		char speedup[16] = "-"; /* without the faithful run */
+		if (!isnan(med[NV - 1]))
+			snprintf(speedup, sizeof(speedup), "%.1f",
+				 med[NV - 1] / med[v]);
+		printf("%-40s %9.2f %7.2f %8s %9.4f %8.1f%% %7.4f %6d\n",
+		       variants[v].name, med[v], med[v] / med[0], speedup,
+		       e[v][0], 100 * e[v][1], e[v][2], iters[v]);
 		fprintf(csv, "\"%s\",%.4f,%.5f,%.5f,%.5f\n", variants[v].name,
 			med[v], e[v][0], e[v][1], e[v][2]);
 	}
@@ -352,12 +355,24 @@ int main(int argc, char **argv)
 		"set datafile separator ','\nset logscale x\n"
 		"set xlabel 'median fit time (s, log scale)'\n"
 		"set ylabel 'roughness error (%%)'\nset yrange [0:*]\n"
-		"set xrange [0.5:2000]\n"
+		"set xrange [0.5:%s]\n"
 		"set title 'glint fit: speed against accuracy (%s)'\n"
-		"plot 'bench-out/fit.csv' skip 1 using 2:($4*100) with points "
-		"pt 7 ps 1.5 notitle, '' skip 1 using 2:($4*100):1 with labels "
-		"offset 0,1 font ',8' notitle\n",
-		material);
+		"set rmargin at screen 0.64\n",
+		isnan(med[NV - 1]) ? "*" : "2000", material);
+	/* Points numbered as the table's rows, the names beside the plot
+	 * (their labels on the points overlapped). */
+	for (int v = 0, k = 0; v < NV; v++)
+		if (!isnan(med[v])) {
+			k++;
+			fprintf(gp,
+				"set label %d '%d  %s' at screen 0.66, "
+				"screen %.3f font ',9'\n",
+				k, k, variants[v].name, 0.86 - 0.045 * (k - 1));
+		}
+	fprintf(gp, "plot 'bench-out/fit.csv' skip 1 using 2:($4*100) with "
+		    "points pt 7 ps 1.5 notitle, '' skip 1 using "
+		    "2:($4*100):(sprintf('%%d', $0 + 1)) with labels offset "
+		    "0.9,0.6 font ',9' notitle\n");
 	fclose(gp);
 	if (system("command -v gnuplot >/dev/null 2>&1") == 0 &&
 	    system("gnuplot bench-out/fit.gp") == 0)

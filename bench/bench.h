@@ -21,16 +21,16 @@ static inline void bench_help(int argc, char **argv, const char *usage)
 		}
 }
 
-/* A whole positive count of at most `max`, or -1. */
-static inline int bench_count(const char *s, int max)
+/* A whole number in [lo, hi] (lo >= 0), or -1. */
+static inline int bench_count(const char *s, int lo, int hi)
 {
 	char *end;
 	long v = strtol(s, &end, 10);
-	return *s && !*end && v > 0 && v <= max ? (int)v : -1;
+	return *s && !*end && v >= lo && v <= hi ? (int)v : -1;
 }
 
 /* An argument the program does not take: say so with the usage, exit 2. */
-static inline int bench_refuse(const char *arg, const char *usage)
+static inline _Noreturn void bench_refuse(const char *arg, const char *usage)
 {
 	fprintf(stderr, "%s: not an argument of this benchmark\nusage: %s\n",
 		arg, usage);

@@ -119,10 +119,8 @@ int main(int argc, char **argv)
 	for (int i = 1; i < argc; i++) {
 		if (!strcmp(argv[i], "--device") && i + 1 < argc)
 			dev = argv[++i];
-		else if (bench_count(argv[i], 1000) > 0)
-			runs = bench_count(argv[i], 1000) > MAXRUNS
-				       ? MAXRUNS
-				       : bench_count(argv[i], 1000);
+		else if (bench_count(argv[i], 1, 1000) > 0)
+			runs = fmin(bench_count(argv[i], 1, 1000), MAXRUNS);
 		else
 			bench_refuse(argv[i], usage);
 	}

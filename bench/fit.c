@@ -229,9 +229,7 @@ int main(int argc, char **argv)
 			default_only = 1;
 		else if (!strcmp(argv[i], "--material") && i + 1 < argc)
 			material = argv[++i];
-		else if (bench_count(argv[i], 1000) > 0)
-			rounds = bench_count(argv[i], 1000);
-		else
+		else if ((rounds = bench_count(argv[i], 1, 1000)) < 0)
 			bench_refuse(argv[i], usage);
 	}
 	glint_log_set_mode(GLINT_LOG_QUIET);

@@ -16,7 +16,6 @@ Raspberry Pi 5 class CPU.  Writes docs/results/fit-instructions.md with
 
 usage: bench/fit_instructions.py [BUILD_DIR] [--arm64 [ARM64_BUILD_DIR]] [--write]"""
 import os
-import platform
 import resource
 import re
 import shutil
@@ -27,6 +26,8 @@ import time
 from datetime import datetime, timezone
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "bench"))
+from page import machine, write_atomic  # noqa: E402
 
 # The stage rows of bench/fit --default-only's table (seconds).  Under
 # callgrind the threads run one at a time at a near-constant rate, so each
@@ -72,8 +73,8 @@ def callgrind(cmd, tmp):
                        capture_output=True, text=True)
     if p.returncode != 0:
         sys.exit(f"fit_instructions: {' '.join(cmd)} under valgrind failed:\n{p.stderr[-2000:]}")
-    total = int(re.search(r"Collected\s*:\s*(\d+)", p.stderr).group(1)) \
-        if re.search(r"Collected\s*:\s*(\d+)", p.stderr) else None
+    m = re.search(r"Collected\s*:\s*(\d+)", p.stderr)
+    total = int(m.group(1)) if m else None
     self_ = subprocess.run(["callgrind_annotate", out], capture_output=True, text=True).stdout
     row = re.compile(r"^\s*([\d,]+)\s+\([\s\d.]+%\)\s+(\S+):(\S+)")
     if total is None:
@@ -162,6 +163,7 @@ def main():
     if not os.access(fit, os.X_OK):
         sys.exit(f"fit_instructions: {fit}: not built (run ./scripts/setup)")
     cmd = [fit, "1", "--default-only"]
+    where = machine()
     with tempfile.TemporaryDirectory() as tmp:
         # bench/fit caches its reference photo in ./bench-out: run where
         # the checkout's cache is.
@@ -198,8 +200,8 @@ def main():
                                 capture_output=True, text=True).stdout.strip()
         when = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
         md = ["# The default fit's instructions", "",
-              f"`bench/fit_instructions.py --write` (commit {commit}, {when}, "
-              f"{platform.machine()}): `bench/fit 1 --default-only` (yellow "
+              f"`bench/fit_instructions.py {' '.join(sys.argv[1:])}` (commit {commit}, {when}, "
+              f"{where}): `bench/fit 1 --default-only` (yellow "
               f"plastic under Venice, a 512×512 photo, sphere radius 180 px) "
               f"counted by `{how}`. The count does not move with the "
               f"machine's load, so a change to the fitter is judged by it "
@@ -237,8 +239,7 @@ def main():
                    "| instructions per cycle (assumed) | estimated fit time |", "|---:|---:|"]
             md += [f"| {ipc:.1f} | {t:.1f} s |" for ipc, t in est]
         path = os.path.join(ROOT, "docs", "results", "fit-instructions.md")
-        with open(path, "w") as f:
-            f.write("\n".join(md) + "\n")
+        write_atomic(path, ("\n".join(md) + "\n").encode())
         print(f"wrote {path}")
 
 

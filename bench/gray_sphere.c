@@ -295,9 +295,7 @@ int main(int argc, char **argv)
 		} else if (!strcmp(argv[a], "--max-pixels") && a + 1 < argc) {
 			max_pixels = atoi(argv[++a]);
 		} else {
-			int k = !strcmp(argv[a], "0")
-					? 0
-					: bench_count(argv[a], NLIGHTS - 1);
+			int k = bench_count(argv[a], 0, NLIGHTS - 1);
 			if (k < 0)
 				bench_refuse(argv[a], usage);
 			use[k] = 1, nuse++;

@@ -179,9 +179,8 @@ int main(int argc, char **argv)
 		    w <= 8192 && h <= 8192 && nsz < MAXSIZES) {
 			size[nsz][0] = w & ~1;
 			size[nsz++][1] = h & ~1;
-		} else if (atoi(argv[i]) > 0 && !strchr(argv[i], 'x')) {
-			rounds = atoi(argv[i]) > MAXROUNDS ? MAXROUNDS
-							   : atoi(argv[i]);
+		} else if (bench_count(argv[i], 1, 1000) > 0) {
+			rounds = fmin(bench_count(argv[i], 1, 1000), MAXROUNDS);
 		} else {
 			bench_refuse(argv[i], usage);
 		}

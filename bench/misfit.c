@@ -410,7 +410,7 @@ int main(int argc, char **argv)
 				      .eval = glint_ashikhmin_shirley_eval,
 				      .ctx = &as_brdf };
 	static struct one_fit held_fits[MAX_LIGHTS];
-	int nrot = argc > 1 ? bench_count(argv[1], MAX_LIGHTS / 4) : 4;
+	int nrot = argc > 1 ? bench_count(argv[1], 1, MAX_LIGHTS / 4) : 4;
 
 	if (nrot < 0 || argc > 2)
 		bench_refuse(argv[nrot < 0 ? 1 : 2], usage);

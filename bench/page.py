@@ -10,7 +10,6 @@ usage: bench/page.py [--out-dir DIR] [--png FILE] NAME -- COMMAND [ARG...]"""
 import os
 import platform
 import shlex
-import shutil
 import subprocess
 import sys
 import tempfile
@@ -24,6 +23,20 @@ USAGE = __doc__.splitlines()[-1]
 def refuse(what):
     print(f"{what}\n{USAGE}", file=sys.stderr)
     sys.exit(2)
+
+
+def write_atomic(path, data):
+    """path holds data whole or keeps what it held: written beside it,
+    then renamed over it."""
+    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(path) or ".", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        os.unlink(tmp)
+        raise
 
 
 def machine():
@@ -84,21 +97,13 @@ def main():
     if fresh_png:
         lines += [f"![{name}]({name}.png)", ""]
     lines += ["```", p.stdout.rstrip("\n"), "```", ""]
-    # Written whole or not at all: a page and its chart each by rename.
-    for src, dst in ([(png, os.path.join(out_dir, name + ".png"))] if fresh_png else []):
-        fd, tmp = tempfile.mkstemp(dir=out_dir, suffix=".png")
-        os.close(fd)
-        shutil.copyfile(src, tmp)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, dst)
-    stale = os.path.join(out_dir, name + ".png")
-    if not fresh_png and os.path.exists(stale):
-        os.remove(stale)  # a chart of an earlier run, not of this page
-    fd, tmp = tempfile.mkstemp(dir=out_dir, suffix=".md")
-    with os.fdopen(fd, "w") as f:
-        f.write("\n".join(lines))
-    os.chmod(tmp, 0o644)
-    os.replace(tmp, os.path.join(out_dir, name + ".md"))
+    page, chart = os.path.join(out_dir, name + ".md"), os.path.join(out_dir, name + ".png")
+    if fresh_png:
+        with open(png, "rb") as f:
+            write_atomic(chart, f.read())
+    elif os.path.exists(chart) and os.path.exists(page) and f"({name}.png)" in open(page).read():
+        os.remove(chart)  # the chart of this page's earlier run, not of this one
+    write_atomic(page, "\n".join(lines).encode())
     print(f"wrote {os.path.join(out_dir, name + '.md')}", file=sys.stderr)
 
 

@@ -64,7 +64,7 @@ int main(int argc, char **argv)
 {
 	static const char usage[] = "bench/render [ROUNDS]";
 	bench_help(argc, argv, usage);
-	int rounds = argc > 1 ? bench_count(argv[1], 100) : 7;
+	int rounds = argc > 1 ? bench_count(argv[1], 1, 100) : 7;
 	if (rounds < 0 || argc > 2)
 		bench_refuse(argv[rounds < 0 ? 1 : 2], usage);
 	struct glint_scene sc;

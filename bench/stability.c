@@ -80,11 +80,8 @@ int main(int argc, char **argv)
 {
 	static const char usage[] = "bench/stability [STARTS] [ANNEAL_STARTS]";
 	bench_help(argc, argv, usage);
-	int starts = argc > 1 ? bench_count(argv[1], 1000) : 6;
-	int anneal_starts = argc <= 2 ? 1
-			    : !strcmp(argv[2], "0")
-				    ? 0
-				    : bench_count(argv[2], 1000);
+	int starts = argc > 1 ? bench_count(argv[1], 1, 1000) : 6;
+	int anneal_starts = argc > 2 ? bench_count(argv[2], 0, 1000) : 1;
 	if (starts < 0 || anneal_starts < 0 || argc > 3)
 		bench_refuse(argv[starts < 0	      ? 1
 				  : anneal_starts < 0 ? 2

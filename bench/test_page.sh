@@ -28,6 +28,10 @@ check "... and no page" test ! -e out/failing.md
 "$page" --out-dir out demo -- printf 'second run\n' >/dev/null 2>&1
 check "a second run replaces the page; a chart it did not make is neither linked nor kept" \
 	bash -c "grep -q '^second run$' out/demo.md && ! grep -q '(demo.png)' out/demo.md && test ! -e out/demo.png"
+printf 'a user chart' >out/mine.png
+"$page" --out-dir out mine -- printf 'a table\n' >/dev/null 2>&1
+check "a chart no earlier page of that name linked is the user's: kept" \
+	bash -c "test \"\$(cat out/mine.png)\" = 'a user chart'"
 "$page" --no-such >/dev/null 2>&1
 check "an unknown option: exit 2" test $? = 2
 check "no temporary files left" bash -c "! ls out | grep -q '^tmp'"

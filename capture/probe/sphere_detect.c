@@ -4,6 +4,8 @@
 #include "core/error.h"
 #include "core/vec.h"
 
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_linalg.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -325,8 +327,11 @@ static double det3(const double a[3][3])
 }
 
 /* Geometric circle fit to px, py from c: Gauss-Newton on (cx, cy, r),
- * Huber weights at 0.5 px, 3 x 3 steps by Cramer's rule. */
-static void circle_fit(const double *px, const double *py, int np, double c[3])
+ * each point weighted by wt[k] (NULL: 1) and by Huber's weight at
+ * `huber` in units of its standard error (1 / sqrt(wt[k])), 3 x 3 steps
+ * by Cramer's rule. */
+static void circle_fit(const double *px, const double *py, const double *wk,
+		       int np, double huber, double c[3])
 {
 	for (int it = 0; it < 20; it++) {
 		double jtj[3][3] = { { 0 } }, jtr[3] = { 0 };
@@ -335,8 +340,9 @@ static void circle_fit(const double *px, const double *py, int np, double c[3])
 			       d = hypot(dx, dy);
 			if (d <= 0)
 				continue;
-			double res = d - c[2],
-			       wt = fabs(res) < 0.5 ? 1 : 0.5 / fabs(res);
+			double w0 = wk ? wk[k] : 1, res = d - c[2],
+			       z = fabs(res) * sqrt(w0),
+			       wt = w0 * (z < huber ? 1 : huber / z);
 			double j[3] = { -dx / d, -dy / d, -1 };
 			for (int a = 0; a < 3; a++) {
 				jtr[a] += wt * j[a] * res;
@@ -359,6 +365,182 @@ static void circle_fit(const double *px, const double *py, int np, double c[3])
 		if (step < 1e-6)
 			break;
 	}
+}
+
+/*
+ * 5. The rim located by a model of its profile.  The gradient's peak sits
+ * where the blurred step is steepest only when both sides are flat; a
+ * glossy ball brightens towards its rim (Fresnel) and a sky behind it
+ * falls towards the horizon, and the peak moves by a third of a pixel
+ * where they do (top and bottom unlike: the centre moves).  Along the
+ * radius at each of about one angle per rim pixel, the linear luminance
+ * from PROFILE_HALF px inside to as far outside is fitted with
+ *   m(t) = (a + b t) (1 - S(t - e)) + (c + d t) S(t - e),
+ * S a Gaussian step of width s: a sloped level on each side and the edge
+ * at e between them.  a..d are linear (least squares for each e), e is
+ * searched on a grid and refined by a parabola through the profiled sum
+ * of squares, whose curvature gives its standard error (var e = 2 s2 /
+ * SSE'', s2 the residual variance); s is one for the whole rim (the
+ * camera's blur), the one with the least total sum of squares.  The
+ * circle is then fitted to the edges weighted by 1 / var e (Huber at 2
+ * standard errors): a profile the model does not describe (a highlight
+ * on the rim, a background the ball's colour) counts little.
+ */
+#define PROFILE_HALF 3.0
+#define PROFILE_STEP 0.5
+#define PROFILE_N    13 /* 2 PROFILE_HALF / PROFILE_STEP + 1 */
+#define EDGE_RANGE   2.5
+#define EDGE_STEP    0.05
+#define EDGE_N	     101 /* 2 EDGE_RANGE / EDGE_STEP + 1 */
+
+static double luminance_at(const struct glint_image *img, double x, double y)
+{
+	/* Pixel (x, y) spans [x, x + 1): its value sits at its centre. */
+	x -= 0.5;
+	y -= 0.5;
+	int ix = (int)floor(x), iy = (int)floor(y);
+	double tx = x - ix, ty = y - iy, v = 0;
+	for (int j = 0; j < 2; j++)
+		for (int i = 0; i < 2; i++) {
+			const float *p = glint_image_px(img, ix + i, iy + j);
+			double l =
+				0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+			v += (i ? tx : 1 - tx) * (j ? ty : 1 - ty) *
+			     (isfinite(l) ? l : 0);
+		}
+	return v;
+}
+
+/* Least squares of the four levels x for the edge at e, blur s (normal
+ * equations by GSL's Cholesky; the caller has GSL's error handler off):
+ * the residual sum of squares, HUGE_VAL when they are singular. */
+static double profile_sse(const double *v, double e, double s, double *x)
+{
+	double ata[16] = { 0 }, aty[4] = { 0 }, f[PROFILE_N][4], fit = 0;
+	for (int k = 0; k < PROFILE_N; k++) {
+		double t = -PROFILE_HALF + PROFILE_STEP * k - e;
+		double st = 0.5 * erfc(-t / (1.4142135623730951 * s));
+		f[k][0] = 1 - st;
+		f[k][1] = (1 - st) * t;
+		f[k][2] = st;
+		f[k][3] = st * t;
+		for (int a = 0; a < 4; a++) {
+			for (int b = 0; b < 4; b++)
+				ata[4 * a + b] += f[k][a] * f[k][b];
+			aty[a] += f[k][a] * v[k];
+		}
+	}
+	gsl_matrix_view mv = gsl_matrix_view_array(ata, 4, 4);
+	gsl_vector_view bv = gsl_vector_view_array(aty, 4);
+	if (gsl_linalg_cholesky_decomp1(&mv.matrix) ||
+	    gsl_linalg_cholesky_svx(&mv.matrix, &bv.vector))
+		return HUGE_VAL;
+	for (int k = 0; k < PROFILE_N; k++) {
+		double m = 0;
+		for (int a = 0; a < 4; a++)
+			m += f[k][a] * aty[a];
+		fit += (v[k] - m) * (v[k] - m);
+	}
+	memcpy(x, aty, sizeof(aty));
+	return fit;
+}
+
+/* The profile at angle (ux, uy) of circle c, from PROFILE_HALF px inside
+ * the rim outwards; 0 when it leaves the image. */
+static int rim_profile(const struct glint_image *img, const double c[3],
+		       double ux, double uy, double *v)
+{
+	for (int k = 0; k < PROFILE_N; k++) {
+		double t = -PROFILE_HALF + PROFILE_STEP * k;
+		double x = c[0] + (c[2] + t) * ux, y = c[1] + (c[2] + t) * uy;
+		if (x < 1 || y < 1 || x > img->width - 1 || y > img->height - 1)
+			return 0;
+		v[k] = luminance_at(img, x, y);
+	}
+	return 1;
+}
+
+/* The edge in profile v for blur s: *e (px outwards of the circle), its
+ * variance *var and the least sum of squares; 0 when the grid's minimum
+ * is at its end or the sum is flat there. */
+static int profile_edge(const double *v, double s, double *e, double *var,
+			double *sse)
+{
+	double best = HUGE_VAL, q[EDGE_N];
+	int j = 0;
+	for (int k = 0; k < EDGE_N; k++) {
+		double x[4];
+		q[k] = profile_sse(v, -EDGE_RANGE + EDGE_STEP * k, s, x);
+		if (q[k] < best) {
+			best = q[k];
+			j = k;
+		}
+	}
+	*sse = best;
+	if (j == 0 || j == EDGE_N - 1 || !isfinite(best))
+		return 0;
+	double a = q[j - 1], b = q[j], cc = q[j + 1], den = a - 2 * b + cc;
+	if (!(den > 0))
+		return 0;
+	double off = 0.5 * (a - cc) / den;
+	*e = -EDGE_RANGE + EDGE_STEP * (j + off);
+	double curv = den / (EDGE_STEP * EDGE_STEP);
+	double s2 = fmax(b - 0.25 * (a - cc) * off, 0) / (PROFILE_N - 5);
+	*var = 2 * s2 / curv;
+	return 1;
+}
+
+static int rim_refine(const struct glint_image *img, double c[3])
+{
+	static const double blurs[] = { 0.35, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0,
+					1.1,  1.2, 1.4, 1.7, 2.0, 2.8 };
+	int nb = (int)(sizeof(blurs) / sizeof(blurs[0]));
+	int steps = (int)fmin(2048, fmax(64, ceil(2 * M_PI * c[2])));
+	double *px = malloc((size_t)steps * 3 * sizeof(double));
+	double v[PROFILE_N];
+	if (!px)
+		return glint_error_set(ENOMEM,
+				       "sphere detection: out of memory");
+	double *py = px + steps, *wk = py + steps;
+	gsl_error_handler_t *old = gsl_set_error_handler_off();
+	/* The blur: the least total sum of squares over every 4th angle
+	 * (each profile's least, wherever its edge). */
+	double s = 1.0, least = HUGE_VAL;
+	for (int b = 0; b < nb; b++) {
+		double tot = 0;
+		for (int k = 0; k < steps; k += 4) {
+			double a = 2 * M_PI * (k + 0.5) / steps, e, var, sse;
+			if (!rim_profile(img, c, cos(a), sin(a), v))
+				continue;
+			profile_edge(v, blurs[b], &e, &var, &sse);
+			if (isfinite(sse))
+				tot += sse;
+		}
+		if (tot > 0 && tot < least) {
+			least = tot;
+			s = blurs[b];
+		}
+	}
+	for (int pass = 0; pass < 2; pass++) {
+		int np = 0;
+		for (int k = 0; k < steps; k++) {
+			double a = 2 * M_PI * (k + 0.5) / steps, e, var, sse;
+			double ux = cos(a), uy = sin(a);
+			if (!rim_profile(img, c, ux, uy, v) ||
+			    !profile_edge(v, s, &e, &var, &sse) || !(var > 0))
+				continue;
+			px[np] = c[0] + (c[2] + e) * ux;
+			py[np] = c[1] + (c[2] + e) * uy;
+			wk[np] = 1 / fmax(var, 1e-6);
+			np++;
+		}
+		if (np < 8)
+			break;
+		circle_fit(px, py, wk, np, 2.0, c);
+	}
+	gsl_set_error_handler(old);
+	free(px);
+	return 0;
 }
 
 /*
@@ -519,8 +701,10 @@ int glint_sphere_detect(const struct glint_image *img, double r_min,
 		np = subpixel_edges(&em, c, pass == 0 ? band : 2, px, py);
 		if (np < 8)
 			break;
-		circle_fit(px, py, np, c);
+		circle_fit(px, py, NULL, np, 0.5, c);
 	}
+	if (np >= 8 && c[2] > 0 && (ret = rim_refine(img, c)) < 0)
+		goto out;
 	if (np < 8 || !(c[2] > 0)) {
 		ret = glint_error_set(ENOENT,
 				      "sphere detection: no circle found "

@@ -16,7 +16,12 @@
  *   4. refinement: each such edge located to sub-pixel along its gradient
  *      (parabola through the gradient magnitude) and a geometric circle
  *      fit (Gauss-Newton with Huber weights), which works on a partial arc
- *      (a dark ball against a dark floor shows only part of its rim).
+ *      (a dark ball against a dark floor shows only part of its rim);
+ *   5. the rim's profile: at about one angle per rim pixel, a blurred step
+ *      between two sloped levels fitted along the radius, and the circle
+ *      fitted again to those edges weighted by their inverse variances
+ *      (the gradient's peak moves where the ball or its backdrop slopes
+ *      towards the rim: sphere_detect.c, rim_refine()).
  * The pinhole image of an off-axis sphere is an ellipse; this fits its
  * circle of best fit (centre and tangential radius to well under a pixel
  * for the rig's small angles; glint_pinhole_sphere_from_circle() inverts it).
@@ -30,8 +35,8 @@
 
 struct glint_circle {
 	double cx, cy, r;
-	int points;	/* edge points in the final fit */
-	double rms_px;	/* their RMS distance from the circle */
+	int points;	/* edge points of step 4's fit */
+	double rms_px;	/* their RMS distance from the final circle */
 	double arc_deg; /* angular extent of the rim they cover */
 	/* The detection's test statistic: the share of the circle's rim
 	 * (in steps of about a pixel) with an edge on it whose gradient is

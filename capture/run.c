@@ -41,6 +41,8 @@ static int unwrap_probe(const char *dir, const struct glint_capture_setup *s,
 	o.ball_cx = c.cx;
 	o.ball_cy = c.cy;
 	o.ball_r = c.r;
+	o.psf_sigma_px = s->psf_sigma_px;
+	o.olpf = s->olpf;
 	glint_log_info("probe ball at (%.2f, %.2f), radius %.2f px "
 		       "(%d edge points, %.2f px rms)",
 		       c.cx, c.cy, c.r, c.points, c.rms_px);

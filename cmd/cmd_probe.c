@@ -35,8 +35,9 @@ void cmd_probe_help(void)
 	       "perspective camera (each pixel's own view ray, not the "
 	       "orthographic\napproximation), divided by the ball's "
 	       "reflectance at each angle.  Also writes\nENV-mask.png "
-	       "(white = reliable: not grazing, not the camera's own "
-	       "reflection),\nENV-density.exr (photo pixels per "
+	       "(white = reliable: not grazing, not on the blurred rim, not "
+	       "the camera's\nown reflection), ENV-density.exr (photo "
+	       "pixels per "
 	       "steradian, for blending two views) and\n"
 	       "ENV-sources.json: light sources too small for the photo to "
 	       "resolve (the sun, a\nsmall lamp), found, measured (direction, "
@@ -64,6 +65,16 @@ void cmd_probe_help(void)
 	       "comparison\n"
 	       "  --no-sources         leave compact light sources as "
 	       "photographed\n"
+	       "  --psf-sigma PX       the camera's blur (lens and demosaic, "
+	       "1 sigma; default 0):\n"
+	       "                       the rim within 3 sigma of the blur "
+	       "is unreliable\n"
+	       "  --olpf               the camera has an optical low-pass "
+	       "filter (adds its split)\n"
+	       "  --no-fill            leave the unreliable directions "
+	       "behind the ball as\n"
+	       "                       photographed (default: interpolated "
+	       "from around them)\n"
 	       "\n"
 	       "convert: between latlong, angular (Debevec's light probe "
 	       "format), cross\n(vertical cube cross) and ball (ideal "
@@ -161,6 +172,9 @@ static int unwrap_main(int argc, char **argv)
 		CMD_CALL("size", &size, parse_numbers),
 		CMD_FLAG("orthographic", 0, &o.orthographic),
 		CMD_FLAG("no-sources", 0, &o.no_sources),
+		CMD_REAL("psf-sigma", &o.psf_sigma_px, 0, 8),
+		CMD_FLAG("olpf", 0, &o.olpf),
+		CMD_FLAG("no-fill", 0, &o.no_fill),
 		CMD_FLAG("srgb", 0, &srgb),
 		CMD_STRING("output", 'o', &out),
 		{ 0 },

@@ -423,6 +423,87 @@ int glint_probe_ball_setup(const struct glint_image *photo,
 	return ret;
 }
 
+double glint_unwrap_rim_margin_px(const struct glint_unwrap_opts *o)
+{
+	double s = o->psf_sigma_px > 0 ? o->psf_sigma_px : 0;
+	return 3 * sqrt(s * s + (o->olpf ? 0.25 : 0) + 1.0 / 12);
+}
+
+/*
+ * The directions a single view of the ball does not show reliably lie
+ * around the one straight behind it: they are reflected by the ball's
+ * grazing rim, compressed into its last pixels and mixed there by the
+ * camera's blur with the backdrop beside the ball (on the simulated rig,
+ * whose ball is 96 px across, 10-30 deg from that direction came out 15
+ * to 55 % dark).  A sample sphere sees them near its own rim, where
+ * Fresnel's rise tells ior from specular.  They are filled by the
+ * harmonic interpolation of the reliable map around them (Laplace's
+ * equation on the lat-long grid, the reliable texels fixed; successive
+ * over-relaxation from their mean), smooth and without the rim's dark
+ * bias; the mask keeps them marked unreliable.  The camera's own
+ * reflection (within cos_cone of to_cam) stays as photographed: the
+ * camera is part of what the sample sees.
+ */
+static int fill_behind(struct glint_image *e, const struct glint_image *m,
+		       struct vec3 to_cam, double cos_cone)
+{
+	int w = e->width, h = e->height;
+	size_t n = (size_t)w * h, nf = 0;
+	int *idx = malloc(n * sizeof(int));
+	double mean[3] = { 0, 0, 0 }, msum = 0;
+
+	if (!idx)
+		return glint_error_set(ENOMEM, "unwrap: out of memory");
+	for (int y = 0; y < h; y++)
+		for (int x = 0; x < w; x++) {
+			size_t i = (size_t)y * w + x;
+			struct vec3 d = glint_latlong_uv_to_dir((x + 0.5) / w,
+								(y + 0.5) / h);
+			if (m->data[3 * i] > 0.5) {
+				for (int c = 0; c < 3; c++)
+					mean[c] += e->data[3 * i + c];
+				msum++;
+			} else if (v3_dot(d, to_cam) < cos_cone) {
+				idx[nf++] = (int)i;
+			}
+		}
+	if (!nf || !(msum > 0)) {
+		free(idx);
+		return 0;
+	}
+	for (size_t k = 0; k < nf; k++)
+		for (int c = 0; c < 3; c++)
+			e->data[3 * (size_t)idx[k] + c] =
+				(float)(mean[c] / msum);
+	/* Gauss-Seidel with over-relaxation over the filled texels (their
+	 * neighbours wrap in longitude and stop at the poles), until no
+	 * texel moves by 1e-5 of the mean. */
+	double tol = 1e-5 * (mean[0] + mean[1] + mean[2]) / (3 * msum);
+	for (int it = 0; it < 4000; it++) {
+		double moved = 0;
+		for (size_t k = 0; k < nf; k++) {
+			int i = idx[k], x = i % w, y = i / w;
+			int nb[4] = { y * w + (x + 1) % w,
+				      y * w + (x + w - 1) % w,
+				      (y > 0 ? y - 1 : y) * w + x,
+				      (y < h - 1 ? y + 1 : y) * w + x };
+			for (int c = 0; c < 3; c++) {
+				float *p = e->data + 3 * (size_t)i + c;
+				double avg = 0;
+				for (int j = 0; j < 4; j++)
+					avg += e->data[3 * (size_t)nb[j] + c];
+				double d = 1.9 * (0.25 * avg - *p);
+				*p += (float)d;
+				moved = fmax(moved, fabs(d));
+			}
+		}
+		if (moved < tol)
+			break;
+	}
+	free(idx);
+	return 0;
+}
+
 int glint_probe_unwrap(const struct glint_image *photo,
 		       const struct glint_unwrap_opts *o,
 		       struct glint_image **env, struct glint_image **mask,
@@ -454,6 +535,7 @@ int glint_probe_unwrap(const struct glint_image *photo,
 	}
 	double cos_graze = cos(o->grazing_deg * M_PI / 180);
 	double cos_cone = cos(o->camera_cone_deg * M_PI / 180);
+	double inner = o->ball_r - glint_unwrap_rim_margin_px(o);
 	struct vec3 to_cam = v3_scale(v3_norm(b.c), -1);
 	double dth = M_PI / h;
 	for (int y = 0; y < h; y++)
@@ -485,11 +567,19 @@ int glint_probe_unwrap(const struct glint_image *photo,
 				pe[c] = (float)(rgb[c] / r);
 			}
 			int reliable =
-				ci > cos_graze && v3_dot(d, to_cam) < cos_cone;
+				ci > cos_graze &&
+				v3_dot(d, to_cam) < cos_cone &&
+				hypot(px - o->ball_cx, py - o->ball_cy) < inner;
 			pm[0] = pm[1] = pm[2] = (float)reliable;
 			pd[0] = pd[1] = pd[2] =
 				(float)pixel_density(&b, d, px, py, dth);
 		}
+	if (!o->no_fill && (ret = fill_behind(e, m, to_cam, cos_cone)) < 0) {
+		glint_image_free(e);
+		glint_image_free(m);
+		glint_image_free(dn);
+		return ret;
+	}
 	*env = e;
 	if (mask)
 		*mask = m;

@@ -79,9 +79,19 @@ struct glint_unwrap_opts {
 	double grazing_deg;	/* unreliable beyond this angle of incidence
 				   (default 80) */
 	double camera_cone_deg; /* the camera's own reflection (default 6) */
-	int orthographic;	/* for comparison: the approximation peers
-				   use (parallel view rays) */
-	int width, height;	/* lat-long output (default 4 r x 2 r) */
+	/* The camera's blur (a scene's camera.psf_sigma_px and olpf): the
+	 * ball's pixels within 3 of its standard deviations of the rim mix
+	 * with what lies beside the ball, and are unreliable. */
+	double psf_sigma_px;
+	int olpf;
+	/* 0 (default): the directions behind the ball that the photo does
+	 * not show reliably (grazing, or on the blurred rim) are filled by
+	 * a harmonic interpolation from the reliable ones around them; 1:
+	 * left as photographed. */
+	int no_fill;
+	int orthographic;  /* for comparison: the approximation peers
+			      use (parallel view rays) */
+	int width, height; /* lat-long output (default 4 r x 2 r) */
 	/* Compact light sources (capture/probe/probe_sources.h): found and
 	 * put into the map as points unless no_sources; the merge's
 	 * variance and weights (may be NULL) give their noise and say which
@@ -94,10 +104,17 @@ struct glint_unwrap_opts {
  * perspective. */
 void glint_unwrap_default_opts(struct glint_unwrap_opts *o);
 
+/* How far inside the rim, in pixels, the camera's blur reaches: 3
+ * standard deviations of the lens and demosaic (psf_sigma_px), the OLPF's
+ * split (0.5 px) and the pixel's square (1 / sqrt(12) px) together. */
+double glint_unwrap_rim_margin_px(const struct glint_unwrap_opts *o);
+
 /*
  * Lat-long radiance in the camera's frame, divided by the ball's
  * reflectance at each point's angle of incidence; mask 1 where reliable
- * (not grazing, not the camera's reflection, inside the photo), else 0;
+ * (not grazing, not within glint_unwrap_rim_margin_px() of the rim, not
+ * the camera's reflection, inside the photo), else 0; unless o->no_fill,
+ * the unreliable directions behind the ball interpolated from around them;
  * density = photo pixels per steradian (for blending views).  mask and
  * density may be NULL; the images are the caller's, freed with
  * glint_image_free().

@@ -11,7 +11,9 @@
 
 #include "capture/probe/probe.h"
 #include "core/error.h"
+#include "sim/camera_sim.h"
 #include "sim/probe_sim.h"
+#include "sim/sensor.h"
 
 static int cmp_double(const void *a, const void *b)
 {
@@ -249,6 +251,83 @@ static void test_unwrap(void)
 	glint_image_free(truth);
 }
 
+/* The flux of lat-long m within [a0, a1) degrees of the direction
+ * straight behind the ball (-Z), per channel. */
+static void band_flux(const struct glint_image *m, double a0, double a1,
+		      double f[3])
+{
+	int w = m->width, h = m->height;
+	f[0] = f[1] = f[2] = 0;
+	for (int y = 0; y < h; y++) {
+		double om =
+			(2 * M_PI / w) * (M_PI / h) * sin((y + 0.5) * M_PI / h);
+		for (int x = 0; x < w; x++) {
+			struct vec3 d = glint_latlong_uv_to_dir((x + 0.5) / w,
+								(y + 0.5) / h);
+			double a = acos(fmax(-1, fmin(1, -d.z))) * 180 / M_PI;
+			if (a < a0 || a >= a1)
+				continue;
+			for (int c = 0; c < 3; c++)
+				f[c] += glint_image_px(m, x, y)[c] * om;
+		}
+	}
+}
+
+/* The shipped rig's probe (320 x 240, the ball 96 px in radius) through
+ * its lens and OLPF: the directions 10-30 deg from straight behind the
+ * ball reach the photo only in the ball's last three pixels, mixed by the
+ * blur with the backdrop beside it.  As photographed they are a third
+ * dark (the sample's rim sees them: specular came out 5 % high, ior
+ * low); interpolated from the reliable map around them, within 20 %. */
+static void test_behind(void)
+{
+	struct glint_image *photo = NULL, *truth = NULL;
+	struct glint_sensor s;
+	CHECK(glint_sim_probe_scene(320, 240, 1, &photo) == 0 &&
+		      glint_sim_rig_map(1, &truth) == 0,
+	      "%s", glint_error_msg());
+	if (!photo || !truth)
+		return;
+	glint_sensor_default(&s);
+	s.olpf = 1;
+	CHECK(glint_sensor_optics(&s, photo) == 0, "%s", glint_error_msg());
+	struct glint_unwrap_opts o;
+	glint_unwrap_default_opts(&o);
+	o.fpx = glint_sim_probe_focal_px(320);
+	o.ball_cx = 160;
+	o.ball_cy = 120;
+	o.ball_r = 96;
+	o.psf_sigma_px = s.psf_sigma_px;
+	o.olpf = 1;
+	double ft[3], fe[2][3];
+	band_flux(truth, 10, 30, ft);
+	for (int raw = 0; raw < 2; raw++) {
+		struct glint_image *env = NULL;
+		o.no_fill = raw;
+		CHECK(glint_probe_unwrap(photo, &o, &env, NULL, NULL) == 0,
+		      "%s", glint_error_msg());
+		if (!env)
+			return;
+		band_flux(env, 10, 30, fe[raw]);
+		printf("10-30 deg behind the ball, %s: flux %.3f %.3f %.3f of "
+		       "the truth\n",
+		       raw ? "as photographed" : "filled", fe[raw][0] / ft[0],
+		       fe[raw][1] / ft[1], fe[raw][2] / ft[2]);
+		glint_image_free(env);
+	}
+	for (int c = 0; c < 3; c++) {
+		CHECK(fabs(fe[0][c] / ft[c] - 1) < 0.2,
+		      "channel %d filled: %.3f of the truth", c,
+		      fe[0][c] / ft[c]);
+		CHECK(fe[1][c] / ft[c] < 0.8,
+		      "channel %d as photographed: %.3f of the truth (the "
+		      "test's premise: the rim's directions come out dark)",
+		      c, fe[1][c] / ft[c]);
+	}
+	glint_image_free(photo);
+	glint_image_free(truth);
+}
+
 int main(void)
 {
 	if (glint_image_read(GLINT_DATA_DIR "/env/venice_sunset_1k.hdr",
@@ -258,6 +337,7 @@ int main(void)
 	}
 	RUN(test_round_trips);
 	RUN(test_unwrap);
+	RUN(test_behind);
 	glint_image_free(venice);
 	return test_result();
 }

@@ -29,7 +29,23 @@ check "binary installed" test -x "$bin"
 check "data installed" test -f "$data/paper-table1.json" -a -f "$data/env/venice_sunset_1k.hdr" -a -f "$data/rig-sim.json"
 check "systemd unit installed, pointing at the installed binary" \
 	grep -q "^ExecStart=$prefix/bin/glint rig --config $sysconfdir/glint/rig.json" "$dest$prefix/lib/systemd/system/glint-rig.service"
-check "udev rule installed" grep -q 'g:glint:rw' "$dest$prefix/lib/udev/rules.d/70-glint.rules"
+check "udev rule installed, for the devices' group" grep -q 'g:glint-dev:rw' "$dest$prefix/lib/udev/rules.d/70-glint.rules"
+# The unit's sandbox: systemd's own reading of it (no unknown or
+# malformed line; verify needs the binary it names, so a copy names the
+# installed one) and its exposure at 3.0 or below (--threshold is in
+# tenths).
+unit=$dest$prefix/lib/systemd/system/glint-rig.service
+sandbox() {
+	command -v systemd-analyze >/dev/null || { echo "systemd-analyze is not installed"; return 1; }
+	mkdir -p "$tmp/unit"
+	sed "s#^ExecStart=$prefix/bin/glint#ExecStart=$bin#" "$unit" >"$tmp/unit/glint-rig.service"
+	local out
+	out=$(systemd-analyze verify "$tmp/unit/glint-rig.service" 2>&1)
+	[ -z "$out" ] || { echo "systemd-analyze verify: $out"; return 1; }
+	systemd-analyze security --offline=true --threshold=30 "$tmp/unit/glint-rig.service" |
+		tail -1
+}
+check "systemd unit: verified, exposure at most 3.0" sandbox
 check "example rig file installed" test -f "$dest$sysconfdir/glint/rig.example.json"
 check "docs installed" test -f "$dest$prefix/$datadir/doc/glint/rig.md"
 # Man pages: glint(1) and one per command of glint --help's table, each

@@ -1,8 +1,9 @@
 #!/bin/bash
 # glint's udev rule (scripts/udev/70-glint.rules) in the test VM: with the
-# rule in udev's runtime rules folder and a glint group, the camera (vivid)
-# and a GPIO chip (gpio-sim) become usable by a user whose only group is
-# glint, and by no other; Debian's owners and groups stay.
+# rule in udev's runtime rules folder and a glint-dev group, the camera
+# (vivid) and a GPIO chip (gpio-sim) become usable by a user whose only
+# group is glint-dev, and by no other: not by the queue's glint group;
+# Debian's owners and groups stay.
 # usage: test_udev.sh RULES_FILE   (inside scripts/vm run)
 set -u
 here=$(dirname "$0")
@@ -17,10 +18,13 @@ tmp=$(mktemp -d)
 udevd=""
 trap '[ -z "$udevd" ] || kill $udevd 2>/dev/null; umount /etc/group 2>/dev/null; rm -rf "$tmp"' EXIT
 
-# The host's /etc is read-only here: a glint group (gid 4242) over it.
+# The host's /etc is read-only here: the glint-dev (devices, gid 4242) and
+# glint (queue, gid 4245) groups over it.
 cp /etc/group "$tmp/group"
-grep -q '^glint:' "$tmp/group" || echo "glint:x:4242:" >>"$tmp/group"
-gid=$(awk -F: '$1 == "glint" {print $3}' "$tmp/group")
+grep -q '^glint-dev:' "$tmp/group" || echo "glint-dev:x:4242:" >>"$tmp/group"
+grep -q '^glint:' "$tmp/group" || echo "glint:x:4245:" >>"$tmp/group"
+gid=$(awk -F: '$1 == "glint-dev" {print $3}' "$tmp/group")
+qgid=$(awk -F: '$1 == "glint" {print $3}' "$tmp/group")
 mount --bind "$tmp/group" /etc/group
 mkdir -p /run/udev/rules.d
 cp "$rules" /run/udev/rules.d/
@@ -34,11 +38,11 @@ video=$(ls /dev/video* | head -1)
 udevd=$!
 check "udev has run the rule" udev_ready "$video" "/dev/$chip"
 
-has_acl() { getfacl -p "$1" 2>/dev/null | grep -q "^group:glint:rw-$"; }
-check "the video node grants the glint group rw" has_acl "$video"
-check "the GPIO chip grants the glint group rw" has_acl "/dev/$chip"
+has_acl() { getfacl -p "$1" 2>/dev/null | grep -q "^group:glint-dev:rw-$"; }
+check "the video node grants the glint-dev group rw" has_acl "$video"
+check "the GPIO chip grants the glint-dev group rw" has_acl "/dev/$chip"
 for m in /dev/media*; do
-	[ -e "$m" ] && check "$m grants the glint group rw" has_acl "$m"
+	[ -e "$m" ] && check "$m grants the glint-dev group rw" has_acl "$m"
 done
 # Debian's own rules still apply: the camera's group stays video; the
 # GPIO chip stays root's (its owning group gets nothing from the ACL).
@@ -51,8 +55,10 @@ as() { # GID COMMAND...: as an unprivileged user whose only group is GID
 	shift
 	setpriv --reuid=4243 --regid="$g" --clear-groups "$@"
 }
-check "a glint-group user opens the GPIO chip" as "$gid" gpioinfo "$chip"
+check "a glint-dev user opens the GPIO chip" as "$gid" gpioinfo "$chip"
 check "... and queries the camera" as "$gid" v4l2-ctl -d "$video" --info
+check "a user of the queue's glint group cannot open the GPIO chip" bash -c "! setpriv --reuid=4243 --regid=$qgid --clear-groups gpioinfo $chip >/dev/null 2>&1"
+check "... nor the camera" bash -c "! setpriv --reuid=4243 --regid=$qgid --clear-groups v4l2-ctl -d $video --info >/dev/null 2>&1"
 check "a user of another group cannot open the GPIO chip" bash -c "! setpriv --reuid=4243 --regid=4244 --clear-groups gpioinfo $chip >/dev/null 2>&1"
 check "... nor the camera" bash -c "! setpriv --reuid=4243 --regid=4244 --clear-groups v4l2-ctl -d $video --info >/dev/null 2>&1"
 finish

@@ -119,6 +119,12 @@ void cmd_fit_help(void)
 	       "undetermined, or\n"
 	       "                        specular and ior trading off\n"
 	       "  --no-select-model     never choose the model that way\n"
+	       "  --no-per-light        with several photos, do not also fit "
+	       "each alone (by\n"
+	       "                        default each is, and params.json's "
+	       "per_light says\n"
+	       "                        whether a parameter drifts with the "
+	       "light's angle)\n"
 	       "  --ladder              fidelity ladder: try cheaper "
 	       "modelling (no depth of\n"
 	       "                        field, fewer samples per pixel, "
@@ -417,6 +423,7 @@ int cmd_fit(int argc, char **argv)
 		CMD_CALL("ladder-knobs", &job->ladder_knobs, parse_knobs),
 		CMD_FLAG("select-model", 0, &job->select),
 		CMD_FLAG("no-select-model", 0, &job->no_auto_select),
+		CMD_FLAG("no-per-light", 0, &job->no_per_light),
 		{ 0 },
 	};
 	struct cmd_args a;

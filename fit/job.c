@@ -11,6 +11,7 @@
 
 #include "ladder.h"
 #include "misfit.h"
+#include "per_light.h"
 #include "select.h"
 #include "export/export.h"
 #include "fit/render/compare.h"
@@ -166,6 +167,28 @@ static int run_fit(const struct glint_fit_view *views, int nv,
 		       "choosing the model by BIC (--select-model)",
 		       nv > 1 ? "s do" : " does", (*model)->name);
 	return select_model(views, nv, o, 0, model, res, selection);
+}
+
+/* Several photos: each fitted alone too, and the drift of each
+ * parameter with the light's angle as *doc (fit/per_light.h); the
+ * verdict logged. */
+static int per_light(const struct glint_fit_view *views, int nv,
+		     const struct glint_model *model,
+		     const struct glint_fit_opts *o,
+		     const struct glint_fit_result *joint, json_t **doc)
+{
+	struct glint_per_light *pl = malloc(sizeof(*pl));
+	int ret = pl ? glint_fit_per_light(views, nv, model, o, joint, pl)
+		     : glint_error_set(ENOMEM, "out of memory");
+	if (ret == 0) {
+		*doc = glint_per_light_json(pl, model);
+		if (pl->ndrift)
+			glint_log_warn("per-light fits: %s", pl->verdict);
+		else
+			glint_log_info("per-light fits: %s", pl->verdict);
+	}
+	free(pl);
+	return ret;
 }
 
 /* params.json for a fit (without the model choice, selection, fidelity
@@ -363,6 +386,7 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 	struct glint_fit_result res;
 	const struct glint_model *model = NULL;
 	json_t *fidelity = NULL, *selection = NULL, *why = NULL, *doc = NULL;
+	json_t *per = NULL;
 	int ret;
 
 	*result = NULL;
@@ -393,6 +417,9 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 						    outs[k].job->weight };
 	ret = run_fit(views, nv, job, &o, &model, &res, &why, &selection,
 		      &fidelity);
+	if (ret == 0 && nv > 1 && !job->no_per_light &&
+	    !glint_model_is_transparent(model))
+		ret = per_light(views, nv, model, &o, &res, &per);
 	if (o.progress)
 		o.progress(o.progress_ctx, NULL, 0,
 			   0); /* the passes are done */
@@ -417,6 +444,8 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 	if (outs[0].have_mf)
 		json_object_set_new(doc, "misfit",
 				    glint_misfit_json(&outs[0].mf));
+	if (per)
+		json_object_set(doc, "per_light", per);
 	/* A fit is taken as a measurement by a stated rule; a refused one
 	 * leaves its evidence beside the output, which stays as it was. */
 	char refused[1024];
@@ -448,6 +477,7 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 	doc = NULL;
 out:
 	json_decref(doc);
+	json_decref(per);
 	json_decref(why);
 	json_decref(fidelity);
 	json_decref(selection);

@@ -59,6 +59,10 @@ struct glint_fit_job {
 	 * statistics into params.json's "photos". */
 	struct glint_fit_job *also;
 	int nalso;
+	/* With more photos: unless no_per_light, each also fitted alone and
+	 * each parameter's drift with the light's angle reported
+	 * (fit/per_light.h; params.json's "per_light"). */
+	int no_per_light;
 	/* Set by glint_fit_job_crop() or _load(): the photo, weights and
 	 * camera are
 	 * the window at (x, y) of a frame_width x frame_height frame
@@ -136,6 +140,10 @@ double glint_render_first_factor(double q_pilot, double pair_s, double budget_s,
  * when the roughness is reported as a value (params.json's
  * "upper_bound"; docs/fitting.md, "What one image determines"). */
 double glint_fit_roughness_bound(const struct glint_fit_result *r);
+
+/* Parameter k is not determined: its interval spans half its bounds or
+ * more, or the photo cannot see it at all. */
+int glint_fit_undetermined(const struct glint_fit_result *r, int k);
 
 /* params.json's "parameters" (name, value, stderr, at_bound, bounds) and
  * "passes" arrays for a result; new references. */

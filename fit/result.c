@@ -11,9 +11,8 @@
 #include <stdio.h>
 #include <string.h>
 
-/* A parameter is not determined when its interval spans half its bounds
- * or more, or the photo cannot see it at all. */
-static int undetermined(const struct glint_fit_result *r, int k)
+/* (fit/job.h) */
+int glint_fit_undetermined(const struct glint_fit_result *r, int k)
 {
 	const struct glint_param *pi = &r->model->params[k];
 	if (r->unc.n == 0)
@@ -71,8 +70,9 @@ json_t *glint_fit_params_json(const struct glint_fit_result *r)
 			json_object_set_new(
 				o, "interval",
 				json_pack("[f,f]", r->unc.lo[k], r->unc.hi[k]));
-			json_object_set_new(o, "determined",
-					    json_boolean(!undetermined(r, k)));
+			json_object_set_new(
+				o, "determined",
+				json_boolean(!glint_fit_undetermined(r, k)));
 		}
 		if (k == rk && isfinite(glint_fit_roughness_bound(r)))
 			json_object_set_new(
@@ -144,7 +144,7 @@ int glint_fit_specular_f0(const struct glint_fit_result *r, double v[3],
 		v[c] = r->p[ks] * f0;
 		se[c] = glint_uncertainty_delta(&r->unc, g);
 	}
-	return worst >= 0.9 || undetermined(r, ki);
+	return worst >= 0.9 || glint_fit_undetermined(r, ki);
 }
 
 /*
@@ -185,7 +185,7 @@ static void specular_fresnel(const struct glint_fit_result *r, json_t *find,
 					" %s%.4f +- %.4f", c ? ", " : "", v[c],
 					1.96 * se[c]);
 	}
-	if (undetermined(r, param_index(r->model, "ior")) &&
+	if (glint_fit_undetermined(r, param_index(r->model, "ior")) &&
 	    len < (int)sizeof(msg))
 		snprintf(msg + len, sizeof(msg) - (size_t)len,
 			 "; ior is not determined by this photo");
@@ -198,7 +198,7 @@ int glint_fit_needs_selection(const struct glint_fit_result *r)
 	int n = r->unc.n, ki = param_index(m, "ior");
 
 	for (int k = 0; k < n; k++)
-		if (undetermined(r, k))
+		if (glint_fit_undetermined(r, k))
 			return 1;
 	for (int k = 0; k < n && ki >= 0; k++)
 		if (!strncmp(m->params[k].name, "specular", 8) &&
@@ -265,7 +265,7 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 			me,
 			json_real(sqrt(fmax(0, u->cov_regions[k * n + k]))));
 		json_array_append_new(md, json_real(r->discrepancy[k]));
-		if (undetermined(r, k) &&
+		if (glint_fit_undetermined(r, k) &&
 		    strcmp(m->params[k].name, "ior") != 0) {
 			snprintf(msg, sizeof(msg),
 				 "%s is not determined by this photo "

@@ -26,7 +26,11 @@
  *   6. model selection (glint_select_model_views(), what --select-model
  *      and the automatic choice run): on front alone the BIC cannot
  *      prefer a Fresnel with an ior to a constant one by much; front +
- *      rim choose a model with an ior, by a clear margin.
+ *      rim choose a model with an ior, by a clear margin;
+ *   7. per light (glint_fit_per_light(), what a joint glint fit reports):
+ *      front + rim of the same teflon drift in no parameter; front of
+ *      teflon + rim of a teflon half again as rough drift in roughness,
+ *      and the verdict says so.
  */
 #include "test.h"
 
@@ -36,6 +40,7 @@
 #include "fit/brdf/microfacet.h"
 #include "fit/brdf/model.h"
 #include "fit/fit.h"
+#include "fit/per_light.h"
 #include "fit/select.h"
 #include "sim_scene.h"
 
@@ -94,6 +99,35 @@ static int fit(struct shot **shots, int n, const struct glint_model *m,
 	int ret = glint_fit_views(v, n, m, &o, res);
 	if (ret < 0)
 		fprintf(stderr, "fit: %s\n", glint_error_msg());
+	return ret;
+}
+
+/* 7. Per light: the joint fit of shots a and b, each alone, and the
+ * drift of every parameter with the light's angle. */
+static int per_light(struct shot *a, struct shot *b,
+		     const struct glint_model *m, struct glint_per_light *pl)
+{
+	struct shot *ab[] = { a, b };
+	struct glint_fit_result *joint = malloc(sizeof(*joint));
+	struct glint_fit_view v[2] = { { &a->r, a->photo, a->weight },
+				       { &b->r, b->photo, b->weight } };
+	struct glint_fit_opts o;
+	glint_fit_default_opts(&o);
+	int ret = joint ? fit(ab, 2, m, joint) : -1;
+	if (ret == 0)
+		ret = glint_fit_per_light(v, 2, m, &o, joint, pl);
+	if (ret < 0)
+		fprintf(stderr, "per light: %s\n", glint_error_msg());
+	free(joint);
+	if (ret == 0) {
+		for (int k = 0; k < m->nparams; k++)
+			printf("  %-10s %8.4f (%6.1f deg) %8.4f (%6.1f deg): "
+			       "slope %+.4f per 10 deg, z %+.2f\n",
+			       m->params[k].name, pl->p[0][k], pl->angle_deg[0],
+			       pl->p[1][k], pl->angle_deg[1], pl->slope[k],
+			       pl->z[k]);
+		printf("  %s\n", pl->verdict);
+	}
 	return ret;
 }
 
@@ -303,6 +337,26 @@ int main(void)
 	}
 	free(sel1);
 	free(sel2);
+
+	/* 7. Per light. */
+	struct glint_per_light *pl = malloc(sizeof(*pl));
+	struct shot rough;
+	double other[GLINT_MAX_PARAMS];
+	memcpy(other, truth, sizeof(other));
+	other[6] *= 1.5;
+	CHECK(pl && per_light(&front, &rim, m, pl) == 0, "per light");
+	if (pl && !test_failures)
+		CHECK(pl->ndrift == 0 && strstr(pl->verdict, "explains every"),
+		      "front + rim of one teflon: %s", pl->verdict);
+	CHECK(shoot(140, m, other, &rough) == 0, "%s", glint_error_msg());
+	CHECK(pl && per_light(&front, &rough, m, pl) == 0, "per light");
+	if (pl && !test_failures)
+		CHECK(pl->drifts[6] && strstr(pl->verdict, "roughness drifts"),
+		      "front of teflon + rim of a rougher one: roughness z "
+		      "%.2f: %s",
+		      pl->z[6], pl->verdict);
+	shot_free(&rough);
+	free(pl);
 
 	/* 5. Refusals. */
 	refusals(&front, m);

@@ -240,6 +240,16 @@ for q in r['parameters']:
 for f in ('render.exr', 'render-2.exr', 'compare.png', 'compare-2.png'):
     assert os.path.getsize(os.path.join(d['run'], 'fit', f)) > 0, f
 "
+check "... each lamp fitted alone too: one material explains both, no drift" python3 -c "
+import json, os
+d = json.load(open('$tmp/lamps.out'))
+pl = json.load(open(os.path.join(d['run'], 'fit', 'params.json')))['per_light']
+print('  ' + pl['verdict'])
+for l in pl['lights']:
+    print('  photo %d: light %.1f deg from the view, roughness %.4f' % (l['photo'], l['light_angle_deg'], l['values']['roughness']))
+assert len(pl['lights']) == 2 and len(pl['trends']) == 8, pl
+assert not any(t['drifts'] for t in pl['trends']), pl['verdict']
+"
 check "... sessions shows the samples fitted by their run" run 0 "" sessions --root "$tmp/lamps"
 check "... (FIT: run)" bash -c "test \$(grep -c '^sample .* complete *run ' '$tmp/out') = 2"
 run_dir=$(ls -d "$tmp"/lamps/run-*)

@@ -10,7 +10,7 @@ under the upper bound glint reports; ior 0.05).  Writes docs/results/
 rig-materials.md and rig-materials.png (with --write).
 
 --check: exit 1 unless every material run has every true value inside its
-interval and within tolerance (the heavy suite's `rig-materials` runs two).
+interval and within tolerance (the heavy suite's `rig-materials` runs three).
 
 usage: bench/rig_materials.py [BUILD_DIR] [--only NAME,NAME] [--write] [--check]"""
 import json

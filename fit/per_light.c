@@ -73,7 +73,8 @@ static void verdict(struct glint_per_light *pl, const struct glint_model *m)
 	if (worst < 0) {
 		snprintf(pl->verdict, n,
 			 "no trend to test: the lights are within a degree "
-			 "of each other as seen from the view");
+			 "of each other as seen from the view (not fitted "
+			 "one by one)");
 		return;
 	}
 	if (!pl->ndrift) {
@@ -119,6 +120,27 @@ int glint_fit_per_light(const struct glint_fit_view *views, int nv,
 	out->nviews = nv;
 	out->nparams = model->nparams;
 	oo.progress = NULL;
+	/* Lights at one angle from the view (one lamp, the turntable
+	 * turned) have no trend to show: no fits. */
+	double amin = INFINITY, amax = -INFINITY;
+	for (int v = 0; v < nv; v++) {
+		out->angle_deg[v] = light_angle(views[v].r);
+		amin = fmin(amin, out->angle_deg[v]);
+		amax = fmax(amax, out->angle_deg[v]);
+	}
+	if (!(amax - amin >= 1)) {
+		free(one);
+		for (int k = 0; k < model->nparams; k++)
+			out->slope[k] = out->slope_se[k] = out->z[k] =
+				out->chi2_dof[k] = NAN;
+		for (int v = 0; v < nv; v++) {
+			out->rel_rmse[v] = NAN;
+			for (int k = 0; k < model->nparams; k++)
+				out->p[v][k] = out->se[v][k] = NAN;
+		}
+		verdict(out, model);
+		return 0;
+	}
 	for (int v = 0; v < nv && ret == 0; v++) {
 		glint_log_info("per-light fits: photo %d of %d alone", v + 1,
 			       nv);
@@ -130,7 +152,6 @@ int glint_fit_per_light(const struct glint_fit_view *views, int nv,
 						 v + 1, nv);
 			break;
 		}
-		out->angle_deg[v] = light_angle(views[v].r);
 		out->rel_rmse[v] = one->rel_rmse;
 		for (int k = 0; k < model->nparams; k++) {
 			out->p[v][k] = one->p[k];
@@ -155,8 +176,9 @@ json_t *glint_per_light_json(const struct glint_per_light *pl,
 	for (int v = 0; v < pl->nviews; v++) {
 		json_t *vals = json_object(), *ses = json_object();
 		for (int k = 0; k < pl->nparams; k++) {
-			json_object_set_new(vals, model->params[k].name,
-					    json_real(pl->p[v][k]));
+			json_object_set_new(
+				vals, model->params[k].name,
+				glint_json_real_or_null(pl->p[v][k]));
 			json_object_set_new(
 				ses, model->params[k].name,
 				glint_json_real_or_null(pl->se[v][k]));

@@ -23,6 +23,10 @@
  * (glint_fit_result's interval over half the bounds) count for that
  * light only where determined.
  *
+ * When every light is within a degree of the same angle from the view
+ * (one lamp, the turntable turned) there is no trend to test and the
+ * photos are not fitted one by one (values NAN).
+ *
  * Errors: a negative errno with glint_error_msg() naming the photo.
  * Threads: the fits use o->nthreads.  Who frees: nothing (values).
  */

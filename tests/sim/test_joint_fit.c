@@ -105,17 +105,20 @@ static int fit(struct shot **shots, int n, const struct glint_model *m,
 /* 7. Per light: the joint fit of shots a and b, each alone, and the
  * drift of every parameter with the light's angle. */
 static int per_light(struct shot *a, struct shot *b,
-		     const struct glint_model *m, struct glint_per_light *pl)
+		     const struct glint_model *m,
+		     const struct glint_fit_result *known,
+		     struct glint_per_light *pl)
 {
 	struct shot *ab[] = { a, b };
-	struct glint_fit_result *joint = malloc(sizeof(*joint));
+	struct glint_fit_result *joint = known ? NULL : malloc(sizeof(*joint));
 	struct glint_fit_view v[2] = { { &a->r, a->photo, a->weight },
 				       { &b->r, b->photo, b->weight } };
 	struct glint_fit_opts o;
 	glint_fit_default_opts(&o);
-	int ret = joint ? fit(ab, 2, m, joint) : -1;
+	int ret = known ? 0 : joint ? fit(ab, 2, m, joint) : -1;
 	if (ret == 0)
-		ret = glint_fit_per_light(v, 2, m, &o, joint, pl);
+		ret = glint_fit_per_light(v, 2, m, &o, known ? known : joint,
+					  pl);
 	if (ret < 0)
 		fprintf(stderr, "per light: %s\n", glint_error_msg());
 	free(joint);
@@ -344,17 +347,22 @@ int main(void)
 	double other[GLINT_MAX_PARAMS];
 	memcpy(other, truth, sizeof(other));
 	other[6] *= 1.5;
-	CHECK(pl && per_light(&front, &rim, m, pl) == 0, "per light");
+	CHECK(pl && per_light(&front, &rim, m, &joint, pl) == 0, "per light");
 	if (pl && !test_failures)
 		CHECK(pl->ndrift == 0 && strstr(pl->verdict, "explains every"),
 		      "front + rim of one teflon: %s", pl->verdict);
 	CHECK(shoot(140, m, other, &rough) == 0, "%s", glint_error_msg());
-	CHECK(pl && per_light(&front, &rough, m, pl) == 0, "per light");
+	CHECK(pl && per_light(&front, &rough, m, NULL, pl) == 0, "per light");
 	if (pl && !test_failures)
 		CHECK(pl->drifts[6] && strstr(pl->verdict, "roughness drifts"),
 		      "front of teflon + rim of a rougher one: roughness z "
 		      "%.2f: %s",
 		      pl->z[6], pl->verdict);
+	/* the same light twice: nothing to test, nothing fitted */
+	CHECK(pl && per_light(&front, &front, m, &twice, pl) == 0 &&
+		      strstr(pl->verdict, "no trend to test") &&
+		      isnan(pl->p[0][6]),
+	      "front twice: %s", pl ? pl->verdict : "");
 	shot_free(&rough);
 	free(pl);
 

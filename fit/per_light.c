@@ -128,20 +128,13 @@ int glint_fit_per_light(const struct glint_fit_view *views, int nv,
 		amin = fmin(amin, out->angle_deg[v]);
 		amax = fmax(amax, out->angle_deg[v]);
 	}
-	if (!(amax - amin >= 1)) {
-		free(one);
+	int fit = amax - amin >= 1;
+	for (int v = 0; !fit && v < nv; v++) {
+		out->rel_rmse[v] = NAN;
 		for (int k = 0; k < model->nparams; k++)
-			out->slope[k] = out->slope_se[k] = out->z[k] =
-				out->chi2_dof[k] = NAN;
-		for (int v = 0; v < nv; v++) {
-			out->rel_rmse[v] = NAN;
-			for (int k = 0; k < model->nparams; k++)
-				out->p[v][k] = out->se[v][k] = NAN;
-		}
-		verdict(out, model);
-		return 0;
+			out->p[v][k] = out->se[v][k] = NAN;
 	}
-	for (int v = 0; v < nv && ret == 0; v++) {
+	for (int v = 0; fit && v < nv && ret == 0; v++) {
 		glint_log_info("per-light fits: photo %d of %d alone", v + 1,
 			       nv);
 		ret = glint_fit_views(&views[v], 1, model, &oo, one);

@@ -411,37 +411,60 @@ static double luminance_at(const struct glint_image *img, double x, double y)
 	return v;
 }
 
-/* Least squares of the four levels x for the edge at e, blur s (normal
- * equations by GSL's Cholesky; the caller has GSL's error handler off):
- * the residual sum of squares, HUGE_VAL when they are singular. */
-static double profile_sse(const double *v, double e, double s, double *x)
+/* The model's four basis functions at the profile's samples for each
+ * edge position of the grid, and the Cholesky factor of their normal
+ * matrix (GSL's): they depend on the edge and the blur alone, not on
+ * the profile, so they are made once per blur.  ok[j] 0: singular. */
+struct step_basis {
+	double f[EDGE_N][PROFILE_N][4];
+	double llt[EDGE_N][16];
+	int ok[EDGE_N];
+};
+
+/* (the caller has GSL's error handler off) */
+static void step_basis_init(struct step_basis *sb, double s)
 {
-	double ata[16] = { 0 }, aty[4] = { 0 }, f[PROFILE_N][4], fit = 0;
-	for (int k = 0; k < PROFILE_N; k++) {
-		double t = -PROFILE_HALF + PROFILE_STEP * k - e;
-		double st = 0.5 * erfc(-t / (1.4142135623730951 * s));
-		f[k][0] = 1 - st;
-		f[k][1] = (1 - st) * t;
-		f[k][2] = st;
-		f[k][3] = st * t;
-		for (int a = 0; a < 4; a++) {
-			for (int b = 0; b < 4; b++)
-				ata[4 * a + b] += f[k][a] * f[k][b];
-			aty[a] += f[k][a] * v[k];
+	for (int j = 0; j < EDGE_N; j++) {
+		double e = -EDGE_RANGE + EDGE_STEP * j, *ata = sb->llt[j];
+		memset(ata, 0, sizeof(sb->llt[j]));
+		for (int k = 0; k < PROFILE_N; k++) {
+			double t = -PROFILE_HALF + PROFILE_STEP * k - e;
+			double st = 0.5 * erfc(-t / (1.4142135623730951 * s));
+			double *f = sb->f[j][k];
+			f[0] = 1 - st;
+			f[1] = (1 - st) * t;
+			f[2] = st;
+			f[3] = st * t;
+			for (int a = 0; a < 4; a++)
+				for (int b = 0; b < 4; b++)
+					ata[4 * a + b] += f[a] * f[b];
 		}
+		gsl_matrix_view mv = gsl_matrix_view_array(ata, 4, 4);
+		sb->ok[j] = gsl_linalg_cholesky_decomp1(&mv.matrix) == 0;
 	}
-	gsl_matrix_view mv = gsl_matrix_view_array(ata, 4, 4);
+}
+
+/* Least squares of the four levels for the edge at grid position j: the
+ * residual sum of squares, HUGE_VAL where the basis is singular. */
+static double profile_sse(const double *v, const struct step_basis *sb, int j)
+{
+	double aty[4] = { 0 }, fit = 0;
+	if (!sb->ok[j])
+		return HUGE_VAL;
+	for (int k = 0; k < PROFILE_N; k++)
+		for (int a = 0; a < 4; a++)
+			aty[a] += sb->f[j][k][a] * v[k];
+	gsl_matrix_const_view mv =
+		gsl_matrix_const_view_array(sb->llt[j], 4, 4);
 	gsl_vector_view bv = gsl_vector_view_array(aty, 4);
-	if (gsl_linalg_cholesky_decomp1(&mv.matrix) ||
-	    gsl_linalg_cholesky_svx(&mv.matrix, &bv.vector))
+	if (gsl_linalg_cholesky_svx(&mv.matrix, &bv.vector))
 		return HUGE_VAL;
 	for (int k = 0; k < PROFILE_N; k++) {
 		double m = 0;
 		for (int a = 0; a < 4; a++)
-			m += f[k][a] * aty[a];
+			m += sb->f[j][k][a] * aty[a];
 		fit += (v[k] - m) * (v[k] - m);
 	}
-	memcpy(x, aty, sizeof(aty));
 	return fit;
 }
 
@@ -460,17 +483,16 @@ static int rim_profile(const struct glint_image *img, const double c[3],
 	return 1;
 }
 
-/* The edge in profile v for blur s: *e (px outwards of the circle), its
- * variance *var and the least sum of squares; 0 when the grid's minimum
- * is at its end or the sum is flat there. */
-static int profile_edge(const double *v, double s, double *e, double *var,
-			double *sse)
+/* The edge in profile v for a blur's basis sb: *e (px outwards of the
+ * circle), its variance *var and the least sum of squares; 0 when the
+ * grid's minimum is at its end or the sum is flat there. */
+static int profile_edge(const double *v, const struct step_basis *sb, double *e,
+			double *var, double *sse)
 {
 	double best = HUGE_VAL, q[EDGE_N];
 	int j = 0;
 	for (int k = 0; k < EDGE_N; k++) {
-		double x[4];
-		q[k] = profile_sse(v, -EDGE_RANGE + EDGE_STEP * k, s, x);
+		q[k] = profile_sse(v, sb, k);
 		if (q[k] < best) {
 			best = q[k];
 			j = k;
@@ -497,28 +519,36 @@ static int rim_refine(const struct glint_image *img, double c[3])
 	int nb = (int)(sizeof(blurs) / sizeof(blurs[0]));
 	int steps = (int)fmin(2048, fmax(64, ceil(2 * M_PI * c[2])));
 	double *px = malloc((size_t)steps * 3 * sizeof(double));
+	struct step_basis *sb = malloc(sizeof(*sb)), *best = NULL;
 	double v[PROFILE_N];
-	if (!px)
+	if (!px || !sb || !(best = malloc(sizeof(*best)))) {
+		free(px);
+		free(sb);
 		return glint_error_set(ENOMEM,
 				       "sphere detection: out of memory");
+	}
 	double *py = px + steps, *wk = py + steps;
 	gsl_error_handler_t *old = gsl_set_error_handler_off();
 	/* The blur: the least total sum of squares over every 4th angle
 	 * (each profile's least, wherever its edge). */
-	double s = 1.0, least = HUGE_VAL;
+	double least = HUGE_VAL;
+	step_basis_init(best, 1.0);
 	for (int b = 0; b < nb; b++) {
 		double tot = 0;
+		step_basis_init(sb, blurs[b]);
 		for (int k = 0; k < steps; k += 4) {
 			double a = 2 * M_PI * (k + 0.5) / steps, e, var, sse;
 			if (!rim_profile(img, c, cos(a), sin(a), v))
 				continue;
-			profile_edge(v, blurs[b], &e, &var, &sse);
+			profile_edge(v, sb, &e, &var, &sse);
 			if (isfinite(sse))
 				tot += sse;
 		}
 		if (tot > 0 && tot < least) {
+			struct step_basis *t = best;
 			least = tot;
-			s = blurs[b];
+			best = sb;
+			sb = t;
 		}
 	}
 	for (int pass = 0; pass < 2; pass++) {
@@ -527,7 +557,8 @@ static int rim_refine(const struct glint_image *img, double c[3])
 			double a = 2 * M_PI * (k + 0.5) / steps, e, var, sse;
 			double ux = cos(a), uy = sin(a);
 			if (!rim_profile(img, c, ux, uy, v) ||
-			    !profile_edge(v, s, &e, &var, &sse) || !(var > 0))
+			    !profile_edge(v, best, &e, &var, &sse) ||
+			    !(var > 0))
 				continue;
 			px[np] = c[0] + (c[2] + e) * ux;
 			py[np] = c[1] + (c[2] + e) * uy;
@@ -540,6 +571,8 @@ static int rim_refine(const struct glint_image *img, double c[3])
 	}
 	gsl_set_error_handler(old);
 	free(px);
+	free(sb);
+	free(best);
 	return 0;
 }
 

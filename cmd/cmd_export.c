@@ -59,8 +59,10 @@ void cmd_export_help(void)
 	       "  -o, --output OUT  the file to write (refused if it exists, "
 	       "unless --force)\n"
 	       "  --entry NAME      pick NAME from a Table-1 style file\n"
-	       "  --name N          the material's name (default: the "
-	       "input's file name)\n"
+	       "  --name N          the material's name (default: the one "
+	       "the input holds, else\n"
+	       "                    its session's for a fit, else the "
+	       "file's stem)\n"
 	       "  --diameter-m D    a transparent sphere's diameter in "
 	       "metres (its absorption\n"
 	       "                    is per diameter; a fit's params.json "
@@ -118,6 +120,22 @@ static double recorded_diameter(const char *path)
 	return d > 0 ? d : NAN;
 }
 
+/* The name a material file or a fit's params.json gives its material,
+ * else one from where it lives (glint_export_name_from_path). */
+static const char *material_name(const char *path, char buf[256])
+{
+	json_t *doc = glint_json_read_quiet(path);
+	json_t *fitted = json_object_get(doc, "material");
+	const char *n = json_string_value(
+		json_object_get(json_is_object(fitted) ? fitted : doc, "name"));
+	if (n && *n)
+		snprintf(buf, 256, "%s", n);
+	else
+		glint_export_name_from_path(path, buf, 256);
+	json_decref(doc);
+	return buf;
+}
+
 int cmd_export(int argc, char **argv)
 {
 	const char *out = NULL, *name = NULL, *entry = NULL;
@@ -152,10 +170,9 @@ int cmd_export(int argc, char **argv)
 		return cmd_fail("export");
 	if (isnan(diameter_m))
 		diameter_m = recorded_diameter(a.argv[0]);
-	if (!name) {
-		const char *s = strrchr(a.argv[0], '/');
-		name = entry ? entry : s ? s + 1 : a.argv[0];
-	}
+	char name_buf[256];
+	if (!name)
+		name = entry ? entry : material_name(a.argv[0], name_buf);
 	json_t *res = cmd_export_write((enum glint_export_format)to, model, p,
 				       diameter_m, a.argv[0], name, out, force);
 	if (!res)

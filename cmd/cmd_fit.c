@@ -213,6 +213,10 @@ void cmd_fit_help(void)
 	       "                        refitted as by glint export, "
 	       "residuals in\n"
 	       "                        params.json's \"exports\"\n"
+	       "  --name N              the material's name in params.json "
+	       "and the exports\n"
+	       "                        (default: the session's, or OUT's "
+	       "folder name)\n"
 	       "  --max-iter N          LM iterations per pass (default 60)\n"
 	       "  --threads N           worker threads (default: all CPUs)\n"
 	       "  --wait                SESSION: wait for a running fit of "
@@ -411,6 +415,7 @@ int cmd_fit(int argc, char **argv)
 		CMD_REAL("level", &job->opts.level, 0.51, 0.999),
 		CMD_REAL("accept-rmse", &job->accept_rmse, 1e-9, 1e9),
 		CMD_FLAG("force", 0, &job->force),
+		CMD_STRING("name", 0, &job->name),
 		CMD_FLAG("srgb", 0, &job->srgb),
 		CMD_CALL("export", &job->exports, parse_exports),
 		CMD_INT("max-iter", &job->opts.max_iter, 1, 10000),

@@ -346,6 +346,49 @@ const char *glint_export_note_of(const struct glint_export *e)
 	return e->dielectric ? dielectric_note : note;
 }
 
+/* The last component of path[0..*len) (trailing slashes dropped): its
+ * start; *len becomes its length. */
+static const char *last_component(const char *path, size_t *len)
+{
+	size_t e = *len;
+	while (e > 1 && path[e - 1] == '/')
+		e--;
+	size_t b = e;
+	while (b > 0 && path[b - 1] != '/')
+		b--;
+	*len = e - b;
+	return path + b;
+}
+
+const char *glint_export_name_from_path(const char *path, char *buf, size_t n)
+{
+	char *abs = realpath(path, NULL); /* "." and "fit" have a parent */
+	const char *p = abs ? abs : path;
+	size_t len = strlen(p), l = len;
+	const char *c = last_component(p, &l);
+
+	if (l == 11 && !strncmp(c, "params.json", 11)) {
+		len = (size_t)(c - p); /* its folder */
+		l = len;
+		c = last_component(p, &l);
+	} else if (l > 5 && !strncmp(c + l - 5, ".json", 5)) {
+		l -= 5;
+		len = 0; /* a material file: its stem */
+	}
+	if (len && l == 3 && !strncmp(c, "fit", 3)) {
+		len = (size_t)(c - p); /* a session's fit: the session */
+		l = len;
+		c = last_component(p, &l);
+	}
+	if (!l || (l == 1 && (*c == '.' || *c == '/')) ||
+	    (l == 2 && !strncmp(c, "..", 2)))
+		snprintf(buf, n, "material");
+	else
+		snprintf(buf, n, "%.*s", (int)l, c);
+	free(abs);
+	return buf;
+}
+
 char *glint_export_text(const struct glint_export *e, const char *name,
 			const char *source, const struct glint_model *model)
 {

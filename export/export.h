@@ -155,6 +155,15 @@ const char *glint_export_extension(enum glint_export_format format);
 char *glint_export_text(const struct glint_export *e, const char *name,
 			const char *source, const struct glint_model *model);
 
+/*
+ * A material's name from where its fit lives, into buf (n bytes): a
+ * fit's folder or its params.json names its session (SESSION/fit ->
+ * SESSION; any other folder is itself the name), a material file its
+ * stem (copper.json -> copper).  "material" when the path names nothing
+ * (".", "/").  Returns buf.
+ */
+const char *glint_export_name_from_path(const char *path, char *buf, size_t n);
+
 /* The target's parameters by their names in the target, as JSON. */
 json_t *glint_export_params_json(const struct glint_export *e);
 

@@ -222,6 +222,9 @@ static json_t *params_doc(const struct glint_fit_job *job,
 						       : "uniform");
 	if (!doc)
 		return NULL;
+	char name[256];
+	json_object_set_new(json_object_get(doc, "material"), "name",
+			    json_string(job_material_name(job, name)));
 	json_object_set_new(doc, "optimizer",
 			    json_string(o->optimizer == GLINT_OPT_LM ? "lm"
 					: o->optimizer == GLINT_OPT_ANNEAL
@@ -242,17 +245,13 @@ static json_t *params_doc(const struct glint_fit_job *job,
 	return doc;
 }
 
-/* An export's material name: the output folder's last component. */
+/* The material's name: job->name, else its output folder's (a session's
+ * fit: the session's). */
 const char *job_material_name(const struct glint_fit_job *job, char buf[256])
 {
-	size_t n = strlen(job->out_dir);
-	while (n > 1 && job->out_dir[n - 1] == '/')
-		n--;
-	size_t b = n;
-	while (b > 0 && job->out_dir[b - 1] != '/')
-		b--;
-	snprintf(buf, 256, "%.*s", (int)(n - b), job->out_dir + b);
-	return strcmp(buf, ".") && strcmp(buf, "..") && *buf ? buf : "material";
+	if (job->name && *job->name)
+		return job->name;
+	return glint_export_name_from_path(job->out_dir, buf, 256);
 }
 
 /* What a joint fit cannot do (yet): checked before any work. */

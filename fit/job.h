@@ -47,6 +47,10 @@ struct glint_fit_job {
 	 * write: glint's own are replaced, the others kept (never an input
 	 * of this run, never a file of someone else's of a name it writes) */
 	int force;
+	/* The material's name in params.json and the exports; NULL:
+	 * from out_dir (glint_export_name_from_path: a session's fit is
+	 * named after the session). */
+	const char *name;
 	/* bit k set: write out_dir/material + the extension of export
 	 * format k (export/export.h) with an accepted result */
 	unsigned exports;

@@ -190,6 +190,22 @@ cp -r "$tmp/fit1" "$tmp/fit1.keep"
 # evaluation of both models from their published equations.
 check "export the fit to glTF" run 0 "relative RMS difference" export "$tmp/fit1/params.json" --to gltf -o "$tmp/m.gltf"
 check "... the glTF BRDF matches glint's within the stated residual" python3 "$here/check_export.py" "$tmp/fit1/params.json" "$tmp/m.gltf"
+diam=$(python3 -c "import json; print(json.load(open('$tmp/fit1/params.json'))['inputs']['sphere_diameter_m'])")
+check "... a closed sphere of the fit's diameter carrying the material, named after the fit's folder" python3 "$here/check_gltf_mesh.py" "$tmp/m.gltf" fit1 "$diam"
+check "... the fit's own export the same, its params.json naming the material" python3 -c "
+import json, subprocess, sys
+assert json.load(open('$tmp/fit1/params.json'))['material']['name'] == 'fit1'
+subprocess.run([sys.executable, '$here/check_gltf_mesh.py', '$tmp/fit1/material.gltf', 'fit1', '$diam'], check=True)"
+# A session's fit (SESSION/fit/params.json) without a name of its own is
+# named after the session; --name names it.
+mkdir -p "$tmp/lab-teflon/fit"
+python3 -c "
+import json; d = json.load(open('$tmp/fit1/params.json')); del d['material']['name']
+json.dump(d, open('$tmp/lab-teflon/fit/params.json', 'w'))"
+check "export of a session's fit names the material after the session" run 0 "" export "$tmp/lab-teflon/fit/params.json" --to gltf -o "$tmp/session.gltf" -q
+check "... 'lab-teflon'" python3 "$here/check_gltf_mesh.py" "$tmp/session.gltf" lab-teflon "$diam"
+check "export --name names it (as an identifier)" run 0 "" export "$tmp/lab-teflon/fit/params.json" --to gltf -o "$tmp/named.gltf" --name "Teflon sheet/2" -q
+check "... 'Teflon_sheet_2'" python3 "$here/check_gltf_mesh.py" "$tmp/named.gltf" Teflon_sheet_2 "$diam"
 check "export the fit to Mitsuba 3" run 0 "mitsuba" export "$tmp/fit1/params.json" --to mitsuba -o "$tmp/m.xml"
 check "... Mitsuba's BRDF matches glint's within the stated residual" python3 "$here/check_export.py" "$tmp/fit1/params.json" "$tmp/m.xml"
 check "export the fit to pbrt-v4" run 0 "pbrt" export "$tmp/fit1/params.json" --to pbrt -o "$tmp/m.pbrt"

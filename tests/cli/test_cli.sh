@@ -186,6 +186,12 @@ check "... no folder" test ! -e "$tmp/fitx"
 check "render the fitted material from params.json" run 0 "" render "$tmp/fscene.json" --material "$tmp/fit1/params.json" -o "$tmp/refit.exr" -q
 check "... wrote it" test -s "$tmp/refit.exr"
 cp -r "$tmp/fit1" "$tmp/fit1.keep"
+# The naive method (every parameter at once, one pass) on a subsample:
+# its code under the sanitizers (naive-vs-three-pass compares the two).
+check "fit --method naive" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" --method naive --max-pixels 600 -o "$tmp/naive" --json -q
+check "... one pass, named naive" python3 -c "
+import json; r = json.load(open('$tmp/out'))
+assert r['method']['name'] == 'naive', r['method']"
 # Export: glTF refitted to the fitted BRDF, checked by an independent
 # evaluation of both models from their published equations.
 check "export the fit to glTF" run 0 "relative RMS difference" export "$tmp/fit1/params.json" --to gltf -o "$tmp/m.gltf"

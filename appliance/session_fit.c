@@ -216,6 +216,12 @@ int glint_session_fit(struct glint_fit_request *req,
 		in.lock[k] = -1;
 	int ret = choose_inputs(req, &in, &job->out_dir, out);
 	json_t *doc = NULL;
+	/* A session's (or run's) own fit folder holds its latest fit: a
+	 * fit of it replaces the previous one; a folder named with -o
+	 * follows the one overwrite rule (--force). */
+	if (ret == 0 &&
+	    (job->out_dir == in.rs.out || job->out_dir == in.fs[0].out))
+		job->replace = 1;
 	/* --wait on a session whose running fit then wrote its result into
 	 * the same folder: that result is the answer, not a second fit */
 	int taken = ret == 0 && in.fitted_meanwhile && job->out_dir &&

@@ -5,6 +5,7 @@
 #include "core/error.h"
 #include "core/formats.h"
 #include "core/log.h"
+#include "core/output.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -13,7 +14,7 @@
 void cmd_convert_help(void)
 {
 	printf("usage: glint convert IN OUT [--half] [--exposure EV] [--srgb] "
-	       "[--json]\n"
+	       "[--force] [--json]\n"
 	       "\n"
 	       "Read IN (.exr incl. DWAA/DWAB, .hdr, .pfm, .tif: float or "
 	       "16-bit linear)\nand write OUT (.exr, .hdr, .pfm, .tif: 32-bit "
@@ -33,6 +34,10 @@ void cmd_convert_help(void)
 	       "  --exposure EV  PNG exposure in stops (default: auto)\n"
 	       "  --allow-nonfinite  copy NaN/Inf values instead of "
 	       "failing\n"
+	       "  --force        replace OUT if glint wrote it (an existing "
+	       "OUT is refused\n"
+	       "                 without it; a file glint did not write, "
+	       "or IN, always)\n"
 	       "  --json         print a JSON result on stdout\n");
 }
 
@@ -42,13 +47,14 @@ int cmd_convert(int argc, char **argv)
 	struct glint_image *img;
 	const char *out = NULL;
 	double exposure = NAN;
-	int nonfinite = 0, srgb = 0;
+	int nonfinite = 0, srgb = 0, force = 0;
 	const struct cmd_opt opts[] = {
 		CMD_FLAG("srgb", 0, &srgb),
 		CMD_FLAG("half", 0, &wo.exr_half),
 		CMD_REAL("exposure", &exposure, -64, 64),
 		CMD_FLAG("allow-nonfinite", 0, &nonfinite),
 		CMD_STRING("output", 'o', &out),
+		CMD_FLAG("force", 0, &force),
 		{ 0 },
 	};
 	struct cmd_args a;
@@ -68,6 +74,9 @@ int cmd_convert(int argc, char **argv)
 	if (!out)
 		out = a.argv[1];
 	argv = a.argv;
+	const char *inputs[] = { argv[0], NULL };
+	if (glint_output_check(out, force, inputs) < 0)
+		return cmd_fail("convert");
 	/* To a float format the values become radiance: the one policy.
 	 * 8-bit to 8-bit (a PNG preview) copies them. */
 	int to_ldr = glint_image_encoded(out);

@@ -10,6 +10,7 @@
 #include "options.h"
 #include "fit/job.h"
 
+#include "core/output.h"
 #include "core/clock.h"
 #include "core/error.h"
 #include "core/log.h"
@@ -23,7 +24,7 @@
 void cmd_demo_help(void)
 {
 	printf("usage: glint demo [--material NAME] [--out DIR] [--noise] "
-	       "[--json]\n"
+	       "[--force] [--json]\n"
 	       "\n"
 	       "The whole job on the simulated rig: the simulator photographs "
 	       "a 10 cm sphere of\na material from the paper's Table 1 "
@@ -47,6 +48,9 @@ void cmd_demo_help(void)
 	       "                   of a noise-free HDR photo (saturated "
 	       "pixels get weight 0)\n"
 	       "  --out DIR        output folder (created if missing)\n"
+	       "  --force          replace a previous demo's photo and fit "
+	       "there (refused\n"
+	       "                   without it)\n"
 	       "  --threads N      worker threads (default: all CPUs)\n"
 	       "  --json           print the fit's params.json plus the "
 	       "truth on stdout\n"
@@ -61,7 +65,7 @@ int cmd_demo(int argc, char **argv)
 	struct glint_fit_job job = { 0 };
 	const struct glint_model *model;
 	double truth[GLINT_MAX_PARAMS];
-	int noise = 0, method = -1, ret;
+	int noise = 0, method = -1, force = 0, ret;
 
 	glint_fit_default_opts(&job.opts);
 	const struct cmd_opt opts[] = {
@@ -69,6 +73,7 @@ int cmd_demo(int argc, char **argv)
 		CMD_STRING("output", 'o', &dir),
 		CMD_CHOICE("method", &method, glint_fit_method_names),
 		CMD_FLAG("noise", 0, &noise),
+		CMD_FLAG("force", 0, &force),
 		CMD_INT("threads", &job.nthreads, 0, 256),
 		{ 0 },
 	};
@@ -93,6 +98,11 @@ int cmd_demo(int argc, char **argv)
 	    glint_material_load(table, material, &model, truth) < 0)
 		return cmd_fail("demo");
 	job.model = model; /* the demo fits the material's own model */
+	/* The one overwrite rule: the photo here, the fit's folder by its
+	 * own check. */
+	job.force = job.replace = force;
+	if (glint_output_check(photo_path, force, NULL) < 0)
+		return cmd_fail("demo");
 	if (mkdir(dir, 0777) < 0 && errno != EEXIST) {
 		glint_error_set(errno, "%s: cannot create folder: %s", dir,
 				strerror(errno));

@@ -1,6 +1,5 @@
 /* SPDX-License-Identifier: MIT */
 /* glint export: the fitted material in a renderer's model (export/export.h). */
-#define _POSIX_C_SOURCE 200809L /* lstat */
 #include "cmd.h"
 #include "options.h"
 
@@ -8,13 +7,13 @@
 #include "core/error.h"
 #include "core/json.h"
 #include "core/log.h"
+#include "core/output.h"
 #include "export/export.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 
 void cmd_export_help(void)
 {
@@ -67,7 +66,9 @@ void cmd_export_help(void)
 	       "metres (its absorption\n"
 	       "                    is per diameter; a fit's params.json "
 	       "records it)\n"
-	       "  --force           replace OUT\n"
+	       "  --force           replace OUT if glint wrote it (never "
+	       "another's file\n"
+	       "                    or the input)\n"
 	       "  --json            print the result as JSON\n");
 }
 
@@ -76,14 +77,9 @@ json_t *cmd_export_write(enum glint_export_format format,
 			 double diameter_m, const char *source,
 			 const char *name, const char *out, int force)
 {
-	struct stat st;
-	if (!force && lstat(out, &st) == 0) {
-		glint_error_set(EEXIST,
-				"%s exists: refusing to replace it (--force "
-				"to)",
-				out);
+	const char *inputs[] = { source, NULL };
+	if (glint_output_check(out, force, inputs) < 0)
 		return NULL;
-	}
 	struct glint_export e;
 	if (glint_export_refit(format, model, p, diameter_m, &e) < 0)
 		return NULL;

@@ -188,9 +188,12 @@ void cmd_fit_help(void)
 	       "                        a flat disc of the photo's mean "
 	       "colour); a refused\n"
 	       "                        fit's diagnostics go to OUT.refused\n"
-	       "  --force               write into OUT even when it holds "
-	       "files "
-	       "glint did not\n"
+	       "  --force               replace a previous result in OUT "
+	       "(refused without it;\n"
+	       "                        a session's own fit folder is "
+	       "replaced by its next fit),\n"
+	       "                        and write into OUT even when it "
+	       "holds files glint did not\n"
 	       "                        write: glint's own (its "
 	       "glint-outputs.txt) are replaced,\n"
 	       "                        the others kept; never an input of "
@@ -453,6 +456,7 @@ int cmd_fit(int argc, char **argv)
 	if ((ladder || job->ladder_knobs) && !(job->ladder > 0))
 		job->ladder = 0.5;
 	job->opts.progress = cmd_fit_progress;
+	job->replace = job->force;
 	req.args = a.argv;
 	req.nargs = a.argc;
 	for (int k = 0; k < wl.n; k++)

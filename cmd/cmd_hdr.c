@@ -14,6 +14,8 @@
 #include "core/error.h"
 #include "core/json.h"
 #include "core/log.h"
+#include "core/output.h"
+#include "core/path.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -50,7 +52,8 @@ void cmd_hdr_help(void)
 	       "\n8-bit photos (any camera) with --times or --times-file, or "
 	       "JPEG and TIFF\nphotos with their exposure times in EXIF: the "
 	       "camera's response\nis recovered (--response robertson, the "
-	       "default, or debevec), written to\nresponse.csv, and the "
+	       "default, or debevec), written to\nresponse.csv and drawn in "
+	       "response.png, and the "
 	       "photos merged; codes at the black floor and at 255 get\nno "
 	       "weight (no variance image for 8-bit input).\n\n"
 	       "  -o, --output DIR      output folder (default: the session; "
@@ -68,6 +71,13 @@ void cmd_hdr_help(void)
 	       "      --saturation DN   samples at or above this are clipped "
 	       "(default: 95 %% of\n"
 	       "                        the range above black)\n"
+	       "      --force           replace the files named above if "
+	       "glint wrote them\n"
+	       "                        (a session's own are replaced by "
+	       "its next merge)\n"
+	       "                        (existing ones are refused without "
+	       "it; another's files\n"
+	       "                        or the inputs, always)\n"
 	       "      --json            print a JSON result on stdout\n"
 	       "  -q, --quiet           no info messages\n"
 	       "\nA raw bracket whose frames disagree beyond their noise (a "
@@ -75,6 +85,25 @@ void cmd_hdr_help(void)
 	       "refused, naming the pair; nothing is merged.\n"
 	       "\nExit status: 0 done, 1 bad input (a mixed or moved bracket "
 	       "among it),\n2 bad command line.\n");
+}
+
+/* Each file hdr writes into folder out (names, NULL-terminated), by the
+ * one overwrite rule (core/output.h); the n inputs are never replaced. */
+static int outputs_check(const char *out, const char *const *names, int force,
+			 char **inputs, int n)
+{
+	char path[GLINT_PATH_MAX];
+	const char **in = calloc((size_t)n + 1, sizeof(*in));
+	int ret = in ? 0 : glint_error_set(ENOMEM, "out of memory");
+	for (int k = 0; k < n && in; k++)
+		in[k] = inputs[k];
+	for (int k = 0; ret == 0 && names[k]; k++) {
+		ret = glint_path_join(path, sizeof(path), out, names[k]);
+		if (ret == 0)
+			ret = glint_output_check(path, force, in);
+	}
+	free(in);
+	return ret;
 }
 
 static int ldr_main(char **files, int n, const char *times,
@@ -105,7 +134,7 @@ static int ldr_main(char **files, int n, const char *times,
 		return cmd_fail("hdr");
 	}
 	glint_log_info("%d photos (%s response%s, times from %s) -> "
-		       "%s/hdr.exr (%dx%d), response.csv",
+		       "%s/hdr.exr (%dx%d), response.csv and .png",
 		       n, method, info.iterations ? ", iterated" : "", source,
 		       out, info.width, info.height);
 	if (json)
@@ -124,7 +153,7 @@ int cmd_hdr(int argc, char **argv)
 	static const char *const responses[] = { "robertson", "debevec", NULL };
 	const char *out = NULL, *times = NULL, *times_file = NULL;
 	double cpe = NAN, rn = NAN, sat = NAN;
-	int response = 0, ret;
+	int response = 0, force = 0, ret;
 	const struct cmd_opt opts[] = {
 		CMD_STRING("output", 'o', &out),
 		CMD_REAL("dn-per-electron", &cpe, 1e-9, 1e9),
@@ -133,6 +162,7 @@ int cmd_hdr(int argc, char **argv)
 		CMD_STRING("times", 0, &times),
 		CMD_STRING("times-file", 0, &times_file),
 		CMD_CHOICE("response", &response, responses),
+		CMD_FLAG("force", 0, &force),
 		{ 0 },
 	};
 	struct cmd_args a;
@@ -156,6 +186,12 @@ int cmd_hdr(int argc, char **argv)
 		if (!out)
 			return cmd_usage_error("hdr",
 					       "8-bit photos need -o DIR");
+		static const char *const ldr_names[] = {
+			"hdr.exr",	"mask.png",	"hdr.png",
+			"response.csv", "response.png", NULL
+		};
+		if (outputs_check(out, ldr_names, force, argv, argc) < 0)
+			return cmd_fail("hdr");
 		return ldr_main(argv, argc, times, times_file, method, out,
 				json);
 	}
@@ -174,6 +210,10 @@ int cmd_hdr(int argc, char **argv)
 	 * its session.json). */
 	int is_session =
 		argc == 1 && !(stat(argv[0], &st) == 0 && S_ISREG(st.st_mode));
+	/* A session's own folder holds its latest merge (the rig's): a
+	 * merge of it there replaces it; a folder named with -o follows the
+	 * one overwrite rule. */
+	int own = is_session && !out;
 	if (is_session) {
 		ret = glint_session_noise(argv[0], &nm);
 		if (!out)
@@ -185,6 +225,13 @@ int cmd_hdr(int argc, char **argv)
 		n = argc;
 		ret = glint_frames_read((const char *const *)argv, n, &frames);
 	}
+	static const char *const all_names[] = { "hdr.exr",	"variance.exr",
+						 "weights.exr", "mask.png",
+						 "hdr.png",	"hdr.json",
+						 NULL };
+	if (ret == 0 && !own)
+		ret = outputs_check(out, all_names, force, argv,
+				    is_session ? 0 : argc);
 	if (!isnan(cpe))
 		nm.dn_per_electron = cpe;
 	if (!isnan(rn))

@@ -11,6 +11,7 @@
 #include "capture/probe/probe_register.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/output.h"
 #include "core/path.h"
 
 #include <errno.h>
@@ -90,10 +91,34 @@ void cmd_probe_help(void)
 	       "views are reliable; then\nthe views are blended, each "
 	       "weighted by its mask x sampling density (the\n-mask.png and "
 	       "-density.exr written by unwrap, when present).\n"
+	       "\nEvery subcommand refuses an existing output unless --force, "
+	       "and replaces\nonly files glint wrote (never another's, "
+	       "never an input).\n"
 	       "\nEvery subcommand takes light: an 8-bit image (.png, .jpg, "
 	       "...) is refused\nas not radiance, unless --srgb (then "
 	       "linearised through the sRGB curve).\n"
 	       "\nExit status: 0 done, 1 bad input, 2 bad command line.\n");
+}
+
+/* OUT and its siblings (OUT less its extension, then each suffix; ""
+ * is OUT itself) by the one overwrite rule (core/output.h), the input
+ * never replaced. */
+static int outputs_check(const char *out, const char *const *suffixes,
+			 int force, const char *input)
+{
+	const char *inputs[] = { input, NULL };
+	char path[GLINT_PATH_MAX];
+	for (int k = 0; suffixes[k]; k++) {
+		int ret = *suffixes[k] ? glint_path_sibling(path, sizeof(path),
+							    out, suffixes[k])
+				       : 0;
+		if (ret == 0)
+			ret = glint_output_check(*suffixes[k] ? path : out,
+						 force, inputs);
+		if (ret < 0)
+			return ret;
+	}
+	return 0;
 }
 
 /* N numbers separated by ',' or 'x' ("640,480", "1024x512") into a
@@ -159,7 +184,7 @@ static int unwrap_main(int argc, char **argv)
 	const char *out = NULL;
 	struct numbers f = { .n = 1 }, pp = { .n = 2 }, ball = { .n = 3 },
 		       chrome = { .n = 2 }, size = { .n = 2 };
-	int srgb = 0;
+	int srgb = 0, force = 0;
 
 	glint_unwrap_default_opts(&o);
 	const struct cmd_opt opts[] = {
@@ -176,6 +201,7 @@ static int unwrap_main(int argc, char **argv)
 		CMD_FLAG("olpf", 0, &o.olpf),
 		CMD_FLAG("no-fill", 0, &o.no_fill),
 		CMD_FLAG("srgb", 0, &srgb),
+		CMD_FLAG("force", 0, &force),
 		CMD_STRING("output", 'o', &out),
 		{ 0 },
 	};
@@ -214,6 +240,10 @@ static int unwrap_main(int argc, char **argv)
 						"required");
 	struct glint_image *photo = NULL;
 	int w, h;
+	static const char *const siblings[] = { "", "-mask.png", "-density.exr",
+						"-sources.json", NULL };
+	if (outputs_check(out, siblings, force, argv[0]) < 0)
+		return cmd_fail("probe");
 	int ret = glint_image_read_radiance(argv[0], srgb, &photo);
 	if (ret == 0 && (ret = glint_probe_find_ball(photo, have_ball, &o)) < 0)
 		glint_error_prefix(ret, "%s", argv[0]);
@@ -242,12 +272,13 @@ static int convert_main(int argc, char **argv)
 				to = GLINT_PROBE_LATLONG;
 	const char *fs = NULL, *ts = NULL;
 	struct numbers size = { .n = 2 };
-	int srgb = 0;
+	int srgb = 0, force = 0;
 	const struct cmd_opt opts[] = {
 		CMD_STRING("from", 0, &fs),
 		CMD_STRING("to", 0, &ts),
 		CMD_CALL("size", &size, parse_numbers),
 		CMD_FLAG("srgb", 0, &srgb),
+		CMD_FLAG("force", 0, &force),
 		{ 0 },
 	};
 	struct cmd_args a;
@@ -265,6 +296,9 @@ static int convert_main(int argc, char **argv)
 	if (glint_probe_format_parse(fs, &from) < 0 ||
 	    glint_probe_format_parse(ts, &to) < 0)
 		return cmd_usage_error("probe", "%s", glint_error_msg());
+	static const char *const same[] = { "", NULL };
+	if (outputs_check(argv[1], same, force, argv[0]) < 0)
+		return cmd_fail("probe");
 	struct glint_image *src = NULL, *dst = NULL;
 	int ret = glint_image_read_radiance(argv[0], srgb, &src);
 	if (ret == 0 && (ret = glint_probe_convert(src, from, to, (int)v[0],
@@ -284,13 +318,11 @@ static int register_main(int argc, char **argv)
 {
 	const char *out = NULL, *points = NULL;
 	double yaw = 90;
-	int srgb = 0;
+	int srgb = 0, force = 0;
 	const struct cmd_opt opts[] = {
-		CMD_REAL("yaw", &yaw, -360, 360),
-		CMD_FLAG("srgb", 0, &srgb),
-		CMD_STRING("points", 0, &points),
-		CMD_STRING("output", 'o', &out),
-		{ 0 },
+		CMD_REAL("yaw", &yaw, -360, 360), CMD_FLAG("srgb", 0, &srgb),
+		CMD_STRING("points", 0, &points), CMD_FLAG("force", 0, &force),
+		CMD_STRING("output", 'o', &out),  { 0 },
 	};
 	struct cmd_args args;
 	int pr = cmd_options_parse("probe register", cmd_probe_help, opts, argc,
@@ -303,6 +335,10 @@ static int register_main(int argc, char **argv)
 	if (argc != 2 || !out)
 		return cmd_usage_error("probe", "register: expected ENV1 ENV2 "
 						"-o OUT");
+	static const char *const same[] = { "", NULL };
+	if (outputs_check(out, same, force, argv[0]) < 0 ||
+	    outputs_check(out, same, force, argv[1]) < 0)
+		return cmd_fail("probe");
 	struct glint_image *e1 = NULL, *e2 = NULL, *w1, *w2, *blend = NULL;
 	struct mat3 r;
 	double quality = NAN;

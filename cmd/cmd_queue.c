@@ -43,7 +43,9 @@ void cmd_queue_help(void)
 	       "  --root DIR       the captures folder (default: the rig "
 	       "file's \"output\")\n"
 	       "  --config FILE    rig file to take the root from (default: "
-	       "data/rig-sim.json)\n"
+	       "/etc/glint/rig.json\n"
+	       "                   installed, data/rig-sim.json from a "
+	       "build folder)\n"
 	       "  --until-empty    run: stop when no job is left\n"
 	       "  --json           JSON on stdout\n"
 	       "  -q, --quiet      no info messages\n");

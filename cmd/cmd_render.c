@@ -7,6 +7,7 @@
 #include "core/error.h"
 #include "core/formats.h"
 #include "core/log.h"
+#include "core/output.h"
 #include "fit/render/render.h"
 
 #include <errno.h>
@@ -63,6 +64,11 @@ void cmd_render_help(void)
 	       "32)\n"
 	       "      --brdf-samples N   BRDF samples per hit (default 32)\n"
 	       "      --no-background black where the sphere is not\n"
+	       "      --force         replace outputs glint wrote (existing "
+	       "ones are refused\n"
+	       "                      without it; files glint did not write "
+	       "or the inputs,\n"
+	       "                      always)\n"
 	       "      --threads N     worker threads (default: all CPUs)\n"
 	       "      --json          print a JSON result on stdout, logs as "
 	       "JSON lines\n"
@@ -125,7 +131,7 @@ int cmd_render(int argc, char **argv)
 					.background = 1,
 					.exposure = NAN };
 	const char *material = NULL, *entry = NULL, *paper = NULL;
-	int spp = 0, ls = -1, bs = -1, nobg = 0, srgb = 0;
+	int spp = 0, ls = -1, bs = -1, nobg = 0, srgb = 0, force = 0;
 	const char *env = NULL;
 	struct rotation rot = { 0 };
 	double env_scale = NAN;
@@ -147,6 +153,7 @@ int cmd_render(int argc, char **argv)
 		CMD_INT("light-samples", &ls, 0, 1 << 16),
 		CMD_INT("brdf-samples", &bs, 0, 1 << 16),
 		CMD_FLAG("no-background", 0, &nobg),
+		CMD_FLAG("force", 0, &force),
 		CMD_INT("threads", &job.nthreads, 0, 256),
 		{ 0 },
 	};
@@ -178,6 +185,13 @@ int cmd_render(int argc, char **argv)
 	}
 	if (glint_material_load(material, entry, &job.model, job.params) < 0)
 		return cmd_fail("render");
+	/* Every output checked before any work. */
+	const char *inputs[] = { a.argv[0], material, job.scene.env_path,
+				 NULL };
+	const char *outs[] = { job.out_exr, job.out_png, job.out_coverage };
+	for (int k = 0; k < 3; k++)
+		if (outs[k] && glint_output_check(outs[k], force, inputs) < 0)
+			return cmd_fail("render");
 	if (spp)
 		job.scene.spp = spp;
 	if (ls >= 0)

@@ -5,11 +5,13 @@
 
 #include "core/error.h"
 #include "core/log.h"
+#include "core/path.h"
 
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #ifndef GLINT_VERSION
 #define GLINT_VERSION "dev"
@@ -57,7 +59,13 @@ const char *cmd_rig_config(char *buf, size_t n, const char *config)
 	if (config)
 		snprintf(buf, n, "%s", config);
 	else
-		snprintf(buf, n, "%s/rig-sim.json", glint_data_dir());
+		snprintf(buf, n, "%s", glint_rig_config_default());
+	if (!config && access(buf, F_OK) < 0)
+		glint_log_warn("no rig file at %s (the installed appliance's): "
+			       "copy rig.example.json beside it to rig.json "
+			       "and edit it, or give --config FILE (the "
+			       "simulated rig: %s/rig-sim.json)",
+			       buf, glint_data_dir());
 	return buf;
 }
 

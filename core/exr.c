@@ -9,6 +9,7 @@
 #include "exr_cxx.h"
 #include "exr_internal.h"
 #include "formats.h"
+#include "output.h"
 
 #include <Imath/half.h>
 #include <OpenEXR/openexr.h>
@@ -451,6 +452,31 @@ int glint_exr_size(const char *path, int *width, int *height)
 	return ret;
 }
 
+int glint_exr_software(const char *path, char *buf, size_t n)
+{
+	exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+	exr_context_t ctx = NULL;
+	const char *s = NULL;
+	int32_t len = 0;
+	exr_result_t rv;
+	int ret = -ENOENT;
+
+	init.error_handler_fn = exr_error_cb;
+	exr_last_msg[0] = '\0';
+	rv = exr_start_read(&ctx, path, &init);
+	if (rv != EXR_ERR_SUCCESS)
+		ret = exr_fail(path, "not a readable OpenEXR file", rv);
+	else if (exr_attr_get_string(ctx, 0, "software", &len, &s) ==
+			 EXR_ERR_SUCCESS &&
+		 s && len >= 0) {
+		snprintf(buf, n, "%.*s", (int)len, s);
+		ret = 0;
+	}
+	if (ctx)
+		exr_finish(&ctx);
+	return ret;
+}
+
 int glint_exr_read(const char *path, struct glint_image **out)
 {
 	return glint_exr_read_window(path, NULL, out);
@@ -588,6 +614,9 @@ int glint_exr_write(const char *path, const struct glint_image *img,
 		rv = exr_initialize_required_attr_simple(ctx, part, img->width,
 							 img->height,
 							 EXR_COMPRESSION_ZIP);
+	if (rv == EXR_ERR_SUCCESS)
+		rv = exr_attr_set_string(ctx, part, "software",
+					 GLINT_OUTPUT_SOFTWARE);
 	if (rv == EXR_ERR_SUCCESS && opts->frame_width) {
 		rv = exr_set_data_window(ctx, part, &dw);
 		if (rv == EXR_ERR_SUCCESS)

@@ -24,12 +24,16 @@
 int glint_exr_read(const char *path, struct glint_image **out);
 /* The data window's size, from the header alone. */
 int glint_exr_size(const char *path, int *width, int *height);
+/* The header's "software" string attribute (who wrote the file) into
+ * buf: 0, -ENOENT without one, or the error met reading the header. */
+int glint_exr_software(const char *path, char *buf, size_t n);
 /* Only a window of the data window (which it must lie in), decoding only
  * the chunks (scanline blocks or tiles) it touches. */
 int glint_exr_read_window(const char *path,
 			  const struct glint_image_window *win,
 			  struct glint_image **out);
-/* ZIP-compressed scanline EXR with R, G, B as 32-bit float or half
+/* ZIP-compressed scanline EXR with R, G, B as 32-bit float or half,
+ * "software" glint
  * (opts->exr_half); the data window and display window as opts says
  * (glint_write_opts), checked to lie inside the frame. */
 int glint_exr_write(const char *path, const struct glint_image *img,
@@ -50,10 +54,14 @@ int glint_pfm_write(const char *path, const struct glint_image *img);
  */
 int glint_png_write(const char *path, const struct glint_image *img,
 		    double exposure);
+/* A PNG's "Software" text (tEXt, zTXt or iTXt) into buf: 0, -ENOENT
+ * without one, or the error met reading it. */
+int glint_png_software(const char *path, char *buf, size_t n);
 
 /* A PNG written atomically, rows from get_row(ctx, y, row): bit_depth 8 or
  * 16 (big-endian samples, as PNG stores them), 1 or 3 channels, an sRGB
- * chunk, level-1 compression when `fast`, and one optional iTXt chunk. */
+ * chunk, level-1 compression when `fast`, a "Software" text naming glint
+ * and one optional text chunk more. */
 struct glint_png_layout {
 	int bit_depth, channels, srgb, fast;
 	const char *text_key, *text;

@@ -3,6 +3,7 @@
 #include "path.h"
 #include "error.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <stdarg.h>
@@ -83,18 +84,53 @@ int glint_path_self(char *buf, size_t n)
 	return 0;
 }
 
+int glint_in_build_tree(void)
+{
+	char exe[GLINT_PATH_MAX];
+	size_t root = strlen(GLINT_BUILD_ROOT);
+
+	return glint_path_self(exe, sizeof(exe)) == 0 && strlen(exe) > root &&
+	       !strncmp(exe, GLINT_BUILD_ROOT, root) && exe[root] == '/';
+}
+
+/* An installed path (absolute, as configured) under the root the binary
+ * runs from: the binary at ROOT + the configured bindir puts it at ROOT +
+ * path (ROOT empty for an ordinary install). */
+static void installed(char *buf, size_t n, const char *path)
+{
+	char exe[GLINT_PATH_MAX], dir[GLINT_PATH_MAX];
+	size_t lb = strlen(GLINT_INSTALL_BIN_DIR), ld;
+
+	snprintf(buf, n, "%s", path);
+	if (glint_path_self(exe, sizeof(exe)) < 0 ||
+	    glint_path_dirname(dir, sizeof(dir), exe) < 0)
+		return;
+	ld = strlen(dir);
+	if (ld > lb && !strcmp(dir + ld - lb, GLINT_INSTALL_BIN_DIR))
+		snprintf(buf, n, "%.*s%s", (int)(ld - lb), dir, path);
+}
+
 const char *glint_data_dir(void)
 {
-	static char exe[GLINT_PATH_MAX];
+	static char data[GLINT_PATH_MAX];
 	const char *env = getenv("GLINT_DATA_DIR");
-	size_t root = strlen(GLINT_BUILD_ROOT);
 
 	if (env && env[0])
 		return env;
-	if (glint_path_self(exe, sizeof(exe)) == 0 && strlen(exe) > root &&
-	    !strncmp(exe, GLINT_BUILD_ROOT, root) && exe[root] == '/')
+	if (glint_in_build_tree())
 		return GLINT_SOURCE_DATA_DIR;
-	return GLINT_INSTALL_DATA_DIR;
+	installed(data, sizeof(data), GLINT_INSTALL_DATA_DIR);
+	return data;
+}
+
+const char *glint_rig_config_default(void)
+{
+	static char conf[GLINT_PATH_MAX];
+
+	if (glint_in_build_tree())
+		return GLINT_SOURCE_DATA_DIR "/rig-sim.json";
+	installed(conf, sizeof(conf), GLINT_INSTALL_CONF_DIR "/rig.json");
+	return conf;
 }
 
 int glint_data_path(char *buf, size_t n, const char *name)
@@ -164,4 +200,18 @@ int glint_check_regular(const char *path)
 		return fd;
 	close(fd);
 	return 0;
+}
+
+int glint_path_is_empty_dir(const char *path)
+{
+	DIR *d = opendir(path);
+	struct dirent *e;
+	int empty = 1;
+
+	if (!d)
+		return errno == ENOENT;
+	while (empty && (e = readdir(d)))
+		empty = !strcmp(e->d_name, ".") || !strcmp(e->d_name, "..");
+	closedir(d);
+	return empty;
 }

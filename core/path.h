@@ -57,6 +57,10 @@ FILE *glint_fopen_regular(const char *path, const char *mode);
  * negative errno naming the file. */
 int glint_check_regular(const char *path);
 
+/* 1 when path does not exist or is a folder with no entries; 0 when it
+ * holds any (or is not a folder). */
+int glint_path_is_empty_dir(const char *path);
+
 /* The folder part of `path` ("." when it has none) into buf. */
 int glint_path_dirname(char *buf, size_t n, const char *path);
 
@@ -68,9 +72,22 @@ int glint_path_self(char *buf, size_t n);
  * The folder of glint's own data (the sim rig's map, Table 1, rig files):
  * $GLINT_DATA_DIR when set; else the source tree's data/ for a binary run
  * from its build folder (tests, benches, a checkout), else the installed
- * one (meson's datadir/glint).  Static storage; no trailing slash.
+ * one (meson's datadir/glint) found relative to the installed binary: a
+ * tree installed under another root (a DESTDIR, an image being built)
+ * finds its own.  Static storage; no trailing slash.
  */
 const char *glint_data_dir(void);
+
+/* 1 for a binary run from its build folder, 0 for an installed one. */
+int glint_in_build_tree(void);
+
+/*
+ * The rig file every rig command takes without --config: the simulated
+ * rig (data/rig-sim.json) for a binary run from its build folder, the
+ * installed appliance's (meson's sysconfdir/glint/rig.json, relative to
+ * the installed binary as above) otherwise.  Static storage.
+ */
+const char *glint_rig_config_default(void);
 
 /* Into buf: glint_data_dir() joined with name. */
 int glint_data_path(char *buf, size_t n, const char *name);

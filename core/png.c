@@ -4,6 +4,7 @@
 #include "error.h"
 #include "path.h"
 #include "formats.h"
+#include "output.h"
 #include "vec.h"
 
 #include <png.h>
@@ -100,14 +101,17 @@ int glint_png_write_rows(const char *path, int w, int h,
 		     PNG_FILTER_TYPE_DEFAULT);
 	if (l->srgb)
 		png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+	png_text text[2];
+	memset(text, 0, sizeof(text));
+	text[0].compression = PNG_TEXT_COMPRESSION_NONE;
+	text[0].key = (png_charp) "Software";
+	text[0].text = (png_charp)GLINT_OUTPUT_SOFTWARE;
 	if (l->text_key) {
-		png_text text;
-		memset(&text, 0, sizeof(text));
-		text.compression = PNG_ITXT_COMPRESSION_NONE;
-		text.key = (png_charp)l->text_key;
-		text.text = (png_charp)l->text;
-		png_set_text(png, info, &text, 1);
+		text[1].compression = PNG_ITXT_COMPRESSION_NONE;
+		text[1].key = (png_charp)l->text_key;
+		text[1].text = (png_charp)l->text;
 	}
+	png_set_text(png, info, text, l->text_key ? 2 : 1);
 	png_write_info(png, info);
 	for (int y = 0; y < h; y++) {
 		get_row(ctx, y, row);
@@ -207,6 +211,44 @@ int glint_png_check_chunks(const char *path)
 out:
 	fclose(fp);
 	return ret;
+}
+
+int glint_png_software(const char *path, char *buf, size_t n)
+{
+	int ret = glint_png_check_chunks(path);
+	if (ret < 0)
+		return ret;
+	FILE *fp = glint_fopen_regular(path, "rb");
+	if (!fp)
+		return -errno;
+	png_structp png =
+		png_create_read_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+	png_infop info = png ? png_create_info_struct(png) : NULL;
+	if (!info) {
+		png_destroy_read_struct(&png, NULL, NULL);
+		fclose(fp);
+		return glint_error_set(ENOMEM, "%s: out of memory", path);
+	}
+	volatile int res = -ENOENT; /* set after setjmp */
+	if (setjmp(png_jmpbuf(png))) {
+		res = glint_error_set(EIO, "%s: not a readable PNG", path);
+	} else {
+		/* The header's chunks only (texts before the image data). */
+		png_set_chunk_malloc_max(png, 1 << 20);
+		png_init_io(png, fp);
+		png_read_info(png, info);
+		png_textp t = NULL;
+		int nt = png_get_text(png, info, &t, NULL);
+		for (int k = 0; k < nt; k++)
+			if (!strcmp(t[k].key, "Software") && t[k].text) {
+				snprintf(buf, n, "%s", t[k].text);
+				res = 0;
+				break;
+			}
+	}
+	png_destroy_read_struct(&png, &info, NULL);
+	fclose(fp);
+	return res;
 }
 
 int glint_png_read_rgb8(const char *path, int *w, int *h, uint8_t **px)

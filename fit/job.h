@@ -47,6 +47,10 @@ struct glint_fit_job {
 	 * write: glint's own are replaced, the others kept (never an input
 	 * of this run, never a file of someone else's of a name it writes) */
 	int force;
+	/* replace a previous result (a folder of glint's files alone) in
+	 * out_dir; without it one is refused (the one overwrite rule,
+	 * core/output.h) */
+	int replace;
 	/* The material's name in params.json and the exports; NULL:
 	 * from out_dir (glint_export_name_from_path: a session's fit is
 	 * named after the session). */

@@ -45,9 +45,10 @@ static int write_view(struct glint_atomic_dir *ad, int k,
 	double mean[2][GLINT_MISFIT_BANDS], se[2][GLINT_MISFIT_BANDS];
 	long px[2][GLINT_MISFIT_BANDS];
 	struct glint_compare_plot plots[2] = {
-		{ "VIEW ANGLE", GLINT_MISFIT_BANDS, ve, mean[0], se[0], px[0] },
-		{ "MIRROR ANGLE", GLINT_MISFIT_BANDS, me, mean[1], se[1],
-		  px[1] },
+		{ "VIEW ANGLE", "DEG FROM VIEW", GLINT_MISFIT_BANDS, ve,
+		  mean[0], se[0], px[0] },
+		{ "MIRROR ANGLE", "DEG FROM MIRROR", GLINT_MISFIT_BANDS, me,
+		  mean[1], se[1], px[1] },
 	};
 	for (int b = 0; mf && b < GLINT_MISFIT_BANDS; b++) {
 		const struct glint_misfit_band *band[2] = { &mf->view[b],
@@ -219,6 +220,12 @@ int job_check_outputs(const struct glint_fit_job *job)
 	char dir[GLINT_PATH_MAX];
 	int ret = glint_atomic_dir_check(job->out_dir, output_names(), NULL,
 					 inputs, job->force);
+	if (!ret && !job->replace && !glint_path_is_empty_dir(job->out_dir))
+		ret = glint_error_set(EEXIST,
+				      "%s holds a previous result: refusing to "
+				      "replace it (--force replaces glint's "
+				      "files there)",
+				      job->out_dir);
 
 	if (!ret)
 		ret = glint_path_fmt(dir, sizeof(dir), "%s.refused",

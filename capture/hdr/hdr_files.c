@@ -10,7 +10,9 @@
 #include "core/error.h"
 #include "core/exif.h"
 #include "core/formats.h"
+#include "core/output.h"
 #include "core/path.h"
+#include "core/plot.h"
 
 #include <errno.h>
 #include <math.h>
@@ -131,8 +133,12 @@ static int read_stack(const char *const *files, int n, uint8_t **img, int *w,
 
 static int write_response(const char *out, const double resp[256][3])
 {
-	char path[GLINT_PATH_MAX], csv[256 * 64];
-	size_t k = 0;
+	char path[GLINT_PATH_MAX], csv[256 * 64 + 128];
+	/* One comment line (numpy's loadtxt and pandas skip it): the marker
+	 * of a file glint wrote (core/output.h). */
+	size_t k = (size_t)snprintf(csv, sizeof(csv),
+				    "# written by glint: camera response "
+				    "g(z) for z = 0..255, R,G,B\n");
 	int ret = glint_path_join(path, sizeof(path), out, "response.csv");
 
 	for (int z = 0; z < 256; z++)
@@ -142,9 +148,96 @@ static int write_response(const char *out, const double resp[256][3])
 	return ret < 0 ? ret : glint_atomic_write_file(path, csv, k);
 }
 
+/* The response as a picture (response.png): log2 of the exposure that
+ * makes each code value, per channel, relative to code 128's, against
+ * the code value; labelled axes, a legend and the method's name. */
+static int write_response_png(const char *out, const double resp[256][3],
+			      const char *method)
+{
+	enum { W = 560, H = 380, L = 64, R = 16, T = 34, B = 48 };
+	static const uint8_t axis[3] = { 120, 120, 120 };
+	static const uint8_t grid[3] = { 225, 225, 225 };
+	static const uint8_t rgb[3][3] = { { 200, 30, 30 },
+					   { 30, 150, 40 },
+					   { 40, 70, 210 } };
+	static const char *const names[3] = { "R", "G", "B" };
+	double lo = INFINITY, hi = -INFINITY, y[256][3];
+	char path[GLINT_PATH_MAX], buf[64];
+	struct glint_canvas cv;
+
+	for (int z = 0; z < 256; z++)
+		for (int c = 0; c < 3; c++) {
+			y[z][c] = resp[z][c] > 0 ? log2(resp[z][c]) : NAN;
+			if (isfinite(y[z][c])) {
+				lo = fmin(lo, y[z][c]);
+				hi = fmax(hi, y[z][c]);
+			}
+		}
+	if (!(hi > lo)) {
+		lo = -1;
+		hi = 1;
+	}
+	lo = floor(lo);
+	hi = ceil(hi);
+	int ret = glint_path_join(path, sizeof(path), out, "response.png");
+	if (ret == 0)
+		ret = glint_canvas_init(&cv, W, H);
+	if (ret < 0)
+		return ret;
+	int pw = W - L - R, ph = H - T - B;
+	/* Grid and ticks: every 32 codes; every stop (or every k stops). */
+	int step = (int)ceil((hi - lo) / 12);
+	for (int k = (int)lo; k <= (int)hi; k += step) {
+		int py = T + ph - (int)lrint((k - lo) / (hi - lo) * ph);
+		glint_canvas_fill(&cv, L, py, L + pw, py, grid);
+		snprintf(buf, sizeof(buf), "%d", k);
+		glint_canvas_text(&cv, L - 6 - (int)strlen(buf) * 6, py - 3, 1,
+				  buf);
+	}
+	for (int z = 0; z <= 256; z += 32) {
+		int px = L + (int)lrint(fmin(z, 255) / 255.0 * pw);
+		glint_canvas_fill(&cv, px, T, px, T + ph, grid);
+		snprintf(buf, sizeof(buf), "%d", z < 256 ? z : 255);
+		glint_canvas_text(&cv, px - (int)strlen(buf) * 3, T + ph + 6, 1,
+				  buf);
+	}
+	glint_canvas_fill(&cv, L, T, L, T + ph, axis);
+	glint_canvas_fill(&cv, L, T + ph, L + pw, T + ph, axis);
+	for (int c = 0; c < 3; c++) {
+		int px0 = -1, py0 = -1;
+		for (int z = 0; z < 256; z++) {
+			if (!isfinite(y[z][c])) {
+				px0 = -1;
+				continue;
+			}
+			int px = L + (int)lrint(z / 255.0 * pw);
+			int py = T + ph -
+				 (int)lrint((y[z][c] - lo) / (hi - lo) * ph);
+			if (px0 >= 0)
+				glint_canvas_line(&cv, px0, py0, px, py,
+						  rgb[c]);
+			px0 = px;
+			py0 = py;
+		}
+		/* The legend, top left inside the plot. */
+		int lx = L + 10 + 40 * c, ly = T + 8;
+		glint_canvas_fill(&cv, lx, ly + 3, lx + 14, ly + 4, rgb[c]);
+		glint_canvas_text(&cv, lx + 18, ly, 1, names[c]);
+	}
+	snprintf(buf, sizeof(buf), "CAMERA RESPONSE (%s)",
+		 !strcmp(method, "debevec") ? "DEBEVEC-MALIK" : "ROBERTSON");
+	glint_canvas_text(&cv, L, 8, 2, buf);
+	glint_canvas_text(&cv, L + pw / 2 - 15 * 6 / 2, H - 18, 1,
+			  "PIXEL CODE VALUE");
+	glint_canvas_text(&cv, 4, T - 12, 1, "LOG2 EXPOSURE, CODE 128 = 0");
+	ret = glint_canvas_write_png(&cv, path);
+	glint_canvas_free(&cv);
+	return ret;
+}
+
 static int write_ldr_result(const char *out, struct glint_image *rad,
 			    struct glint_image *valid,
-			    const double resp[256][3])
+			    const double resp[256][3], const char *method)
 {
 	static const char *const names[] = { "hdr.exr", "mask.png", "hdr.png" };
 	struct glint_image *imgs[] = { rad, valid, rad };
@@ -160,7 +253,8 @@ static int write_ldr_result(const char *out, struct glint_image *rad,
 		if (ret < 0)
 			return ret;
 	}
-	return write_response(out, resp);
+	int ret = write_response(out, resp);
+	return ret < 0 ? ret : write_response_png(out, resp, method);
 }
 
 int glint_ldr_merge_files(const char *const *files, int n, const double *t,
@@ -190,7 +284,7 @@ int glint_ldr_merge_files(const char *const *files, int n, const double *t,
 	if (ret == 0)
 		ret = glint_ldr_merge(&s, resp, NULL, &rad, &valid);
 	if (ret == 0)
-		ret = write_ldr_result(out, rad, valid, resp);
+		ret = write_ldr_result(out, rad, valid, resp, method);
 	for (int i = 0; img && i < n; i++)
 		free(img[i]);
 	free(img);
@@ -226,16 +320,17 @@ int glint_hdr_report_write(const char *out, int frames, int width, int height,
 			json_pack("{s:i, s:I, s:f}", "pair", i, "compared",
 				  (json_int_t)rep->compared[i],
 				  "disagree_fraction", rep->disagree[i]));
-	json_t *res = json_pack(
-		"{s:s, s:i, s:i, s:i, s:I, s:I, s:I, s:b, s:o, "
-		"s:{s:f, s:f, s:f}}",
-		"output", out, "frames", frames, "width", width, "height",
-		height, "valid_pixels", (json_int_t)valid_px, "clipped_sites",
-		(json_int_t)rep->invalid_sites, "dark_sites",
-		(json_int_t)rep->dark_sites, "moved", rep->moved, "motion",
-		pairs, "noise_model", "dn_per_electron", nm->dn_per_electron,
-		"read_noise_e", nm->read_noise_e, "saturation_dn",
-		nm->saturation_dn);
+	json_t *res =
+		json_pack("{s:s, s:s, s:i, s:i, s:i, s:I, s:I, s:I, s:b, s:o, "
+			  "s:{s:f, s:f, s:f}}",
+			  "generator", GLINT_OUTPUT_SOFTWARE, "output", out,
+			  "frames", frames, "width", width, "height", height,
+			  "valid_pixels", (json_int_t)valid_px, "clipped_sites",
+			  (json_int_t)rep->invalid_sites, "dark_sites",
+			  (json_int_t)rep->dark_sites, "moved", rep->moved,
+			  "motion", pairs, "noise_model", "dn_per_electron",
+			  nm->dn_per_electron, "read_noise_e", nm->read_noise_e,
+			  "saturation_dn", nm->saturation_dn);
 	char *text = res ? json_dumps(res, JSON_INDENT(2)) : NULL;
 	ret = text ? glint_path_join(path, sizeof(path), out, "hdr.json")
 		   : glint_error_set(ENOMEM, "out of memory");

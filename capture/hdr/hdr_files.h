@@ -41,7 +41,9 @@ struct glint_ldr_merge_info {
  * times: glint_ldr_check_order) with the response recovered by `method`
  * ("robertson" or "debevec"), and write into folder `out` (made if
  * missing): hdr.exr, mask.png, hdr.png (a tone-mapped preview) and
- * response.csv (256 rows of r,g,b).  Each file is written atomically.
+ * response.csv (a comment line, then 256 rows of r,g,b) and response.png
+ * (its plot, log2 exposure against code value).  Each file is written
+ * atomically.
  */
 int glint_ldr_merge_files(const char *const *files, int n, const double *t,
 			  const char *method, const char *out,

@@ -7,6 +7,7 @@
 #include "capture/probe/probe_sources.h"
 #include "capture/probe/probe_internal.h"
 
+#include "core/output.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/json.h"
@@ -514,6 +515,8 @@ int glint_probe_sources_write(const char *path, const char *photo,
 	json_t *doc = json_object(), *arr = json_array();
 	double ty = flux_y(s->total_flux);
 
+	json_object_set_new(doc, "generator",
+			    json_string(GLINT_OUTPUT_SOFTWARE));
 	json_object_set_new(doc, "photo", json_string(photo ? photo : ""));
 	json_object_set_new(
 		doc, "what",
@@ -580,8 +583,8 @@ int glint_probe_sources_write(const char *path, const char *photo,
 
 int glint_probe_sources_read(const char *path, struct glint_light_sources *s)
 {
-	static const char *const top[] = { "photo", "what", "total_flux",
-					   "sources", NULL };
+	static const char *const top[] = { "generator",	 "photo",   "what",
+					   "total_flux", "sources", NULL };
 	const struct glint_range any = { -1e30, 1e30, 0, 0 };
 	const struct glint_range pos = { 0, 1e30, 0, 0 };
 	json_t *doc, *arr;

@@ -23,10 +23,13 @@
  * its mean residual and standard error, drawn as a dot with a +-2 standard
  * error bar (red where the mean is more than 5 standard errors from 0)
  * about a zero line.  edges has n + 1 values (degrees); bands with fewer
- * than 20 pixels are not drawn.  title: upper-case letters, digits.
+ * than 20 pixels are not drawn.  title and xlabel (the x axis's name;
+ * NULL: "DEGREES"): capitals, digits and punctuation.  The y axis is
+ * labelled "MEAN RENDER - PHOTO" with its range, and a legend under the
+ * plots says what the marks are.
  */
 struct glint_compare_plot {
-	const char *title;
+	const char *title, *xlabel;
 	int n;
 	const double *edges, *mean, *se;
 	const long *pixels;

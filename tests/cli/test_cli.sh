@@ -306,9 +306,9 @@ cat >"$tmp/wide.json" <<JSON
  "sphere": {"diameter_m": 0.1, "circle_px": {"cx": 48, "cy": 48, "r": 30}},
  "environment": {"path": "env.exr"}}
 JSON
-check "fit: photo and scene sizes differ" run 1 "photo is 96x96: expected the scene camera's 100x96" fit "$tmp/wide.json" "$tmp/photo.exr" -o "$tmp/fit1"
+check "fit: photo and scene sizes differ" run 1 "photo is 96x96: expected the scene camera's 100x96" fit "$tmp/wide.json" "$tmp/photo.exr" -o "$tmp/fit1" --force
 sed 's/"cx": 48, "cy": 48, "r": 30/"cx": 14, "cy": 14, "r": 10/' "$tmp/fscene.json" >"$tmp/elsewhere.json"
-check "fit: no sphere where the scene says" run 1 "the photo shows the backdrop, not a sphere" fit "$tmp/elsewhere.json" "$tmp/photo.exr" -o "$tmp/fit1"
+check "fit: no sphere where the scene says" run 1 "the photo shows the backdrop, not a sphere" fit "$tmp/elsewhere.json" "$tmp/photo.exr" -o "$tmp/fit1" --force
 check "a refused fit's diagnostics go beside the output" python3 -c "
 import json; r=json.load(open('$tmp/fit1.refused/params.json'))
 assert r['accepted'] is False and 'backdrop' in r['acceptance']['verdict'], r['acceptance']
@@ -328,7 +328,7 @@ assert r['pixels']==sum(p['pixels'] for p in ph), r['pixels']
 assert abs(r['material']['diffuse'][0]-0.124)<0.02, r['material']
 for f in ['render-2.exr', 'compare-2.png', 'render.exr', 'compare.png']:
     assert os.path.getsize('$tmp/joint/' + f) > 0, f"
-check "a joint fit's folder is replaced by the next" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" "$tmp/fscene2.json" "$tmp/photo2.exr" -o "$tmp/joint" -q --max-pixels 256 --sample-sets 1
+check "a joint fit's folder is replaced by the next" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" "$tmp/fscene2.json" "$tmp/photo2.exr" -o "$tmp/joint" --force -q --max-pixels 256 --sample-sets 1
 check "--select-model on a joint fit" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" "$tmp/fscene2.json" "$tmp/photo2.exr" -o "$tmp/jointsel" --select-model --json -q
 check "... every candidate fitted to both photos, the chosen one's result per photo" python3 -c "
 import json; r=json.load(open('$tmp/jointsel/params.json'))
@@ -347,7 +347,7 @@ check "... its evidence beside the output, per photo" python3 -c "
 import json; r=json.load(open('$tmp/jx.refused/params.json'))
 assert r['accepted'] is False, r['accepted']
 assert [p['acceptance']['accepted'] for p in r['photos']]==[True, False], r['photos']"
-check "--accept-rmse replaces the rule" run 1 "relative RMSE 0.1" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fit1" --accept-rmse 0.001
+check "--accept-rmse replaces the rule" run 1 "relative RMSE 0.1" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fit1" --force --accept-rmse 0.001
 check "--accept-rmse must be a positive number" run 2 "--accept-rmse 'no'" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fit1" --accept-rmse no
 python3 -c "
 import random, struct
@@ -355,7 +355,7 @@ random.seed(1)
 with open('$tmp/other.pfm', 'wb') as f:
     f.write(b'PF\\n96 96\\n-1.0\\n')
     f.write(struct.pack('<%df' % (96 * 96 * 3), *[random.random() for _ in range(96 * 96 * 3)]))"
-check "a photo of something else is refused" run 1 "does not show this scene's sphere" fit "$tmp/fscene.json" "$tmp/other.pfm" -o "$tmp/fit1"
+check "a photo of something else is refused" run 1 "does not show this scene's sphere" fit "$tmp/fscene.json" "$tmp/other.pfm" -o "$tmp/fit1" --force
 # One radiance policy: every command that takes light or a photo to fit
 # refuses an 8-bit image with the same message, unless --srgb.
 "$glint" convert "$tmp/photo.exr" "$tmp/photo8.png" -q
@@ -425,13 +425,44 @@ def pfm(name, vals):
 pfm("black.pfm", [0.0] * (96 * 96 * 3))
 pfm("zeros_w.pfm", [0.0] * (96 * 96 * 3))
 PY
-check "fit: an all-black photo" run 1 "black where the scene puts the sphere" fit "$tmp/fscene.json" "$tmp/black.pfm" -o "$tmp/fit1"
-check "fit: every pixel saturated (zero weight)" run 1 "no usable pixel on the sphere" fit "$tmp/fscene.json" "$tmp/photo.exr" --weights "$tmp/zeros_w.pfm" -o "$tmp/fit1"
+check "fit: an all-black photo" run 1 "black where the scene puts the sphere" fit "$tmp/fscene.json" "$tmp/black.pfm" -o "$tmp/fit1" --force
+check "fit: every pixel saturated (zero weight)" run 1 "no usable pixel on the sphere" fit "$tmp/fscene.json" "$tmp/photo.exr" --weights "$tmp/zeros_w.pfm" -o "$tmp/fit1" --force
 sed 's/env.exr/nan.pfm/' "$tmp/fscene.json" >"$tmp/fnan.json"
-check "fit: NaN in the env map" run 1 "nan.pfm: pixel (0, 0) channel G is nan" fit "$tmp/fnan.json" "$tmp/photo.exr" -o "$tmp/fit1"
+check "fit: NaN in the env map" run 1 "nan.pfm: pixel (0, 0) channel G is nan" fit "$tmp/fnan.json" "$tmp/photo.exr" -o "$tmp/fit1" --force
 check "fit: bad method" run 2 "--method 'best': expected one of three-pass, naive, varpro" fit "$tmp/fscene.json" "$tmp/photo.exr" --method best
 check "failed fits left the old results whole" diff -r "$tmp/fit1" "$tmp/fit1.keep"
 check "no half-written result folders" bash -c "! ls '$tmp' | grep -q 'fit1.tmp'"
+
+# One overwrite rule for every output (core/output.h): an existing output
+# is refused unless --force, and --force replaces only what glint wrote,
+# never an input.
+mkdir -p "$tmp/ow"
+cp "$tmp/r.exr" "$tmp/ow/in.exr"
+check "convert to a new file" run 0 "" convert "$tmp/ow/in.exr" "$tmp/ow/out.exr" -q
+check "convert onto it again: refused" run 1 "out.exr exists: refusing to replace it (--force" convert "$tmp/ow/in.exr" "$tmp/ow/out.exr"
+check "... --force replaces glint's own EXR" run 0 "" convert "$tmp/ow/in.exr" "$tmp/ow/out.exr" --force -q
+for ext in exr png hdr tif json gltf; do
+	echo "a user's notes" >"$tmp/ow/user.$ext"
+done
+check "convert --force onto a user's .exr: refused, naming why" run 1 "user.exr: no record of glint as its writer, so not known to be glint's output" convert "$tmp/ow/in.exr" "$tmp/ow/user.exr" --force
+check "convert --force onto its own input: refused" run 1 "is an input of this command" convert "$tmp/ow/in.exr" "$tmp/ow/in.exr" --force
+"$glint" convert "$tmp/ow/in.exr" "$tmp/ow/o.pfm" -q
+check "convert --force onto a PFM: refused (a PFM cannot say who wrote it)" run 1 "a PFM holds no record of its writer" convert "$tmp/ow/in.exr" "$tmp/ow/o.pfm" --force
+python3 -c "
+open('$tmp/ow/cam.png', 'wb').write(open('$tmp/r.png', 'rb').read().replace(b'Software', b'Softwarf'))"
+check "render --png --force onto another program's PNG: refused" run 1 "cam.png: a PNG without glint as its" render "$tmp/scene.json" --paper copper -o "$tmp/ow/r2.exr" --png "$tmp/ow/cam.png" --force
+check "... and nothing written (checked before any work)" test ! -e "$tmp/ow/r2.exr"
+check "render onto glint's own PNG and EXR: refused without --force" run 1 "exists: refusing" render "$tmp/scene.json" --paper copper -o "$tmp/ow/out.exr" --png "$tmp/r.png"
+check "... replaced with it" run 0 "" render "$tmp/scene.json" --paper copper -o "$tmp/ow/out.exr" --png "$tmp/r.png" --force -q
+ln -s "$tmp/ow/out.exr" "$tmp/ow/link.exr"
+check "--force onto a symbolic link: refused" run 1 "link.exr is a symbolic link" convert "$tmp/ow/in.exr" "$tmp/ow/link.exr" --force
+check "export --force onto a user's .gltf: refused" run 1 "user.gltf: no record of glint as its writer" export "$tmp/fit1/params.json" --to gltf -o "$tmp/ow/user.gltf" --force
+check "... export --force onto glint's own: replaced" run 0 "" export "$tmp/fit1/params.json" --to gltf -o "$tmp/m.gltf" --force -q
+check "convert to .hdr and a TIFF, then --force onto each: glint's, replaced" bash -c "'$glint' convert '$tmp/ow/in.exr' '$tmp/ow/o.hdr' -q && '$glint' convert '$tmp/ow/in.exr' '$tmp/ow/o.tif' -q && '$glint' convert '$tmp/ow/in.exr' '$tmp/ow/o.hdr' --force -q && '$glint' convert '$tmp/ow/in.exr' '$tmp/ow/o.tif' --force -q"
+check "... a user's .hdr and .tif are not" bash -c "! '$glint' convert '$tmp/ow/in.exr' '$tmp/ow/user.hdr' --force -q 2>/dev/null && ! '$glint' convert '$tmp/ow/in.exr' '$tmp/ow/user.tif' --force -q 2>/dev/null"
+check "every user's file as it was" bash -c "for e in exr png hdr tif json gltf; do [ \"\$(cat '$tmp/ow/user.'\$e)\" = \"a user's notes\" ] || exit 1; done"
+check "fit into a previous result: refused" run 1 "holds a previous result: refusing to replace it" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/naive" --method naive --max-pixels 600
+check "... --force replaces it" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/naive" --method naive --max-pixels 600 --force -q
 
 echo "$((checks - fails)) passed, $fails failed"
 [ "$fails" = 0 ]

@@ -83,9 +83,9 @@ check "options after the arguments and '--' ending them" eval 'g 0 convert "$dat
 # --json: a JSON document on stdout; -q: nothing on stderr.
 check "convert --json" eval 'g 0 convert "$data/env/venice_sunset_1k.hdr" "$tmp/e.pfm" --json && is_json'
 check "convert -q: silent" eval 'g 0 convert "$data/env/venice_sunset_1k.hdr" "$tmp/f.pfm" -q && [ ! -s "$tmp/err" ] && [ ! -s "$tmp/out" ]'
-check "convert without -q says what it did" eval 'g 0 convert "$data/env/venice_sunset_1k.hdr" "$tmp/f.pfm" && has_err "venice_sunset_1k.hdr ->"'
-check "convert -v: debug messages" eval 'g 0 convert "$data/env/venice_sunset_1k.hdr" "$tmp/f.pfm" -v && has_err "glint: debug: read " && has_err "1024x512"'
-check "convert --json -v: debug messages as JSON lines" eval 'g 0 convert "$data/env/venice_sunset_1k.hdr" "$tmp/f.pfm" --json -v && grep -q "\"level\": *\"debug\"" "$tmp/err"'
+check "convert without -q says what it did" eval 'g 0 convert "$data/env/venice_sunset_1k.hdr" "$tmp/f1.pfm" && has_err "venice_sunset_1k.hdr ->"'
+check "convert -v: debug messages" eval 'g 0 convert "$data/env/venice_sunset_1k.hdr" "$tmp/f2.pfm" -v && has_err "glint: debug: read " && has_err "1024x512"'
+check "convert --json -v: debug messages as JSON lines" eval 'g 0 convert "$data/env/venice_sunset_1k.hdr" "$tmp/f3.pfm" --json -v && grep -q "\"level\": *\"debug\"" "$tmp/err"'
 check "cameras --json" eval 'g 0 cameras --json && is_json'
 check "jobs --json" eval 'g 0 jobs --json --root "$tmp" && is_json'
 check "sessions --json" eval 'g 0 sessions --json --root "$tmp" && is_json'
@@ -107,7 +107,7 @@ journal() { # stderr file, then glint's arguments
 	JOURNAL_STREAM=$(stat -c '%d:%i' "$f") "$glint" "$@" 2>>"$f" >/dev/null </dev/null
 }
 check "journal: an error line starts with <3>" eval 'journal "$tmp/j1" convert "$tmp/missing.exr" "$tmp/g.pfm"; head -1 "$tmp/j1" | grep -q "^<3>glint: error: "'
-check "journal: an info line with <6>, a debug line with <7>" eval 'journal "$tmp/j2" convert "$data/env/venice_sunset_1k.hdr" "$tmp/f.pfm" -v && grep -q "^<6>glint: .*venice_sunset_1k.hdr ->" "$tmp/j2" && grep -q "^<7>glint: debug: " "$tmp/j2"'
+check "journal: an info line with <6>, a debug line with <7>" eval 'journal "$tmp/j2" convert "$data/env/venice_sunset_1k.hdr" "$tmp/f4.pfm" -v && grep -q "^<6>glint: .*venice_sunset_1k.hdr ->" "$tmp/j2" && grep -q "^<7>glint: debug: " "$tmp/j2"'
 check "journal: JSON lines too" eval 'journal "$tmp/j3" convert "$tmp/missing.exr" "$tmp/g.pfm" --json; grep -q "^<3>{" "$tmp/j3"'
 check "another stream named: no prefix" eval ': >"$tmp/j4"; JOURNAL_STREAM=$(stat -c "%d:%i" "$tmp/j1") "$glint" convert "$tmp/missing.exr" "$tmp/g.pfm" 2>"$tmp/j4"; head -1 "$tmp/j4" | grep -q "^glint: error: "'
 

@@ -25,7 +25,10 @@ run() {
 }
 photos=("$mem"/memorial00[67]?.png)
 check "memorial stack merges" run 0 "" hdr --times-file "$mem/shutter_times_qhan1028.txt" "${photos[@]}" -o "$tmp/m" --json
-check "... radiance, mask, response written" bash -c "test -s '$tmp/m/hdr.exr' && test -s '$tmp/m/mask.png' && test \$(wc -l <'$tmp/m/response.csv') = 256"
+check "... radiance, mask, response written" bash -c "test -s '$tmp/m/hdr.exr' && test -s '$tmp/m/mask.png' && test \$(grep -vc '^#' '$tmp/m/response.csv') = 256"
+check "... and drawn (response.png, glint's PNG)" bash -c "head -c 8 '$tmp/m/response.png' | od -An -tx1 | tr -d ' \n' | grep -qx 89504e470d0a1a0a && grep -q 'glint' '$tmp/m/response.png'"
+check "a merge into a previous one: refused without --force" run 1 "hdr.exr exists: refusing to replace it" hdr --times-file "$mem/shutter_times_qhan1028.txt" "${photos[@]}" -o "$tmp/m"
+check "... replaced with it" run 0 "" hdr --times-file "$mem/shutter_times_qhan1028.txt" "${photos[@]}" -o "$tmp/m" --force -q
 check "debevec response too" run 0 "" hdr --times 32,16,8,4,2,1,1/2,1/4,1/8,1/16,1/32,1/64,1/128,1/256,1/512,1/1024 "${photos[@]}" -o "$tmp/d" --response debevec -q
 check "times count mismatch: exit 1" run 1 "15 exposure times for 16 images" hdr --times 32,16,8,4,2,1,1/2,1/4,1/8,1/16,1/32,1/64,1/128,1/256,1/512 "${photos[@]:0:15}" "${photos[15]}" -o "$tmp/x"
 rev=($(printf '%s\n' "${photos[@]}" | sort -r))
@@ -64,7 +67,7 @@ check "an 8-bit ball photo is refused as radiance" run 1 "not radiance" probe un
 check "... nothing written" test ! -e "$tmp/u.exr"
 check "--srgb: the ball is found in the photo" run 0 "found the ball at 254." probe unwrap "$chrome" -o "$tmp/u.exr" --focal-px 1000 --srgb
 check "... and the 8-bit input is warned about" grep -q "8-bit, taken as sRGB-encoded" "$tmp/err"
-check "a --ball 19 px off the photo's is warned about" run 0 "disagrees with the ball found in the photo" probe unwrap "$chrome" -o "$tmp/u.exr" --focal-px 1000 --srgb --ball 254.5,147.5,100
+check "a --ball 19 px off the photo's is warned about" run 0 "disagrees with the ball found in the photo" probe unwrap "$chrome" -o "$tmp/u.exr" --focal-px 1000 --srgb --ball 254.5,147.5,100 --force
 python3 - "$tmp/noise.pfm" <<'PY'
 import random, struct, sys
 random.seed(7)

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # meson install into a DESTDIR, then the installed glint run from outside
 # the source and build trees: its help, check-rig on the installed sim rig
-# and the demo, with its data found in the installed datadir only.
+# and the demo, with its data found in the installed datadir only (beside
+# the binary, as installed under the DESTDIR), and the rig commands'
+# default rig file the installed sysconfdir's rig.json.
 #   test_install.sh BUILD_DIR PREFIX DATADIR SYSCONFDIR MANDIR
 set -uo pipefail
 build=$1 prefix=$2 datadir=$3 sysconfdir=$4 mandir=$5
@@ -82,12 +84,31 @@ manpages() {
 check "man pages installed: glint(1) and one per command" manpages
 
 cd "$tmp" || exit 1
-# Without the data where it was installed to, the installed binary must
-# not fall back to the source tree: it names the installed folder.
-if [ ! -d "$prefix/$datadir/glint" ]; then
-	check "installed binary: data from the datadir, not the source tree" \
-		bash -c "'$bin' demo -o '$tmp/d0' -q >'$tmp/d0.log' 2>&1; s=\$?; cat '$tmp/d0.log'; test \$s != 0 && grep -q '$prefix/$datadir/glint' '$tmp/d0.log'"
+unset GLINT_DATA_DIR
+# The installed binary finds its data beside itself (the datadir under the
+# root it was installed to), never the source tree's.
+check "installed demo without GLINT_DATA_DIR: its data found beside the binary" \
+	bash -c "'$bin' demo --material yellow-plastic -o '$tmp/d0' --json -q >'$tmp/d0.json' && grep -q '\"scene\": \"$data/demo-scene.json\"' '$tmp/d0.json'"
+# The rig commands without --config take the installed appliance's rig
+# file: missing, named with what to do; present, used.
+conf=$dest$sysconfdir/glint
+check "installed check-rig without a rig.json: refused, naming it and the example" \
+	bash -c "! '$bin' check-rig >'$tmp/cr.log' 2>&1 && grep -q 'no rig file at $conf/rig.json' '$tmp/cr.log' && grep -q 'rig.example.json' '$tmp/cr.log'"
+sed -e "s|\"output\": \"captures\"|\"output\": \"$tmp/var/captures\"|" \
+	-e "s|\"scenario\": \"sim-press.json\"|\"scenario\": \"$data/sim-press.json\"|" \
+	"$data/rig-sim.json" >"$conf/rig.json"
+mkdir -p "$tmp/var/captures"
+chmod 755 "$tmp"
+# As the service user would run it (a user of its own, not root).
+as_user=()
+if [ "$(id -u)" = 0 ] && command -v setpriv >/dev/null; then
+	as_user=(setpriv --reuid=nobody --regid=nogroup --clear-groups)
+	chown nobody "$tmp/var/captures"
 fi
+check "installed check-rig with the installed rig.json, no --config${as_user:+, as nobody}" \
+	"${as_user[@]}" "$bin" check-rig
+check "installed jobs: the installed rig file's captures folder" \
+	bash -c "'$bin' jobs --json | grep -q '$tmp/var/captures'"
 export GLINT_DATA_DIR=$data
 check "installed glint --help" "$bin" --help
 check "installed check-rig on the installed sim rig" "$bin" check-rig --config "$data/rig-sim.json"

@@ -154,7 +154,7 @@ static int write_response(const char *out, const double resp[256][3])
 static int write_response_png(const char *out, const double resp[256][3],
 			      const char *method)
 {
-	enum { W = 560, H = 380, L = 64, R = 16, T = 34, B = 48 };
+	enum { W = 560, H = 380, L = 64, R = 16, T = 36, B = 48 };
 	static const uint8_t axis[3] = { 120, 120, 120 };
 	static const uint8_t grid[3] = { 225, 225, 225 };
 	static const uint8_t rgb[3][3] = { { 200, 30, 30 },
@@ -226,10 +226,10 @@ static int write_response_png(const char *out, const double resp[256][3],
 	}
 	snprintf(buf, sizeof(buf), "CAMERA RESPONSE (%s)",
 		 !strcmp(method, "debevec") ? "DEBEVEC-MALIK" : "ROBERTSON");
-	glint_canvas_text(&cv, L, 8, 2, buf);
+	glint_canvas_text(&cv, L, 3, 2, buf);
 	glint_canvas_text(&cv, L + pw / 2 - 15 * 6 / 2, H - 18, 1,
 			  "PIXEL CODE VALUE");
-	glint_canvas_text(&cv, 4, T - 12, 1, "LOG2 EXPOSURE, CODE 128 = 0");
+	glint_canvas_text(&cv, 4, T - 10, 1, "LOG2 EXPOSURE, CODE 128 = 0");
 	ret = glint_canvas_write_png(&cv, path);
 	glint_canvas_free(&cv);
 	return ret;

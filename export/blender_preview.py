@@ -52,7 +52,8 @@ def build_material(name=NAME):
     return mat
 
 
-def preview_scene(mat, env=None, samples=64, size=512):
+def preview_scene(mat, env=None, samples=64, size=512,
+                  env_rotation=(0.0, 0.0, 0.0)):
     """A new scene (the open file's scenes are left as they are) with a
     sphere of the material, a camera and light: the environment map env
     (equirectangular) or a sun and a grey sky.  Returns it."""
@@ -76,9 +77,7 @@ def preview_scene(mat, env=None, samples=64, size=512):
     world.use_nodes = True
     bg = world.node_tree.nodes["Background"]
     if env:
-        tex = world.node_tree.nodes.new("ShaderNodeTexEnvironment")
-        tex.image = bpy.data.images.load(env)
-        world.node_tree.links.new(tex.outputs["Color"], bg.inputs["Color"])
+        glint_environment(world.node_tree, bg, env, env_rotation)
     else:
         bg.inputs["Color"].default_value = (0.05, 0.05, 0.05, 1.0)
         sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
@@ -99,6 +98,63 @@ def preview_scene(mat, env=None, samples=64, size=512):
     scene.view_settings.view_transform = "Standard"
     scene.view_settings.look = "None"
     return scene
+
+
+def glint_environment(tree, bg, env, rotation):
+    """Light the world with a lat-long map as glint does
+    (docs/conventions.md): glint's world is Blender's turned to +Y up
+    (g = (x, z, -y), the preview camera looking along glint's -Z), the map
+    turned by rotation = (a, b, c) degrees, R = Rz(c) Ry(b) Rx(a), the
+    radiance along d that of the map at m = R^T d, stored at
+    u = 0.5 + atan2(m.x, -m.z) / 2 pi, v = acos(m.y) / pi from the top.
+    Built from nodes, so the map is glint's by construction rather than by
+    Blender's own equirectangular convention."""
+    nodes, links = tree.nodes, tree.links
+
+    def op(name, a, b=None):
+        n = nodes.new("ShaderNodeMath")
+        n.operation = name
+        for k, v in enumerate((a, b)):
+            if v is None:
+                continue
+            if isinstance(v, (int, float)):
+                n.inputs[k].default_value = v
+            else:
+                links.new(v, n.inputs[k])
+        return n.outputs[0]
+
+    coord = nodes.new("ShaderNodeTexCoord")
+    b = nodes.new("ShaderNodeSeparateXYZ")
+    links.new(coord.outputs["Generated"], b.inputs[0])
+    g = nodes.new("ShaderNodeCombineXYZ")
+    links.new(b.outputs["X"], g.inputs["X"])
+    links.new(b.outputs["Z"], g.inputs["Y"])
+    links.new(op("MULTIPLY", b.outputs["Y"], -1.0), g.inputs["Z"])
+    rot = nodes.new("ShaderNodeVectorRotate")
+    rot.rotation_type = "EULER_XYZ"
+    rot.invert = True  # R^T: the map's direction seen along d
+    rot.inputs["Rotation"].default_value = [math.radians(x)
+                                            for x in rotation]
+    rot.inputs["Center"].default_value = (0.0, 0.0, 0.0)
+    links.new(g.outputs[0], rot.inputs["Vector"])
+    m = nodes.new("ShaderNodeSeparateXYZ")
+    links.new(rot.outputs[0], m.inputs[0])
+    # Blender's atan2 is ARCTAN2(A, B) = atan2(A, B).
+    phi = op("ARCTAN2", m.outputs["X"], op("MULTIPLY", m.outputs["Z"],
+                                                -1.0))
+    u = op("ADD", op("DIVIDE", phi, 2 * math.pi), 0.5)
+    theta = op("ARCCOSINE", op("MINIMUM", op("MAXIMUM", m.outputs["Y"],
+                                                   -1.0), 1.0))
+    v = op("SUBTRACT", 1.0, op("DIVIDE", theta, math.pi))
+    uv = nodes.new("ShaderNodeCombineXYZ")
+    links.new(u, uv.inputs["X"])
+    links.new(v, uv.inputs["Y"])
+    tex = nodes.new("ShaderNodeTexImage")
+    tex.image = bpy.data.images.load(env)
+    tex.interpolation = "Linear"
+    tex.extension = "REPEAT"  # wraps across the seam in u
+    links.new(uv.outputs[0], tex.inputs["Vector"])
+    links.new(tex.outputs["Color"], bg.inputs["Color"])
 
 
 # Output formats by the file's extension: (Blender's format, its depth).
@@ -135,7 +191,12 @@ def main(argv):
                     help="render a sphere of the material (Cycles) to OUT "
                     "(.png, .exr, .hdr, .tif or .jpg, from its extension)")
     ap.add_argument("--env", metavar="MAP",
-                    help="light the preview with this environment map")
+                    help="light the preview with this lat-long map, "
+                    "oriented as glint orients it (docs/conventions.md)")
+    ap.add_argument("--env-rotation", metavar="X,Y,Z", default="0,0,0",
+                    help="the map's rotation in degrees about glint's X, Y, "
+                    "Z, as a scene's environment.rotation_deg (default "
+                    "0,0,0)")
     ap.add_argument("--samples", type=int, default=64)
     ap.add_argument("--size", type=int, default=512)
     ap.add_argument("--save", metavar="OUT.blend",
@@ -151,7 +212,14 @@ def main(argv):
     if args.save and os.path.lexists(args.save):
         sys.exit("glint: %s exists: refusing to replace it" % args.save)
     if args.render:
-        scene = preview_scene(mat, args.env, args.samples, args.size)
+        try:
+            rot = [float(x) for x in args.env_rotation.split(",")]
+        except ValueError:
+            rot = []
+        if len(rot) != 3:
+            sys.exit("glint: --env-rotation '%s': expected X,Y,Z in "
+                     "degrees" % args.env_rotation)
+        scene = preview_scene(mat, args.env, args.samples, args.size, rot)
         set_output(scene, args.render)
         bpy.ops.render.render(write_still=True, scene=scene.name)
         print("glint: rendered", args.render)

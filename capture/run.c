@@ -259,6 +259,7 @@ static int merge_session(const struct glint_capture_setup *s, const char *kind,
 			snprintf(files[(*nfiles)++], 64, "env-mask.png");
 			snprintf(files[(*nfiles)++], 64, "env-density.exr");
 			snprintf(files[(*nfiles)++], 64, "env-sources.json");
+			snprintf(files[(*nfiles)++], 64, "env-preview.png");
 		}
 	}
 	if (ret == 0 && !strcmp(kind, "sample") && s->focal_px > 0) {

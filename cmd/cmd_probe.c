@@ -43,7 +43,9 @@ void cmd_probe_help(void)
 	       "ENV-sources.json: light sources too small for the photo to "
 	       "resolve (the sun, a\nsmall lamp), found, measured (direction, "
 	       "flux, colour, their uncertainty) and\nput into the map as "
-	       "points (docs/hdr.md).  PHOTO-variance.exr and\n"
+	       "points (docs/hdr.md); ENV-preview.png: the map with those "
+	       "sources\nringed and numbered, the unreliable directions "
+	       "darkened.  PHOTO-variance.exr and\n"
 	       "PHOTO-weights.exr beside the photo (a merge's) give their "
 	       "noise and clipping.\n"
 	       "  --focal-px F         focal length in pixels\n"
@@ -240,8 +242,12 @@ static int unwrap_main(int argc, char **argv)
 						"required");
 	struct glint_image *photo = NULL;
 	int w, h;
-	static const char *const siblings[] = { "", "-mask.png", "-density.exr",
-						"-sources.json", NULL };
+	static const char *const siblings[] = { "",
+						"-mask.png",
+						"-density.exr",
+						"-sources.json",
+						"-preview.png",
+						NULL };
 	if (outputs_check(out, siblings, force, argv[0]) < 0)
 		return cmd_fail("probe");
 	int ret = glint_image_read_radiance(argv[0], srgb, &photo);

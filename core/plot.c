@@ -6,6 +6,7 @@
 #include "formats.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -115,6 +116,19 @@ void glint_canvas_line(struct glint_canvas *cv, int x0, int y0, int x1, int y1,
 			y0 += sy;
 		}
 	}
+}
+
+void glint_canvas_ring(struct glint_canvas *cv, double cx, double cy, double r,
+		       double t, const uint8_t rgb[3])
+{
+	int x0 = (int)floor(cx - r - t), x1 = (int)ceil(cx + r + t);
+	int y0 = (int)floor(cy - r - t), y1 = (int)ceil(cy + r + t);
+	for (int y = y0; y <= y1; y++)
+		for (int x = x0; x <= x1; x++) {
+			double d = hypot(x + 0.5 - cx, y + 0.5 - cy);
+			if (fabs(d - r) <= t / 2)
+				glint_canvas_put(cv, x, y, rgb);
+		}
 }
 
 void glint_canvas_text(struct glint_canvas *cv, int x, int y, int s,

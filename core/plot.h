@@ -33,6 +33,9 @@ void glint_canvas_fill(struct glint_canvas *cv, int x0, int y0, int x1, int y1,
 		       const uint8_t rgb[3]);
 void glint_canvas_line(struct glint_canvas *cv, int x0, int y0, int x1, int y1,
 		       const uint8_t rgb[3]);
+/* A ring of radius r (pixels) and thickness t about (cx, cy). */
+void glint_canvas_ring(struct glint_canvas *cv, double cx, double cy, double r,
+		       double t, const uint8_t rgb[3]);
 /* Text in near-black, its top-left at (x, y), glyphs scaled by s. */
 void glint_canvas_text(struct glint_canvas *cv, int x, int y, int s,
 		       const char *str);

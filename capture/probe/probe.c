@@ -11,8 +11,10 @@
 #include "core/path.h"
 #include "core/optics.h"
 #include "core/pinhole.h"
+#include "core/plot.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -744,6 +746,59 @@ static void log_sources(const struct glint_light_sources *s)
 	}
 }
 
+/*
+ * ENV-preview.png: the map as seen (auto exposure, sRGB), the directions
+ * the mask calls unreliable darkened, each compact light source found
+ * ringed and numbered as in the log and -sources.json, and a title line
+ * saying so.  At most 1024 pixels across (nearest texel).
+ */
+static int write_preview(const char *path, const struct glint_image *env,
+			 const struct glint_image *mask,
+			 const struct glint_light_sources *src)
+{
+	static const uint8_t ring[3] = { 255, 40, 200 }, halo[3] = { 0, 0, 0 };
+	int w = env->width < 1024 ? env->width : 1024, h = w / 2, top = 14;
+	double sx = (double)env->width / w, sy = (double)env->height / h;
+	double scale = exp2(glint_png_auto_exposure(env));
+	struct glint_canvas cv;
+	char buf[96];
+	int ret = glint_canvas_init(&cv, w, h + top);
+
+	if (ret < 0)
+		return ret;
+	for (int y = 0; y < h; y++)
+		for (int x = 0; x < w; x++) {
+			int ex = (int)(x * sx), ey = (int)(y * sy);
+			const float *p = glint_image_px(env, ex, ey);
+			int ok =
+				!mask || glint_image_px(mask, ex, ey)[0] > 0.5f;
+			uint8_t c[3];
+			for (int k = 0; k < 3; k++)
+				c[k] = (uint8_t)(glint_tonemap_srgb8(p[k] *
+								     scale) /
+						 (ok ? 1 : 3));
+			glint_canvas_put(&cv, x, top + y, c);
+		}
+	for (int i = 0; i < src->n; i++) {
+		const struct vec3 d = src->s[i].dir;
+		double u = 0.5 + atan2(d.x, -d.z) / (2 * M_PI);
+		double v = acos(fmax(-1, fmin(1, d.y))) / M_PI;
+		double cx = u * w, cy = top + v * h, r = 7;
+		glint_canvas_ring(&cv, cx, cy, r, 4, halo);
+		glint_canvas_ring(&cv, cx, cy, r, 2, ring);
+		snprintf(buf, sizeof(buf), "%d", i + 1);
+		glint_canvas_text(&cv, (int)(cx + r + 3), (int)(cy - 3), 1,
+				  buf);
+	}
+	snprintf(buf, sizeof(buf),
+		 "PROBE MAP: %d COMPACT SOURCE%s RINGED, UNRELIABLE DARKENED",
+		 src->n, src->n == 1 ? "" : "S");
+	glint_canvas_text(&cv, 2, 3, 1, buf);
+	ret = glint_canvas_write_png(&cv, path);
+	glint_canvas_free(&cv);
+	return ret;
+}
+
 int glint_probe_unwrap_write(const struct glint_image *photo,
 			     const struct glint_unwrap_opts *o,
 			     const char *env_path, int *width, int *height)
@@ -787,6 +842,11 @@ int glint_probe_unwrap_write(const struct glint_image *photo,
 					 "-density.exr");
 	if (ret == 0)
 		ret = glint_image_write(path, dens, NULL);
+	if (ret == 0)
+		ret = glint_path_sibling(path, sizeof(path), env_path,
+					 "-preview.png");
+	if (ret == 0)
+		ret = write_preview(path, env, mask, &src);
 	if (ret == 0 && width)
 		*width = env->width;
 	if (ret == 0 && height)

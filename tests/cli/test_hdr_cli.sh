@@ -67,6 +67,7 @@ check "an 8-bit ball photo is refused as radiance" run 1 "not radiance" probe un
 check "... nothing written" test ! -e "$tmp/u.exr"
 check "--srgb: the ball is found in the photo" run 0 "found the ball at 254." probe unwrap "$chrome" -o "$tmp/u.exr" --focal-px 1000 --srgb
 check "... and the 8-bit input is warned about" grep -q "8-bit, taken as sRGB-encoded" "$tmp/err"
+check "... a preview of the map beside it (glint's PNG)" bash -c "head -c 8 '$tmp/u-preview.png' | od -An -tx1 | tr -d ' \n' | grep -qx 89504e470d0a1a0a && grep -q glint '$tmp/u-preview.png'"
 check "a --ball 19 px off the photo's is warned about" run 0 "disagrees with the ball found in the photo" probe unwrap "$chrome" -o "$tmp/u.exr" --focal-px 1000 --srgb --ball 254.5,147.5,100 --force
 python3 - "$tmp/noise.pfm" <<'PY'
 import random, struct, sys

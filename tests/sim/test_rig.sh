@@ -98,6 +98,8 @@ p = {q['name']: q['value'] for q in d['fit']['parameters']}
 print('  fitted', {k: round(v, 3) for k, v in p.items()})
 assert abs(p['diffuse.r'] - 0.292) < 0.02 and abs(p['diffuse.g'] - 0.117) < 0.02
 "
+probe_dir=$(python3 -c "import json; print(json.load(open('$tmp/one.out'))['probe'])")
+check "... the probe's preview rings the light sources it found" python3 "$(dirname "$0")/../cli/check_probe_preview.py" "$probe_dir/env-preview.png" "$probe_dir/env-sources.json"
 check "... the final render's own noise below the photo's (its noise model)" python3 -c "
 import json, os
 d = json.load(open('$tmp/one.out'))

@@ -33,7 +33,8 @@ void cmd_demo_help(void)
 	       "renderer, then glint fits the Torrance-Sparrow model to that "
 	       "photo with the\npaper's three-pass method and prints true "
 	       "against recovered values.\nWrites DIR/photo.exr and "
-	       "DIR/fit/{params.json, render.exr, compare.png}\n(DIR "
+	       "DIR/fit/{report.html, params.json, render.exr, "
+	       "compare.png}\n(DIR "
 	       "defaults to ./demo-out).\n"
 	       "\n"
 	       "  --material NAME  satin-paint, semi-gloss-paint, "
@@ -163,8 +164,8 @@ int cmd_demo(int argc, char **argv)
 		       json_real_value(json_object_get(doc, "relative_rmse")));
 		cmd_print_params(doc, truth);
 		cmd_print_verdicts(doc);
-		printf("  photo:   %s\n  results: %s/params.json, render.exr, "
-		       "compare.png\n",
+		printf("  photo:   %s\n  results: %s/report.html, params.json, "
+		       "render.exr, compare.png\n",
 		       photo_path, fit_dir);
 		json_decref(doc);
 	}

@@ -483,7 +483,8 @@ int cmd_fit(int argc, char **argv)
 	cmd_print_params(doc, NULL);
 	cmd_print_verdicts(doc);
 	print_photos(doc);
-	printf("results: %s/params.json, render%s.exr, compare%s.png\n",
+	printf("results: %s/report.html (open it in a browser), params.json, "
+	       "render%s.exr, compare%s.png\n",
 	       o.out_dir, o.nphotos > 1 ? "[-N]" : "",
 	       o.nphotos > 1 ? "[-N]" : "");
 	size_t k;

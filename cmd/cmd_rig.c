@@ -139,8 +139,8 @@ static void print_result(const struct glint_rig_run *ro, int json)
 		       json_real_value(json_object_get(doc, "relative_rmse")));
 		cmd_print_params(doc, NULL);
 		cmd_print_verdicts(doc);
-		printf("  results: %s/fit/params.json, render.exr, "
-		       "compare.png%s\n",
+		printf("  results: %s/fit/report.html, params.json, "
+		       "render.exr, compare.png%s\n",
 		       ro->fit_of,
 		       rs->n > 1 ? " (render-K.exr, compare-K.png: photo K)"
 				 : "");

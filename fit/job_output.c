@@ -9,6 +9,7 @@
 
 #include "fit/ladder.h"
 #include "fit/misfit.h"
+#include "fit/report.h"
 #include "fit/select.h"
 #include "export/export.h"
 #include "fit/render/compare.h"
@@ -88,8 +89,9 @@ static int write_view(struct glint_atomic_dir *ad, int k,
 static const char *const *output_names(void)
 {
 	static const char *const fixed[] = {
-		"params.json",	"render.exr",	 "compare.png", "material.gltf",
-		"material.xml", "material.pbrt", "material.py", "material.mtlx",
+		"params.json",	 "report.html",	  "render.exr",
+		"compare.png",	 "material.gltf", "material.xml",
+		"material.pbrt", "material.py",	  "material.mtlx",
 	};
 	enum { NFIXED = sizeof(fixed) / sizeof(fixed[0]) };
 	static char more[2 * (GLINT_FIT_MAX_VIEWS - 1)][32];
@@ -135,6 +137,15 @@ int job_write_results(const struct glint_fit_job *job, const char *dir,
 	free(text);
 	for (int k = 0; k < nviews && !ret; k++)
 		ret = write_view(&ad, k, &outs[k]);
+	if (!ret) {
+		char *html = glint_fit_report_html(doc, nviews);
+		ret = html ? glint_atomic_write_file(
+				     glint_atomic_dir_file(&ad, "report.html",
+							   path, sizeof(path)),
+				     html, strlen(html))
+			   : glint_error_set(ENOMEM, "out of memory");
+		free(html);
+	}
 	char name_buf[256];
 	for (int k = 0; exports && !ret && k < GLINT_EXPORT_NFORMATS; k++) {
 		const struct glint_export *e = &exports[k];

@@ -146,7 +146,7 @@ assert names==['diffuse.r','diffuse.g','diffuse.b','specular.r','specular.g','sp
 assert r['method']['name']=='three-pass' and len(r['passes'])>=3, r['passes']
 assert abs(r['material']['diffuse'][0]-0.124)<0.02, r['material']
 assert all('stderr' in p for p in r['parameters'])"
-check "fit wrote params.json, render.exr, compare.png" test -s "$tmp/fit1/params.json" -a -s "$tmp/fit1/render.exr" -a -s "$tmp/fit1/compare.png"
+check "fit wrote params.json, render.exr, compare.png, report.html" test -s "$tmp/fit1/params.json" -a -s "$tmp/fit1/render.exr" -a -s "$tmp/fit1/compare.png" -a -s "$tmp/fit1/report.html"
 check "... and the exports, listed with their residuals" python3 -c "
 import json, os; r=json.load(open('$tmp/fit1/params.json'))
 e={x['format']: x for x in r['exports']}

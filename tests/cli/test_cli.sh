@@ -268,6 +268,12 @@ check "a material key of another model is refused" run 1 "roughness2" render "$t
 # Inputs are regular files: a pipe (here a process substitution) is
 # refused by name, as a FIFO planted where a file belongs would be.
 check "a pipe as an input is refused, named" run 1 "a FIFO, not a regular file" render "$tmp/fscene.json" --material <(echo '{"model": "ggx", "roughness": 0.3}') -o "$tmp/x.exr"
+# --model auto (its choice between the opaque and the transparent
+# model, under the sanitizers here; model-auto tests what it picks).
+check "fit --model auto on an opaque photo: Torrance-Sparrow chosen" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fitauto" --model auto --max-pixels 600 --json -q
+check "... and said why" python3 -c "
+import json; d = json.load(open('$tmp/out'))['model_choice']
+assert d['chosen'] == 'torrance-sparrow', d"
 check "fit --select-model" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fitsel" --select-model --json -q
 check "--select-model reports every candidate with AIC, BIC, errors" python3 -c "
 import json; r=json.load(open('$tmp/out'))['model_selection']

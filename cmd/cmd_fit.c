@@ -245,6 +245,31 @@ void cmd_fit_progress(void *ctx, const char *pass, int iter, double cost)
 		fprintf(stderr, "\r%*s\r", 70, "");
 }
 
+/* "  label: text", the text wrapped at 78 columns at spaces, each further
+ * line indented under the text's start. */
+static void print_wrapped(const char *label, const char *text)
+{
+	int indent = 2 + (int)strlen(label) + 2, col = indent - 1;
+	if (!text)
+		return;
+	printf("  %s:", label);
+	while (*text) {
+		size_t n = strcspn(text, " ");
+		if (col > indent && col + 1 + (int)n > 78) {
+			printf("\n%*s", indent, "");
+			col = indent;
+		} else {
+			putchar(' ');
+			col++;
+		}
+		printf("%.*s", (int)n, text);
+		col += (int)n;
+		text += n;
+		text += strspn(text, " ");
+	}
+	putchar('\n');
+}
+
 void cmd_print_params(const json_t *doc, const double *truth)
 {
 	json_t *ps = json_object_get(doc, "parameters"), *p;
@@ -306,7 +331,7 @@ void cmd_print_params(const json_t *doc, const double *truth)
 	printf("  and the render's systematic accuracy (docs/fitting.md, "
 	       "\"Uncertainty\")\n");
 	json_array_foreach(json_object_get(unc, "findings"), i, p)
-		printf("  note: %s\n", json_string_value(p));
+		print_wrapped("note", json_string_value(p));
 }
 
 void cmd_print_verdicts(const json_t *doc)
@@ -317,9 +342,9 @@ void cmd_print_verdicts(const json_t *doc)
 		json_object_get(json_object_get(doc, "misfit"), "verdict"));
 
 	if (av)
-		printf("  verdict: %s\n", av);
+		print_wrapped("verdict", av);
 	if (mv)
-		printf("  residual: %s\n", mv);
+		print_wrapped("residual", mv);
 }
 
 static int parse_model(const char *arg, void *dest)

@@ -56,6 +56,8 @@ int cmd_queue(int argc, char **argv);
 int cmd_jobs(int argc, char **argv);
 int cmd_sessions(int argc, char **argv);
 void cmd_queue_help(void);
+void cmd_jobs_help(void);
+void cmd_sessions_help(void);
 void cmd_hdr_help(void);
 void cmd_cameras_help(void);
 

@@ -22,13 +22,22 @@
 #include <string.h>
 #include <sys/stat.h>
 
+/* The options every queue command takes to find the captures folder. */
+static void root_options(void)
+{
+	printf("  --root DIR       the captures folder (default: the rig "
+	       "file's \"output\")\n"
+	       "  --config FILE    rig file to take the root from (default: "
+	       "/etc/glint/rig.json\n"
+	       "                   installed, data/rig-sim.json from a "
+	       "build folder)\n");
+}
+
 void cmd_queue_help(void)
 {
 	printf("usage: glint queue add SESSION [--root DIR]\n"
 	       "       glint queue cancel ID [--root DIR]\n"
 	       "       glint queue run [--until-empty] [--root DIR]\n"
-	       "       glint jobs [--root DIR] [--json]\n"
-	       "       glint sessions [--root DIR] [--json]\n"
 	       "\n"
 	       "The job queue shared by the rig daemon and SSH users, a folder "
 	       "ROOT/queue that\nany number of processes use safely (no "
@@ -37,17 +46,40 @@ void cmd_queue_help(void)
 	       "worker:\nit fits queued sessions one at a time (glint fit "
 	       "SESSION --wait), forever or\nuntil the queue is empty.  A "
 	       "worker that dies leaves its job to be re-run by\nthe next.  "
-	       "jobs lists the queue; sessions lists capture sessions with "
-	       "their\nstatus.\n"
-	       "\n"
-	       "  --root DIR       the captures folder (default: the rig "
-	       "file's \"output\")\n"
-	       "  --config FILE    rig file to take the root from (default: "
-	       "/etc/glint/rig.json\n"
-	       "                   installed, data/rig-sim.json from a "
-	       "build folder)\n"
-	       "  --until-empty    run: stop when no job is left\n"
+	       "glint jobs lists the queue; glint sessions the capture "
+	       "sessions.\n"
+	       "\n");
+	root_options();
+	printf("  --until-empty    run: stop when no job is left\n"
 	       "  --json           JSON on stdout\n"
+	       "  -q, --quiet      no info messages\n");
+}
+
+void cmd_jobs_help(void)
+{
+	printf("usage: glint jobs [--root DIR] [--json]\n"
+	       "\n"
+	       "The fit queue (glint queue): each job's id, state (pending, "
+	       "running, done,\nfailed, cancelled), kind, submitter (the "
+	       "job file's owner) and session, and\na failed job's error.  "
+	       "--json: the queue folder and each job's record.\n"
+	       "\n");
+	root_options();
+	printf("  --json           JSON on stdout\n"
+	       "  -q, --quiet      no info messages\n");
+}
+
+void cmd_sessions_help(void)
+{
+	printf("usage: glint sessions [--root DIR] [--json]\n"
+	       "\n"
+	       "The capture sessions under the captures folder: each one's "
+	       "kind (probe or\nsample), frames, status, whether it (or its "
+	       "run) has been fitted, and a\nfailed one's error.  --json: "
+	       "one array of them.\n"
+	       "\n");
+	root_options();
+	printf("  --json           JSON on stdout\n"
 	       "  -q, --quiet      no info messages\n");
 }
 
@@ -59,7 +91,8 @@ struct qopts {
 	int status; /* the exit status when parse() returns -1 */
 };
 
-static int parse(const char *cmd, int argc, char **argv, struct qopts *q)
+static int parse(const char *cmd, void (*help)(void), int argc, char **argv,
+		 struct qopts *q)
 {
 	const char *root = NULL, *config = NULL;
 	char def[4096];
@@ -72,7 +105,7 @@ static int parse(const char *cmd, int argc, char **argv, struct qopts *q)
 		{ 0 },
 	};
 	struct cmd_args a;
-	int r = cmd_options_parse(cmd, cmd_queue_help, opts, argc, argv, &a);
+	int r = cmd_options_parse(cmd, help, opts, argc, argv, &a);
 	if (r) {
 		q->status = cmd_options_exit(r);
 		return -1;
@@ -130,7 +163,7 @@ static int print_job(const struct glint_job *j, void *ctx)
 int cmd_jobs(int argc, char **argv)
 {
 	struct qopts q;
-	if (parse("jobs", argc, argv, &q) < 0)
+	if (parse("jobs", cmd_jobs_help, argc, argv, &q) < 0)
 		return q.status;
 	if (q.nargs != 0)
 		return cmd_usage_error("jobs", "unexpected argument '%s'",
@@ -154,7 +187,7 @@ int cmd_sessions(int argc, char **argv)
 	struct qopts q;
 	char **list = NULL;
 	int n = 0;
-	if (parse("sessions", argc, argv, &q) < 0)
+	if (parse("sessions", cmd_sessions_help, argc, argv, &q) < 0)
 		return q.status;
 	if (q.nargs != 0)
 		return cmd_usage_error("sessions", "unexpected argument '%s'",
@@ -229,7 +262,7 @@ int cmd_queue(int argc, char **argv)
 	const char *what = argv[1];
 	char name[32];
 	snprintf(name, sizeof(name), "queue %s", argv[1]);
-	if (parse(name, argc - 1, argv + 1, &q) < 0)
+	if (parse(name, cmd_queue_help, argc - 1, argv + 1, &q) < 0)
 		return q.status;
 	int nargs = q.nargs;
 	char **args = q.args;

@@ -46,8 +46,8 @@ static const struct glint_cmd commands[] = {
 	{ "check-rig", "check a rig file, its camera and GPIO lines",
 	  cmd_check_rig, cmd_check_rig_help },
 	{ "sessions", "list capture sessions and their status", cmd_sessions,
-	  cmd_queue_help },
-	{ "jobs", "list the job queue", cmd_jobs, cmd_queue_help },
+	  cmd_sessions_help },
+	{ "jobs", "list the job queue", cmd_jobs, cmd_jobs_help },
 	{ "queue", "add, cancel or run queued fits", cmd_queue,
 	  cmd_queue_help },
 };

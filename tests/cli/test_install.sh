@@ -78,6 +78,16 @@ manpages() {
 				{ echo "glint-$c.1: $lines SYNOPSIS lines for $forms usage forms"; return 1; }
 		done
 	fi
+	# Each command its own page (jobs, sessions and queue shared one).
+	local a b
+	for a in jobs sessions queue; do
+		for b in jobs sessions queue; do
+			[ "$a" = "$b" ] && continue
+			grep -v '^\.TH\|glint-' "$man1/glint-$a.1" >"$tmp/ma" 2>/dev/null
+			grep -v '^\.TH\|glint-' "$man1/glint-$b.1" >"$tmp/mb" 2>/dev/null
+			cmp -s "$tmp/ma" "$tmp/mb" && { echo "glint-$a.1 and glint-$b.1 say the same"; return 1; }
+		done
+	done
 	echo "$n command pages"
 	[ "$n" -ge 14 ]
 }

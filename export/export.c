@@ -9,6 +9,7 @@
 #include "fit/render/sampling.h"
 
 #include "core/error.h"
+#include "core/path.h"
 #include "core/suggest.h"
 
 #include <math.h>
@@ -362,7 +363,17 @@ static const char *last_component(const char *path, size_t *len)
 
 const char *glint_export_name_from_path(const char *path, char *buf, size_t n)
 {
-	char *abs = realpath(path, NULL); /* "." and "fit" have a parent */
+	/* Absolute, so that "." and "fit" have a parent: the path itself, or
+	 * (one not made yet) its folder's and its last component. */
+	char *abs = realpath(path, NULL), dir[GLINT_PATH_MAX], *da = NULL;
+	if (!abs && glint_path_dirname(dir, sizeof(dir), path) == 0 &&
+	    (da = realpath(dir, NULL))) {
+		size_t l = strlen(path);
+		const char *base = last_component(path, &l);
+		if (asprintf(&abs, "%s/%.*s", da, (int)l, base) < 0)
+			abs = NULL;
+		free(da);
+	}
 	const char *p = abs ? abs : path;
 	size_t len = strlen(p), l = len;
 	const char *c = last_component(p, &l);

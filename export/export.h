@@ -157,9 +157,10 @@ char *glint_export_text(const struct glint_export *e, const char *name,
 
 /*
  * A material's name from where its fit lives, into buf (n bytes): a
- * fit's folder or its params.json names its session (SESSION/fit ->
- * SESSION; any other folder is itself the name), a material file its
- * stem (copper.json -> copper).  "material" when the path names nothing
+ * fit's folder or its params.json; a folder named fit (SESSION/fit, or
+ * one not made yet) is named after the folder holding it, any other
+ * folder is itself the name; a material file its stem (copper.json ->
+ * copper).  "material" when the path names nothing
  * (".", "/").  Returns buf.
  */
 const char *glint_export_name_from_path(const char *path, char *buf, size_t n);

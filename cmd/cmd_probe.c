@@ -103,12 +103,11 @@ void cmd_probe_help(void)
 }
 
 /* OUT and its siblings (OUT less its extension, then each suffix; ""
- * is OUT itself) by the one overwrite rule (core/output.h), the input
- * never replaced. */
+ * is OUT itself) by the one overwrite rule (core/output.h), the inputs
+ * (NULL-terminated) never replaced. */
 static int outputs_check(const char *out, const char *const *suffixes,
-			 int force, const char *input)
+			 int force, const char *const *inputs)
 {
-	const char *inputs[] = { input, NULL };
 	char path[GLINT_PATH_MAX];
 	for (int k = 0; suffixes[k]; k++) {
 		int ret = *suffixes[k] ? glint_path_sibling(path, sizeof(path),
@@ -248,7 +247,8 @@ static int unwrap_main(int argc, char **argv)
 						"-sources.json",
 						"-preview.png",
 						NULL };
-	if (outputs_check(out, siblings, force, argv[0]) < 0)
+	const char *inputs[] = { argv[0], NULL };
+	if (outputs_check(out, siblings, force, inputs) < 0)
 		return cmd_fail("probe");
 	int ret = glint_image_read_radiance(argv[0], srgb, &photo);
 	if (ret == 0 && (ret = glint_probe_find_ball(photo, have_ball, &o)) < 0)
@@ -303,7 +303,8 @@ static int convert_main(int argc, char **argv)
 	    glint_probe_format_parse(ts, &to) < 0)
 		return cmd_usage_error("probe", "%s", glint_error_msg());
 	static const char *const same[] = { "", NULL };
-	if (outputs_check(argv[1], same, force, argv[0]) < 0)
+	const char *inputs[] = { argv[0], NULL };
+	if (outputs_check(argv[1], same, force, inputs) < 0)
 		return cmd_fail("probe");
 	struct glint_image *src = NULL, *dst = NULL;
 	int ret = glint_image_read_radiance(argv[0], srgb, &src);
@@ -342,8 +343,8 @@ static int register_main(int argc, char **argv)
 		return cmd_usage_error("probe", "register: expected ENV1 ENV2 "
 						"-o OUT");
 	static const char *const same[] = { "", NULL };
-	if (outputs_check(out, same, force, argv[0]) < 0 ||
-	    outputs_check(out, same, force, argv[1]) < 0)
+	const char *inputs[] = { argv[0], argv[1], NULL };
+	if (outputs_check(out, same, force, inputs) < 0)
 		return cmd_fail("probe");
 	struct glint_image *e1 = NULL, *e2 = NULL, *w1, *w2, *blend = NULL;
 	struct mat3 r;

@@ -10,6 +10,7 @@
 #include "capture/hdr/frame_file.h"
 #include "capture/hdr/hdr_linear.h"
 #include "capture/hdr/hdr_files.h"
+#include "capture/hdr/raw_file.h"
 #include "capture/hdr/session_merge.h"
 #include "core/error.h"
 #include "core/json.h"
@@ -25,18 +26,27 @@
 
 void cmd_hdr_help(void)
 {
-	printf("usage: glint hdr (SESSION_DIR | FRAME.dng...) [options]\n"
+	printf("usage: glint hdr SESSION_DIR [options]\n"
+	       "       glint hdr RAW... -o DIR [--times T1,T2,...] "
+	       "[options]\n"
 	       "       glint hdr --times T1,T2,... IMAGE.png... -o DIR "
 	       "[--response M]\n"
 	       "       glint hdr PHOTO.jpg|PHOTO.tif... -o DIR (times from "
 	       "EXIF)\n"
 	       "\n"
-	       "Merge a bracket of raw frames (a capture session, or frame "
-	       "files written by\nglint capture) into linear radiance with "
-	       "noise-optimal weights, zero weight\nfor clipped samples, a "
-	       "per-pixel variance and a motion check, folding the\nframes "
-	       "in one at a time (a session's as its capture did: the same "
-	       "result).\nWrites into the session (or -o DIR):\n"
+	       "Merge a bracket of raw frames into linear radiance with "
+	       "noise-optimal weights,\nzero weight for clipped samples, a "
+	       "per-pixel variance and a motion check,\nfolding the frames "
+	       "in one at a time (a session's as its capture did: the "
+	       "same\nresult).  RAW files: glint's own frames, any camera's "
+	       "raw files LibRaw reads\n(DNG, CR2/CR3, NEF, ARW, RAF, ORF, "
+	       "RW2, ...: exposure, ISO, black and white\nlevels, the CFA "
+	       "pattern and the colour matrix from their metadata; camera "
+	       "RGB\nturned into linear sRGB), or a converter's 16-bit "
+	       "linear TIFFs (dcraw -4 -T).\nAnother camera's conversion "
+	       "gain comes from the bracket (photon transfer)\nunless "
+	       "--dn-per-electron is given.\n"
+	       "Writes into the session (or -o DIR):\n"
 	       "  hdr.exr        radiance, DN per second at unity gain "
 	       "(demosaiced: bilinear)\n"
 	       "  variance.exr   its variance per pixel and channel (0 = "
@@ -47,25 +57,30 @@ void cmd_hdr_help(void)
 	       "frame\n"
 	       "  hdr.png        preview (auto exposure)\n"
 	       "  hdr.json       what the merge saw (frames, clipped and dark "
-	       "pixels, motion)\n"
-	       "\n"
-	       "\n8-bit photos (any camera) with --times or --times-file, or "
-	       "JPEG and TIFF\nphotos with their exposure times in EXIF: the "
-	       "camera's response\nis recovered (--response robertson, the "
-	       "default, or debevec), written to\nresponse.csv and drawn in "
-	       "response.png, and the "
-	       "photos merged; codes at the black floor and at 255 get\nno "
+	       "pixels, motion,\n"
+	       "                 the files' reader, camera, levels, colour "
+	       "matrix, noise)\n"
+	       "\n8-bit photos (any camera: JPEG, 8-bit PNG or TIFF) with "
+	       "--times or --times-file,\nor JPEG and TIFF photos with "
+	       "their exposure times in EXIF: the camera's response\nis "
+	       "recovered (--response robertson, the default, or debevec), "
+	       "written to\nresponse.csv and drawn in response.png, and the "
+	       "photos merged; codes at the\nblack floor and at 255 get no "
 	       "weight (no variance image for 8-bit input).\n\n"
 	       "  -o, --output DIR      output folder (default: the session; "
 	       "required for files)\n"
-	       "      --times LIST      8-bit mode: exposure times in "
-	       "seconds, e.g. 32,16,1/2\n"
+	       "      --times LIST      exposure times in seconds, e.g. "
+	       "32,16,1/2 (8-bit photos;\n"
+	       "                        raw files without their own, or "
+	       "in place of them)\n"
 	       "      --times-file F    the same, one per line\n"
 	       "      --response M      robertson (default) or debevec\n"
 	       "      --dn-per-electron C  sensor conversion gain at unity "
 	       "gain (default: the\n"
-	       "                        rig's \"sensor\", else the simulated "
-	       "sensor's 0.4095)\n"
+	       "                        rig's \"sensor\"; another camera's "
+	       "files: from the\n"
+	       "                        bracket; glint's frames: the "
+	       "simulated sensor's 0.4095)\n"
 	       "      --read-noise E    read noise, electrons (default: rig, "
 	       "else 2.5)\n"
 	       "      --saturation DN   samples at or above this are clipped "
@@ -176,13 +191,12 @@ int cmd_hdr(int argc, char **argv)
 	if (argc < 1)
 		return cmd_usage_error("hdr", "expected a session folder or "
 					      "frame files");
-	/* 8-bit photos: with their times given, or JPEG and TIFF photos
-	 * with their times in EXIF. */
-	char ext[16];
-	glint_path_ext(argv[0], ext, sizeof(ext));
-	int exif = !strcmp(ext, "jpg") || !strcmp(ext, "jpeg") ||
-		   !strcmp(ext, "tif") || !strcmp(ext, "tiff");
-	if (times || times_file || exif) {
+	/* 8-bit photos (JPEG, 8-bit PNG and TIFF): with their times given,
+	 * or from EXIF; everything else is raw. */
+	int ldr = glint_raw_file_is_8bit(argv[0]);
+	if (ldr < 0)
+		return cmd_fail("hdr");
+	if (ldr) {
 		if (!out)
 			return cmd_usage_error("hdr",
 					       "8-bit photos need -o DIR");
@@ -198,6 +212,8 @@ int cmd_hdr(int argc, char **argv)
 
 	struct glint_noise_model nm;
 	struct glint_frame *frames = NULL;
+	struct glint_raw_info info;
+	json_t *input = NULL;
 	struct glint_hdr_report rep;
 	static const char *const hdr_names[5] = { "hdr.exr", "variance.exr",
 						  "weights.exr", "mask.png",
@@ -223,7 +239,24 @@ int cmd_hdr(int argc, char **argv)
 			return cmd_usage_error("hdr",
 					       "frame files need -o DIR");
 		n = argc;
-		ret = glint_frames_read((const char *const *)argv, n, &frames);
+		double *t = NULL;
+		ret = 0;
+		if (times || times_file) {
+			t = calloc((size_t)n, sizeof(*t));
+			ret = t ? glint_exposure_times_read(times, times_file,
+							    n, t)
+				: glint_error_set(ENOMEM, "out of memory");
+		}
+		if (ret == 0)
+			ret = glint_frames_read((const char *const *)argv, n, t,
+						&frames, &info);
+		free(t);
+		if (ret == 0)
+			input = glint_raw_input_json(
+				&info, &frames[0],
+				times_file ? "--times-file"
+				: times	   ? "--times"
+					   : "the files' metadata");
 	}
 	static const char *const all_names[] = { "hdr.exr",	"variance.exr",
 						 "weights.exr", "mask.png",
@@ -232,6 +265,26 @@ int cmd_hdr(int argc, char **argv)
 	if (ret == 0 && !own)
 		ret = outputs_check(out, all_names, force, argv,
 				    is_session ? 0 : argc);
+	/* Another camera's files: its conversion gain from the bracket
+	 * itself, unless given. */
+	const char *noise_from = is_session
+					 ? "the session's rig.json"
+					 : "glint's simulated sensor (default)";
+	long used = 0;
+	if (ret == 0 && !is_session && isnan(cpe) &&
+	    strcmp(info.reader, "glint frame") != 0) {
+		ret = glint_noise_from_bracket(frames, n, &nm, &used);
+		if (used)
+			noise_from = "the bracket (photon transfer)";
+	}
+	if (!isnan(cpe))
+		noise_from = "--dn-per-electron";
+	if (input) {
+		json_object_set_new(input, "noise_model_from",
+				    json_string(noise_from));
+		json_object_set_new(input, "photon_transfer_sites",
+				    json_integer(used));
+	}
 	if (!isnan(cpe))
 		nm.dn_per_electron = cpe;
 	if (!isnan(rn))
@@ -246,15 +299,17 @@ int cmd_hdr(int argc, char **argv)
 						&rep, &width, &height,
 						&valid_px);
 	else if (ret == 0)
-		ret = glint_hdr_merge_write(frames, n, &nm, out, hdr_names,
-					    &rep, &width, &height, &valid_px,
-					    NULL);
+		ret = glint_hdr_merge_write(
+			frames, n, &nm, info.has_matrix ? info.rgb_cam : NULL,
+			out, hdr_names, &rep, &width, &height, &valid_px, NULL);
 	if (ret == 0)
 		n = rep.frames;
 	json_t *res = NULL;
 	if (ret == 0)
 		ret = glint_hdr_report_write(out, n, width, height, valid_px,
-					     &rep, &nm, &res);
+					     &rep, &nm, input, &res);
+	else
+		json_decref(input);
 	if (ret == 0) {
 		glint_log_info("%d frames -> %s/hdr.exr (%dx%d), %ld of %ld "
 			       "pixels valid, %ld sites clipped in every "

@@ -11,7 +11,17 @@
 #include <math.h>
 #include <string.h>
 
-static int from_jpeg(const char *path, double *t)
+static double jpeg_iso(ExifData *ed)
+{
+	ExifEntry *e = exif_content_get_entry(ed->ifd[EXIF_IFD_EXIF],
+					      EXIF_TAG_ISO_SPEED_RATINGS);
+	if (!e || e->format != EXIF_FORMAT_SHORT || e->components < 1 ||
+	    e->size < 2)
+		return 0;
+	return exif_get_short(e->data, exif_data_get_byte_order(ed));
+}
+
+static int from_jpeg(const char *path, double *t, double *iso)
 {
 	ExifData *ed = exif_data_new_from_file(path);
 	if (!ed)
@@ -29,6 +39,7 @@ static int from_jpeg(const char *path, double *t)
 		ExifRational r = exif_get_rational(
 			e->data, exif_data_get_byte_order(ed));
 		*t = r.denominator ? (double)r.numerator / r.denominator : 0;
+		*iso = jpeg_iso(ed);
 	}
 	exif_data_unref(ed);
 	return ret;
@@ -51,7 +62,7 @@ static int tiff_rational(TIFF *tif, uint32_t tag, double *v)
 	return TIFFGetField(tif, tag, v);
 }
 
-static int from_tiff(const char *path, double *t)
+static int from_tiff(const char *path, double *t, double *iso)
 {
 	struct glint_tiff_msgs m;
 	TIFF *tif = glint_tiff_open(path, "r", &m);
@@ -71,21 +82,32 @@ static int from_tiff(const char *path, double *t)
 						"%s: its EXIF directory has no "
 						"ExposureTime",
 						path);
+	uint16_t count = 0, *speeds = NULL;
+	if (ret == 0 &&
+	    TIFFGetField(tif, EXIFTAG_ISOSPEEDRATINGS, &count, &speeds) &&
+	    count >= 1 && speeds)
+		*iso = speeds[0];
 	TIFFClose(tif);
 	return ret;
 }
 
 int glint_exif_exposure_time(const char *path, double *t)
 {
+	double iso;
+	return glint_exif_exposure(path, t, &iso);
+}
+
+int glint_exif_exposure(const char *path, double *t, double *iso)
+{
 	char ext[16];
 	int ret;
 
-	*t = 0;
+	*t = *iso = 0;
 	glint_path_ext(path, ext, sizeof(ext));
 	if (!strcmp(ext, "tif") || !strcmp(ext, "tiff"))
-		ret = from_tiff(path, t);
+		ret = from_tiff(path, t, iso);
 	else if (!strcmp(ext, "jpg") || !strcmp(ext, "jpeg"))
-		ret = from_jpeg(path, t);
+		ret = from_jpeg(path, t, iso);
 	else
 		ret = glint_error_set(EINVAL,
 				      "%s: exposure times are read from the "

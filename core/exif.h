@@ -13,5 +13,7 @@
  * (values).
  */
 int glint_exif_exposure_time(const char *path, double *t);
+/* The same, and *iso the EXIF ISOSpeedRatings (0 when it has none). */
+int glint_exif_exposure(const char *path, double *t, double *iso);
 
 #endif

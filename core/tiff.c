@@ -215,6 +215,55 @@ int glint_tiff_read_rgb8(const char *path, int *w, int *h, uint8_t **rgb)
 	return 0;
 }
 
+int glint_tiff_read_rgb16(const char *path, int *w, int *h, int *channels,
+			  uint16_t **px)
+{
+	struct samples s;
+	int ret = read_samples(path, &s);
+
+	*px = NULL;
+	if (ret < 0)
+		return ret;
+	if (s.bits != 16) {
+		free(s.data);
+		return glint_error_set(EINVAL,
+				       "%s: a %d-bit TIFF where 16-bit linear "
+				       "samples are expected",
+				       path, s.bits);
+	}
+	int nc = s.spp >= 3 ? 3 : 1;
+	*px = malloc((size_t)s.w * s.h * nc * sizeof(uint16_t));
+	if (!*px) {
+		free(s.data);
+		return glint_error_set(ENOMEM, "%s: out of memory", path);
+	}
+	for (size_t i = 0; i < (size_t)s.w * s.h; i++)
+		for (int c = 0; c < nc; c++)
+			(*px)[nc * i + c] = (uint16_t)sample(&s, i, c);
+	free(s.data);
+	*w = s.w;
+	*h = s.h;
+	*channels = nc;
+	return 0;
+}
+
+int glint_tiff_sample_bits(const char *path, int *is_float)
+{
+	struct glint_tiff_msgs m;
+	uint16_t bps = 0, fmt = SAMPLEFORMAT_UINT;
+	TIFF *tif = glint_tiff_open(path, "r", &m);
+
+	if (!tif)
+		return glint_error_set(EIO, "%s: not a readable TIFF: %s", path,
+				       m.text[0] ? m.text : "libtiff failed");
+	TIFFGetFieldDefaulted(tif, TIFFTAG_BITSPERSAMPLE, &bps);
+	TIFFGetFieldDefaulted(tif, TIFFTAG_SAMPLEFORMAT, &fmt);
+	TIFFClose(tif);
+	if (is_float)
+		*is_float = fmt == SAMPLEFORMAT_IEEEFP;
+	return bps;
+}
+
 int glint_tiff_write(const char *path, const struct glint_image *img)
 {
 	char tmp[4096];

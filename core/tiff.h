@@ -36,6 +36,14 @@ TIFF *glint_tiff_open(const char *path, const char *mode,
 int glint_tiff_read(const char *path, struct glint_image **out);
 /* An 8-bit TIFF's code values (w * h * 3 bytes, caller frees). */
 int glint_tiff_read_rgb8(const char *path, int *w, int *h, uint8_t **rgb);
+/* A 16-bit TIFF's samples as they are (a raw converter's linear output,
+ * e.g. dcraw -4 -T): *channels 3 (RGB; extra samples dropped) or 1 (grey),
+ * w * h * channels values, caller frees. */
+int glint_tiff_read_rgb16(const char *path, int *w, int *h, int *channels,
+			  uint16_t **px);
+/* Bits per sample of a TIFF's first image (*is_float, may be NULL: its
+ * samples are floats), or a negative errno naming the file. */
+int glint_tiff_sample_bits(const char *path, int *is_float);
 /* 32-bit float RGB, deflate with the floating-point predictor, atomic. */
 int glint_tiff_write(const char *path, const struct glint_image *img);
 

@@ -62,6 +62,9 @@ struct glint_frame {
 	double exposure_s;	/* applied, as the camera reports it */
 	double gain;		/* applied analogue gain */
 	double black_level;	/* DN */
+	/* DN where the sensor saturates (a raw file's WhiteLevel, e.g. 15520
+	 * of a 14-bit range); 0: the top code, 2^bit_depth - 1. */
+	double white_level;
 	/* Exposure window on the clock given to glint_camera_open()
 	 * (V4L2: CLOCK_MONOTONIC, which glint_clock_real is). */
 	double t_start, t_end;
@@ -74,9 +77,15 @@ void glint_frame_release(struct glint_frame *f);
  * saturation is not known: 95 % of the range above black (a sensor's
  * response bends before its top code).  The bracket planner and the merge
  * use the same level, so a bracket covers what the merge can use. */
+static inline double glint_frame_white_dn(const struct glint_frame *f)
+{
+	return f->white_level > 0 ? f->white_level
+				  : (double)((1u << f->bit_depth) - 1);
+}
+
 static inline double glint_frame_clip_dn(const struct glint_frame *f)
 {
-	double top = (double)((1u << f->bit_depth) - 1);
+	double top = glint_frame_white_dn(f);
 	return f->black_level + 0.95 * (top - f->black_level);
 }
 

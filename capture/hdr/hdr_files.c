@@ -293,22 +293,55 @@ int glint_ldr_merge_files(const char *const *files, int n, const double *t,
 	return ret;
 }
 
-int glint_frames_read(const char *const *files, int n,
-		      struct glint_frame **frames)
+int glint_frames_read(const char *const *files, int n, const double *times,
+		      struct glint_frame **frames, struct glint_raw_info *info)
 {
+	struct glint_raw_info k;
 	int ret = 0;
 
 	*frames = calloc((size_t)n, sizeof(**frames));
 	if (!*frames)
 		return glint_error_set(ENOMEM, "out of memory");
-	for (int i = 0; i < n && ret == 0; i++)
-		ret = glint_frame_read(files[i], &(*frames)[i], NULL);
+	for (int i = 0; i < n && ret == 0; i++) {
+		struct glint_frame *f = &(*frames)[i];
+		ret = glint_raw_file_read(files[i], f, i ? &k : info);
+		if (ret < 0)
+			break;
+		if (i == 0)
+			k = *info;
+		if (times) {
+			f->exposure_s = times[i];
+		} else if (!k.has_exposure) {
+			ret = glint_error_set(EINVAL,
+					      "%s: no exposure time in its "
+					      "metadata: give the bracket's "
+					      "times (--times or --times-file)",
+					      files[i]);
+			break;
+		}
+		/* One camera and one colour matrix for the whole bracket. */
+		int same = !strcmp(k.camera, info->camera) &&
+			   !strcmp(k.reader, info->reader) &&
+			   k.has_matrix == info->has_matrix;
+		for (int j = 0; same && j < 9; j++)
+			same = fabs(k.rgb_cam[j] - info->rgb_cam[j]) <= 1e-6;
+		if (!same)
+			ret = glint_error_set(EINVAL,
+					      "%s: %s (read by %s) where %s "
+					      "holds %s (read by %s): a "
+					      "bracket's frames come from one "
+					      "camera",
+					      files[i], k.camera, k.reader,
+					      files[0], info->camera,
+					      info->reader);
+	}
 	return ret;
 }
 
 int glint_hdr_report_write(const char *out, int frames, int width, int height,
 			   long valid_px, const struct glint_hdr_report *rep,
-			   const struct glint_noise_model *nm, json_t **doc)
+			   const struct glint_noise_model *nm, json_t *input,
+			   json_t **doc)
 {
 	char path[GLINT_PATH_MAX];
 	json_t *pairs = json_array();
@@ -331,6 +364,10 @@ int glint_hdr_report_write(const char *out, int frames, int width, int height,
 			  "motion", pairs, "noise_model", "dn_per_electron",
 			  nm->dn_per_electron, "read_noise_e", nm->read_noise_e,
 			  "saturation_dn", nm->saturation_dn);
+	if (res && input)
+		json_object_set_new(res, "input", input);
+	else
+		json_decref(input);
 	char *text = res ? json_dumps(res, JSON_INDENT(2)) : NULL;
 	ret = text ? glint_path_join(path, sizeof(path), out, "hdr.json")
 		   : glint_error_set(ENOMEM, "out of memory");
@@ -342,4 +379,25 @@ int glint_hdr_report_write(const char *out, int frames, int width, int height,
 	else
 		json_decref(res);
 	return ret;
+}
+
+json_t *glint_raw_input_json(const struct glint_raw_info *info,
+			     const struct glint_frame *f0,
+			     const char *times_from)
+{
+	json_t *m = json_array();
+	for (int i = 0; i < 9 && info->has_matrix; i++)
+		json_array_append_new(m, json_real(info->rgb_cam[i]));
+	return json_pack(
+		"{s:s, s:s, s:s, s:s, s:f, s:f, s:f, s:s, s:o}", "reader",
+		info->reader, "camera", info->camera, "format", f0->format,
+		"exposure_times_from", times_from, "iso", info->iso,
+		"black_level", f0->black_level, "white_level",
+		glint_frame_white_dn(f0), "colour",
+		info->has_matrix ? "camera RGB to linear sRGB (D65 white) by "
+				   "the file's colour matrix"
+				 : "as the frames hold it (glint's cameras: "
+				   "linear sRGB; a TIFF: its converter's "
+				   "output space)",
+		"matrix", info->has_matrix ? m : (json_decref(m), json_null()));
 }

@@ -14,6 +14,7 @@
  */
 
 #include "capture/hdr/hdr_linear.h"
+#include "capture/hdr/raw_file.h"
 
 #include <jansson.h>
 
@@ -49,19 +50,32 @@ int glint_ldr_merge_files(const char *const *files, int n, const double *t,
 			  const char *method, const char *out,
 			  struct glint_ldr_merge_info *info);
 
-/* Raw frames (capture/hdr/frame_file.h) read from files[n]: *frames is the
- * caller's, freed with glint_frames_free() also on failure. */
-int glint_frames_read(const char *const *files, int n,
-		      struct glint_frame **frames);
+/* Raw frames read from files[n] (capture/hdr/raw_file.h: glint's own,
+ * 16-bit TIFFs, any raw file LibRaw reads), with exposure times times[n]
+ * in place of the files' own when times is not NULL (a file without one is
+ * an error otherwise).  *info: frame 0's reader, camera and colour matrix;
+ * every frame must come from the same camera by the same reader.  *frames
+ * is the caller's, freed with glint_frames_free() also on failure. */
+int glint_frames_read(const char *const *files, int n, const double *times,
+		      struct glint_frame **frames, struct glint_raw_info *info);
 
 /*
  * The merge's record, written atomically to out/hdr.json: the frame
  * count, size, valid pixels, clipped and dark sites, the motion check per
- * frame pair and the noise model used.  *doc (the same document) is the
- * caller's to json_decref() when doc is not NULL.
+ * frame pair, the noise model used and, when `input` is not NULL (the
+ * record takes it), what the frames were ("input").  *doc (the same
+ * document) is the caller's to json_decref() when doc is not NULL.
  */
 int glint_hdr_report_write(const char *out, int frames, int width, int height,
 			   long valid_px, const struct glint_hdr_report *rep,
-			   const struct glint_noise_model *nm, json_t **doc);
+			   const struct glint_noise_model *nm, json_t *input,
+			   json_t **doc);
+
+/* What a bracket of files was, for hdr.json's "input": the reader, the
+ * camera, where the exposure times came from, the colour conversion and
+ * its matrix, the frames' layout, white and black levels. */
+json_t *glint_raw_input_json(const struct glint_raw_info *info,
+			     const struct glint_frame *f0,
+			     const char *times_from);
 
 #endif

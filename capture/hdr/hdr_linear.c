@@ -29,13 +29,14 @@ void glint_raw_hdr_release(struct glint_raw_hdr *h)
 int glint_hdr_check_frame(const struct glint_frame *f, int i,
 			  const struct glint_frame *f0)
 {
-	if (!f->linear || f->channels != 1)
+	if (!f->linear || !(f->channels == 1 ||
+			    (f->channels == 3 && !strcmp(f->format, "RGB16"))))
 		return glint_error_set(
 			EINVAL,
 			"HDR merge: frame %d is %s, %d channel(s)%s: "
-			"the linear merge takes raw Bayer or mono "
-			"frames (camera-encoded ones need a response "
-			"curve)",
+			"the linear merge takes raw Bayer, mono or "
+			"linear RGB16 frames (camera-encoded ones need "
+			"a response curve)",
 			i, f->format, f->channels,
 			f->linear ? "" : ", camera-encoded");
 	if (f0 && (f->width != f0->width || f->height != f0->height ||
@@ -56,11 +57,14 @@ int glint_hdr_check_frame(const struct glint_frame *f, int i,
 				       "finite values",
 				       i, f->exposure_s, f->gain);
 	if (f->bit_depth < 1 || f->bit_depth > 16 || !(f->black_level >= 0) ||
-	    f->black_level >= (1 << f->bit_depth) - 1)
+	    !(f->white_level >= 0) ||
+	    f->white_level > (1 << f->bit_depth) - 1 ||
+	    f->black_level >= glint_frame_white_dn(f))
 		return glint_error_set(EINVAL,
 				       "HDR merge: frame %d: black level "
-				       "%g for %d bits",
-				       i, f->black_level, f->bit_depth);
+				       "%g, white level %g for %d bits",
+				       i, f->black_level,
+				       glint_frame_white_dn(f), f->bit_depth);
 	if (!f->data)
 		return glint_error_set(EINVAL,
 				       "HDR merge: frame %d has no pixels", i);
@@ -90,7 +94,7 @@ static int by_exposure(const void *a, const void *b)
 void glint_merge_frame_init(struct merge_frame *k, const struct glint_frame *f,
 			    const struct glint_noise_model *m)
 {
-	double top = (1 << f->bit_depth) - 1;
+	double top = glint_frame_white_dn(f);
 	k->data = f->data;
 	k->black = f->black_level;
 	k->top = top;
@@ -200,6 +204,86 @@ static void merge_rows(void *ctx, int begin, int end, int thread)
 	}
 }
 
+static int by_value(const void *a, const void *b)
+{
+	float x = *(const float *)a, y = *(const float *)b;
+	return (x > y) - (x < y);
+}
+
+int glint_noise_from_bracket(const struct glint_frame *frames, int n,
+			     struct glint_noise_model *m, long *used)
+{
+	const struct glint_frame **f = malloc((size_t)n * sizeof(*f));
+	int ret = check_frames(frames, n);
+
+	*used = 0;
+	if (!f || ret < 0) {
+		free(f);
+		return ret < 0 ? ret : glint_error_set(ENOMEM, "out of memory");
+	}
+	for (int i = 0; i < n; i++)
+		f[i] = &frames[i];
+	qsort(f, (size_t)n, sizeof(*f), by_exposure);
+	size_t ns =
+		(size_t)frames[0].width * frames[0].height * frames[0].channels;
+	/* At most about 4 M samples over all pairs. */
+	size_t step = ns * (size_t)(n > 1 ? n - 1 : 1) / 4000000 + 1;
+	/* Linear RGB frames (a converter's output) keep one list per
+	 * channel: its colour matrix gives the channels different noise. */
+	int nc = frames[0].channels;
+	if (nc > 1 && step % (size_t)nc)
+		step += (size_t)nc - step % (size_t)nc;
+	size_t cap = (ns / step + 1) * (size_t)(n > 1 ? n - 1 : 1),
+	       k[3] = { 0 };
+	float *q = malloc(cap * (size_t)nc * sizeof(float));
+	if (!q) {
+		free(f);
+		return glint_error_set(ENOMEM, "out of memory");
+	}
+	for (int i = 0; i + 1 < n; i++) {
+		const struct glint_frame *a = f[i], *b = f[i + 1];
+		double ra = glint_frame_white_dn(a) - a->black_level,
+		       rb = glint_frame_white_dn(b) - b->black_level;
+		double r =
+			(b->exposure_s * b->gain) / (a->exposure_s * a->gain);
+		for (size_t s0 = 0; s0 < ns; s0 += step)
+			for (int c = 0; c < nc; c++) {
+				size_t s = s0 + (size_t)c;
+				double da = a->data[s] - a->black_level,
+				       db = b->data[s] - b->black_level;
+				if (da < 0.05 * ra || da > 0.8 * ra ||
+				    db < 0.05 * rb || db > 0.8 * rb)
+					continue;
+				double diff = db - r * da;
+				q[cap * (size_t)c + k[c]++] =
+					(float)(diff * diff /
+						(b->gain * db +
+						 r * r * a->gain * da));
+			}
+	}
+	free(f);
+	/* diff^2 / its variance per unit c is chi-square with one degree of
+	 * freedom: its median is 0.45494 c.  Of several channels, the
+	 * noisiest (its variance is not understated). */
+	double best = 0;
+	long total = 0;
+	for (int c = 0; c < nc; c++) {
+		if (k[c] < 1000)
+			continue;
+		float *qc = q + cap * (size_t)c;
+		qsort(qc, k[c], sizeof(*qc), by_value);
+		double est = qc[k[c] / 2] / 0.454936;
+		best = est > best ? est : best;
+		total += (long)k[c];
+	}
+	if (best > 0) {
+		m->dn_per_electron = best;
+		*used = total;
+	}
+	free(q);
+	return 0;
+}
+
 int glint_hdr_merge_raw(const struct glint_frame *frames, int n,
 			const struct glint_noise_model *noise,
 			struct glint_raw_hdr *out, struct glint_hdr_report *rep)
@@ -216,7 +300,8 @@ int glint_hdr_merge_raw(const struct glint_frame *frames, int n,
 	memset(rep, 0, sizeof(*rep));
 	if (ret < 0)
 		return ret;
-	size_t ns = (size_t)frames[0].width * frames[0].height;
+	size_t ns =
+		(size_t)frames[0].width * frames[0].channels * frames[0].height;
 	f = malloc((size_t)n * sizeof(*f));
 	mf = malloc((size_t)n * sizeof(*mf));
 	part = calloc((size_t)nthreads, sizeof(*part));
@@ -248,7 +333,8 @@ int glint_hdr_merge_raw(const struct glint_frame *frames, int n,
 	}
 	/* Rows to every thread; each counts into its own report (sums of
 	 * whole numbers: the same totals in any order). */
-	struct merge_job job = { mf, n, frames[0].width, out, part };
+	struct merge_job job = { mf, n, frames[0].width * frames[0].channels,
+				 out, part };
 	glint_parallel_for(frames[0].height, 8, nthreads, merge_rows, &job);
 	for (int t = 0; t < nthreads; t++) {
 		rep->invalid_sites += part[t].invalid_sites;
@@ -409,6 +495,26 @@ static void demosaic_rows(void *ctx, int begin, int end, int thread)
 		}
 }
 
+/* Three samples per pixel (a linear RGB frame): nothing to interpolate;
+ * a pixel is valid where all three are. */
+static void rgb_rows(void *ctx, int begin, int end, int thread)
+{
+	const struct demosaic_job *j = ctx;
+	const struct glint_raw_hdr *raw = j->raw;
+	(void)thread;
+
+	for (size_t p = (size_t)begin * raw->width;
+	     p < (size_t)end * raw->width; p++) {
+		int ok = raw->valid[3 * p] && raw->valid[3 * p + 1] &&
+			 raw->valid[3 * p + 2];
+		for (int c = 0; c < 3; c++) {
+			j->r->data[3 * p + c] = raw->x[3 * p + c];
+			j->v->data[3 * p + c] = ok ? raw->var[3 * p + c] : 0;
+			j->m->data[3 * p + c] = (float)ok;
+		}
+	}
+}
+
 int glint_hdr_demosaic(const struct glint_raw_hdr *raw,
 		       struct glint_image **radiance,
 		       struct glint_image **variance,
@@ -416,15 +522,16 @@ int glint_hdr_demosaic(const struct glint_raw_hdr *raw,
 {
 	int w = raw->width, h = raw->height;
 	const char *fmt = raw->format;
+	int rgb = !strcmp(fmt, "RGB16");
 
 	*radiance = *variance = *valid = NULL;
 	if (strcmp(fmt, "RGGB16") && strcmp(fmt, "GRBG16") &&
 	    strcmp(fmt, "GBRG16") && strcmp(fmt, "BGGR16") &&
-	    strcmp(fmt, "MONO16"))
+	    strcmp(fmt, "MONO16") && !rgb)
 		return glint_error_set(EINVAL,
 				       "demosaic: layout '%s': expected "
-				       "RGGB16, GRBG16, GBRG16, BGGR16 or "
-				       "MONO16",
+				       "RGGB16, GRBG16, GBRG16, BGGR16, "
+				       "MONO16 or RGB16",
 				       fmt);
 	struct demosaic_job job = { raw,
 				    { { 0 } },
@@ -439,11 +546,17 @@ int glint_hdr_demosaic(const struct glint_raw_hdr *raw,
 		glint_image_free(job.m);
 		return glint_error_set(ENOMEM, "demosaic: out of memory");
 	}
-	int colour[4];
-	cfa_cell(fmt, colour);
-	demosaic_taps(&job, colour);
-	/* Rows to every thread: each output pixel reads only the sites. */
-	glint_parallel_for(h, 8, glint_cpu_count(), demosaic_rows, &job);
+	if (rgb) {
+		glint_parallel_for(h, 8, glint_cpu_count(), rgb_rows, &job);
+	} else {
+		int colour[4];
+		cfa_cell(fmt, colour);
+		demosaic_taps(&job, colour);
+		/* Rows to every thread: each output pixel reads only the
+		 * sites. */
+		glint_parallel_for(h, 8, glint_cpu_count(), demosaic_rows,
+				   &job);
+	}
 	*radiance = job.r;
 	*variance = job.v;
 	*valid = job.m;

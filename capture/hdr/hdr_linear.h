@@ -37,6 +37,22 @@ struct glint_noise_model {
 /* The simulated 12-bit sensor's numbers (sim/sensor.c). */
 void glint_noise_default(struct glint_noise_model *m);
 
+/*
+ * The conversion gain of a camera glint knows nothing of, from its own
+ * bracket (photon transfer): at each site well exposed (5-80 % of the
+ * range) in two frames adjacent in exposure, the second frame's value less
+ * the first's scaled by their exposure ratio has the variance
+ * c (g_b d_b + r^2 g_a d_a) of shot noise; the median of the squared
+ * difference over that, over all pairs (at most about 4 M samples), is
+ * 0.455 c.  Linear RGB frames (a raw converter's output, whose colour
+ * matrix gives each channel its own noise) take the noisiest channel's.
+ * m->dn_per_electron is set when at least 1000 sites qualify (*used says
+ * how many), else left as it is.  The frames must pass the
+ * merge's checks.
+ */
+int glint_noise_from_bracket(const struct glint_frame *frames, int n,
+			     struct glint_noise_model *m, long *used);
+
 /* Per-photosite merge (before demosaicing). */
 struct glint_raw_hdr {
 	int width, height;

@@ -124,10 +124,13 @@ static int fold_held(struct glint_hdr_stream *s, const struct merge_frame *next)
 	if (!part)
 		return glint_error_set(ENOMEM, "HDR merge: out of memory");
 	held.data = s->held;
-	struct fold_job job = {
-		s,    &held,	     next, 1u << idx, idx < 32 ? idx : -1,
-		part, s->first.width
-	};
+	struct fold_job job = { s,
+				&held,
+				next,
+				1u << idx,
+				idx < 32 ? idx : -1,
+				part,
+				s->first.width * s->first.channels };
 	glint_parallel_for(s->first.height, 8, nthreads, fold_rows, &job);
 	for (int t = 0; job.pair >= 0 && t < nthreads; t++) {
 		s->rep.compared[idx] += part[t].compared[idx];
@@ -139,7 +142,7 @@ static int fold_held(struct glint_hdr_stream *s, const struct merge_frame *next)
 
 static int start(struct glint_hdr_stream *s, const struct glint_frame *f)
 {
-	size_t ns = (size_t)f->width * f->height;
+	size_t ns = (size_t)f->width * f->channels * f->height;
 
 	s->sites = ns;
 	s->sw = calloc(ns, sizeof(float));
@@ -262,9 +265,9 @@ int glint_hdr_stream_finish(struct glint_hdr_stream *s,
 	int last = s->n - 1;
 	struct merge_frame held = s->k[last];
 	held.data = s->held;
-	struct finish_job job = {
-		{ s, &held, NULL, 1u << last, -1, part, s->first.width }, valid
-	};
+	struct finish_job job = { { s, &held, NULL, 1u << last, -1, part,
+				    s->first.width * s->first.channels },
+				  valid };
 	glint_parallel_for(s->first.height, 8, nthreads, finish_rows, &job);
 	*rep = s->rep;
 	rep->frames = s->n;

@@ -198,15 +198,43 @@ void glint_frames_free(struct glint_frame *f, int n)
 	free(f);
 }
 
-int glint_hdr_write(struct glint_raw_hdr *raw, const char *out,
-		    const char *const names[5], int *width, int *height,
-		    long *valid_px, struct glint_image **radiance)
+/* Camera RGB to the output's RGB by the 3 x 3 matrix m (row-major): the
+ * radiance, and the variance as of a sum of independent terms (each
+ * channel's variance weighted by the square of its coefficient). */
+static void to_rgb(struct glint_image *rad, struct glint_image *var,
+		   const double m[9])
+{
+	size_t np = (size_t)rad->width * rad->height;
+	for (size_t p = 0; p < np; p++) {
+		float *x = rad->data + 3 * p, *v = var->data + 3 * p;
+		double y[3], w[3];
+		int ok = v[0] > 0 && v[1] > 0 && v[2] > 0;
+		for (int i = 0; i < 3; i++) {
+			y[i] = w[i] = 0;
+			for (int j = 0; j < 3; j++) {
+				y[i] += m[3 * i + j] * x[j];
+				w[i] += m[3 * i + j] * m[3 * i + j] * v[j];
+			}
+		}
+		for (int i = 0; i < 3; i++) {
+			x[i] = (float)y[i];
+			v[i] = ok ? (float)w[i] : 0;
+		}
+	}
+}
+
+static int write_merge(struct glint_raw_hdr *raw, const double *rgb_cam,
+		       const char *out, const char *const names[5], int *width,
+		       int *height, long *valid_px,
+		       struct glint_image **radiance)
 {
 	struct glint_image *rad = NULL, *var = NULL, *valid = NULL;
 	char path[GLINT_PATH_MAX];
 	int ret = glint_hdr_demosaic(raw, &rad, &var, &valid);
 
 	glint_raw_hdr_release(raw);
+	if (ret == 0 && rgb_cam)
+		to_rgb(rad, var, rgb_cam);
 	if (ret == 0 && mkdir(out, 0777) < 0 && errno != EEXIST)
 		ret = glint_error_set(errno, "%s: %s", out, strerror(errno));
 	*valid_px = 0;
@@ -249,8 +277,17 @@ int glint_hdr_write(struct glint_raw_hdr *raw, const char *out,
 	return ret;
 }
 
+int glint_hdr_write(struct glint_raw_hdr *raw, const char *out,
+		    const char *const names[5], int *width, int *height,
+		    long *valid_px, struct glint_image **radiance)
+{
+	return write_merge(raw, NULL, out, names, width, height, valid_px,
+			   radiance);
+}
+
 int glint_hdr_merge_write(struct glint_frame *frames, int n,
-			  const struct glint_noise_model *nm, const char *out,
+			  const struct glint_noise_model *nm,
+			  const double *rgb_cam, const char *out,
 			  const char *const names[5],
 			  struct glint_hdr_report *rep, int *width, int *height,
 			  long *valid_px, struct glint_image **radiance)
@@ -271,8 +308,8 @@ int glint_hdr_merge_write(struct glint_frame *frames, int n,
 	glint_hdr_stream_free(st);
 	if (ret < 0)
 		return ret;
-	return glint_hdr_write(&raw, out, names, width, height, valid_px,
-			       radiance);
+	return write_merge(&raw, rgb_cam, out, names, width, height, valid_px,
+			   radiance);
 }
 
 static int fold_one(struct glint_frame *f, int i, int n, void *ctx)

@@ -37,11 +37,15 @@ int glint_hdr_write(struct glint_raw_hdr *raw, const char *out,
 
 /*
  * Merge a raw bracket (the streaming merge, frames folded in the order
- * given) and write it as glint_hdr_write() does.  Each frame's pixel data
- * is released (glint_frame_release: its metadata stays) once folded in.
+ * given) and write it as glint_hdr_write() does, after turning the camera's
+ * RGB into linear sRGB by rgb_cam (3 x 3, row-major; NULL: the frames' RGB
+ * is kept, as glint's own cameras' is linear sRGB by declaration) with the
+ * variance carried through.  Each frame's pixel data is released
+ * (glint_frame_release: its metadata stays) once folded in.
  */
 int glint_hdr_merge_write(struct glint_frame *frames, int n,
-			  const struct glint_noise_model *nm, const char *out,
+			  const struct glint_noise_model *nm,
+			  const double *rgb_cam, const char *out,
 			  const char *const names[5],
 			  struct glint_hdr_report *rep, int *width, int *height,
 			  long *valid_px, struct glint_image **radiance);

@@ -8,21 +8,7 @@ mem=$2/exposures/memorial
 [ -d "$mem" ] || { echo "skip: $mem absent"; exit 77; }
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-fails=0 checks=0
-check() {
-	local what=$1
-	shift
-	checks=$((checks + 1))
-	if "$@"; then echo "ok   $what"; else echo "FAIL $what"; fails=$((fails + 1)); fi
-}
-run() {
-	local want=$1 frag=$2
-	shift 2
-	"$glint" "$@" >"$tmp/out" 2>"$tmp/err"
-	local got=$?
-	[ "$got" = "$want" ] || { echo "  glint $*: exit $got, expected $want:" >&2; cat "$tmp/err" >&2; return 1; }
-	[ -z "$frag" ] || grep -qF -- "$frag" "$tmp/err" || { echo "  stderr lacks '$frag':" >&2; cat "$tmp/err" >&2; return 1; }
-}
+. "$(dirname "$0")/../checks.sh"
 photos=("$mem"/memorial00[67]?.png)
 check "memorial stack merges" run 0 "" hdr --times-file "$mem/shutter_times_qhan1028.txt" "${photos[@]}" -o "$tmp/m" --json
 check "... radiance, mask, response written" bash -c "test -s '$tmp/m/hdr.exr' && test -s '$tmp/m/mask.png' && test \$(grep -vc '^#' '$tmp/m/response.csv') = 256"
@@ -101,5 +87,4 @@ check "register a map with itself: no turn" run 0 "" probe register "$tmp/c.exr"
 check "... angle ~0" python3 -c "import json,sys; d=json.load(open('$tmp/out')); sys.exit(d['angle_deg'] > 0.3)"
 printf '10 10 20 20\n' >"$tmp/one.txt"
 check "register from one point: exit 1" run 1 "at least 2" probe register "$tmp/c.exr" "$tmp/c.exr" -o "$tmp/b2.exr" --points "$tmp/one.txt"
-echo "$((checks - fails)) passed, $fails failed"
-[ "$fails" = 0 ]
+checks_done

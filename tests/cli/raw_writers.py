@@ -15,6 +15,10 @@
       white level 12000, the first column dropped (a GRBG mosaic),
       ColorMatrix1 a real camera's (Adobe's for the Canon EOS 5D Mark
       II), AsShotNeutral of tungsten light, ExposureTime and ISO in IFD 0.
+  raw_writers.py linear-dng IN.tiff OUT.dng EXPOSURE_S 0
+      A linear (LinearRaw, demosaiced RGB) DNG by tifffile from a 16-bit
+      RGB TIFF's samples (dcraw -4 -T's), white level 65535, no colour
+      matrix, ExposureTime in IFD 0.
 """
 import struct
 import sys
@@ -115,11 +119,27 @@ def write_dng(pgm, out, exposure, iso, with_exposure):
                      subfiletype=0, software="tifffile")
 
 
+def write_linear_dng(tiff, out, exposure):
+    import tifffile
+
+    rgb = tifffile.imread(tiff)
+    tags = [
+        (50706, "B", 4, (1, 4, 0, 0), True),      # DNGVersion
+        (50708, "s", 0, "tifffile linear", True),
+        (50717, "H", 1, (65535,), True),          # WhiteLevel
+        (33434, "2I", 1, rational(exposure), True),
+    ]
+    tifffile.imwrite(out, rgb, photometric=34892, extratags=tags,
+                     subfiletype=0, software="tifffile")
+
+
 def main():
     kind, pgm, out = sys.argv[1:4]
     exposure, iso = float(sys.argv[4]), int(sys.argv[5])
     if kind == "mrw":
         write_mrw(pgm, out, exposure, iso)
+    elif kind == "linear-dng":
+        write_linear_dng(pgm, out, exposure)
     else:
         write_dng(pgm, out, exposure, iso, "--no-exposure" not in sys.argv)
 

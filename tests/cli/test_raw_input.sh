@@ -5,7 +5,8 @@
 #  - glint's DNGs with glint's metadata stripped (exiftool): LibRaw reads
 #    them; the same radiance;
 #  - 16-bit linear TIFFs by dcraw -4 -T: dcraw's scale (65535 / (4095 -
-#    64)) and its own demosaic;
+#    64)) and its own demosaic; the same samples as linear DNGs by
+#    tifffile, read by LibRaw: the TIFFs' merge;
 #  - DNGs by tifffile (a 14-bit range, black 256, white 12000, a GRBG
 #    mosaic, a Canon's colour matrix): the values through the file's
 #    matrix, and D65 white through it grey;
@@ -45,7 +46,7 @@ check "a bracket of the simulated camera" run 0 "" capture sample --config "$tmp
 sess=$(ls -d "$tmp"/caps/*/ | head -1)
 frames=("$sess"/frame-00[3-9].dng)
 check "glint's own merge of frames 3-9" run 0 "" hdr "${frames[@]}" -o "$tmp/ref" -q
-mkdir "$tmp/strip" "$tmp/tif" "$tmp/dng" "$tmp/mrw"
+mkdir "$tmp/strip" "$tmp/tif" "$tmp/dng" "$tmp/mrw" "$tmp/lin"
 i=0
 for f in "${frames[@]}"; do
 	b=$(basename "$f" .dng)
@@ -54,6 +55,7 @@ for f in "${frames[@]}"; do
 	dcraw -4 -T -c "$f" >"$tmp/tif/$b.tiff"
 	dcraw -D -4 -c "$f" >"$tmp/$b.pgm"
 	"$py" "$here/raw_writers.py" dng "$tmp/$b.pgm" "$tmp/dng/$b.dng" "$t" 100
+	"$py" "$here/raw_writers.py" linear-dng "$tmp/tif/$b.tiff" "$tmp/lin/$b.dng" "$t" 0
 	# Every other MRW frame at ISO 200 for half the time: the same light.
 	if ((i++ % 2)); then
 		python3 "$here/raw_writers.py" mrw "$tmp/$b.pgm" "$tmp/mrw/$b.mrw" "$(python3 -c "print($t / 2)")" 200
@@ -79,6 +81,12 @@ check "... read by libtiff, RGB16, white 65535" json_is "$tmp/t/hdr.json" \
 	"d['input']['reader'] == 'libtiff' and d['input']['format'] == 'RGB16' and d['input']['white_level'] == 65535 and d['valid_pixels'] > 0.9 * 192 * 128"
 pfm "$tmp/t"
 check "... glint's radiance x 65535 / 4031 (dcraw's scale; its demosaic within 1 %)" python3 "$here/check_raw_input.py" "$tmp/ref/hdr.pfm" "$tmp/t/hdr.pfm" "$tmp/t/hdr.json" "$(python3 -c 'print(65535 / 4031)')" 0 0.005
+
+check "tifffile's linear DNGs of those TIFFs' samples merge (LibRaw)" run 0 "" hdr "$tmp"/lin/*.dng -o "$tmp/l" -q
+check "... RGB16, no colour matrix" json_is "$tmp/l/hdr.json" \
+	"d['input']['reader'].startswith('LibRaw') and d['input']['format'] == 'RGB16' and d['input']['matrix'] is None"
+pfm "$tmp/l"
+check "... the same radiance as the TIFFs' merge" python3 "$here/check_raw_input.py" "$tmp/t/hdr.pfm" "$tmp/l/hdr.pfm" "$tmp/l/hdr.json" 1 0 0.0002
 
 check "tifffile's DNGs merge" run 0 "" hdr "$tmp"/dng/*.dng -o "$tmp/d" -q
 check "... GRBG, black 256, white 12000, the Canon's matrix" json_is "$tmp/d/hdr.json" \

@@ -4,7 +4,8 @@
 // Memorial Church stack, side by side in one run: time (medians), merge
 // throughput, and accuracy against the published radiance map (up to
 // scale); plus glint's raw (linear) merge throughput on a simulated
-// bracket.  usage: bench/hdr [ROUNDS]   (default 5)
+// bracket; a chart of time and accuracy per method in bench-out/hdr.png.
+// usage: bench/hdr [ROUNDS]   (default 5)
 // glint's C headers include core/atomic.h, which in C++ brings <atomic>:
 // a template library that must not be included with C linkage.
 #include <atomic>
@@ -82,6 +83,38 @@ void accuracy(const float *ours, const float *ref, size_t n, double *corr,
 	*corr = (m * sab - sa * sb) /
 		std::sqrt((m * saa - sa * sa) * (m * sbb - sb * sb));
 	*within10 = ok / m;
+}
+
+// Time and accuracy per method, side by side: bench-out/hdr.png
+// (gnuplot, when installed).
+void plot()
+{
+	FILE *gp = fopen("bench-out/hdr.gp", "w");
+	if (!gp)
+		return;
+	fprintf(gp,
+		"set terminal pngcairo size 1000,420 font ',10'\n"
+		"set output 'bench-out/hdr.png'\n"
+		"set datafile separator ','\n"
+		"set style fill solid 0.7 border -1\n"
+		"set boxwidth 0.6\n"
+		"set xtics rotate by -20 noenhanced\n"
+		"set grid ytics\n"
+		"set multiplot layout 1,2 title 'Memorial Church stack: glint "
+		"against OpenCV 4.6'\n"
+		"set title 'time to recover the response and merge (s)'\n"
+		"set yrange [0:*]\n"
+		"plot 'bench-out/hdr.csv' skip 1 using 0:($2+$3):xtic(1) "
+		"with boxes lc rgb '#4477aa' notitle\n"
+		"set title 'pixels within 10 %% of the published map (%%)'\n"
+		"set yrange [0:100]\n"
+		"plot 'bench-out/hdr.csv' skip 1 using 0:($6*100):xtic(1) "
+		"with boxes lc rgb '#228833' notitle\n"
+		"unset multiplot\n");
+	fclose(gp);
+	if (system("command -v gnuplot >/dev/null 2>&1") == 0 &&
+	    system("gnuplot bench-out/hdr.gp") == 0)
+		printf("plot: bench-out/hdr.png\n");
 }
 
 } // namespace
@@ -232,8 +265,10 @@ int main(int argc, char **argv)
 	       "OpenCV': total time / OpenCV's for the same method\n"
 	       "peak memory: %.1f MiB\n",
 	       peak_mib());
-	if (csv)
+	if (csv) {
 		fclose(csv);
+		plot();
+	}
 	for (auto p : img)
 		free(p);
 	glint_image_free(ref);

@@ -21,33 +21,41 @@
 #include <string.h>
 #include <sys/stat.h>
 
-void cmd_probe_help(void)
+/* What every subcommand's page ends with. */
+static void probe_help_footer(void)
+{
+	printf("\nAn existing output is refused unless --force, which "
+	       "replaces only files glint\nwrote (never another's, never an "
+	       "input).  Every input is light: an 8-bit\nimage (.png, .jpg, "
+	       "...) is refused as not radiance, unless --srgb (then\n"
+	       "linearised through the sRGB curve).\n"
+	       "\nExit status: 0 done, 1 bad input, 2 bad command line.\n");
+}
+
+static void unwrap_help(void)
 {
 	printf("usage: glint probe unwrap PHOTO.exr --focal-px F [--ball "
 	       "CX,CY,R] [options] -o ENV.exr\n"
-	       "       glint probe convert IN OUT --from FMT --to FMT "
-	       "[--size WxH] [--srgb]\n"
-	       "       glint probe register ENV1.exr ENV2.exr -o OUT.exr "
-	       "[--yaw DEG] [--points F] [--srgb]\n"
 	       "\n"
-	       "unwrap: a photographed mirror ball (HDR, linear) to a "
+	       "A photographed mirror ball (HDR, linear) to a "
 	       "lat-long map in the\ncamera's frame (+Y up, the camera "
 	       "looking along -Z: the map's centre), with\nthe rig's "
 	       "perspective camera (each pixel's own view ray, not the "
 	       "orthographic\napproximation), divided by the ball's "
 	       "reflectance at each angle.  Also writes\nENV-mask.png "
 	       "(white = reliable: not grazing, not on the blurred rim, not "
-	       "the camera's\nown reflection), ENV-density.exr (photo "
-	       "pixels per "
-	       "steradian, for blending two views) and\n"
-	       "ENV-sources.json: light sources too small for the photo to "
-	       "resolve (the sun, a\nsmall lamp), found, measured (direction, "
-	       "flux, colour, their uncertainty) and\nput into the map as "
-	       "points (docs/hdr.md); ENV-preview.png: the map with those "
-	       "sources\nringed and numbered, the unreliable directions "
-	       "darkened.  PHOTO-variance.exr and\n"
-	       "PHOTO-weights.exr beside the photo (a merge's) give their "
-	       "noise and clipping.\n"
+	       "the\ncamera's own reflection), ENV-density.exr (photo "
+	       "pixels per steradian, for\nblending two views) and "
+	       "ENV-sources.json: light sources too small for the photo\nto "
+	       "resolve (the sun, a small lamp), found, measured (direction, "
+	       "flux, colour,\ntheir uncertainty) and put into the map as "
+	       "points (docs/hdr.md); ENV-preview.png:\nthe map with those "
+	       "sources ringed and numbered, the unreliable directions\n"
+	       "darkened.  PHOTO-variance.exr and PHOTO-weights.exr beside "
+	       "the photo (a\nmerge's) give their noise and clipping.\n"
+	       "\n"
+	       "  -o, --output ENV.exr the map (and the files named above "
+	       "beside it)\n"
 	       "  --focal-px F         focal length in pixels\n"
 	       "  --principal X,Y      principal point (default: the image "
 	       "centre)\n"
@@ -78,28 +86,72 @@ void cmd_probe_help(void)
 	       "behind the ball as\n"
 	       "                       photographed (default: interpolated "
 	       "from around them)\n"
+	       "  --force              replace outputs glint wrote\n");
+	probe_help_footer();
+}
+
+static void convert_help(void)
+{
+	printf("usage: glint probe convert IN OUT --from FMT --to FMT "
+	       "[--size WxH] [--srgb]\n"
 	       "\n"
-	       "convert: between latlong, angular (Debevec's light probe "
-	       "format), cross\n(vertical cube cross) and ball (ideal "
-	       "mirror ball, orthographic); orientations\nin docs/hdr.md.  "
-	       "Default size keeps the angular resolution.\n"
+	       "A light probe from one mapping to another: latlong, angular "
+	       "(Debevec's light\nprobe format), cross (vertical cube "
+	       "cross) and ball (ideal mirror ball,\northographic); "
+	       "orientations in docs/hdr.md.  The default size keeps the "
+	       "angular\nresolution.\n"
 	       "\n"
-	       "register: two unwrapped views of the probe (the second photo "
-	       "~90 degrees\naway) to one map in view 1's frame: the "
-	       "rotation from --points (a file of\nlines 'x1 y1 x2 y2', "
-	       "lat-long pixel positions of the same feature in each\nmap; "
-	       "least squares), else automatically from --yaw (the rough "
-	       "turn about\n+Y, default 90) by the best agreement where both "
-	       "views are reliable; then\nthe views are blended, each "
-	       "weighted by its mask x sampling density (the\n-mask.png and "
-	       "-density.exr written by unwrap, when present).\n"
-	       "\nEvery subcommand refuses an existing output unless --force, "
-	       "and replaces\nonly files glint wrote (never another's, "
-	       "never an input).\n"
-	       "\nEvery subcommand takes light: an 8-bit image (.png, .jpg, "
-	       "...) is refused\nas not radiance, unless --srgb (then "
-	       "linearised through the sRGB curve).\n"
-	       "\nExit status: 0 done, 1 bad input, 2 bad command line.\n");
+	       "  --from FMT, --to FMT latlong, angular, cross or ball\n"
+	       "  --size WxH           output size\n"
+	       "  --srgb               take an 8-bit image as sRGB-encoded\n"
+	       "  --force              replace an output glint wrote\n");
+	probe_help_footer();
+}
+
+static void register_help(void)
+{
+	printf("usage: glint probe register ENV1.exr ENV2.exr -o OUT.exr "
+	       "[--yaw DEG] [--points F] [--srgb]\n"
+	       "\n"
+	       "Two unwrapped views of the probe (the second photo ~90 "
+	       "degrees away) to one\nmap in view 1's frame: the rotation "
+	       "from --points (a file of lines\n'x1 y1 x2 y2', lat-long "
+	       "pixel positions of the same feature in each map;\nleast "
+	       "squares), else automatically from --yaw (the rough turn "
+	       "about +Y) by\nthe best agreement where both views are "
+	       "reliable; then the views are blended,\neach weighted by its "
+	       "mask x sampling density (the -mask.png and -density.exr\n"
+	       "written by unwrap, when present).\n"
+	       "\n"
+	       "  -o, --output OUT.exr the blended map\n"
+	       "  --yaw DEG            the rough turn between the views "
+	       "(default 90)\n"
+	       "  --points F           matched points, one 'x1 y1 x2 y2' a "
+	       "line\n"
+	       "  --srgb               take 8-bit maps as sRGB-encoded\n"
+	       "  --force              replace an output glint wrote\n");
+	probe_help_footer();
+}
+
+void cmd_probe_help(void)
+{
+	printf("usage: glint probe unwrap PHOTO.exr --focal-px F [--ball "
+	       "CX,CY,R] [options] -o ENV.exr\n"
+	       "       glint probe convert IN OUT --from FMT --to FMT "
+	       "[--size WxH] [--srgb]\n"
+	       "       glint probe register ENV1.exr ENV2.exr -o OUT.exr "
+	       "[--yaw DEG] [--points F] [--srgb]\n"
+	       "\n"
+	       "Light probes: a mirror-ball photo to the environment map a "
+	       "fit is lit by.\n"
+	       "\n"
+	       "subcommands (glint probe SUB --help: its options):\n"
+	       "  unwrap     a mirror-ball photo to a lat-long map, its small "
+	       "lights measured\n"
+	       "  convert    a light probe between lat-long, angular, cube "
+	       "cross and ball\n"
+	       "  register   two unwrapped views of the probe to one map\n");
+	probe_help_footer();
 }
 
 /* OUT and its siblings (OUT less its extension, then each suffix; ""
@@ -207,8 +259,8 @@ static int unwrap_main(int argc, char **argv)
 		{ 0 },
 	};
 	struct cmd_args a;
-	int r = cmd_options_parse("probe unwrap", cmd_probe_help, opts, argc,
-				  argv, &a);
+	int r = cmd_options_parse("probe unwrap", unwrap_help, opts, argc, argv,
+				  &a);
 	if (r)
 		return cmd_options_exit(r);
 	if (f.given)
@@ -288,7 +340,7 @@ static int convert_main(int argc, char **argv)
 		{ 0 },
 	};
 	struct cmd_args a;
-	int r = cmd_options_parse("probe convert", cmd_probe_help, opts, argc,
+	int r = cmd_options_parse("probe convert", convert_help, opts, argc,
 				  argv, &a);
 	if (r)
 		return cmd_options_exit(r);
@@ -332,7 +384,7 @@ static int register_main(int argc, char **argv)
 		CMD_STRING("output", 'o', &out),  { 0 },
 	};
 	struct cmd_args args;
-	int pr = cmd_options_parse("probe register", cmd_probe_help, opts, argc,
+	int pr = cmd_options_parse("probe register", register_help, opts, argc,
 				   argv, &args);
 	if (pr)
 		return cmd_options_exit(pr);

@@ -33,6 +33,55 @@ static void root_options(void)
 	       "build folder)\n");
 }
 
+static void queue_help_footer(void)
+{
+	printf("  --json           JSON on stdout\n"
+	       "  -q, --quiet      no info messages\n"
+	       "\nExit status: 0 done, 1 refused (named), 2 bad command "
+	       "line.\n");
+}
+
+static void add_help(void)
+{
+	printf("usage: glint queue add SESSION [--root DIR]\n"
+	       "\n"
+	       "Queue a fit of a sample session (glint fit SESSION --wait, "
+	       "run by a worker).\nWhat the fit needs is checked now: a probe "
+	       "session, an incomplete one, one\nwithout a scene, or one "
+	       "already pending or running (the job named) is\nrefused.  "
+	       "Prints the job's id; the job file's owner is its submitter.\n"
+	       "\n");
+	root_options();
+	queue_help_footer();
+}
+
+static void cancel_help(void)
+{
+	printf("usage: glint queue cancel ID [--root DIR]\n"
+	       "\n"
+	       "Cancel a job: a pending one is moved to cancelled, a running "
+	       "one is stopped by\nits worker (its fit's process group gets "
+	       "SIGTERM).  Only the job's submitter\n(or the queue's owner, or "
+	       "root) may cancel it.\n"
+	       "\n");
+	root_options();
+	queue_help_footer();
+}
+
+static void run_help(void)
+{
+	printf("usage: glint queue run [--until-empty] [--root DIR]\n"
+	       "\n"
+	       "A worker: fits the queued sessions one at a time, oldest "
+	       "first, forever or\nuntil the queue is empty.  Any number of "
+	       "workers share a queue safely; a\nworker that dies leaves its "
+	       "job to be re-run by the next.\n"
+	       "\n");
+	root_options();
+	printf("  --until-empty    stop when no job is left\n");
+	queue_help_footer();
+}
+
 void cmd_queue_help(void)
 {
 	printf("usage: glint queue add SESSION [--root DIR]\n"
@@ -41,18 +90,17 @@ void cmd_queue_help(void)
 	       "\n"
 	       "The job queue shared by the rig daemon and SSH users, a folder "
 	       "ROOT/queue that\nany number of processes use safely (no "
-	       "server).  add queues a fit of a sample\nsession; cancel "
-	       "removes a pending job or stops a running one; run is a "
-	       "worker:\nit fits queued sessions one at a time (glint fit "
-	       "SESSION --wait), forever or\nuntil the queue is empty.  A "
-	       "worker that dies leaves its job to be re-run by\nthe next.  "
-	       "glint jobs lists the queue; glint sessions the capture "
-	       "sessions.\n"
+	       "server).  glint jobs lists the queue;\nglint sessions the "
+	       "capture sessions.\n"
+	       "\n"
+	       "subcommands (glint queue SUB --help: its options):\n"
+	       "  add        queue a fit of a sample session\n"
+	       "  cancel     cancel a pending job, or stop a running one\n"
+	       "  run        a worker: fit queued sessions one at a time\n"
 	       "\n");
 	root_options();
-	printf("  --until-empty    run: stop when no job is left\n"
-	       "  --json           JSON on stdout\n"
-	       "  -q, --quiet      no info messages\n");
+	printf("  --until-empty    run: stop when no job is left\n");
+	queue_help_footer();
 }
 
 void cmd_jobs_help(void)
@@ -262,7 +310,10 @@ int cmd_queue(int argc, char **argv)
 	const char *what = argv[1];
 	char name[32];
 	snprintf(name, sizeof(name), "queue %s", argv[1]);
-	if (parse(name, cmd_queue_help, argc - 1, argv + 1, &q) < 0)
+	void (*help)(void) = !strcmp(what, "add")      ? add_help
+			     : !strcmp(what, "cancel") ? cancel_help
+						       : run_help;
+	if (parse(name, help, argc - 1, argv + 1, &q) < 0)
 		return q.status;
 	int nargs = q.nargs;
 	char **args = q.args;

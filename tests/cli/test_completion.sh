@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The bash completion (data/completion/glint): commands from glint's own
-# --help, a command's options from its --help, files otherwise.
+# The bash completion (scripts/glint-completion.bash): commands from
+# glint's own --help, a command's subcommands and options from its --help
+# (a subcommand's options from the subcommand's), files otherwise.
 #   test_completion.sh GLINT COMPLETION
 set -u
 glint=$1
@@ -28,6 +29,14 @@ expect "an option of rig" "$(complete_at rig --on)" --once
 got=$(complete_at fit --mod)
 if grep -qx -- --once <<<"$got"; then
 	echo "FAIL fit offered rig's --once"
+	fail=1
+fi
+expect "a subcommand of probe" "$(complete_at probe un)" unwrap
+expect "a subcommand of queue" "$(complete_at queue ca)" cancel
+expect "an option of probe unwrap" "$(complete_at probe unwrap --foc)" --focal-px
+got=$(complete_at probe convert --)
+if grep -qx -- --focal-px <<<"$got"; then
+	echo "FAIL probe convert offered unwrap's --focal-px"
 	fail=1
 fi
 tmp=$(mktemp -d)

@@ -63,6 +63,20 @@ manpages() {
 			{ echo "glint-$c.1 has no NAME line"; return 1; }
 		n=$((n + 1))
 	done
+	# A page per subcommand of a command whose help has a table of them
+	# (probe, queue), with the subcommand's own options.
+	local s subs=0
+	for c in $("$bin" --help | awk '/^commands:/ {t = 1; next} t && /^  [a-z]/ {print $1}'); do
+		for s in $("$bin" "$c" --help | awk '/^subcommands/ {t = 1; next} t && /^  [a-z]/ {print $1} t && /^$/ {exit}'); do
+			[ -f "$man1/glint-$c-$s.1" ] || { echo "no man page for $c $s"; return 1; }
+			grep -q "^glint-$c-$s \\\\- " "$man1/glint-$c-$s.1" ||
+				{ echo "glint-$c-$s.1 has no NAME line"; return 1; }
+			subs=$((subs + 1))
+		done
+	done
+	[ "$subs" -ge 6 ] || { echo "$subs subcommand pages, expected probe's 3 and queue's 3"; return 1; }
+	grep -q -- '--focal-px' "$man1/glint-probe-unwrap.1" && ! grep -q -- '--focal-px' "$man1/glint-probe-convert.1" ||
+		{ echo "glint-probe-unwrap.1 and glint-probe-convert.1 do not hold their own options"; return 1; }
 	grep -q 'material.gltf' "$man1/glint-fit.1" || return 1
 	# Rendered by man where it is installed: no roff warnings.
 	if command -v man >/dev/null; then

@@ -363,6 +363,24 @@ void glint_board_locate(const struct glint_board *b, enum glint_role r,
 	}
 }
 
+int glint_board_chip(const struct glint_board *b, enum glint_role r, char *name,
+		     size_t nn, char *label, size_t nl)
+{
+	if (!b->cfg.lines[r].used)
+		return glint_error_set(ENOENT, "board: no %s line",
+				       glint_role_name(r));
+	if (!b->ops->chip)
+		return glint_error_set(
+			ENODEV,
+			"board: the %s backend's lines are on no "
+			"GPIO chip",
+			b->ops->name);
+	pthread_mutex_lock((pthread_mutex_t *)&b->lock);
+	int ret = b->ops->chip(b->priv, r, name, nn, label, nl);
+	pthread_mutex_unlock((pthread_mutex_t *)&b->lock);
+	return ret;
+}
+
 int glint_board_led(struct glint_board *b, enum glint_led pattern)
 {
 	if (!b->led_running)

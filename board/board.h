@@ -125,6 +125,11 @@ struct glint_board_ops {
 	/* Optional: where a requested line was found, for the record (e.g.
 	 * `gpiochip0 (glint-rig) line 22 "lights"`). */
 	void (*locate)(void *priv, enum glint_role r, char *buf, size_t n);
+	/* Optional: the GPIO chip a requested line is on, its name
+	 * ("gpiochip1") and label ("pinctrl-bcm2711"); 0 or a negative
+	 * errno.  Backends without chips (the simulated board) have none. */
+	int (*chip)(void *priv, enum glint_role r, char *name, size_t nn,
+		    char *label, size_t nl);
 };
 
 /* The real backend (libgpiod v1), when built; the simulated board is
@@ -170,6 +175,10 @@ int glint_board_has(const struct glint_board *b, enum glint_role r);
  * rig file's chip and line where the backend has none). */
 void glint_board_locate(const struct glint_board *b, enum glint_role r,
 			char *buf, size_t n);
+/* The GPIO chip of a configured line (the backend's chip op): -ENODEV,
+ * named, for a backend without chips. */
+int glint_board_chip(const struct glint_board *b, enum glint_role r, char *name,
+		     size_t nn, char *label, size_t nl);
 /* Every light on (1) or off (0). */
 int glint_board_lights(struct glint_board *b, int on);
 /* Light k (1..) on and every other light off; then the settle wait. */

@@ -244,6 +244,20 @@ static int gpiod_wait_edge(void *priv, enum glint_role r, double timeout_s,
 	return 1;
 }
 
+static int gpiod_chip_of(void *priv, enum glint_role r, char *name, size_t nn,
+			 char *label, size_t nl)
+{
+	struct gpiod_board *b = priv;
+	struct gpiod_chip *c =
+		b->lines[r] ? gpiod_line_get_chip(b->lines[r]) : NULL;
+
+	if (!c)
+		return -ENOENT;
+	snprintf(name, nn, "%s", gpiod_chip_name(c));
+	snprintf(label, nl, "%s", gpiod_chip_label(c));
+	return 0;
+}
+
 static void gpiod_locate(void *priv, enum glint_role r, char *buf, size_t n)
 {
 	struct gpiod_board *b = priv;
@@ -268,4 +282,5 @@ const struct glint_board_ops glint_board_gpiod_ops = {
 	.get = gpiod_get,
 	.wait_edge = gpiod_wait_edge,
 	.locate = gpiod_locate,
+	.chip = gpiod_chip_of,
 };

@@ -14,13 +14,16 @@
 #include "options.h"
 #include "appliance/daemon.h"
 #include "appliance/rig.h"
+#include "appliance/udev.h"
 
 #include "board/board.h"
 #include "appliance/queue.h"
 #include "capture/camera/camera.h"
 #include "capture/hdr/session.h"
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/output.h"
 #include "core/path.h"
 
 #include <errno.h>
@@ -71,12 +74,28 @@ void cmd_rig_help(void)
 void cmd_check_rig_help(void)
 {
 	printf("usage: glint check-rig [--config RIG.json] [--json]\n"
+	       "       glint check-rig --udev-rules FILE [--group G] "
+	       "[--force]\n"
 	       "\n"
 	       "Check a rig file without capturing: every key, the camera "
 	       "(opened and\ndescribed), every GPIO line (its chip present, "
 	       "the line in range and free,\nthen requested and released with "
 	       "outputs left off).  Exit 0 when all is well,\n1 naming the "
-	       "first problem.\n");
+	       "first problem.\n"
+	       "\n"
+	       "  --config RIG.json    the rig file (default: the installed "
+	       "one, else the\n"
+	       "                       simulated rig)\n"
+	       "  --udev-rules FILE    once checked, write a udev rules file "
+	       "(- for stdout)\n"
+	       "                       giving the devices' group read-write "
+	       "access to this rig's\n"
+	       "                       camera and GPIO chips and no other "
+	       "device (docs/rig.md);\n"
+	       "                       install it as "
+	       "/etc/udev/rules.d/70-glint.rules\n"
+	       "  --group G            that group (default glint-dev)\n"
+	       "  --force              replace a rules file glint wrote\n");
 }
 
 static atomic_int stop_flag, cancel_flag;
@@ -208,13 +227,42 @@ int cmd_rig(int argc, char **argv)
 	return ret < 0 && !stop_flag ? GLINT_EXIT_FAIL : GLINT_EXIT_OK;
 }
 
+/* The udev rules for the rig (appliance/udev.h) into `out`, by the one
+ * overwrite rule ("-": stdout). */
+static int write_rules(const struct glint_rig *rig,
+		       const struct glint_board *board, const char *group,
+		       const char *out, int force, const char *rig_path)
+{
+	char *text = NULL;
+	const char *inputs[] = { rig_path, NULL };
+	int ret = glint_udev_rules(rig, board, group, &text);
+
+	if (ret == 0 && !strcmp(out, "-")) {
+		fputs(text, stdout);
+	} else if (ret == 0) {
+		ret = glint_output_check(out, force, inputs);
+		if (ret == 0)
+			ret = glint_atomic_write_file(out, text, strlen(text));
+		if (ret == 0)
+			glint_log_info("udev rules for this rig's devices: %s "
+				       "(udevadm control --reload; udevadm "
+				       "trigger)",
+				       out);
+	}
+	free(text);
+	return ret;
+}
+
 int cmd_check_rig(int argc, char **argv)
 {
-	const char *config = NULL;
+	const char *config = NULL, *rules = NULL, *group = "glint-dev";
 	char path[4096];
-	int ret;
+	int ret, force = 0;
 	const struct cmd_opt opts[] = {
 		CMD_STRING("config", 0, &config),
+		CMD_STRING("udev-rules", 0, &rules),
+		CMD_STRING("group", 0, &group),
+		CMD_FLAG("force", 0, &force),
 		{ 0 },
 	};
 	struct cmd_args a;
@@ -257,8 +305,10 @@ int cmd_check_rig(int argc, char **argv)
 				"board (%s): %d line(s) present and free",
 				rig.board.backend, n);
 		}
-		glint_board_close(board);
 	}
+	if (ret == 0 && rules)
+		ret = write_rules(&rig, board, group, rules, force, path);
+	glint_board_close(board);
 	glint_rig_free(&rig);
 	if (ret < 0) {
 		json_decref(lines);
@@ -268,7 +318,7 @@ int cmd_check_rig(int argc, char **argv)
 		cmd_print_json(json_pack("{s:s, s:b, s:o}", "rig", path, "ok",
 					 1, "lines",
 					 lines ? lines : json_object()));
-	else
+	else if (!rules || strcmp(rules, "-"))
 		printf("%s: ok\n", path);
 	if (!json)
 		json_decref(lines);

@@ -87,3 +87,13 @@ gpio_sim_dir() {
 	local dev=/sys/kernel/config/gpio-sim/$1
 	echo "/sys/devices/platform/$(cat "$dev/dev_name")/$(cat "$dev/bank0/chip_name")"
 }
+
+# vivid_node: vivid's (first instance's) video capture node, not a real
+# camera's.
+vivid_node() {
+	local d
+	for d in /sys/class/video4linux/video*; do
+		grep -qs '^vivid-000-vid-cap$' "$d/name" && echo "/dev/${d##*/}" && return 0
+	done
+	return 1
+}

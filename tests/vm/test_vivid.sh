@@ -19,13 +19,6 @@ trap 'rm -rf "$tmp"' EXIT
 
 # One capture node only (no output, VBI, radio, SDR or touch nodes).
 check "vivid loads" modprobe vivid n_devs=1 node_types=0x1
-vivid_node() { # vivid's capture node, not a real camera's
-	local d
-	for d in /sys/class/video4linux/video*; do
-		grep -qs '^vivid-[0-9]*-vid-cap$' "$d/name" && echo "/dev/${d##*/}" && return 0
-	done
-	return 1
-}
 check "... its capture node appears" wait_until 10 vivid_node
 dev=$(vivid_node)
 

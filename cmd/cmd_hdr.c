@@ -212,7 +212,7 @@ int cmd_hdr(int argc, char **argv)
 
 	struct glint_noise_model nm;
 	struct glint_frame *frames = NULL;
-	struct glint_raw_info info;
+	struct glint_raw_info info = { 0 };
 	json_t *input = NULL;
 	struct glint_hdr_report rep;
 	static const char *const hdr_names[5] = { "hdr.exr", "variance.exr",

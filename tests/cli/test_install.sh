@@ -28,6 +28,8 @@ meson install -C "$build" --destdir "$dest" --no-rebuild --quiet >"$tmp/install.
 bin=$dest$prefix/bin/glint
 data=$dest$prefix/$datadir/glint
 check "binary installed" test -x "$bin"
+check "shell completions installed where bash-completion and zsh look" \
+	test -f "$dest$prefix/$datadir/bash-completion/completions/glint" -a -f "$dest$prefix/$datadir/zsh/vendor-completions/_glint"
 check "data installed" test -f "$data/paper-table1.json" -a -f "$data/env/venice_sunset_1k.hdr" -a -f "$data/rig-sim.json"
 check "systemd unit installed, pointing at the installed binary" \
 	grep -q "^ExecStart=$prefix/bin/glint rig --config $sysconfdir/glint/rig.json" "$dest$prefix/lib/systemd/system/glint-rig.service"

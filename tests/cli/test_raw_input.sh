@@ -113,6 +113,7 @@ t5=$(python3 -c "import json; print(json.load(open('$sess/frame-005.json'))['exp
 t6=$(python3 -c "import json; print(json.load(open('$sess/frame-006.json'))['exposure_s'])")
 check "... merges with --times" run 0 "" hdr "$tmp/noexp.dng" "$tmp/dng/frame-006.dng" -o "$tmp/x" --times "$t5,$t6" -q
 check "... which hdr.json names" json_is "$tmp/x/hdr.json" "d['input']['exposure_times_from'] == '--times'"
+check "--times with a session: exit 2 (its frames carry their own)" run 2 "a session's frames carry their own exposure times" hdr "$sess" --times 1,2
 
 # Bad files: named, nothing written.
 echo "not a raw file" >"$tmp/bad.nef"

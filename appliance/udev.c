@@ -45,6 +45,27 @@ static int parent_name(const char *link, char *out, size_t n)
 	return 0;
 }
 
+/* The kernel name of the device that bus device `name` (a GPIO chip, a
+ * media controller: devices of a bus, not a class, have no "device" link;
+ * their folder lies in their parent's) hangs from: its controller (a
+ * platform device such as fe200000.gpio or vimc.0, a USB interface,
+ * gpio-sim.0). */
+static int bus_parent(const char *bus, const char *name, char *out, size_t n)
+{
+	char path[PATH_MAX], real[PATH_MAX];
+	snprintf(path, sizeof(path), "%s/bus/%s/devices/%s", sysfs(), bus,
+		 name);
+	if (!realpath(path, real))
+		return -errno;
+	char *slash = strrchr(real, '/');
+	if (!slash)
+		return -ENOENT;
+	*slash = 0;
+	slash = strrchr(real, '/');
+	snprintf(out, n, "%s", slash ? slash + 1 : real);
+	return 0;
+}
+
 struct text {
 	char *s;
 	size_t len;
@@ -141,7 +162,7 @@ static int id_names(const char *id, const char *name)
 
 static int libcamera_camera(struct text *t, const char *id, const char *group)
 {
-	char dir[PATH_MAX], link[PATH_MAX + 300], parent[256];
+	char dir[PATH_MAX], parent[256];
 	char seen[8][256];
 	int nseen = 0;
 
@@ -160,8 +181,8 @@ static int libcamera_camera(struct text *t, const char *id, const char *group)
 	while ((e = readdir(d)) && nseen < 8) {
 		if (e->d_name[0] == '.')
 			continue;
-		snprintf(link, sizeof(link), "%s/%s/device", dir, e->d_name);
-		if (parent_name(link, parent, sizeof(parent)) < 0 ||
+		if (bus_parent("media", e->d_name, parent, sizeof(parent)) <
+			    0 ||
 		    !plain(parent) || !id_names(id, parent))
 			continue;
 		int dup = 0;
@@ -196,24 +217,6 @@ static int libcamera_camera(struct text *t, const char *id, const char *group)
 	return 0;
 }
 
-/* The kernel name of the device a GPIO chip (gpiochipN) hangs from: its
- * controller (a platform device such as fe200000.gpio, a USB interface,
- * gpio-sim.0). */
-static int chip_parent(const char *chip, char *out, size_t n)
-{
-	char path[PATH_MAX], real[PATH_MAX];
-	snprintf(path, sizeof(path), "%s/bus/gpio/devices/%s", sysfs(), chip);
-	if (!realpath(path, real))
-		return -errno;
-	char *slash = strrchr(real, '/');
-	if (!slash)
-		return -ENOENT;
-	*slash = 0;
-	slash = strrchr(real, '/');
-	snprintf(out, n, "%s", slash ? slash + 1 : real);
-	return 0;
-}
-
 static int gpio_chips(struct text *t, const struct glint_rig *rig,
 		      const struct glint_board *board, const char *group)
 {
@@ -228,7 +231,7 @@ static int gpio_chips(struct text *t, const struct glint_rig *rig,
 					   sizeof(name), label, sizeof(label));
 		if (ret < 0)
 			return ret;
-		ret = chip_parent(name, parent, sizeof(parent));
+		ret = bus_parent("gpio", name, parent, sizeof(parent));
 		if (ret < 0)
 			return glint_error_set(-ret,
 					       "udev rules: GPIO chip %s: no "

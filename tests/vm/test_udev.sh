@@ -5,8 +5,9 @@
 # group, the rig's camera nodes (video and media, of its parent device)
 # and its GPIO chip become usable by a user whose only group is glint-dev,
 # the other camera and chip by no one new; not by the queue's glint group
-# either; Debian's owners and groups stay.  The rules file follows glint's
-# overwrite rule, and the simulated rig gets no rules.
+# either; Debian's owners and groups stay.  A libcamera rig naming vimc's
+# camera gets rules for vimc.0 and the DMA heaps.  The rules file follows
+# glint's overwrite rule, and the simulated rig gets no rules.
 # usage: test_udev.sh GLINT DATA_DIR   (inside scripts/vm run)
 set -u
 here=$(dirname "$0")
@@ -37,8 +38,13 @@ check "... vivid's capture node appears" wait_until 10 vivid_node
 cam=$(vivid_node)
 nodes_of() { # PARENT: the video4linux and media nodes of that device
 	local d
-	for d in /sys/class/video4linux/* /sys/bus/media/devices/*; do
+	for d in /sys/class/video4linux/*; do
 		[ -e "$d/device" ] && [ "$(basename "$(readlink -f "$d/device")")" = "$1" ] &&
+			echo "/dev/${d##*/}"
+	done
+	# a media controller is a bus device: its folder lies in its parent's
+	for d in /sys/bus/media/devices/*; do
+		[ -e "$d" ] && [ "$(basename "$(dirname "$(readlink -f "$d")")")" = "$1" ] &&
 			echo "/dev/${d##*/}"
 	done
 }
@@ -119,6 +125,23 @@ check "... but not the other chip" bash -c "! setpriv --reuid=4243 --regid=$gid 
 check "... nor the other camera" bash -c "! setpriv --reuid=4243 --regid=$gid --clear-groups v4l2-ctl -d $other --info >/dev/null 2>&1"
 check "a user of the queue's glint group cannot open the GPIO chip" bash -c "! setpriv --reuid=4243 --regid=$qgid --clear-groups gpioinfo $chip >/dev/null 2>&1"
 check "... nor the camera" bash -c "! setpriv --reuid=4243 --regid=$qgid --clear-groups v4l2-ctl -d $cam --info >/dev/null 2>&1"
+# The rules for a libcamera camera (vimc's, by its id): its media
+# device's parent and the DMA heaps; none of vivid's nodes.
+export LIBCAMERA_LOG_LEVELS='*:ERROR'
+lcid=$("$glint" cameras --backend libcamera --json 2>/dev/null |
+	python3 -c "import json, sys; print(json.load(sys.stdin)['cameras'][0]['device'])")
+python3 - "$data/rig-sim.json" "$tmp/rig-lc.json" "$lcid" "$tmp/out" <<'PY'
+import json, sys
+src, dst, cam, out = sys.argv[1:]
+r = json.load(open(src))
+r["output"] = out
+r["camera"] = {"backend": "libcamera", "device": cam}
+r.pop("board", None)
+r.pop("sequence", None)
+json.dump(r, open(dst, "w"), indent=1)
+PY
+check "a libcamera rig ($lcid): rules for vimc.0's nodes and the DMA heaps" \
+	bash -c "'$glint' check-rig --config '$tmp/rig-lc.json' --udev-rules - >'$tmp/lc.rules' 2>'$tmp/err' && grep -q 'KERNELS==\"vimc.0\"' '$tmp/lc.rules' && grep -q 'dma_heap' '$tmp/lc.rules' && ! grep -q 'vivid\|gpio' '$tmp/lc.rules' || { cat '$tmp/err' '$tmp/lc.rules'; false; }"
 check "a user of another group cannot open the GPIO chip" bash -c "! setpriv --reuid=4243 --regid=4244 --clear-groups gpioinfo $chip >/dev/null 2>&1"
 check "... nor the camera" bash -c "! setpriv --reuid=4243 --regid=4244 --clear-groups v4l2-ctl -d $cam --info >/dev/null 2>&1"
 finish

@@ -230,9 +230,9 @@ int cmd_hdr(int argc, char **argv)
 	 * merge of it there replaces it; a folder named with -o follows the
 	 * one overwrite rule. */
 	if (is_session && (times || times_file))
-		return cmd_usage_error("hdr",
-				       "--times: a session's frames carry their "
-				       "own exposure times");
+		return cmd_usage_error(
+			"hdr", "--times: a session's frames carry their "
+			       "own exposure times");
 	int own = is_session && !out;
 	if (is_session) {
 		ret = glint_session_noise(argv[0], &nm);

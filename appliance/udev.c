@@ -33,6 +33,16 @@ static int plain(const char *s)
 	return 1;
 }
 
+/* name into out[n] whole, or -ENAMETOOLONG. */
+static int copy_name(const char *name, char *out, size_t n)
+{
+	size_t len = strlen(name);
+	if (len >= n)
+		return -ENAMETOOLONG;
+	memcpy(out, name, len + 1);
+	return 0;
+}
+
 /* The kernel name of the device `link` (a sysfs device folder's "device"
  * link) points to. */
 static int parent_name(const char *link, char *out, size_t n)
@@ -41,8 +51,7 @@ static int parent_name(const char *link, char *out, size_t n)
 	if (!realpath(link, real))
 		return -errno;
 	const char *base = strrchr(real, '/');
-	snprintf(out, n, "%s", base ? base + 1 : real);
-	return 0;
+	return copy_name(base ? base + 1 : real, out, n);
 }
 
 /* The kernel name of the device that bus device `name` (a GPIO chip, a
@@ -62,8 +71,7 @@ static int bus_parent(const char *bus, const char *name, char *out, size_t n)
 		return -ENOENT;
 	*slash = 0;
 	slash = strrchr(real, '/');
-	snprintf(out, n, "%s", slash ? slash + 1 : real);
-	return 0;
+	return copy_name(slash ? slash + 1 : real, out, n);
 }
 
 struct text {

@@ -231,36 +231,30 @@ int glint_tiff_read_rgb16(const char *path, int *w, int *h, int *channels,
 				       "samples are expected",
 				       path, s.bits);
 	}
+	/* The samples as read, the extra (alpha) ones dropped in place. */
 	int nc = s.spp >= 3 ? 3 : 1;
-	*px = malloc((size_t)s.w * s.h * nc * sizeof(uint16_t));
-	if (!*px) {
-		free(s.data);
-		return glint_error_set(ENOMEM, "%s: out of memory", path);
-	}
-	for (size_t i = 0; i < (size_t)s.w * s.h; i++)
+	uint16_t *d = s.data;
+	for (size_t i = 0; s.spp != nc && i < (size_t)s.w * s.h; i++)
 		for (int c = 0; c < nc; c++)
-			(*px)[nc * i + c] = (uint16_t)sample(&s, i, c);
-	free(s.data);
+			d[nc * i + c] = d[s.spp * i + c];
+	*px = d;
 	*w = s.w;
 	*h = s.h;
 	*channels = nc;
 	return 0;
 }
 
-int glint_tiff_sample_bits(const char *path, int *is_float)
+int glint_tiff_sample_bits(const char *path)
 {
 	struct glint_tiff_msgs m;
-	uint16_t bps = 0, fmt = SAMPLEFORMAT_UINT;
+	uint16_t bps = 0;
 	TIFF *tif = glint_tiff_open(path, "r", &m);
 
 	if (!tif)
 		return glint_error_set(EIO, "%s: not a readable TIFF: %s", path,
 				       m.text[0] ? m.text : "libtiff failed");
 	TIFFGetFieldDefaulted(tif, TIFFTAG_BITSPERSAMPLE, &bps);
-	TIFFGetFieldDefaulted(tif, TIFFTAG_SAMPLEFORMAT, &fmt);
 	TIFFClose(tif);
-	if (is_float)
-		*is_float = fmt == SAMPLEFORMAT_IEEEFP;
 	return bps;
 }
 

@@ -41,9 +41,9 @@ int glint_tiff_read_rgb8(const char *path, int *w, int *h, uint8_t **rgb);
  * w * h * channels values, caller frees. */
 int glint_tiff_read_rgb16(const char *path, int *w, int *h, int *channels,
 			  uint16_t **px);
-/* Bits per sample of a TIFF's first image (*is_float, may be NULL: its
- * samples are floats), or a negative errno naming the file. */
-int glint_tiff_sample_bits(const char *path, int *is_float);
+/* Bits per sample of a TIFF's first image, or a negative errno naming
+ * the file. */
+int glint_tiff_sample_bits(const char *path);
 /* 32-bit float RGB, deflate with the floating-point predictor, atomic. */
 int glint_tiff_write(const char *path, const struct glint_image *img);
 

@@ -238,8 +238,8 @@ static int read_libraw(const char *path, struct glint_frame *f,
 	if (!lr)
 		return glint_error_set(ENOMEM, "%s: out of memory", path);
 	libraw_set_dataerror_handler(lr, on_data_error, &derr);
-	info_init(info, "LibRaw ");
-	snprintf(info->reader + 7, sizeof(info->reader) - 7, "%s",
+	info_init(info, "LibRaw");
+	snprintf(info->reader, sizeof(info->reader), "LibRaw %s",
 		 libraw_version());
 	e = libraw_open_file(lr, path);
 	if (e != LIBRAW_SUCCESS) {
@@ -375,8 +375,7 @@ int glint_raw_file_read(const char *path, struct glint_frame *f,
 	glint_path_ext(path, ext, sizeof(ext));
 	if (is_glint_frame(path, ext)) {
 		info_init(info, "glint frame");
-		snprintf(info->camera, sizeof(info->camera), "glint %s",
-			 "camera");
+		snprintf(info->camera, sizeof(info->camera), "glint camera");
 		int ret = glint_frame_read(path, f, NULL);
 		info->has_exposure = ret == 0;
 		info->iso = 100 * f->gain;
@@ -414,7 +413,7 @@ int glint_raw_file_is_8bit(const char *path)
 	if (!strcmp(ext, "png"))
 		bits = png_bits(path);
 	else if (!strcmp(ext, "tif") || !strcmp(ext, "tiff"))
-		bits = glint_tiff_sample_bits(path, NULL);
+		bits = glint_tiff_sample_bits(path);
 	else
 		return 0;
 	return bits < 0 ? bits : bits <= 8;

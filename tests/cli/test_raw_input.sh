@@ -106,6 +106,11 @@ pfm "$tmp/m"
 # differently from glint's merge: the same median, a spread of the noise.
 check "... the file's matrix x glint's radiance (ISO 200 frames at half the time agree)" python3 "$here/check_raw_input.py" "$tmp/ref/hdr.pfm" "$tmp/m/hdr.pfm" "$tmp/m/hdr.json" 1 0 0.005
 
+# The conversion gains found, for the docs' table (docs/hdr.md).
+for d in s d m; do
+	python3 -c "import json; j = json.load(open('$tmp/$d/hdr.json')); print('  conversion gain from the bracket of', j['input']['camera'], '(%s):' % j['input']['reader'], round(j['noise_model']['dn_per_electron'], 4), 'DN/e-')"
+done
+
 # Times: a file without one needs --times; --times replaces the files'.
 "$py" "$here/raw_writers.py" dng "$tmp/frame-005.pgm" "$tmp/noexp.dng" 1 100 --no-exposure
 check "a raw file without an exposure time: exit 1, named, says --times" run 1 "noexp.dng: no exposure time in its metadata: give the bracket's times (--times" hdr "$tmp/noexp.dng" "$tmp/dng/frame-006.dng" -o "$tmp/x"

@@ -256,9 +256,10 @@ int glint_queue_add(const char *queue, const char *kind, const char *session,
 	 * captures root. */
 	struct glint_job me = { .uid = (unsigned)getuid() };
 	snprintf(me.session, sizeof(me.session), "%s", session);
-	ret = glint_job_session_allowed(queue, &me, abs, sizeof(abs));
+	ret = glint_job_session_open(queue, &me, abs, sizeof(abs));
 	if (ret < 0)
 		return ret;
+	close(ret);
 	session = abs;
 	ret = qopen(queue, &d, 1);
 	if (ret < 0)
@@ -314,39 +315,30 @@ static int in_group(unsigned uid, gid_t gid)
 	return 0;
 }
 
-static int one_session_allowed(const char *queue, const struct glint_job *job,
-			       char *real, size_t n);
-
-int glint_job_session_allowed(const char *queue, const struct glint_job *job,
-			      char *real, size_t n)
+/* May the job's submitter have the folder open as fd fitted: owned by
+ * it, or group-writable by a group it is in (from fstat: the folder
+ * opened, not a path that may since lead elsewhere). */
+static int folder_shared(int fd, const char *name, const struct glint_job *job)
 {
-	int ret = one_session_allowed(queue, job, real, n);
-	if (ret < 0)
-		return ret;
-	/* A rig run's joint fit: each of its samples too (a run.json could
-	 * name a link to someone else's session). */
-	struct glint_run_samples *rs = malloc(sizeof(*rs)); /* 64 KiB */
-	if (!rs)
-		return glint_error_set(ENOMEM, "out of memory");
-	ret = glint_run_read(real, rs);
-	for (int k = 0; ret > 0 && k < rs->n; k++) {
-		struct glint_job sub = *job;
-		char sreal[GLINT_PATH_MAX];
-		snprintf(sub.session, sizeof(sub.session), "%s",
-			 rs->session[k]);
-		int r = one_session_allowed(queue, &sub, sreal, sizeof(sreal));
-		if (r < 0)
-			ret = glint_error_prefix(r, "run %s", real);
-	}
-	free(rs);
-	return ret < 0 ? ret : 0;
+	struct stat st;
+	if (fstat(fd, &st) < 0 || !S_ISDIR(st.st_mode))
+		return glint_error_set(ENOENT, "session %s: not a folder",
+				       name);
+	if ((unsigned)st.st_uid == job->uid)
+		return 0;
+	if ((st.st_mode & S_IWGRP) && in_group(job->uid, st.st_gid))
+		return 0;
+	return glint_error_set(EPERM,
+			       "session %s belongs to uid %u and is not "
+			       "shared with the job's submitter (uid %u): "
+			       "refused",
+			       name, (unsigned)st.st_uid, job->uid);
 }
 
-static int one_session_allowed(const char *queue, const struct glint_job *job,
-			       char *real, size_t n)
+int glint_job_session_open(const char *queue, const struct glint_job *job,
+			   char *real, size_t n)
 {
-	char root[GLINT_PATH_MAX], q[GLINT_PATH_MAX];
-	struct stat st;
+	char root[GLINT_PATH_MAX], q[GLINT_PATH_MAX], now[GLINT_PATH_MAX];
 
 	if (n < GLINT_PATH_MAX || glint_path_fmt(q, sizeof(q), "%s", queue) < 0)
 		return glint_error_set(ENAMETOOLONG, "%s: path too long",
@@ -364,18 +356,54 @@ static int one_session_allowed(const char *queue, const struct glint_job *job,
 				       "root %s: a job may only fit sessions "
 				       "under the folder holding its queue",
 				       real, root);
-	if (stat(real, &st) < 0 || !S_ISDIR(st.st_mode))
-		return glint_error_set(ENOENT, "session %s: not a folder",
+	int fd = open(real, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+	if (fd < 0)
+		return glint_error_set(
+			errno == ENOTDIR || errno == ELOOP ? ENOENT : errno,
+			"session %s: not a folder (%s)", real, strerror(errno));
+	/* The folder opened is the one checked: a component swapped for a
+	 * link between realpath and open would show here as another path
+	 * (the kernel's name of what fd holds). */
+	char link[64];
+	snprintf(link, sizeof(link), "/proc/self/fd/%d", fd);
+	ssize_t ln = readlink(link, now, sizeof(now) - 1);
+	if (ln < 0 || (now[ln] = '\0', strcmp(now, real))) {
+		close(fd);
+		return glint_error_set(EPERM,
+				       "session %s changed while it was "
+				       "checked: refused",
 				       real);
-	if ((unsigned)st.st_uid == job->uid)
-		return 0;
-	if ((st.st_mode & S_IWGRP) && in_group(job->uid, st.st_gid))
-		return 0;
-	return glint_error_set(EPERM,
-			       "session %s belongs to uid %u and is not "
-			       "shared with the job's submitter (uid %u): "
-			       "refused",
-			       real, (unsigned)st.st_uid, job->uid);
+	}
+	int ret = folder_shared(fd, real, job);
+	/* A rig run's joint fit: each of its samples too, opened beneath
+	 * the run's folder (a run names plain folders in itself; a link
+	 * there is refused, not followed). */
+	struct glint_run_samples *rs = ret < 0 ? NULL : malloc(sizeof(*rs));
+	if (ret == 0 && !rs)
+		ret = glint_error_set(ENOMEM, "out of memory");
+	int run = ret < 0 ? 0 : glint_run_read(real, rs);
+	if (run < 0)
+		ret = run;
+	for (int k = 0; run > 0 && ret == 0 && k < rs->n; k++) {
+		const char *name = strrchr(rs->session[k], '/') + 1;
+		int s = openat(fd, name,
+			       O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+		if (s < 0)
+			ret = glint_error_set(EPERM,
+					      "run %s: sample %s is not a "
+					      "folder in the run (%s)",
+					      real, name, strerror(errno));
+		else
+			ret = folder_shared(s, rs->session[k], job);
+		if (s >= 0)
+			close(s);
+	}
+	free(rs);
+	if (ret < 0) {
+		close(fd);
+		return ret;
+	}
+	return fd;
 }
 
 /* A job file's name: ID.json, the id at most 63 letters, digits, '.',

@@ -95,13 +95,17 @@ int glint_queue_finish(const char *queue, struct glint_job *job,
 void glint_job_release(struct glint_job *job);
 
 /*
- * May this job's submitter have its session fitted?  Into `real` (size n)
- * the session's resolved path, which must be a folder inside the captures
- * root (the folder holding QUEUE; links are resolved, so none leads out)
- * and owned by the submitter or shared with it (group-writable, a group
- * it is in).  0 or -EPERM/-ENOENT with the reason.
+ * May this job's submitter have its session fitted?  Into `real` (size n,
+ * at least GLINT_PATH_MAX) the session's resolved path, which must be a
+ * folder inside the captures root (the folder holding QUEUE; links are
+ * resolved, so none leads out) and owned by the submitter or shared with
+ * it (group-writable, a group it is in); a run's samples too, each a
+ * folder in the run.  Returns the folder opened (O_DIRECTORY, close on
+ * exec), the checks made on it rather than on its path: the fit then
+ * works beneath that descriptor, and a path swapped for a link after the
+ * check leads it nowhere else.  -EPERM/-ENOENT with the reason.
  */
-int glint_job_session_allowed(const char *queue, const struct glint_job *job,
-			      char *real, size_t n);
+int glint_job_session_open(const char *queue, const struct glint_job *job,
+			   char *real, size_t n);
 
 #endif

@@ -87,8 +87,19 @@ static int choose_inputs(const struct glint_fit_request *req, struct inputs *in,
 	if (run) {
 		char *dirs[GLINT_RUN_MAX_SAMPLES];
 		n = in->rs.n;
-		for (int k = 0; k < n; k++)
+		for (int k = 0; k < n; k++) {
+			/* a run's samples are folders in it: a link there
+			 * could lead a worker's fit anywhere */
+			struct stat st;
+			if (lstat(in->rs.session[k], &st) < 0 ||
+			    !S_ISDIR(st.st_mode))
+				return glint_error_set(
+					EINVAL,
+					"run %s: sample %s is not a folder in "
+					"the run",
+					req->args[0], in->rs.session[k]);
 			dirs[k] = in->rs.session[k];
+		}
 		if (nw && nw != n)
 			return USAGE(out,
 				     "--weights given %d times for a run of "
@@ -233,8 +244,9 @@ int glint_session_fit(struct glint_fit_request *req,
 		if (ret == 0)
 			ret = glint_json_load(path, &doc);
 		if (ret == 0) {
-			json_object_set_new(doc, "output",
-					    json_string(job->out_dir));
+			json_object_set_new(
+				doc, "output",
+				glint_fit_job_shown_path(job, job->out_dir));
 			glint_log_info("%s was fitted by the fit waited for: "
 				       "its result is the answer (run glint "
 				       "fit again without --wait to fit anew)",

@@ -53,17 +53,19 @@ static void last_line(int fd, char *out, size_t n)
 }
 
 /*
- * The forked child: the session's fit as glint fit SESSION --wait runs
- * it, through the library (appliance/session_fit.h), its logs as JSON
- * lines into the job's .err file, the result document into .out, and the
- * outcome's values (its json_t pointer cleared) into the pipe.  Returns
- * the child's exit status.
+ * The forked child, in the session's folder: the session's fit as glint
+ * fit SESSION --wait runs it, through the library (appliance/session_fit.h),
+ * its logs as JSON lines into the job's .err file, the result document into
+ * .out, and the outcome's values (its json_t pointer cleared) into the pipe.
+ * Returns the child's exit status.
  */
 static int fit_child(const char *session, int fo, int fe, int pipe_fd)
 {
 	static struct glint_fit_request req;
 	static struct glint_fit_outcome o;
-	char *args[1] = { (char *)session };
+	/* the session is the working folder, opened at the check; its
+	 * path only names it in the documents */
+	char *args[1] = { (char *)"." };
 
 	if (dup2(fo, 1) < 0 || dup2(fe, 2) < 0)
 		return 126;
@@ -71,6 +73,7 @@ static int fit_child(const char *session, int fo, int fe, int pipe_fd)
 	glint_fit_request_init(&req);
 	req.args = args;
 	req.nargs = 1;
+	req.job.shown_dir = session;
 	req.wait = 1;
 	if (glint_session_fit(&req, &o) < 0) {
 		glint_log_error("fit: %s", glint_error_msg());
@@ -187,23 +190,23 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop,
 			json_pack("{s:s}", "error",
 				  "bad job: expected kind \"fit\" and an "
 				  "absolute session path"));
-	if (glint_job_session_allowed(queue, job, session, sizeof(session)) < 0)
+	/* The session is opened once, here, where it is checked; the fit
+	 * runs beneath that descriptor (its working folder), so a path
+	 * swapped for a link after the check leads it nowhere else. */
+	int sfd = glint_job_session_open(queue, job, session, sizeof(session));
+	if (sfd < 0)
 		return glint_queue_finish(
 			queue, job, "failed",
 			json_pack("{s:s}", "error", glint_error_msg()));
 	int fo = glint_queue_output(job, ".out");
 	int fe = fo < 0 ? -1 : glint_queue_output(job, ".err");
-	if (fe < 0) {
+	struct job_identity who;
+	if (fe < 0 || job_identity(job, &who) < 0) {
 		if (fo >= 0)
 			close(fo);
-		return glint_queue_finish(
-			queue, job, "failed",
-			json_pack("{s:s}", "error", glint_error_msg()));
-	}
-	struct job_identity who;
-	if (job_identity(job, &who) < 0) {
-		close(fo);
-		close(fe);
+		if (fe >= 0)
+			close(fe);
+		close(sfd);
 		return glint_queue_finish(
 			queue, job, "failed",
 			json_pack("{s:s}", "error", glint_error_msg()));
@@ -217,6 +220,7 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop,
 	int pfd[2];
 	if (pipe2(pfd, O_CLOEXEC) < 0) {
 		int e = errno;
+		close(sfd);
 		close(fo);
 		close(fe);
 		return glint_queue_finish(
@@ -248,8 +252,14 @@ static int run_job(const char *queue, struct glint_job *job, atomic_int *stop,
 		prctl(PR_SET_PDEATHSIG, SIGTERM);
 		if (getppid() != worker)
 			_exit(127);
+		if (fchdir(sfd) < 0) {
+			dprintf(fe, "session %s: %s\n", session,
+				strerror(errno));
+			_exit(126);
+		}
 		_exit(fit_child(session, fo, fe, pfd[1]));
 	}
+	close(sfd);
 	close(pfd[1]);
 	if (pid > 0)
 		setpgid(pid, pid); /* as the child does: no race with kill */

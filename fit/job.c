@@ -191,6 +191,16 @@ static int per_light(const struct glint_fit_view *views, int nv,
 	return ret;
 }
 
+json_t *glint_fit_job_shown_path(const struct glint_fit_job *job,
+				 const char *path)
+{
+	char buf[GLINT_PATH_MAX];
+	if (!job->shown_dir || strncmp(path, "./", 2) ||
+	    glint_path_join(buf, sizeof(buf), job->shown_dir, path + 2) < 0)
+		return json_string(path);
+	return json_string(buf);
+}
+
 /* params.json for a fit (without the model choice, selection, fidelity
  * and output, which the caller adds); a new reference. */
 static json_t *params_doc(const struct glint_fit_job *job,
@@ -200,7 +210,7 @@ static json_t *params_doc(const struct glint_fit_job *job,
 	const struct glint_model *model = res->model;
 	json_t *doc = json_pack(
 		"{s:s,s:s,s:o,s:o,s:{s:s,s:b,s:b,s:f,s:i,s:i},s:f,s:f,s:f,"
-		"s:i,s:i,s:i,s:o,s:f,s:f,s:{s:s,s:s,s:f},s:s}",
+		"s:i,s:i,s:i,s:o,s:f,s:f,s:{s:o,s:o,s:f},s:s}",
 		"model", model->name, "conventions", model->conventions,
 		"material", glint_material_to_json(model, res->p), "parameters",
 		glint_fit_params_json(res), "method", "name",
@@ -215,8 +225,9 @@ static json_t *params_doc(const struct glint_fit_job *job,
 		"specular_pixels", res->specular_pixels, "passes",
 		glint_fit_passes_json(res), "seconds", res->seconds,
 		"setup_seconds", res->setup_seconds, "inputs", "scene",
-		job->scene_path, "photo", job->photo_path, "sphere_diameter_m",
-		2 * job->scene.sphere_radius, "weighting",
+		glint_fit_job_shown_path(job, job->scene_path), "photo",
+		glint_fit_job_shown_path(job, job->photo_path),
+		"sphere_diameter_m", 2 * job->scene.sphere_radius, "weighting",
 		job->weight			       ? "weight image"
 		: o->weighting == GLINT_WEIGHT_POISSON ? "poisson"
 						       : "uniform");
@@ -356,11 +367,16 @@ static int judge(const struct glint_fit_job *job,
 		json_array_append_new(
 			photos,
 			json_pack(
-				"{s:s, s:s, s:i, s:i, s:o, s:o, s:f, s:o, "
+				"{s:o, s:o, s:i, s:i, s:o, s:o, s:f, s:o, "
 				"s:s, s:s, s:o*, s:o*}",
-				"scene", vo->job->scene_path, "photo",
-				vo->job->photo_path, "pixels", one->pixels,
-				"interior_pixels", one->interior, "rmse",
+				"scene",
+				glint_fit_job_shown_path(job,
+							 vo->job->scene_path),
+				"photo",
+				glint_fit_job_shown_path(job,
+							 vo->job->photo_path),
+				"pixels", one->pixels, "interior_pixels",
+				one->interior, "rmse",
 				glint_json_real_or_null(one->rmse),
 				"relative_rmse",
 				glint_json_real_or_null(one->rel_rmse),
@@ -471,7 +487,8 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 				job->exports ? exports : NULL, model);
 	if (ret < 0)
 		goto out;
-	json_object_set_new(doc, "output", json_string(job->out_dir));
+	json_object_set_new(doc, "output",
+			    glint_fit_job_shown_path(job, job->out_dir));
 	*result = doc;
 	doc = NULL;
 out:

@@ -30,6 +30,10 @@ struct glint_fit_job {
 	 * with pass NULL when they are done */
 	struct glint_fit_opts opts;
 	const char *out_dir;
+	/* NULL, or the name params.json gives the working folder: paths
+	 * that begin with "./" are recorded beneath it (a queue worker's
+	 * fit runs beneath its session's descriptor, named "."). */
+	const char *shown_dir;
 	int nthreads;
 	/* > 0: run the fidelity ladder (fit/ladder.h) with this limit in
 	 * standard errors and report its fit */
@@ -207,5 +211,10 @@ int glint_fit_needs_selection(const struct glint_fit_result *r);
  * has no ior (nothing filled). */
 int glint_fit_specular_f0(const struct glint_fit_result *r, double v[3],
 			  double se[3], double *corr);
+
+/* A path as params.json records it: beneath job->shown_dir when it
+ * begins with "./" (a new reference). */
+json_t *glint_fit_job_shown_path(const struct glint_fit_job *job,
+				 const char *path);
 
 #endif

@@ -333,6 +333,30 @@ check "a new worker re-runs it" run 0 "put back in the queue" queue run --until-
 check "... and it is done" bash -c "'$glint' jobs --root '$tmp/one' --json | python3 -c 'import json,sys; j=json.load(sys.stdin)[\"jobs\"]; s=[x[\"state\"] for x in j]; print(\"  states\", s); sys.exit(s.count(\"done\") != 2 or \"running\" in s or \"pending\" in s)'"
 check "a relative session path is stored absolute" bash -c "cd '$(dirname "$sess")' && '$glint' queue add '$(basename "$sess")' --root '$tmp/one' >/dev/null && grep -Eq '\"session\": ?\"/' '$tmp'/one/queue/pending/*.json"
 check "... and runs from another folder" bash -c "cd / && '$glint' queue run --until-empty --root '$tmp/one' -q && '$glint' jobs --root '$tmp/one' | grep -c ' done ' | grep -qx 3"
+# The session is opened where it is checked: one swapped for a link to
+# another folder while its fit runs is still the one fitted, and the
+# other folder is not written.
+swap="$(dirname "$sess")/swap"
+cp -a "$sess" "$swap" && rm -rf "$swap/fit"
+mkdir -p "$tmp/one/decoy"
+check "queue add of a session to be swapped" run 0 "" queue add "$swap" --root "$tmp/one"
+"$glint" queue run --until-empty --root "$tmp/one" -q &
+wpid=$!
+wait_until 30 pgrep -P $wpid
+mv "$swap" "$swap.moved" && ln -s "$tmp/one/decoy" "$swap"
+wait $wpid
+check "a session swapped for a link mid-fit: the folder checked is fitted, the link's target untouched" bash -c "'$glint' jobs --root '$tmp/one' | grep -c ' done ' | grep -qx 4 && test -f '$swap.moved/fit/params.json' && test -z \"\$(ls -A '$tmp/one/decoy')\""
+check "... its params.json names the inputs by the path checked" python3 -c "
+import json
+d = json.load(open('$swap.moved/fit/params.json'))
+print('  ', d['inputs'])
+assert d['inputs']['photo'] == '$swap/sample.exr', d['inputs']
+"
+rm -rf "$swap" "$swap.moved" "$tmp/one/decoy"
+mkdir -p "$tmp/linkrun" && ln -s "$sess" "$tmp/linkrun/s1"
+echo '{"samples": [{"session": "s1", "light": 1}]}' >"$tmp/linkrun/run.json"
+check "a run whose sample is a link: refused, named" run 1 "sample $tmp/linkrun/s1 is not a folder in the run" fit "$tmp/linkrun"
+rm -rf "$tmp/linkrun"
 # Links planted where the worker writes a job's output (the queue is
 # shared over SSH) are removed, never followed: the victim keeps its text.
 echo "my notes" >"$tmp/victim.txt"

@@ -4,7 +4,8 @@
 # by another program reported busy with that program's name, a bouncing
 # press pulled through sysfs counted once, every output read back from the
 # chip while glint drives it (lights, LED blink, stepper pulses and their
-# timing), one full press-to-fit run, and SIGTERM leaving outputs safe.
+# timing), one full press-to-fit run, its run fitted again through the
+# queue by two real accounts (users.sh), and SIGTERM leaving outputs safe.
 # usage: test_gpio_sim.sh GLINT DATA_DIR   (inside scripts/vm run)
 set -u
 here=$(dirname "$0")
@@ -193,6 +194,10 @@ assert len(led) > 4 and abs(dl[len(dl) // 2] - 0.125) < 0.03
 # Safe: lights off, stepper disabled (enable high: active low), step low.
 assert last["lights"] == 0 and last["enable"] == 1 and last["step"] == 0, last
 PY
+
+# The job queue shared by two real accounts, on this press's run.
+check "the queue shared by two accounts (tests/vm/users.sh)" \
+	bash "$here/users.sh" "$glint" "$(ls -d "$tmp"/out/run-* | head -1)"
 
 # SIGTERM mid-capture: every output safe before the lines are released.
 rigfile "$tmp/term.json" "$tmp/term" 80 60 # no fit: a smaller scene to render

@@ -55,12 +55,12 @@ def one_round(glint, rig, cache):
         at.append(t)
     at.append(t_end)
     stages = {name: at[k + 1] - at[k] for k, (name, _) in enumerate(MARKS)}
-    # inside the fit, from its params.json: the fit proper and the render
-    # of render.exr held below a quarter of the photo's noise
+    # inside the fit, from its params.json: the fit proper and the final
+    # render (render.exr, within half the fit's time)
     res = json.loads(p.stdout)
     fit = json.load(open(os.path.join(res["sample"], "fit", "params.json")))
     stages["  of it: fitting (params.json seconds)"] = fit["seconds"]
-    stages["  of it: render.exr at its noise target"] = fit["render"]["seconds"]
+    stages["  of it: render.exr, within half the fit's time"] = fit["render"]["seconds"]
     stages["press to printed result"] = t_end - at[0]
     stages["process, start to end"] = t_end - t_start
     return stages

@@ -193,7 +193,10 @@ int cmd_hdr(int argc, char **argv)
 					      "frame files");
 	/* 8-bit photos (JPEG, 8-bit PNG and TIFF): with their times given,
 	 * or from EXIF; everything else is raw. */
-	int ldr = glint_raw_file_is_8bit(argv[0]);
+	struct stat st0;
+	int ldr = stat(argv[0], &st0) == 0 && S_ISDIR(st0.st_mode)
+			  ? 0 /* a session */
+			  : glint_raw_file_is_8bit(argv[0]);
 	if (ldr < 0)
 		return cmd_fail("hdr");
 	if (ldr) {
@@ -225,7 +228,7 @@ int cmd_hdr(int argc, char **argv)
 	/* One argument that is not a file: a session (or an error naming
 	 * its session.json). */
 	int is_session =
-		argc == 1 && !(stat(argv[0], &st) == 0 && S_ISREG(st.st_mode));
+		argc == 1 && stat(argv[0], &st) == 0 && S_ISDIR(st.st_mode);
 	/* A session's own folder holds its latest merge (the rig's): a
 	 * merge of it there replaces it; a folder named with -o follows the
 	 * one overwrite rule. */

@@ -4,6 +4,7 @@
 
 #include "error.h"
 #include "image.h"
+#include "path.h"
 #include "tiff.h"
 
 #include <errno.h>
@@ -23,6 +24,9 @@ static double jpeg_iso(ExifData *ed)
 
 static int from_jpeg(const char *path, double *t, double *iso)
 {
+	int reg = glint_check_regular(path); /* libexif opens by path */
+	if (reg < 0)
+		return reg;
 	ExifData *ed = exif_data_new_from_file(path);
 	if (!ed)
 		return glint_error_set(EINVAL, "%s: no EXIF data", path);

@@ -5,6 +5,7 @@
 
 #include "atomic_file.h"
 #include "error.h"
+#include "path.h"
 
 #include <errno.h>
 #include <math.h>
@@ -46,6 +47,17 @@ TIFF *glint_tiff_open(const char *path, const char *mode,
 	TIFF *tif;
 
 	m->text[0] = 0;
+	/* libtiff opens by path: a FIFO or a device is refused first (the
+	 * message, glint_error_msg's, names it) rather than blocking it */
+	if (mode[0] == 'r' && glint_check_regular(path) < 0) {
+		const char *why = glint_error_msg();
+		size_t pl = strlen(path);
+		if (!strncmp(why, path, pl) && !strncmp(why + pl, ": ", 2))
+			why += pl + 2;
+		snprintf(m->text, sizeof(m->text), "%s", why);
+		TIFFOpenOptionsFree(o);
+		return NULL;
+	}
 	if (!o)
 		return NULL;
 	TIFFOpenOptionsSetErrorHandlerExtR(o, on_error, m);

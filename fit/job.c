@@ -324,8 +324,12 @@ static int render_view(struct glint_renderer *r,
 				  "height", h, "frame_width",
 				  job->window.frame_width, "frame_height",
 				  job->window.frame_height));
-	vo->have_mf = glint_misfit_analyse(&r->gb, r->env, job->photo, vo->img,
-					   job->weight, vo->cov, &vo->mf) == 0;
+	/* the render's own noise, measured: part of the residual */
+	json_t *qn = json_object_get(vo->render_info, "noise");
+	double q = json_is_number(qn) ? json_number_value(qn) : NAN;
+	vo->have_mf =
+		glint_misfit_analyse(&r->gb, r->env, job->photo, vo->img,
+				     job->weight, vo->cov, q, &vo->mf) == 0;
 	if (!vo->have_mf)
 		glint_error_clear();
 	return 0;

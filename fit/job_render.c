@@ -39,19 +39,23 @@
  * at most a quarter to chi^2) one more pair is rendered with the samples
  * that should bring the two together to the target (q falls as 1 /
  * samples), at most RENDER_MAX_FACTOR times the scene's, and the two
- * means are combined by inverse variance.  The second pair also keeps to
- * a time budget, twice the fit's time and at least RENDER_MIN_BUDGET_S,
- * predicted from the first pair's time (a pair's time grows with its
- * samples): a large photo (a 1 MP frame's sphere is 220,000 pixels) would
- * otherwise spend minutes on a preview after a fit of seconds.  What
- * limited the render is said in params.json.  Without a noise model the
- * scene's counts are used as they are.
+ * means are combined by inverse variance.  The whole render keeps to a
+ * time budget, RENDER_BUDGET_SHARE of the fit's time and at least
+ * RENDER_MIN_BUDGET_S: the second pair is made only when the time left
+ * after the first affords it (a pair's time grows with its samples).  A
+ * render held above the target by the budget is noisier than the photo
+ * allows for, not wrong: its measured noise goes with it into the misfit
+ * analysis, which counts it in the residual's variance.  What limited the
+ * render is said in params.json.  Without a noise model the scene's
+ * counts are used as they are.
  */
 #define RENDER_NOISE_TARGET 0.25
 
 #define RENDER_MAX_FACTOR 4
 
-#define RENDER_MIN_BUDGET_S 20.0
+#define RENDER_BUDGET_SHARE 0.5
+
+#define RENDER_MIN_BUDGET_S 1.0
 
 /* The first pair's pilot: every 16th row, on images of 512 rows or more;
  * its samples are cut at most to an eighth. */
@@ -168,13 +172,13 @@ static int render_pair(struct glint_renderer *r,
 }
 
 static json_t *render_step(const struct glint_fit_job *job, double factor,
-			   double q)
+			   double q, double seconds)
 {
-	return json_pack("{s:i, s:i, s:o}", "light_samples",
+	return json_pack("{s:i, s:i, s:o, s:f}", "light_samples",
 			 2 * scaled(job->scene.light_samples, factor),
 			 "brdf_samples",
 			 2 * scaled(job->scene.brdf_samples, factor), "noise",
-			 glint_json_real_or_null(q));
+			 glint_json_real_or_null(q), "seconds", seconds);
 }
 
 int job_render_final(struct glint_renderer *r, const struct glint_fit_job *job,
@@ -205,7 +209,8 @@ int job_render_final(struct glint_renderer *r, const struct glint_fit_job *job,
 		ret = glint_error_set(ENOMEM, "out of memory");
 		goto out;
 	}
-	double budget_s = fmax(2 * fit_s, RENDER_MIN_BUDGET_S);
+	double budget_s =
+		fmax(RENDER_BUDGET_SHARE * fit_s, RENDER_MIN_BUDGET_S);
 	/* A large image's first pair is sized by a pilot of every 16th row:
 	 * fewer samples where the render is already far below the photo's
 	 * noise, and within the time budget. */
@@ -227,18 +232,24 @@ int job_render_final(struct glint_renderer *r, const struct glint_fit_job *job,
 		goto out;
 	double q = q1, pair_s = glint_clock_monotonic() - t1;
 	const char *limited_by;
-	factor = glint_render_factor(q1, pair_s, budget_s, &limited_by);
+	/* the second pair from the time the pilot and first pair left */
+	factor = glint_render_factor(q1, pair_s,
+				     budget_s - (glint_clock_monotonic() - t0),
+				     &limited_by);
 	if (!factor && first_limit)
 		limited_by = first_limit;
 	if (factor && !(more = glint_image_new(img->width, img->height))) {
 		ret = glint_error_set(ENOMEM, "out of memory");
 		goto out;
 	}
+	double pair2_s = 0;
 	if (factor) {
+		double t2 = glint_clock_monotonic();
 		ret = render_pair(r, job, model, p, f1 * factor, 2, 1, more, b,
 				  cov, &q2, &nv);
 		if (ret < 0)
 			goto out;
+		pair2_s = glint_clock_monotonic() - t2;
 		/* Inverse-variance weights, one for the whole image: the
 		 * pixels' variances all fall with the samples alike. */
 		double w1 = 1 / q1, w2 = 1 / q2;
@@ -260,10 +271,11 @@ int job_render_final(struct glint_renderer *r, const struct glint_fit_job *job,
 		(factor ? 2 * scaled(job->scene.brdf_samples, f1 * factor) : 0);
 	json_t *steps = json_array();
 	if (steps) {
-		json_array_append_new(steps, render_step(job, f1, q1));
+		json_array_append_new(steps, render_step(job, f1, q1, pair_s));
 		if (factor)
 			json_array_append_new(
-				steps, render_step(job, f1 * factor, q2));
+				steps,
+				render_step(job, f1 * factor, q2, pair2_s));
 	}
 	*info = json_pack(
 		"{s:i, s:i, s:o, s:f, s:b, s:I, s:f, s:f, s:s?, "

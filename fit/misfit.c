@@ -182,7 +182,8 @@ int glint_misfit_analyse(const struct glint_gbuffer *gb,
 			 const struct glint_image *photo,
 			 const struct glint_image *render,
 			 const struct glint_image *weight,
-			 const struct glint_image *cov, struct glint_misfit *m)
+			 const struct glint_image *cov, double render_noise,
+			 struct glint_misfit *m)
 {
 	int w = photo->width, h = photo->height;
 	struct acc av[GLINT_MISFIT_BANDS] = { { 0 } };
@@ -197,6 +198,11 @@ int glint_misfit_analyse(const struct glint_gbuffer *gb,
 		return glint_error_set(EINVAL, "misfit: images of different "
 					       "sizes");
 	m->weighted = weight != NULL;
+	m->render_noise =
+		render_noise >= 0 && isfinite(render_noise) ? render_noise : 0;
+	/* a weight is 1 / the photo's variance; the residual's is the
+	 * photo's and the render's */
+	double wscale = 1 / (1 + m->render_noise);
 	/* The photo's mean on the sphere, over its valid (finite) values:
 	 * invalid pixels carry NaN and weight 0. */
 	for (size_t i = 0; i < (size_t)w * h; i++) {
@@ -230,7 +236,8 @@ int glint_misfit_analyse(const struct glint_gbuffer *gb,
 		for (int c = 0; c < 3; c++) {
 			double d = render->data[3 * i + c] -
 				   photo->data[3 * i + c];
-			double wt = weight ? weight->data[3 * i + c] : 1;
+			double wt =
+				weight ? weight->data[3 * i + c] * wscale : 1;
 			if (!isfinite(d) || !(wt > 0))
 				continue;
 			d = weight ? d * sqrt(wt) : d / level;
@@ -290,13 +297,14 @@ static json_t *bands_json(const struct glint_misfit_band *b)
 json_t *glint_misfit_json(const struct glint_misfit *m)
 {
 	return json_pack(
-		"{s:s, s:b, s:s, s:o, s:[f,f,f], s:o, s:o}", "verdict",
+		"{s:s, s:b, s:s, s:f, s:o, s:[f,f,f], s:o, s:o}", "verdict",
 		m->verdict, "structured", m->structured, "residual",
-		m->weighted ? "render - photo, in noise standard deviations"
+		m->weighted ? "render - photo, in standard deviations of the "
+			      "photo's noise and the render's"
 			    : "render - photo, over the photo's mean on the "
 			      "sphere",
-		"chi2_per_value", glint_json_real_or_null(m->chi2),
-		"light_direction", m->light[0], m->light[1], m->light[2],
-		"by_view_angle", bands_json(m->view), "by_mirror_angle",
-		bands_json(m->mirror));
+		"render_noise", m->render_noise, "chi2_per_value",
+		glint_json_real_or_null(m->chi2), "light_direction",
+		m->light[0], m->light[1], m->light[2], "by_view_angle",
+		bands_json(m->view), "by_mirror_angle", bands_json(m->mirror));
 }

@@ -43,8 +43,9 @@ struct glint_misfit {
 	int weighted; /* 1: residuals in noise units */
 	struct glint_misfit_band view[GLINT_MISFIT_BANDS];
 	struct glint_misfit_band mirror[GLINT_MISFIT_BANDS];
-	double light[3]; /* the map's brightest direction (world) */
-	double chi2;	 /* over all the pixels; NAN without weights */
+	double light[3];     /* the map's brightest direction (world) */
+	double chi2;	     /* over all the pixels; NAN without weights */
+	double render_noise; /* as given (0 when not known) */
 	int structured;
 	char verdict[448];
 };
@@ -52,15 +53,21 @@ struct glint_misfit {
 /*
  * Analyse the residual of `render` against `photo` over the pixels whose
  * coverage (cov, from glint_renderer_shade) is whole.  weight (may be
- * NULL) is the fit's per-pixel, per-channel 1/variance.  Fails only on a
- * size mismatch or no pixel on the sphere.
+ * NULL) is the fit's per-pixel, per-channel 1/variance.  render_noise is
+ * the render's own Monte Carlo variance in units of the photo's (0 for a
+ * noiseless render; NAN: not known, taken as 0): the residual's variance
+ * is the photo's times 1 + render_noise, and the weighted residuals are
+ * scaled to it, so that chi^2 per value is about 1 at the noise however
+ * many samples the render took.  Fails only on a size mismatch or no
+ * pixel on the sphere.
  */
 int glint_misfit_analyse(const struct glint_gbuffer *gb,
 			 const struct glint_envmap *env,
 			 const struct glint_image *photo,
 			 const struct glint_image *render,
 			 const struct glint_image *weight,
-			 const struct glint_image *cov, struct glint_misfit *m);
+			 const struct glint_image *cov, double render_noise,
+			 struct glint_misfit *m);
 
 /* The map's brightest direction (world): the texel of most power
  * (radiance x solid angle), the mirror angle's reference. */

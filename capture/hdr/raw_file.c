@@ -372,6 +372,11 @@ int glint_raw_file_read(const char *path, struct glint_frame *f,
 	char ext[16];
 
 	memset(f, 0, sizeof(*f));
+	/* LibRaw and libtiff open by path: a FIFO or a device is refused
+	 * first rather than blocking them */
+	int reg = glint_check_regular(path);
+	if (reg < 0)
+		return reg;
 	glint_path_ext(path, ext, sizeof(ext));
 	if (is_glint_frame(path, ext)) {
 		info_init(info, "glint frame");
@@ -389,13 +394,11 @@ int glint_raw_file_read(const char *path, struct glint_frame *f,
 static int png_bits(const char *path)
 {
 	unsigned char head[33];
-	FILE *fp = fopen(path, "rb");
-	size_t n = fp ? fread(head, 1, sizeof(head), fp) : 0;
-
-	if (fp)
-		fclose(fp);
+	FILE *fp = glint_fopen_regular(path, "rb");
 	if (!fp)
-		return glint_error_set(errno, "%s: %s", path, strerror(errno));
+		return -errno;
+	size_t n = fread(head, 1, sizeof(head), fp);
+	fclose(fp);
 	if (n < sizeof(head) || png_sig_cmp(head, 0, 8) ||
 	    memcmp(head + 12, "IHDR", 4))
 		return glint_error_set(EINVAL, "%s: not a PNG", path);
@@ -407,6 +410,9 @@ int glint_raw_file_is_8bit(const char *path)
 	char ext[16];
 	int bits;
 
+	int reg = glint_check_regular(path);
+	if (reg < 0)
+		return reg;
 	glint_path_ext(path, ext, sizeof(ext));
 	if (!strcmp(ext, "jpg") || !strcmp(ext, "jpeg"))
 		return 1;

@@ -127,5 +127,11 @@ head -c 9000 "$tmp/mrw/frame-004.mrw" >"$tmp/cut.mrw"
 check "a truncated raw file: exit 1, named" run 1 "cut.mrw: its raw data is truncated or corrupt (LibRaw: unexpected end of file)" hdr "$tmp/cut.mrw" "$tmp/mrw/frame-005.mrw" -o "$tmp/y"
 check "frames of two cameras: exit 1, both named" run 1 "frame-005.mrw: Minolta DiMAGE 7Hi (read by LibRaw" hdr "$tmp/dng/frame-004.dng" "$tmp/mrw/frame-005.mrw" -o "$tmp/y"
 check "... nothing written" test ! -e "$tmp/y/hdr.exr"
+# A FIFO given as a photo (LibRaw, libtiff and libexif open by path) is
+# refused at once, not read until the test's timeout.
+mkfifo "$tmp/fifo.mrw" "$tmp/fifo.tif" "$tmp/fifo.jpg"
+for f in fifo.mrw fifo.tif fifo.jpg; do
+	check "a FIFO as a photo ($f): exit 1 at once, named" timeout 30 bash -c "'$glint' hdr '$tmp/$f' -o '$tmp/z' --times 1 2>'$tmp/err'; [ \$? = 1 ] && grep -q '$f: a FIFO, not a regular file' '$tmp/err' && test ! -e '$tmp/z'"
+done
 
 checks_done

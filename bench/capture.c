@@ -37,7 +37,7 @@
 #define MAXRUNS 15
 enum { M_SHIPPED, M_APART, M_KNOWN, M_SEQUENTIAL, NM };
 static const char *const mode_name[NM] = { "metered by its frames",
-					   "metered apart (before)",
+					   "metered apart first",
 					   "from a known start", "sequential" };
 
 static double floor_of(const struct glint_bracket *b, double period)

@@ -45,7 +45,7 @@
 #define MAXSIZES  6
 enum { M_STREAM, M_BATCH, NM };
 static const char *const mode_name[NM] = { "streaming (shipped)",
-					   "batch (before)" };
+					   "batch (frames kept)" };
 static const char *const mode_key[NM] = { "streaming", "batch" };
 
 static double now(void)
@@ -281,7 +281,7 @@ int main(int argc, char **argv)
 			"plot 'bench-out/merge.csv' skip 1 every 2::0 using "
 			"2:5 with linespoints title 'streaming (shipped)', '' "
 			"skip 1 every 2::1 using 2:5 with linespoints title "
-			"'batch (before)', 0.5 with lines dt 2 title "
+			"'batch (frames kept)', 0.5 with lines dt 2 title "
 			"'target 0.5 s'\n");
 		fclose(gp);
 		if (system("command -v gnuplot >/dev/null 2>&1") == 0 &&

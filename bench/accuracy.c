@@ -604,8 +604,8 @@ static int judge(const struct glint_model *m, const double *truth,
 	if (*err <= 1)
 		return WITHIN;
 	/* Roughness below the pixel footprint: glint reports an upper
-	 * bound, not a value (issue 20: near-mirrors within tolerance on
-	 * albedos, specular and ior, roughness under its bound). */
+	 * bound, not a value (near-mirrors within tolerance on albedos,
+	 * specular and ior, roughness under its bound). */
 	double p[GLINT_MAX_PARAMS];
 	memcpy(p, res->p, sizeof(p));
 	p[6] = truth[6];

@@ -3,7 +3,7 @@
  * Raw HDR merge benchmark: how long after a bracket's last frame its
  * merged image is ready, the streaming merge (each frame folded in as it
  * arrives, as glint capture and the rig run it) against the batch merge
- * (every frame kept, merged after the last: the previous build's way).
+ * (every frame kept, merged after the last).
  *
  * Per size, a bracket of the simulated camera's test card is captured once
  * (fake clock: the simulator draws a 12 MP frame's noise in seconds, far

@@ -200,7 +200,7 @@ json_t *glint_fit_verdict_json(const struct glint_fit_result *r,
 
 /* Does the photo leave a parameter of r undetermined, or specular and ior
  * trading off (|correlation| >= 0.95)?  Then glint_fit_job_run() chooses
- * the model by BIC as --select-model does (issue 15). */
+ * the model by BIC as --select-model does. */
 int glint_fit_needs_selection(const struct glint_fit_result *r);
 
 /* Specular x F0(ior) of r per channel (NAN where the model has no such

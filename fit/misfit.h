@@ -3,7 +3,7 @@
 #define GLINT_FIT_MISFIT_H
 
 /*
- * Where the fitted model misses the photo (issue 15, "misfit made
+ * Where the fitted model misses the photo ("misfit made
  * visible"): the residual (render - photo) of the pixels wholly on the
  * sphere, binned by two angles:
  *  - from the view direction (the angle between normal and view: 0 at

@@ -4,7 +4,7 @@
 
 /*
  * Measured (tabulated) isotropic BRDFs for the reference renderer: spheres
- * whose material is none of glint's models (issue 20).
+ * whose material is none of glint's models.
  *
  * The table is the MERL BRDF database's layout (Matusik et al. 2003): RGB
  * values on 90 x 90 x 180 bins of Rusinkiewicz's half/difference angles,

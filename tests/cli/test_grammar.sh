@@ -1,5 +1,5 @@
 #!/bin/bash
-# One option grammar (issue 16): every command, and every subcommand,
+# One option grammar: every command, and every subcommand,
 # takes --help, --json, -q, -v; a bad or misspelt flag is one line naming
 # it (with the likeliest meant), then "Try 'glint CMD --help'." and exit 2.
 # usage: test_grammar.sh GLINT DATA_DIR

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The result swap under SIGKILL (issue 17): strace kills the writer at the
+# The result swap under SIGKILL: strace kills the writer at the
 # k-th call of each of rename, renameat2, unlink, unlinkat, rmdir, fsync,
 # fdatasync and mkdir in turn.  After every kill the folder must hold a
 # whole result, the old one or the new one, never none and never a mix;

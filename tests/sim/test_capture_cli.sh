@@ -98,7 +98,7 @@ JSON
 "$glint" capture sample --config "$tmp/small.json" -q
 check "hdr of frames of different sizes: exit 1" run 1 "must match" hdr "$sess/frame-003.dng" "$(only_session "$tmp/small")/frame-001.dng" -o "$tmp/hdry"
 check "hdr of a missing session: exit 1" run 1 "nowhere" hdr "$tmp/nowhere"
-# Bracket integrity (issue 17): a frame copied over another, or one whose
+# Bracket integrity: a frame copied over another, or one whose
 # pixels were edited (a valid DNG, its metadata kept), is named.
 cp -r "$sess" "$tmp/copied"
 cp "$tmp/copied/frame-007.dng" "$tmp/copied/frame-002.dng"

@@ -108,10 +108,10 @@ int main(int argc, char **argv)
 	/* The defaults: 8 + 8 samples, raised by the fit itself where its
 	 * sample sets disagree by more than the noise (at 192 px, 8 + 8
 	 * left yellow plastic under the studio's softboxes 13 % off in
-	 * roughness; the test used to force 16 + 16). */
+	 * roughness). */
 	CHECK(glint_fit(&r, m, photo, NULL, &o, &res) == 0, "%s",
 	      glint_error_msg());
-	/* A correct photo is never refused (issue 20). */
+	/* A correct photo is never refused. */
 	struct glint_fit_verdict v;
 	CHECK(test_failures || glint_fit_judge(&res, 0, &v), "refused: %s",
 	      v.verdict);

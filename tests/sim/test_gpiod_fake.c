@@ -90,7 +90,7 @@ static void test_outputs(void)
 	      glint_error_msg());
 	if (!b)
 		return;
-	/* Safe from the first instant (issue 17): each output is requested
+	/* Safe from the first instant: each output is requested
 	 * at its inactive value, with no later write needed. */
 	last_value(22, &v, &p, &n);
 	CHECK(v == 0 && n == 1, "lights at open: %d after %d changes", v, n);

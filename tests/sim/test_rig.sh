@@ -329,8 +329,8 @@ wait_until 30 pgrep -P $wpid
 child=$(pgrep -P $wpid)
 kill -KILL $wpid
 wait $wpid 2>/dev/null
-# The fit dies with its worker, by itself (issue 17: it kept running and
-# the next worker fitted the session again).
+# The fit dies with its worker, by itself (left running, the next worker
+# would fit the session again beside it).
 check "the killed worker's fit dies with it" wait_until 5 bash -c "! kill -0 $child"
 check "killed worker: its job is still listed as running" bash -c "'$glint' jobs --root '$tmp/one' | grep -q ' running '"
 check "a new worker re-runs it" run 0 "put back in the queue" queue run --until-empty --root "$tmp/one"

@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /*
  * Spheres of a measured (tabulated) BRDF that is none of glint's models
- * (issue 20, item 5): an Ashikhmin-Shirley material (its coupled diffuse
+ *: an Ashikhmin-Shirley material (its coupled diffuse
  * falls off toward grazing, its Blinn-Phong lobe has Schlick's Fresnel)
  * sampled into the MERL database's table layout (sim/tabulated.h), written
  * and read back as a MERL .binary, photographed by the reference renderer

@@ -726,8 +726,8 @@ static void exr_set_window(const char *p, int w, int h)
 
 /*
  * Headers that promise more than the file holds are refused before
- * anything is allocated (issue 17): each of these once allocated up to
- * 2.8 GB.  The peak memory of the whole test stays small.
+ * anything is allocated: each of these asks for up to 2.8 GB.  The peak memory
+ * of the whole test stays small.
  */
 static void test_header_bombs(void)
 {

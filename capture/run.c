@@ -15,6 +15,7 @@
 #include "core/error.h"
 #include "core/log.h"
 
+#include <gsl/gsl_cdf.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -156,17 +157,33 @@ static int bracket_into(struct glint_camera *cam,
 	return ret;
 }
 
+/* How far below zero, in its standard deviations, a dark site of an
+ * n-site merge may lie by chance: the depth one photo in
+ * GLINT_NEGATIVE_FALSE_ALARM_PHOTOS reaches somewhere (n times the
+ * normal tail), and at least 5.  A fixed depth would refuse good photos
+ * as they grow: -5 sigma happens once in 3.5 million sites, about three
+ * times in a 12 MP frame. */
+#define GLINT_NEGATIVE_FALSE_ALARM_PHOTOS 1e4
+
+double glint_negative_sigma_limit(size_t n)
+{
+	if (n < 1)
+		n = 1;
+	return fmax(5, gsl_cdf_ugaussian_Qinv(
+			       1 / (GLINT_NEGATIVE_FALSE_ALARM_PHOTOS * n)));
+}
+
 /* A merged bracket is radiance before it is written: finite, not
  * negative beyond its noise (a merge's dark sites scatter about zero by
- * their noise; -5 sigma happens about once in 3.5 million by chance),
- * brighter than its noise somewhere, and for a probe, its brightest
- * sites measured in some frame (a light clipped in every frame is a
- * light of unknown strength). */
+ * their noise: glint_negative_sigma_limit), brighter than its noise
+ * somewhere, and for a probe, its brightest sites measured in some frame
+ * (a light clipped in every frame is a light of unknown strength). */
 static int check_raw(const struct glint_raw_hdr *raw, const char *kind,
 		     const char *file)
 {
 	size_t n = (size_t)raw->width * raw->height;
 	size_t bright = 0, clipped = 0, first_clip = 0;
+	double limit = glint_negative_sigma_limit(n);
 
 	for (size_t i = 0; i < n; i++) {
 		double x = raw->x[i], v = raw->var[i];
@@ -182,15 +199,17 @@ static int check_raw(const struct glint_raw_hdr *raw, const char *kind,
 				"%g: expected finite values",
 				file, i % (size_t)raw->width,
 				i / (size_t)raw->width, x, v);
-		if (x < -5 * sqrt(v))
+		if (x < -limit * sqrt(v))
 			return glint_error_set(
 				ERANGE,
 				"%s: site (%zu, %zu) has radiance %g, %.1f "
 				"standard deviations below zero: expected >= "
-				"0 within its noise (a wrong black level or "
+				"0 within its noise (no deeper than %.1f among "
+				"%zu sites by chance; a wrong black level or "
 				"noise model?)",
 				file, i % (size_t)raw->width,
-				i / (size_t)raw->width, x, x / sqrt(v));
+				i / (size_t)raw->width, x, -x / sqrt(v), limit,
+				n);
 		bright += x > 3 * sqrt(v);
 	}
 	if (bright * 100 < n)

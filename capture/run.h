@@ -54,4 +54,10 @@ int glint_capture_run(const struct glint_capture_setup *setup, const char *kind,
 		      const char *out, const char *probe, atomic_int *cancel,
 		      struct glint_capture_result *res);
 
+/* The merge's plausibility check: how many of its standard deviations
+ * below zero a dark site of an n-site merge may lie by chance (the depth
+ * reached somewhere in one photo in 10,000; at least 5).  A site deeper
+ * than that refuses the photo (a wrong black level or noise model). */
+double glint_negative_sigma_limit(size_t n);
+
 #endif

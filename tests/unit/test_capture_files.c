@@ -8,6 +8,7 @@
 #include "test.h"
 
 #include "capture/hdr/frame_file.h"
+#include "capture/run.h"
 #include "capture/hdr/session.h"
 #include "core/error.h"
 #include "core/image.h"
@@ -15,6 +16,7 @@
 #include "core/log.h"
 
 #include <fcntl.h>
+#include <math.h>
 #include <unistd.h>
 
 #include <jansson.h>
@@ -303,6 +305,29 @@ static void test_special_files(const char *dir)
 
 /* Text from another user's file shown safely: controls and broken UTF-8
  * escaped, printable text and valid UTF-8 kept. */
+/* The merge's negative-site limit keeps its false alarms to one photo
+ * in 10,000 at every size: n sites times the normal tail beyond the
+ * limit, and a 12 MP merge allowed deeper than the 5 sigma of a small
+ * one (where -5 sigma happens three times by chance). */
+static void test_negative_limit(void)
+{
+	static const double sizes[] = { 1e2, 7.7e4, 3.1e6, 1.23e7, 5e7 };
+	double last = 0;
+	for (int k = 0; k < 5; k++) {
+		double t = glint_negative_sigma_limit((size_t)sizes[k]);
+		double alarms = sizes[k] * 0.5 * erfc(t / sqrt(2));
+		CHECK(t >= 5 && t >= last &&
+			      (t == 5 || fabs(alarms / 1e-4 - 1) < 1e-3),
+		      "%g sites: limit %.3f sigma, %.3g false alarms a photo",
+		      sizes[k], t, alarms);
+		last = t;
+	}
+	CHECK(glint_negative_sigma_limit(12330000) > 6.5, "12 MP: limit %.2f",
+	      glint_negative_sigma_limit(12330000));
+	CHECK(glint_negative_sigma_limit(100) == 5, "100 sites: %.2f",
+	      glint_negative_sigma_limit(100));
+}
+
 static void test_printable(void)
 {
 	char out[64];
@@ -335,6 +360,7 @@ int main(void)
 	RUN_ARG(test_run, dir);
 	RUN_ARG(test_special_files, dir);
 	RUN(test_printable);
+	RUN(test_negative_limit);
 	char cmd[600];
 	snprintf(cmd, sizeof(cmd), "rm -rf '%s'", dir);
 	if (system(cmd) != 0)

@@ -673,8 +673,13 @@ static void rim_statistic(const struct edge_map *em, const double c[3],
  * copy reduced to at most that, then refined on the full image.  RANSAC
  * needs two rim points out of all the edges, and the rim's share of them
  * falls as the pixels grow (perimeter against area): on a 12 MP frame
- * (4056 x 3040) 4000 draws found a circle through the backdrop instead of
- * the sphere (bench/rig_size).
+ * (4056 x 3040) 4000 draws find a circle through the backdrop instead of
+ * the sphere (bench/rig_size).  The verdict (is it a sphere's silhouette?)
+ * is the reduced copy's too: the rim statistic's thresholds and its
+ * measured false-alarm rate are of images up to DETECT_SIDE, and a full
+ * frame whose edges are spread over several pixels (a soft lens, a view
+ * interpolated up) would fall below them with the sphere plainly there.
+ * The full image then refines where the circle is.
  */
 #define DETECT_SIDE 1024
 
@@ -695,10 +700,11 @@ int glint_sphere_detect(const struct glint_image *img, double r_min,
 		r_max = 0.5 * (w < h ? w : h);
 	}
 	int side = w < h ? w : h;
-	if (side > DETECT_SIDE) {
+	struct glint_circle sc = { 0 };
+	int reduced = side > DETECT_SIDE;
+	if (reduced) {
 		int k = (side + DETECT_SIDE - 1) / DETECT_SIDE;
 		struct glint_image *small = glint_image_downsample(img, k);
-		struct glint_circle sc;
 		if (!small)
 			return glint_error_set(
 				ENOMEM, "sphere detection: out of memory");
@@ -756,8 +762,16 @@ int glint_sphere_detect(const struct glint_image *img, double r_min,
 	}
 	for (int k = 0; k < 36; k++)
 		covered += bins[k];
-	rim_statistic(&em, c, &out->rim_share, &out->rim_z, &out->rim_run_deg,
-		      &out->rim_slope);
+	if (reduced) {
+		/* judged on the reduced copy, where it was found */
+		out->rim_share = sc.rim_share;
+		out->rim_z = sc.rim_z;
+		out->rim_run_deg = sc.rim_run_deg;
+		out->rim_slope = sc.rim_slope;
+	} else {
+		rim_statistic(&em, c, &out->rim_share, &out->rim_z,
+			      &out->rim_run_deg, &out->rim_slope);
+	}
 	out->cx = c[0];
 	out->cy = c[1];
 	out->r = c[2];

@@ -45,6 +45,8 @@ struct glint_circle {
 	double rim_share, rim_z;
 	double rim_run_deg; /* the longest arc of it covered (gaps <= 3 px) */
 	double rim_slope;   /* median log-luminance slope across it, per px */
+	/* (all four of the copy reduced to 1024 px on its shorter side for
+	 * a larger image: where it was found and judged) */
 };
 
 /*

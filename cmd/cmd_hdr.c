@@ -191,12 +191,12 @@ int cmd_hdr(int argc, char **argv)
 	if (argc < 1)
 		return cmd_usage_error("hdr", "expected a session folder or "
 					      "frame files");
-	/* 8-bit photos (JPEG, 8-bit PNG and TIFF): with their times given,
-	 * or from EXIF; everything else is raw. */
-	struct stat st0;
-	int ldr = stat(argv[0], &st0) == 0 && S_ISDIR(st0.st_mode)
-			  ? 0 /* a session */
-			  : glint_raw_file_is_8bit(argv[0]);
+	/* A folder is a session; of files, 8-bit photos (JPEG, 8-bit PNG
+	 * and TIFF) with their times given, or from EXIF; everything else
+	 * is raw. */
+	struct stat st;
+	int first_is_dir = stat(argv[0], &st) == 0 && S_ISDIR(st.st_mode);
+	int ldr = first_is_dir ? 0 : glint_raw_file_is_8bit(argv[0]);
 	if (ldr < 0)
 		return cmd_fail("hdr");
 	if (ldr) {
@@ -223,12 +223,9 @@ int cmd_hdr(int argc, char **argv)
 						  "hdr.png" };
 	int n = 0, width = 0, height = 0;
 	long valid_px = 0;
-	struct stat st;
 	glint_noise_default(&nm);
-	/* One argument that is not a file: a session (or an error naming
-	 * its session.json). */
-	int is_session =
-		argc == 1 && stat(argv[0], &st) == 0 && S_ISDIR(st.st_mode);
+	/* One folder: a session (or an error naming its session.json). */
+	int is_session = argc == 1 && first_is_dir;
 	/* A session's own folder holds its latest merge (the rig's): a
 	 * merge of it there replaces it; a folder named with -o follows the
 	 * one overwrite rule. */

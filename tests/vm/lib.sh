@@ -46,6 +46,13 @@ in_vm() { # the modules scripts/vm built are only there inside its VM
 	[ -n "${GLINT_VM_MODULES:-}" ] && [ -d "$GLINT_VM_MODULES" ]
 }
 
+need_vm() { # outside the VM: meson's skip (77), saying why
+	in_vm || {
+		echo "skip: needs the test VM (scripts/vm run)" >&2
+		exit 77
+	}
+}
+
 # load_module NAME: a module from Debian's kernel, or one scripts/vm built
 # (with the Debian modules it depends on).
 load_module() {

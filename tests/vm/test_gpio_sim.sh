@@ -13,10 +13,7 @@ here=$(dirname "$0")
 . "$here/lib.sh"
 glint=$1
 data=$2
-in_vm || {
-	echo "skip: needs the test VM (scripts/vm run)" >&2
-	exit 77
-}
+need_vm
 tmp=$(mktemp -d)
 sampler=""
 trap '[ -z "$sampler" ] || kill $sampler 2>/dev/null; rm -rf "$tmp"' EXIT

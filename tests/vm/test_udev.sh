@@ -14,10 +14,7 @@ here=$(dirname "$0")
 . "$here/../wait.sh"
 . "$here/lib.sh"
 glint=$1 data=$2
-in_vm || {
-	echo "skip: needs the test VM (scripts/vm run)" >&2
-	exit 77
-}
+need_vm
 tmp=$(mktemp -d)
 udevd=""
 trap '[ -z "$udevd" ] || kill $udevd 2>/dev/null; umount /etc/group 2>/dev/null; rm -rf "$tmp"' EXIT

@@ -12,10 +12,7 @@ here=$(dirname "$0")
 . "$here/lib.sh"
 test_libcamera=$1
 glint=$2
-in_vm || {
-	echo "skip: needs the test VM (scripts/vm run)" >&2
-	exit 77
-}
+need_vm
 tmp=$(mktemp -d)
 udevd=""
 trap '[ -z "$udevd" ] || kill $udevd 2>/dev/null; rm -rf "$tmp"' EXIT

@@ -10,10 +10,7 @@ here=$(dirname "$0")
 . "$here/lib.sh"
 test_vivid=$1
 glint=$2
-in_vm || {
-	echo "skip: needs the test VM (scripts/vm run)" >&2
-	exit 77
-}
+need_vm
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 

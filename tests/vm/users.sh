@@ -15,10 +15,7 @@ here=$(dirname "$0")
 . "$here/../wait.sh"
 . "$here/lib.sh"
 glint=$1 run=$2
-in_vm || {
-	echo "skip: needs the test VM (scripts/vm run)" >&2
-	exit 77
-}
+need_vm
 base=$(mktemp -d /run/glint-users.XXXXXX)
 trap 'umount "$base" /etc/group /etc/passwd 2>/dev/null; rmdir "$base"' EXIT
 mount -t tmpfs -o mode=0755 tmpfs "$base" || exit 1

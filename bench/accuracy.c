@@ -34,9 +34,18 @@
  * the fit stopped short of the truth's basin; above: the fitter's model
  * or the photo's noise prefers the fit).
  *
- *   bench/accuracy [quick|slice] [--check|--no-refusals|--within] [MAP...]
+ * and, per map and over all, each parameter class's interval coverage
+ * (the share of fits whose 95 % interval holds the truth), the median of
+ * |error| / standard error (about 0.67 for an honest interval; far below,
+ * intervals wider than the errors need) and how many fits reported the
+ * parameter undetermined.
+ *
+ *   bench/accuracy [quick|slice] [classes] [--check|--no-refusals|--within]
+ *                  [MAP...]
  * No maps: every map in ../shared/data/probes and data/env (the angular
- * campus probe converted to lat-long: load_map()).
+ * campus probe converted to lat-long: load_map()).  classes: the six
+ * procedural lighting classes of sim/light_class.h instead (a map named
+ * class:NAME is one of them, 1024 px, unrotated).
  * quick: four materials (yellow plastic, nylon, silver, copper); slice:
  * silver (the sim suite's `accuracy-slice`: a map with a sun, where the
  * fit raises its samples; yellow plastic is bench/fit's and the sim
@@ -90,6 +99,7 @@
 #include "core/log.h"
 #include "fit/fit.h"
 #include "fit/job.h"
+#include "sim/light_class.h"
 #include "sim/reference.h"
 
 #include <gsl/gsl_eigen.h>
@@ -155,7 +165,46 @@ struct map_tally {
 	int kind_n[NPHOTO], kind_within[NPHOTO];
 	int bad_weights; /* bracket photos not made, or whose weights are not
 			    1/variance */
+	/* Per parameter class (diffuse, specular, roughness, ior): fits
+	 * with an interval, those whose interval holds the truth, those
+	 * reported undetermined, and |error| / standard error. */
+	int cls_n[4], cls_in[4], cls_undet[4];
+	double cls_z[4][1024];
+	int cls_nz[4];
 };
+
+static const char *const class_names[4] = { "diffuse", "specular", "roughness",
+					    "ior" };
+
+static int param_class(int k)
+{
+	return k < 3 ? 0 : k < 6 ? 1 : k == 6 ? 2 : 3;
+}
+
+/* The intervals of a fit against the truth, by parameter class. */
+static void tally_intervals(struct map_tally *t, const struct glint_model *m,
+			    const double *truth,
+			    const struct glint_fit_result *res)
+{
+	for (int k = 0; k < m->nparams && k < 8; k++) {
+		int c = param_class(k);
+		int undet = !isfinite(res->se[k]) ||
+			    res->unc.hi[k] - res->unc.lo[k] >=
+				    0.5 * (m->params[k].hi - m->params[k].lo);
+		if (!res->unc.n)
+			continue;
+		if (undet) {
+			t->cls_undet[c]++;
+			continue;
+		}
+		t->cls_n[c]++;
+		t->cls_in[c] += truth[k] >= res->unc.lo[k] &&
+				truth[k] <= res->unc.hi[k];
+		if (res->se[k] > 0 && t->cls_nz[c] < 1024)
+			t->cls_z[c][t->cls_nz[c]++] =
+				fabs(res->p[k] - truth[k]) / res->se[k];
+	}
+}
 
 static const char *base(const char *path)
 {
@@ -645,6 +694,12 @@ static int load_map(const char *map, const struct glint_scene *sc,
 {
 	struct glint_image *img = NULL, *ll = NULL;
 
+	if (!strncmp(map, "class:", 6)) {
+		if (glint_sim_light_class(map + 6, 1024, &img) < 0)
+			return -1;
+		return glint_envmap_new(img, sc->env_rotation, sc->env_scale,
+					map, env);
+	}
 	if (glint_image_read(map, &img) < 0)
 		return -1;
 	if (img->width == img->height) {
@@ -723,6 +778,8 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 		with_bias = 0;
 	memset(t, 0, sizeof(*t));
 	fixture_scene(&sc, 256, map);
+	if (!strncmp(map, "class:", 6)) /* they face the camera unrotated */
+		memset(sc.env_rotation, 0, sizeof(sc.env_rotation));
 	if (getenv("ACCURACY_SPP"))
 		sc.spp = atoi(getenv("ACCURACY_SPP"));
 	if (load_map(map, &sc, &env) < 0 ||
@@ -818,6 +875,8 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 				out = judge(m, truth, &res, &err, &bound, why,
 					    sizeof(why));
 			t->n[out]++;
+			if (out != REFUSED)
+				tally_intervals(t, m, truth, &res);
 			t->kind_n[lv]++;
 			t->kind_within[lv] += out == WITHIN;
 			t->bound += bound;
@@ -943,7 +1002,7 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 
 int main(int argc, char **argv)
 {
-	static const char usage[] = "bench/accuracy [quick|slice] "
+	static const char usage[] = "bench/accuracy [quick|slice] [classes] "
 				    "[--check|--no-refusals|--within] [MAP...]";
 	bench_help(argc, argv, usage);
 	const char *const *mats = all_mats;
@@ -951,13 +1010,24 @@ int main(int argc, char **argv)
 	const char *const *maps = default_maps;
 	int nmaps = (int)(sizeof(default_maps) / sizeof(*default_maps));
 	static struct map_tally tally[32];
+	static const char *class_maps[8];
 
 	for (; a < argc; a++) {
 		if (!strcmp(argv[a], "quick"))
 			mats = quick_mats, nmats = 4;
 		else if (!strcmp(argv[a], "slice"))
 			mats = slice_mats, nmats = 1;
-		else if (!strcmp(argv[a], "--check"))
+		else if (!strcmp(argv[a], "classes")) {
+			static char names[8][32];
+			for (nmaps = 0; glint_sim_light_classes[nmaps];
+			     nmaps++) {
+				snprintf(names[nmaps], sizeof(names[nmaps]),
+					 "class:%s",
+					 glint_sim_light_classes[nmaps]);
+				class_maps[nmaps] = names[nmaps];
+			}
+			maps = class_maps;
+		} else if (!strcmp(argv[a], "--check"))
 			check = 1;
 		else if (!strcmp(argv[a], "--within"))
 			within = 1;
@@ -974,7 +1044,7 @@ int main(int argc, char **argv)
 	}
 	for (int i = 0; i < nmaps; i++) {
 		struct stat st;
-		if (stat(maps[i], &st) < 0) {
+		if (strncmp(maps[i], "class:", 6) && stat(maps[i], &st) < 0) {
 			printf("%s: absent; skipped\n", maps[i]);
 			return 77;
 		}
@@ -1024,6 +1094,42 @@ int main(int argc, char **argv)
 		       base(maps[i]), n, t->n[WITHIN], t->bound, t->ideal,
 		       t->n[FLAGGED], t->n[WRONG], t->n[REFUSED], med, kinds,
 		       t->worst_case, t->worst);
+	}
+	printf("\nintervals (95 %%) by parameter class: coverage of the truth, "
+	       "median |error| / standard error (an honest interval: about "
+	       "0.67), undetermined\n");
+	printf("%-26s", "map");
+	for (int c = 0; c < 4; c++)
+		printf(" %26s", class_names[c]);
+	printf("\n");
+	struct map_tally all_cls = { 0 };
+	for (int i = 0; i <= nmaps; i++) {
+		struct map_tally *t = i < nmaps ? &tally[i] : &all_cls;
+		printf("%-26s", i < nmaps ? base(maps[i]) : "all");
+		for (int c = 0; c < 4; c++) {
+			char cell[40];
+			snprintf(cell, sizeof(cell),
+				 "%3d/%-3d %5.1f %% %4.2f %2d", t->cls_in[c],
+				 t->cls_n[c],
+				 t->cls_n[c]
+					 ? 100.0 * t->cls_in[c] / t->cls_n[c]
+					 : NAN,
+				 t->cls_nz[c] ? bench_median(t->cls_z[c],
+							     t->cls_nz[c])
+					      : NAN,
+				 t->cls_undet[c]);
+			printf(" %26s", cell);
+			if (i == nmaps)
+				continue;
+			all_cls.cls_n[c] += t->cls_n[c];
+			all_cls.cls_in[c] += t->cls_in[c];
+			all_cls.cls_undet[c] += t->cls_undet[c];
+			for (int z = 0;
+			     z < t->cls_nz[c] && all_cls.cls_nz[c] < 1024; z++)
+				all_cls.cls_z[c][all_cls.cls_nz[c]++] =
+					t->cls_z[c][z];
+		}
+		printf("\n");
 	}
 	int all = tot[0] + tot[1] + tot[2] + tot[3];
 	for (int k = 0; k < NPHOTO; k++) {

@@ -14,6 +14,7 @@
 #include "core/clock.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "sim/light_class.h"
 #include "sim/photo.h"
 
 #include <math.h>
@@ -23,8 +24,9 @@
 
 void cmd_demo_help(void)
 {
-	printf("usage: glint demo [--material NAME] [--out DIR] [--noise] "
-	       "[--force] [--json]\n"
+	printf("usage: glint demo [--material NAME] [--light CLASS] [--out "
+	       "DIR] "
+	       "[--noise]\n                  [--force] [--json]\n"
 	       "\n"
 	       "The whole job on the simulated rig: the simulator photographs "
 	       "a 10 cm sphere of\na material from the paper's Table 1 "
@@ -43,6 +45,12 @@ void cmd_demo_help(void)
 	       "aluminium-bronze,\n"
 	       "                   copper, nickel, blue-quartz, "
 	       "purple-quartz (transparent)\n"
+	       "  --light CLASS    photograph it under a procedural lighting "
+	       "class instead:\n"
+	       "                   window-room, softbox-studio, overcast, "
+	       "sun-sky, lamp-fill,\n"
+	       "                   night-lamps (docs/scene.md); the map is "
+	       "written as DIR/light.exr\n"
 	       "  --method M       three-pass (default), naive, varpro\n"
 	       "  --noise          a single 12-bit exposure with shot and "
 	       "read noise instead\n"
@@ -60,9 +68,11 @@ void cmd_demo_help(void)
 
 int cmd_demo(int argc, char **argv)
 {
-	const char *material = "yellow-plastic", *dir = "demo-out";
+	const char *material = "yellow-plastic", *dir = "demo-out",
+		   *light = NULL;
 	char scene_path[GLINT_PATH_MAX], table[GLINT_PATH_MAX];
 	char photo_path[GLINT_PATH_MAX], fit_dir[GLINT_PATH_MAX];
+	char light_path[GLINT_PATH_MAX];
 	struct glint_fit_job job = { 0 };
 	const struct glint_model *model;
 	double truth[GLINT_MAX_PARAMS];
@@ -71,6 +81,7 @@ int cmd_demo(int argc, char **argv)
 	glint_fit_default_opts(&job.opts);
 	const struct cmd_opt opts[] = {
 		CMD_STRING("material", 'm', &material),
+		CMD_STRING("light", 0, &light),
 		CMD_STRING("output", 'o', &dir),
 		CMD_CHOICE("method", &method, glint_fit_method_names),
 		CMD_FLAG("noise", 0, &noise),
@@ -95,6 +106,8 @@ int cmd_demo(int argc, char **argv)
 	    glint_path_join(photo_path, sizeof(photo_path), dir, "photo.exr") <
 		    0 ||
 	    glint_path_join(fit_dir, sizeof(fit_dir), dir, "fit") < 0 ||
+	    glint_path_join(light_path, sizeof(light_path), dir, "light.exr") <
+		    0 ||
 	    glint_scene_load(scene_path, &job.scene) < 0 ||
 	    glint_material_load(table, material, &model, truth) < 0)
 		return cmd_fail("demo");
@@ -102,12 +115,30 @@ int cmd_demo(int argc, char **argv)
 	/* The one overwrite rule: the photo here, the fit's folder by its
 	 * own check. */
 	job.force = job.replace = force;
-	if (glint_output_check(photo_path, force, NULL) < 0)
+	if (glint_output_check(photo_path, force, NULL) < 0 ||
+	    (light && glint_output_check(light_path, force, NULL) < 0))
 		return cmd_fail("demo");
+	struct glint_image *map = NULL;
+	if (light && glint_sim_light_class(light, 1024, &map) < 0)
+		return cmd_usage_error("demo", "--light: %s",
+				       glint_error_msg());
 	if (mkdir(dir, 0777) < 0 && errno != EEXIST) {
 		glint_error_set(errno, "%s: cannot create folder: %s", dir,
 				strerror(errno));
+		glint_image_free(map);
 		return cmd_fail("demo");
+	}
+	if (map) {
+		/* The classes face a camera on +Z unrotated, as the demo's
+		 * scene has it. */
+		ret = glint_image_write(light_path, map, NULL);
+		glint_image_free(map);
+		if (ret < 0)
+			return cmd_fail("demo");
+		snprintf(job.scene.env_path, sizeof(job.scene.env_path), "%s",
+			 light_path);
+		memset(job.scene.env_rotation, 0,
+		       sizeof(job.scene.env_rotation));
 	}
 
 	/* The simulated capture. */
@@ -147,7 +178,7 @@ int cmd_demo(int argc, char **argv)
 		cmd_print_json(doc);
 	} else {
 		printf("demo: %s sphere under %s, %dx%d%s\n", material,
-		       strrchr(job.scene.env_path, '/') + 1,
+		       light ? light : strrchr(job.scene.env_path, '/') + 1,
 		       job.window.frame_width ? job.window.frame_width
 					      : job.scene.cam.width,
 		       job.window.frame_width ? job.window.frame_height

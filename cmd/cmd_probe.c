@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /*
- * glint probe unwrap | convert: light-probe processing
+ * glint probe unwrap | convert | register | calibrate: light-probe processing
  * (capture/probe/probe.h, docs/hdr.md).
  */
 #define _POSIX_C_SOURCE 200809L
@@ -8,8 +8,11 @@
 #include "options.h"
 
 #include "capture/probe/probe.h"
+#include "capture/probe/probe_calibrate.h"
+#include "capture/probe/probe_sources.h"
 #include "capture/probe/probe_register.h"
 #include "core/error.h"
+#include "core/json.h"
 #include "core/log.h"
 #include "core/output.h"
 #include "core/path.h"
@@ -90,6 +93,41 @@ static void unwrap_help(void)
 	probe_help_footer();
 }
 
+static void calibrate_help(void)
+{
+	printf("usage: glint probe calibrate ENV.exr GRAY.exr --focal-px F "
+	       "--albedo A [--ball CX,CY,R]\n"
+	       "                             [options] -o OUT.exr\n"
+	       "\n"
+	       "The unwrapped probe ENV.exr corrected by a photo of a matte "
+	       "gray ball of known\nalbedo taken by the same camera from "
+	       "the same place (the gray half of a\ngray/chrome pair): per "
+	       "channel, the map's scale and the flux of each compact\n"
+	       "source of ENV-sources.json (a sun clipped in the probe's "
+	       "shortest frame, a\nlamp whose colour the mosaic aliased) "
+	       "as the gray ball's shading shows them,\nwith their "
+	       "uncertainty (docs/hdr.md, \"Calibration by a gray "
+	       "ball\").  Writes\nOUT.exr, OUT-sources.json and "
+	       "OUT-calibration.json; GRAY-weights.exr beside\nthe photo "
+	       "(a merge's) keeps clipped pixels out.\n"
+	       "\n"
+	       "  -o, --output OUT.exr the calibrated map (and the files "
+	       "named above)\n"
+	       "  --focal-px F         focal length of the gray ball's "
+	       "photo, pixels\n"
+	       "  --principal X,Y      principal point (default: the image "
+	       "centre)\n"
+	       "  --ball CX,CY,R       the gray ball's image circle, pixels "
+	       "(default: found)\n"
+	       "  --albedo A | R,G,B   the ball's diffuse albedo (its "
+	       "specification, or measured)\n"
+	       "  --albedo-sigma S | R,G,B  its 1-sigma uncertainty "
+	       "(default 0)\n"
+	       "  --srgb               take 8-bit images as sRGB-encoded\n"
+	       "  --force              replace outputs glint wrote\n");
+	probe_help_footer();
+}
+
 static void convert_help(void)
 {
 	printf("usage: glint probe convert IN OUT --from FMT --to FMT "
@@ -141,6 +179,8 @@ void cmd_probe_help(void)
 	       "[--size WxH] [--srgb]\n"
 	       "       glint probe register ENV1.exr ENV2.exr -o OUT.exr "
 	       "[--yaw DEG] [--points F] [--srgb]\n"
+	       "       glint probe calibrate ENV.exr GRAY.exr --focal-px F "
+	       "--albedo A -o OUT.exr\n"
 	       "\n"
 	       "Light probes: a mirror-ball photo to the environment map a "
 	       "fit is lit by.\n"
@@ -150,7 +190,9 @@ void cmd_probe_help(void)
 	       "lights measured\n"
 	       "  convert    a light probe between lat-long, angular, cube "
 	       "cross and ball\n"
-	       "  register   two unwrapped views of the probe to one map\n");
+	       "  register   two unwrapped views of the probe to one map\n"
+	       "  calibrate  a map's scale and its small lights' flux from a "
+	       "gray ball's photo\n");
 	probe_help_footer();
 }
 
@@ -231,19 +273,48 @@ static struct glint_image *merge_sibling(const char *photo_path,
 	return img;
 }
 
+/* The ball photo's camera and circle options (--focal-px, --principal,
+ * --ball) into o. */
+struct ball_args {
+	struct numbers f, pp, ball;
+};
+
+#define BALL_ARGS_INIT                                                         \
+	{                                                                      \
+		.f = { .n = 1 }, .pp = { .n = 2 }, .ball = {.n = 3 }           \
+	}
+#define BALL_OPTS(b)                                                           \
+	CMD_CALL("focal-px", &(b).f, parse_numbers),                           \
+		CMD_CALL("principal", &(b).pp, parse_numbers),                 \
+		CMD_CALL("ball", &(b).ball, parse_numbers)
+
+static void ball_args_apply(const struct ball_args *b,
+			    struct glint_unwrap_opts *o)
+{
+	if (b->f.given)
+		o->fpx = b->f.v[0];
+	if (b->pp.given) {
+		o->cx = b->pp.v[0];
+		o->cy = b->pp.v[1];
+	}
+	if (b->ball.given) {
+		o->ball_cx = b->ball.v[0];
+		o->ball_cy = b->ball.v[1];
+		o->ball_r = b->ball.v[2];
+	}
+}
+
 static int unwrap_main(int argc, char **argv)
 {
 	struct glint_unwrap_opts o;
 	const char *out = NULL;
-	struct numbers f = { .n = 1 }, pp = { .n = 2 }, ball = { .n = 3 },
-		       chrome = { .n = 2 }, size = { .n = 2 };
+	struct ball_args ba = BALL_ARGS_INIT;
+	struct numbers chrome = { .n = 2 }, size = { .n = 2 };
 	int srgb = 0, force = 0;
 
 	glint_unwrap_default_opts(&o);
 	const struct cmd_opt opts[] = {
-		CMD_CALL("focal-px", &f, parse_numbers),
-		CMD_CALL("principal", &pp, parse_numbers),
-		CMD_CALL("ball", &ball, parse_numbers),
+		BALL_OPTS(ba),
 		CMD_CALL("chrome", &chrome, parse_numbers),
 		CMD_REAL("reflectivity", &o.reflectivity, 1e-6, 1),
 		CMD_REAL("grazing", &o.grazing_deg, 0, 90),
@@ -263,18 +334,8 @@ static int unwrap_main(int argc, char **argv)
 				  &a);
 	if (r)
 		return cmd_options_exit(r);
-	if (f.given)
-		o.fpx = f.v[0];
-	if (pp.given) {
-		o.cx = pp.v[0];
-		o.cy = pp.v[1];
-	}
-	if (ball.given) {
-		o.ball_cx = ball.v[0];
-		o.ball_cy = ball.v[1];
-		o.ball_r = ball.v[2];
-	}
-	int have_ball = ball.given;
+	ball_args_apply(&ba, &o);
+	int have_ball = ba.ball.given;
 	for (int k = 0; k < 3 && chrome.given; k++) {
 		o.n[k] = chrome.v[0];
 		o.k[k] = chrome.v[1];
@@ -320,6 +381,138 @@ static int unwrap_main(int argc, char **argv)
 			       o.no_sources ? "" : " and sources");
 	glint_image_free(photo);
 	glint_image_free(var);
+	glint_image_free(wt);
+	return ret < 0 ? cmd_fail("probe") : GLINT_EXIT_OK;
+}
+
+/* One number for all three channels, or three. */
+static int parse_rgb(const char *arg, void *dest)
+{
+	struct numbers *nb = dest;
+	nb->n = strchr(arg, ',') ? 3 : 1;
+	if (parse_numbers(arg, dest) < 0)
+		return glint_error_set(EINVAL, "expected one number or three "
+					       "(R,G,B)");
+	if (nb->n == 1)
+		nb->v[1] = nb->v[2] = nb->v[0];
+	nb->n = 3;
+	return 0;
+}
+
+static int calibrate_main(int argc, char **argv)
+{
+	struct glint_unwrap_opts geom;
+	struct glint_calibrate_opts co;
+	const char *out = NULL;
+	struct ball_args ba = BALL_ARGS_INIT;
+	struct numbers alb = { .n = 3 }, alb_sigma = { .n = 3 };
+	int srgb = 0, force = 0;
+
+	glint_unwrap_default_opts(&geom);
+	glint_calibrate_default_opts(&co);
+	const struct cmd_opt opts[] = {
+		BALL_OPTS(ba),
+		CMD_CALL("albedo", &alb, parse_rgb),
+		CMD_CALL("albedo-sigma", &alb_sigma, parse_rgb),
+		CMD_FLAG("srgb", 0, &srgb),
+		CMD_FLAG("force", 0, &force),
+		CMD_STRING("output", 'o', &out),
+		{ 0 },
+	};
+	struct cmd_args a;
+	int r = cmd_options_parse("probe calibrate", calibrate_help, opts, argc,
+				  argv, &a);
+	if (r)
+		return cmd_options_exit(r);
+	if (a.argc != 2 || !out)
+		return cmd_usage_error("probe", "calibrate: expected ENV GRAY "
+						"and -o OUT.exr");
+	if (!ba.f.given || !alb.given)
+		return cmd_usage_error("probe", "calibrate: --focal-px and "
+						"--albedo are required");
+	ball_args_apply(&ba, &geom);
+	for (int c = 0; c < 3; c++) {
+		co.albedo[c] = alb.v[c];
+		co.albedo_sigma[c] = alb_sigma.given ? alb_sigma.v[c] : 0;
+	}
+	const char *env_path = a.argv[0], *gray_path = a.argv[1];
+	static const char *const siblings[] = { "", "-sources.json",
+						"-calibration.json", NULL };
+	const char *inputs[] = { env_path, gray_path, NULL };
+	if (outputs_check(out, siblings, force, inputs) < 0)
+		return cmd_fail("probe");
+
+	struct glint_image *env = NULL, *gray = NULL, *wt = NULL;
+	struct glint_light_sources src, *sp = NULL;
+	struct glint_calibration cal;
+	char path[GLINT_PATH_MAX];
+	int ret = glint_image_read_radiance(env_path, srgb, &env);
+	if (ret == 0)
+		ret = glint_path_sibling(path, sizeof(path), env_path,
+					 "-sources.json");
+	if (ret == 0) {
+		ret = glint_probe_sources_read(path, &src);
+		if (ret == 0)
+			sp = &src;
+		else if (ret == -ENOENT) {
+			glint_log_info("%s: none; the map's scale alone", path);
+			glint_error_clear();
+			ret = 0;
+		}
+	}
+	if (ret == 0)
+		ret = glint_image_read_radiance(gray_path, srgb, &gray);
+	if (ret == 0 &&
+	    (ret = glint_probe_find_ball(gray, ba.ball.given, &geom)) < 0)
+		glint_error_prefix(ret, "%s", gray_path);
+	if (ret == 0)
+		co.weights = wt =
+			merge_sibling(gray_path, "-weights.exr", gray);
+	if (ret == 0)
+		ret = glint_probe_calibrate(env, sp, gray, &geom, &co, &cal);
+	if (ret == 0) {
+		glint_probe_calibration_apply(&cal, env, sp);
+		ret = glint_image_write(out, env, NULL);
+	}
+	if (ret == 0 && sp &&
+	    (ret = glint_path_sibling(path, sizeof(path), out,
+				      "-sources.json")) == 0)
+		ret = glint_probe_sources_write(path, env_path, sp);
+	if (ret == 0 && (ret = glint_path_sibling(path, sizeof(path), out,
+						  "-calibration.json")) == 0)
+		ret = glint_probe_calibration_write(path, env_path, gray_path,
+						    &cal);
+	if (ret == 0 && a.json) {
+		json_t *doc = NULL;
+		if (glint_json_load(path, &doc) == 0)
+			cmd_print_json(doc);
+	} else if (ret == 0) {
+		printf("gray ball: %d pixels, relative RMS %.3f %.3f %.3f\n",
+		       cal.pixels, cal.rel_rms[0], cal.rel_rms[1],
+		       cal.rel_rms[2]);
+		printf("  map scale    %.4f %.4f %.4f  (+- %.4f %.4f %.4f)\n",
+		       cal.scale[0], cal.scale[1], cal.scale[2],
+		       cal.scale_sigma[0], cal.scale_sigma[1],
+		       cal.scale_sigma[2]);
+		for (int k = 0; k < cal.nsources; k++) {
+			const struct glint_calibrated_source *cs = &cal.src[k];
+			printf("  source %d     %.4g %.4g %.4g  (+- %.2g %.2g "
+			       "%.2g) from the %s; the probe had %.4g %.4g "
+			       "%.4g%s\n",
+			       k + 1, cs->flux[0], cs->flux[1], cs->flux[2],
+			       cs->flux_sigma[0], cs->flux_sigma[1],
+			       cs->flux_sigma[2],
+			       cs->from_gray ? "gray ball" : "probe x scale",
+			       cs->flux_probe[0], cs->flux_probe[1],
+			       cs->flux_probe[2],
+			       cs->saturated ? " (clipped: a lower bound)"
+					     : "");
+		}
+		printf("  -> %s, its -sources.json and -calibration.json\n",
+		       out);
+	}
+	glint_image_free(env);
+	glint_image_free(gray);
 	glint_image_free(wt);
 	return ret < 0 ? cmd_fail("probe") : GLINT_EXIT_OK;
 }
@@ -451,8 +644,10 @@ int cmd_probe(int argc, char **argv)
 		return convert_main(argc - 1, argv + 1);
 	if (!strcmp(argv[1], "register"))
 		return register_main(argc - 1, argv + 1);
+	if (!strcmp(argv[1], "calibrate"))
+		return calibrate_main(argc - 1, argv + 1);
 	static const char *const subs[] = { "unwrap", "convert", "register",
-					    NULL };
+					    "calibrate", NULL };
 	cmd_choice_error(argv[1], subs);
 	return cmd_usage_error("probe", "'%s': %s", argv[1], glint_error_msg());
 }

@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 #include "json.h"
+#include "atomic_file.h"
 #include "suggest.h"
 #include "path.h"
 
@@ -296,4 +297,27 @@ int glint_json_known_keys(const char *file, const char *where, json_t *obj,
 json_t *glint_json_real_or_null(double v)
 {
 	return isfinite(v) ? json_real(v) : json_null();
+}
+
+json_t *glint_json_reals(const double *v, int n)
+{
+	json_t *a = json_array();
+	for (int i = 0; i < n; i++)
+		json_array_append_new(a, glint_json_real_or_null(v[i]));
+	return a;
+}
+
+int glint_json_write_file(const char *path, json_t *doc)
+{
+	char *text =
+		doc ? json_dumps(doc, JSON_INDENT(2) | JSON_REAL_PRECISION(9))
+		    : NULL;
+	json_decref(doc);
+	if (!text)
+		return glint_error_set(ENOMEM, "%s: out of memory", path);
+	size_t n = strlen(text);
+	text[n] = '\n'; /* over the terminator: n + 1 bytes written */
+	int ret = glint_atomic_write_file(path, text, n + 1);
+	free(text);
+	return ret;
 }

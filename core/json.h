@@ -72,4 +72,13 @@ int glint_json_known_keys(const char *file, const char *where, json_t *obj,
  * infinity), which JSON cannot hold.  A new reference. */
 json_t *glint_json_real_or_null(double v);
 
+/* An array of n numbers (glint_json_real_or_null each).  A new
+ * reference. */
+json_t *glint_json_reals(const double *v, int n);
+
+/* doc written to path whole or not at all (core/atomic_file.h), indented,
+ * numbers to 9 digits, a newline at the end; doc's reference is taken
+ * (decref'd) either way. */
+int glint_json_write_file(const char *path, json_t *doc);
+
 #endif

@@ -319,10 +319,9 @@ int glint_probe_ball_image(const struct probe_ball *b, struct vec3 d, double *x,
 	return 1;
 }
 
-int glint_probe_ball_reflect(const struct probe_ball *b, double x, double y,
-			     struct vec3 *d, double *ci)
+int glint_probe_ball_normal(const struct probe_ball *b, double x, double y,
+			    struct vec3 *n, struct vec3 *ray)
 {
-	struct vec3 r, n;
 	if (b->ortho) {
 		struct vec3 i = v3_norm(b->c);
 		struct vec3 right = v3_norm(v3_cross(i, v3(0, 1, 0)));
@@ -331,18 +330,26 @@ int glint_probe_ball_reflect(const struct probe_ball *b, double x, double y,
 		double w2 = 1 - u * u - v * v;
 		if (w2 <= 0)
 			return 0;
-		r = i;
-		n = v3_add(v3_add(v3_scale(right, u), v3_scale(up, v)),
-			   v3_scale(i, -sqrt(w2)));
-	} else {
-		r = v3_norm(
-			v3((x - b->cx) / b->fpx, -(y - b->cy) / b->fpx, -1));
-		double bq = v3_dot(r, b->c);
-		double disc = bq * bq - v3_dot(b->c, b->c) + 1;
-		if (disc <= 0)
-			return 0;
-		n = v3_sub(v3_scale(r, bq - sqrt(disc)), b->c);
+		*ray = i;
+		*n = v3_add(v3_add(v3_scale(right, u), v3_scale(up, v)),
+			    v3_scale(i, -sqrt(w2)));
+		return 1;
 	}
+	*ray = v3_norm(v3((x - b->cx) / b->fpx, -(y - b->cy) / b->fpx, -1));
+	double bq = v3_dot(*ray, b->c);
+	double disc = bq * bq - v3_dot(b->c, b->c) + 1;
+	if (disc <= 0)
+		return 0;
+	*n = v3_sub(v3_scale(*ray, bq - sqrt(disc)), b->c);
+	return 1;
+}
+
+int glint_probe_ball_reflect(const struct probe_ball *b, double x, double y,
+			     struct vec3 *d, double *ci)
+{
+	struct vec3 r, n;
+	if (!glint_probe_ball_normal(b, x, y, &n, &r))
+		return 0;
 	*ci = -v3_dot(r, n);
 	if (*ci <= 0)
 		return 0;

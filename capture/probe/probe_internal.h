@@ -42,6 +42,12 @@ int glint_probe_ball_setup(const struct glint_image *photo,
 int glint_probe_ball_image(const struct probe_ball *b, struct vec3 d, double *x,
 			   double *y, double *ci);
 
+/* The ball's outward unit normal where the camera's ray through the
+ * photo's continuous pixel (x, y) meets it, and that ray (unit, towards
+ * the ball); 0 when the ray misses the ball. */
+int glint_probe_ball_normal(const struct probe_ball *b, double x, double y,
+			    struct vec3 *n, struct vec3 *ray);
+
 /* The other way: the direction the ball reflects into the photo's
  * continuous pixel (x, y), and cos(incidence) there; 0 when the pixel
  * misses the ball. */

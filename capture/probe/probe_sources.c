@@ -8,7 +8,6 @@
 #include "capture/probe/probe_internal.h"
 
 #include "core/output.h"
-#include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/json.h"
 #include "core/optics.h"
@@ -250,7 +249,11 @@ static int measure(const struct glint_image *photo,
 			if (dx == 0 && dy == 0)
 				span = g.span_rad;
 		}
-	if (!(all > 0) || !(wsum > 0) || core < so->min_concentration * all)
+	/* A clipped core holds less than its share: the concentration
+	 * cannot be judged, and the contrast against the ring (a light
+	 * wider than the aperture lifts the ring too) stands alone. */
+	if (!(all > 0) || !(wsum > 0) ||
+	    (!clipped && core < so->min_concentration * all))
 		return 0;
 	memset(s, 0, sizeof(*s));
 	s->photo_x = x0 + 0.5 + cx / wsum;
@@ -503,10 +506,7 @@ void glint_probe_add_sources(struct glint_image *env,
 
 static json_t *triple(const double v[3])
 {
-	json_t *a = json_array();
-	for (int c = 0; c < 3; c++)
-		json_array_append_new(a, glint_json_real_or_null(v[c]));
-	return a;
+	return glint_json_reals(v, 3);
 }
 
 int glint_probe_sources_write(const char *path, const char *photo,
@@ -570,15 +570,7 @@ int glint_probe_sources_write(const char *path, const char *photo,
 		json_array_append_new(arr, o);
 	}
 	json_object_set_new(doc, "sources", arr);
-	char *text = json_dumps(doc, JSON_INDENT(2) | JSON_REAL_PRECISION(9));
-	json_decref(doc);
-	if (!text)
-		return glint_error_set(ENOMEM, "%s: out of memory", path);
-	size_t n = strlen(text);
-	text[n] = '\n';
-	int ret = glint_atomic_write_file(path, text, n + 1);
-	free(text);
-	return ret;
+	return glint_json_write_file(path, doc);
 }
 
 int glint_probe_sources_read(const char *path, struct glint_light_sources *s)

@@ -20,7 +20,10 @@
  * (bilinear weights), so that the map's total light is unchanged and the
  * light is as concentrated as the map allows.  A source clipped in the
  * merge (a weight of 0 in the aperture: saturated in the shortest frame)
- * is kept and marked: its flux is a lower bound.
+ * is kept and marked: its flux is a lower bound, and its concentration
+ * is not judged (a clipped core holds less than its share), only its
+ * contrast against the ring.  A gray ball's photo measures such a
+ * source's flux and direction (capture/probe/probe_calibrate.h).
  *
  * Uncertainties (1 sigma): flux from the photo's variance over the
  * aperture, the background (the plane's own error, and the sky's

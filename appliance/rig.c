@@ -412,12 +412,48 @@ static int load_roi(const char *path, json_t *doc,
 	return ret;
 }
 
+/* reference: the gray ball beside the probe (its albedo, the albedo's
+ * uncertainty, where it is in the probe's photo). */
+static int load_reference(const char *path, json_t *doc,
+			  struct glint_capture_setup *c)
+{
+	static const char *const keys[] = { "albedo", "albedo_sigma", "roi",
+					    NULL };
+	json_t *ref = NULL;
+	double v[4] = { 0, 0, 0, 0 };
+	int ret = glint_json_object(path, "", doc, "reference", 0, &ref);
+
+	if (ret || !ref)
+		return ret;
+	ret = glint_json_known_keys(path, "reference", ref, keys);
+	if (!ret)
+		ret = glint_json_number(path, "reference", ref, "albedo", 1,
+					(struct glint_range){ 0, 1, 1, 0 },
+					&c->ref_albedo);
+	if (!ret)
+		ret = glint_json_number(path, "reference", ref, "albedo_sigma",
+					0, (struct glint_range){ 0, 1, 0, 0 },
+					&c->ref_albedo_sigma);
+	if (!ret)
+		ret = glint_json_numbers(path, "reference", ref, "roi", 1, 4,
+					 (struct glint_range){ 0, 65536, 0, 0 },
+					 v);
+	if (!ret && !(v[2] > v[0] && v[3] > v[1]))
+		ret = glint_error_set(EINVAL,
+				      "%s: reference.roi: expected [x0, y0, "
+				      "x1, y1] with x1 > x0 and y1 > y0",
+				      path);
+	c->ref_roi = (struct glint_roi){ (int)v[0], (int)v[1], (int)v[2],
+					 (int)v[3] };
+	return ret;
+}
+
 int glint_rig_load(const char *path, struct glint_rig *r)
 {
-	static const char *const top[] = { "camera", "bracket", "roi",
-					   "output", "sensor",	"optics",
-					   "sample", "board",	"sequence",
-					   NULL };
+	static const char *const top[] = { "camera",   "bracket",   "roi",
+					   "output",   "sensor",    "optics",
+					   "sample",   "reference", "board",
+					   "sequence", NULL };
 	static const char *const cam_keys[] = { "backend", "device", NULL };
 	json_t *cam, *br = NULL;
 	int ret;
@@ -451,6 +487,8 @@ int glint_rig_load(const char *path, struct glint_rig *r)
 		ret = load_optics(path, r->doc, &r->capture);
 	if (!ret)
 		ret = load_roi(path, r->doc, &r->capture);
+	if (!ret)
+		ret = load_reference(path, r->doc, &r->capture);
 	if (!ret)
 		ret = load_board(path, r);
 	if (!ret)

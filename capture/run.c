@@ -8,6 +8,8 @@
 #include "run.h"
 
 #include "capture/probe/probe.h"
+#include "capture/probe/probe_calibrate.h"
+#include "capture/probe/probe_sources.h"
 #include "scene_file.h"
 #include "capture/hdr/session.h"
 #include "capture/hdr/session_merge.h"
@@ -22,16 +24,115 @@
 #include <string.h>
 #include <sys/stat.h>
 
+/* The sphere in img, looked for inside roi when it is given (a frame
+ * that holds a gray/chrome pair holds two). */
+static int detect_in(const struct glint_image *img, const struct glint_roi *roi,
+		     struct glint_circle *c)
+{
+	int x0 = roi->x0, y0 = roi->y0, x1 = roi->x1, y1 = roi->y1;
+	if (x1 > img->width)
+		x1 = img->width;
+	if (y1 > img->height)
+		y1 = img->height;
+	if (!(x1 > x0 && y1 > y0))
+		return glint_sphere_detect(img, 0, 0, c);
+	struct glint_image *crop =
+		glint_image_crop(img, x0, y0, x1 - x0, y1 - y0);
+	if (!crop)
+		return glint_error_set(ENOMEM, "out of memory");
+	int ret = glint_sphere_detect(crop, 0, 0, c);
+	glint_image_free(crop);
+	if (ret < 0)
+		return glint_error_prefix(ret, "in [%d, %d, %d, %d]", x0, y0,
+					  x1, y1);
+	c->cx += x0;
+	c->cy += y0;
+	return 0;
+}
+
+/* The gray ball beside the probe (setup.reference): env.exr and its
+ * sources, just written, calibrated by its shading in place, and
+ * env-calibration.json beside them. */
+static int calibrate_probe(const char *dir, const struct glint_capture_setup *s,
+			   const struct glint_image *probe,
+			   const struct glint_unwrap_opts *chrome)
+{
+	char env_path[GLINT_PATH_MAX], src_path[GLINT_PATH_MAX],
+		cal_path[GLINT_PATH_MAX];
+	struct glint_unwrap_opts g = *chrome;
+	struct glint_calibrate_opts co;
+	struct glint_calibration cal;
+	struct glint_light_sources src;
+	struct glint_image *env = NULL;
+	struct glint_circle c;
+	int ret = detect_in(probe, &s->ref_roi, &c);
+
+	if (ret < 0)
+		return glint_error_prefix(ret, "%s/probe.exr: the gray ball",
+					  dir);
+	g.ball_cx = c.cx;
+	g.ball_cy = c.cy;
+	g.ball_r = c.r;
+	glint_calibrate_default_opts(&co);
+	for (int k = 0; k < 3; k++) {
+		co.albedo[k] = s->ref_albedo;
+		co.albedo_sigma[k] = s->ref_albedo_sigma;
+	}
+	co.weights = chrome->weights;
+	ret = glint_path_join(env_path, sizeof(env_path), dir,
+			      GLINT_SESSION_ENV);
+	if (ret == 0)
+		ret = glint_path_sibling(src_path, sizeof(src_path), env_path,
+					 "-sources.json");
+	if (ret == 0)
+		ret = glint_path_sibling(cal_path, sizeof(cal_path), env_path,
+					 "-calibration.json");
+	if (ret == 0)
+		ret = glint_image_read(env_path, &env);
+	int have_src = 0;
+	if (ret == 0) {
+		ret = glint_probe_sources_read(src_path, &src);
+		have_src = ret == 0;
+		if (ret == -ENOENT) { /* no compact source: the scale alone */
+			glint_error_clear();
+			ret = 0;
+		}
+	}
+	if (ret == 0)
+		ret = glint_probe_calibrate(env, have_src ? &src : NULL, probe,
+					    &g, &co, &cal);
+	if (ret == 0) {
+		glint_probe_calibration_apply(&cal, env,
+					      have_src ? &src : NULL);
+		ret = glint_image_write(env_path, env, NULL);
+	}
+	if (ret == 0 && have_src)
+		ret = glint_probe_sources_write(src_path, "probe.exr", &src);
+	if (ret == 0)
+		ret = glint_probe_calibration_write(cal_path, GLINT_SESSION_ENV,
+						    "probe.exr", &cal);
+	if (ret == 0)
+		glint_log_info("gray ball at (%.2f, %.2f), radius %.2f px: the "
+			       "map x %.3f %.3f %.3f (+- %.3f), %d source%s "
+			       "measured by it",
+			       c.cx, c.cy, c.r, cal.scale[0], cal.scale[1],
+			       cal.scale[2], cal.scale_sigma[1], cal.nsources,
+			       cal.nsources == 1 ? "" : "s");
+	glint_image_free(env);
+	return ret < 0 ? glint_error_prefix(ret, "calibration") : 0;
+}
+
 /* The merged probe -> env.exr (+ env-mask.png, env-density.exr): the ball
- * found in it, unwrapped with the rig's focal length, and the map checked
- * as light before it is written (glint_probe_unwrap_write). */
+ * found in it (inside roi.probe when given), unwrapped with the rig's
+ * focal length, and the map checked as light before it is written
+ * (glint_probe_unwrap_write); with a gray ball beside it, calibrated. */
 static int unwrap_probe(const char *dir, const struct glint_capture_setup *s,
 			const struct glint_image *probe)
 {
 	char path[GLINT_PATH_MAX];
 	struct glint_unwrap_opts o;
 	struct glint_circle c;
-	int ret = glint_sphere_detect(probe, 0, 0, &c);
+	int ret = detect_in(probe, &s->roi[0], &c);
 
 	if (ret < 0)
 		return glint_error_prefix(ret, "%s/probe.exr", dir);
@@ -65,6 +166,8 @@ static int unwrap_probe(const char *dir, const struct glint_capture_setup *s,
 				      GLINT_SESSION_ENV);
 	if (ret == 0)
 		ret = glint_probe_unwrap_write(probe, &o, path, NULL, NULL);
+	if (ret == 0 && s->ref_albedo > 0)
+		ret = calibrate_probe(dir, s, probe, &o);
 	glint_image_free(var);
 	glint_image_free(wt);
 	return ret;
@@ -279,6 +382,9 @@ static int merge_session(const struct glint_capture_setup *s, const char *kind,
 			snprintf(files[(*nfiles)++], 64, "env-density.exr");
 			snprintf(files[(*nfiles)++], 64, "env-sources.json");
 			snprintf(files[(*nfiles)++], 64, "env-preview.png");
+			if (s->ref_albedo > 0)
+				snprintf(files[(*nfiles)++], 64,
+					 "env-calibration.json");
 		}
 	}
 	if (ret == 0 && !strcmp(kind, "sample") && s->focal_px > 0) {

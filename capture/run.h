@@ -34,6 +34,11 @@ struct glint_capture_setup {
 	double psf_sigma_px; /* optics.psf_sigma_px: the camera's blur */
 	int olpf;	     /* optics.olpf */
 	double diameter_m;   /* sample.diameter_m */
+	/* reference: a matte gray ball beside the chrome one, in roi[0]'s
+	 * photo at ref_roi, calibrating the probe
+	 * (capture/probe/probe_calibrate.h); ref_albedo 0: none */
+	double ref_albedo, ref_albedo_sigma;
+	struct glint_roi ref_roi;
 };
 
 struct glint_capture_result {

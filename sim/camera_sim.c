@@ -18,8 +18,9 @@
  * map; sample: a sphere of a Table-1 material under the same map, see
  * sim/camera_sim.h), material (the sample's Table-1 name, default
  * yellow-plastic; rig: what the sim board put in view, sim/world.h),
- * decades (the test card's dynamic range, default 6, plus
- * its bright disk), psf (the lens's Gaussian blur in pixels, default 0.6)
+ * gray (the probe a gray/chrome pair: a matte ball of this albedo beside
+ * the chrome one, glint_sim_probe_pair_scene()), decades (the test card's
+ * dynamic range, default 6, plus its bright disk), psf (the lens's Gaussian blur in pixels, default 0.6)
  * and olpf (the optical low-pass filter, default 1: every view reaches the
  * sensor through both, sim/sensor.h), timescale (real seconds per simulated
  * second, default 1: tests and demos run a 2 s exposure in 20 ms with 0.01),
@@ -63,6 +64,7 @@ struct sim_cam {
 	struct glint_image *scratch;
 	const struct glint_image *view; /* what the sensor sees */
 	int scene_scale;
+	double gray;	   /* > 0: the probe is a gray/chrome pair */
 	char material[48]; /* the sample's Table-1 name */
 	char world[256];   /* scene=rig: what is in view, from this file */
 	char scenario[GLINT_PATH_MAX]; /* sim/scenario.h; "" none */
@@ -104,6 +106,8 @@ static int set_number(struct sim_cam *s, const char *where, const char *key,
 		s->sensor.psf_sigma_px = v;
 	else if (!strcmp(key, "olpf"))
 		s->sensor.olpf = v != 0;
+	else if (!strcmp(key, "gray") && v >= 0 && v <= 1)
+		s->gray = v;
 	else
 		return glint_error_set(EINVAL,
 				       "sim camera %s: option "
@@ -111,8 +115,8 @@ static int set_number(struct sim_cam *s, const char *where, const char *key,
 				       "(2..8192), latency (0..7), "
 				       "manual, seed, noise, decades "
 				       "(0..8), timescale (0..1], "
-				       "scene_scale (1..64), psf (0..8 px) "
-				       "or olpf (0/1)",
+				       "scene_scale (1..64), psf (0..8 px), "
+				       "olpf (0/1) or gray (0..1)",
 				       where, key, v);
 	return 0;
 }
@@ -141,7 +145,7 @@ static int apply_scenario(struct sim_cam *s)
 	static const char *const keys[] = {
 		"width",    "height",  "latency",   "manual",	   "seed",
 		"noise",    "decades", "timescale", "scene_scale", "scene",
-		"material", "psf",     "olpf",	    NULL
+		"material", "psf",     "olpf",	    "gray",	   NULL
 	};
 	const char *f = s->scenario;
 	json_t *doc, *cam, *v;
@@ -327,7 +331,9 @@ static int render_view(const struct sim_cam *s, int sample,
 	int w = (s->width + k - 1) / k, h = (s->height + k - 1) / k;
 	int ret = sample ? glint_sim_sample_scene(w, h, s->material, s->lamps,
 						  out)
-			 : glint_sim_probe_scene(w, h, s->lamps, out);
+		  : s->gray > 0 ? glint_sim_probe_pair_scene(w, h, s->lamps,
+							     s->gray, out)
+				: glint_sim_probe_scene(w, h, s->lamps, out);
 	if (ret == 0 && k > 1)
 		ret = upscale(out, s->width, s->height, k);
 	if (ret < 0) {
@@ -411,11 +417,11 @@ static int scene_image_raw(const struct sim_cam *s, int sample,
 		file_stamp(data, table, sizeof(table));
 	glint_error_clear();
 	snprintf(key, sizeof(key),
-		 "glint sim view 1|%s|%dx%d/%d|lamps %u|%s|exe %s|map %s|"
-		 "table %s",
+		 "glint sim view 1|%s|%dx%d/%d|lamps %u|%s|gray %g|exe %s|"
+		 "map %s|table %s",
 		 sample ? "sample" : "probe", s->width, s->height,
-		 s->scene_scale, s->lamps, sample ? s->material : "-", exe, map,
-		 table);
+		 s->scene_scale, s->lamps, sample ? s->material : "-",
+		 sample ? 0 : s->gray, exe, map, table);
 	uint64_t h = 1469598103934665603ull; /* FNV-1a */
 	for (const char *c = key; *c; c++)
 		h = (h ^ (unsigned char)*c) * 1099511628211ull;

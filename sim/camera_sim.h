@@ -48,6 +48,18 @@ int glint_sim_probe_scene(int w, int h, unsigned lamps,
 			  struct glint_image **out);
 double glint_sim_probe_focal_px(int w);
 
+/* The gray/chrome pair ("gray=ALBEDO" with scene=probe or the rig's probe
+ * view): the chrome ball at 0.3 of the width and a matte gray ball of
+ * that albedo at 0.72, both centred in height, 0.25 of the smaller side
+ * in radius, in the same map and camera; the gray ball rendered by the
+ * reference renderer (Lambert), 9 x 64 samples a pixel. */
+int glint_sim_probe_pair_scene(int w, int h, unsigned lamps, double albedo,
+			       struct glint_image **out);
+/* Where the pair's balls are: image centre and radius, pixels (ball 0 the
+ * chrome, 1 the gray). */
+void glint_sim_probe_pair_circle(int w, int h, int ball, double *cx, double *cy,
+				 double *r);
+
 /* Its "scene=sample": a 10 cm sphere of a Table-1 material under the same
  * map in the same orientation (so the probe's env.exr lights it as it is),
  * seen by the same camera, 0.35 of the smaller side in radius, in front of

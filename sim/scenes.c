@@ -86,6 +86,102 @@ int glint_sim_probe_scene(int w, int h, unsigned lamps,
 	return ret;
 }
 
+void glint_sim_probe_pair_circle(int w, int h, int ball, double *cx, double *cy,
+				 double *r)
+{
+	*cx = (ball ? 0.72 : 0.3) * w;
+	*cy = 0.5 * h;
+	*r = 0.25 * (w < h ? w : h);
+}
+
+/* The centre of a unit ball whose image circle is centred at pixel
+ * (cx, cy) with radius r: on that pixel's ray, at the distance where it
+ * subtends r (the off-axis image is an ellipse of about that size). */
+static struct vec3 ball_centre(int w, int h, double f, double cx, double cy,
+			       double r)
+{
+	struct vec3 d =
+		v3_norm(v3((cx - w / 2.0) / f, -(cy - h / 2.0) / f, -1));
+	return v3_scale(d, 1 / sin(atan(r / f)));
+}
+
+int glint_sim_probe_pair_scene(int w, int h, unsigned lamps, double albedo,
+			       struct glint_image **out)
+{
+	struct glint_image *env = NULL, *gray = NULL, *copy = NULL;
+	struct glint_envmap *em = NULL;
+	struct glint_scene sc;
+	struct glint_reference_opts ro;
+	double n[3] = { 3.2, 3.2, 3.2 }, k[3] = { 3.3, 3.3, 3.3 };
+	double f = glint_sim_probe_focal_px(w), cx, cy, r;
+	double p[GLINT_MAX_PARAMS] = { albedo, albedo, albedo };
+	const struct glint_model *lambert = glint_model_find("lambert");
+	int ret = glint_sim_rig_map(lamps, &env);
+
+	*out = NULL;
+	if (ret < 0)
+		return glint_error_prefix(ret, "sim probe pair");
+	glint_sim_probe_pair_circle(w, h, 0, &cx, &cy, &r);
+	ret = glint_sim_mirror_ball(env, w, h, f,
+				    ball_centre(w, h, f, cx, cy, r), 1, n, k,
+				    12, out);
+	glint_sim_probe_pair_circle(w, h, 1, &cx, &cy, &r);
+	struct vec3 c = ball_centre(w, h, f, cx, cy, r);
+	glint_scene_defaults(&sc);
+	if (ret == 0)
+		ret = glint_pinhole_init(&sc.cam, w, h, f * 1e-6, 1e-6, 0, 0,
+					 v3(0, 0, 0), v3(0, 0, -1),
+					 v3(0, 1, 0));
+	sc.sphere_radius = 1;
+	sc.sphere_centre = c;
+	if (ret == 0 && !(copy = glint_image_dup(env)))
+		ret = glint_error_set(ENOMEM, "sim probe pair: out of memory");
+	double rot[3] = { 0, 0, 0 };
+	if (ret == 0) {
+		ret = glint_envmap_new(copy, rot, 1, "rig map", &em);
+		copy = NULL; /* the map's now */
+	}
+	if (ret == 0 && !(gray = glint_image_new(w, h)))
+		ret = glint_error_set(ENOMEM, "sim probe pair: out of memory");
+	glint_reference_default_opts(&ro);
+	ro.spp = 9;
+	ro.samples = 64;
+	if (ret == 0)
+		ret = glint_reference_render(&sc, em, lambert, p, &ro, gray);
+	/* the gray ball over the chrome's black background, by the share
+	 * of each pixel its silhouette covers (4 x 4 rays) */
+	for (int y = 0; ret == 0 && y < h; y++)
+		for (int x = 0; x < w; x++) {
+			if (hypot(x + 0.5 - cx, y + 0.5 - cy) > r + 2)
+				continue;
+			int hit = 0;
+			for (int j = 0; j < 4; j++)
+				for (int i = 0; i < 4; i++) {
+					struct vec3 d = v3_norm(v3(
+						(x + (i + 0.5) / 4 - w / 2.0) /
+							f,
+						-(y + (j + 0.5) / 4 - h / 2.0) /
+							f,
+						-1));
+					double b = v3_dot(d, c);
+					hit += b * b - v3_dot(c, c) + 1 > 0;
+				}
+			float *o = glint_image_px(*out, x, y);
+			const float *g = glint_image_px(gray, x, y);
+			for (int q = 0; q < 3; q++)
+				o[q] += (float)(hit / 16.0) * g[q];
+		}
+	glint_envmap_free(em);
+	glint_image_free(copy);
+	glint_image_free(gray);
+	glint_image_free(env);
+	if (ret < 0) {
+		glint_image_free(*out);
+		*out = NULL;
+	}
+	return ret;
+}
+
 double glint_sim_probe_focal_px(int w)
 {
 	return 2.0 * w;

@@ -394,7 +394,7 @@ int glint_probe_calibrate(const struct glint_image *env,
 					       "1, sigma >= 0",
 					       o->albedo[c],
 					       o->albedo_sigma[c]);
-	if (!env || env->width != 2 * env->height)
+	if (!env || abs(env->width - 2 * env->height) > 2)
 		return glint_error_set(EINVAL,
 				       "calibrate: the probe is not a 2:1 "
 				       "lat-long map");
@@ -445,6 +445,9 @@ int glint_probe_calibrate(const struct glint_image *env,
 	 * by green, until none changes. */
 	double x[3][1 + GLINT_MAX_SOURCES], se[3][1 + GLINT_MAX_SOURCES];
 	double rms[3];
+	/* xf, sf: the first round's, every source free: each source's flux
+	 * as the gray ball alone sees it */
+	double xf[3][1 + GLINT_MAX_SOURCES], sf[3][1 + GLINT_MAX_SOURCES];
 	for (int round = 0; round <= ns; round++) {
 		for (int c = 0; c < 3 && ret == 0; c++)
 			ret = solve_channel(&s, erest, cosk, src, free_k,
@@ -452,6 +455,10 @@ int glint_probe_calibrate(const struct glint_image *env,
 					    &rms[c]);
 		if (ret < 0)
 			goto out;
+		if (round == 0) {
+			memcpy(xf, x, sizeof(xf));
+			memcpy(sf, se, sizeof(sf));
+		}
 		int changed = 0;
 		for (int k = 0, j = 1; k < ns; k++) {
 			if (!free_k[k])
@@ -491,17 +498,34 @@ int glint_probe_calibrate(const struct glint_image *env,
 			cs->dir_sigma_deg = l->dir_sigma_deg;
 			cs->saturated = l->saturated;
 			cs->from_gray = free_k[k];
+			/* the gray ball's flux alone (every source free),
+			 * its standard error with the directions' freedom
+			 * and the albedo's */
+			double g = xf[c][1 + k],
+			       gs = hypot(fmax(sf[c][1 + k],
+					       fabs(g) * flux_rel[k]),
+					  fabs(g) * ra);
 			if (free_k[k]) {
 				cs->flux[c] = x[c][j];
-				cs->flux_sigma[c] =
-					hypot(se[c][j], x[c][j] * ra);
+				cs->flux_sigma[c] = hypot(
+					fmax(se[c][j], x[c][j] * flux_rel[k]),
+					x[c][j] * ra);
 				j++;
 			} else {
-				cs->flux[c] = x[c][0] * l->flux[c];
-				cs->flux_sigma[c] = hypot(
+				/* the probe's, scaled, and the gray ball's
+				 * by their inverse variances: blue a mosaic
+				 * aliased to nothing is the gray ball's */
+				double pf = x[c][0] * l->flux[c];
+				double ps = hypot(
 					x[c][0] * l->flux_sigma[c],
-					cs->flux[c] *
-						hypot(ra, se[c][0] / x[c][0]));
+					pf * hypot(ra, se[c][0] / x[c][0]));
+				double wp = ps > 0 ? 1 / (ps * ps) : 0,
+				       wg = gs > 0 ? 1 / (gs * gs) : 0;
+				if (!(wp + wg > 0))
+					wp = 1;
+				cs->flux[c] =
+					fmax(0, (wp * pf + wg * g) / (wp + wg));
+				cs->flux_sigma[c] = 1 / sqrt(wp + wg);
 			}
 		}
 	}

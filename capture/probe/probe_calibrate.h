@@ -19,15 +19,16 @@
  * a lower bound) or one whose colour the mosaic aliased.  A source the
  * gray ball determines no better than the probe did (its standard error
  * over the probe's own, the probe's scaled by s; or a flux below zero)
- * keeps the probe's flux, scaled by s, and the fit is repeated without
- * it.  Each source's direction is measured first, on green: on the side
- * it lights, its shading rho / pi n . (g d) is linear in the vector g d
- * (probe_calibrate.c, refine_directions()); the gray ball's direction is
- * kept where its standard error is under the probe's.  Standard errors: the
- * least squares' own, scaled by the residual's variance (what the ball shows
- * that the model does not, counted as noise), and the albedo's relative
- * uncertainty added in quadrature to every scale and flux (fully correlated:
- * one number multiplies all).
+ * enters the scale's fit at the probe's flux, and its calibrated flux is
+ * the probe's (times s) and the gray ball's alone (every source free)
+ * weighted by their inverse variances, per channel.  Each source's direction is
+ * measured first, on green: on the side it lights, its shading rho / pi n . (g
+ * d) is linear in the vector g d (probe_calibrate.c, refine_directions()); the
+ * gray ball's direction is kept where its standard error is under the probe's.
+ * Standard errors: the least squares' own, scaled by the residual's variance
+ * (what the ball shows that the model does not, counted as noise), and the
+ * albedo's relative uncertainty added in quadrature to every scale and flux
+ * (fully correlated: one number multiplies all).
  *
  * The ball's pixels within max_radius of its image radius are used (the
  * rim is blurred and grazing), at most about 4000 of them on a regular
@@ -68,7 +69,8 @@ struct glint_calibrated_source {
 	double flux_probe[3]; /* what the probe measured */
 	double flux[3];	      /* calibrated */
 	double flux_sigma[3];
-	int from_gray; /* 1: the gray ball's flux; 0: the probe's x scale */
+	int from_gray; /* 1: the gray ball's flux; 0: the probe's x scale
+			  and the gray ball's, weighted */
 	int saturated; /* clipped in the probe */
 };
 

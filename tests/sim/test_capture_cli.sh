@@ -253,5 +253,29 @@ JSON
 	unset FAKE_V4L2
 fi
 
+# A gray/chrome pair on the probe stand (reference): the chrome ball found
+# inside roi.probe, the gray one inside reference.roi, the map calibrated
+# by the gray ball (capture/probe/probe_calibrate.h).  The sim's chrome is
+# the one glint assumes, so the map's scale is 1 within its sigma.
+gray_rig() { # NAME REFERENCE_ROI
+	cat >"$tmp/$1.json" <<JSON
+{"camera": {"backend": "sim", "device": "sim:width=320,height=240,scene=rig,gray=0.18,timescale=0.01"},
+ "optics": {"focal_px": 640, "psf_sigma_px": 0.86, "olpf": true},
+ "reference": {"albedo": 0.18, "albedo_sigma": 0.005, "roi": $2},
+ "roi": {"probe": [0, 0, 163, 240]},
+ "output": "$tmp/$1"}
+JSON
+}
+gray_rig gray "[163, 0, 320, 240]"
+check "probe with a gray ball beside it: calibrated" run 0 "gray ball at" capture probe --config "$tmp/gray.json"
+check "... its session complete, env-calibration.json among its files" python3 "$checker" "$(only_session "$tmp/gray")" complete 8
+check "... the map's scale 1 within 3 sigma, sigma under 5 %" python3 -c "
+import json, sys
+d = json.load(open('$(only_session "$tmp/gray")/env-calibration.json'))
+ok = all(abs(s - 1) < 3 * e and e < 0.05 for s, e in zip(d['scale'], d['scale_sigma']))
+print(d['scale'], d['scale_sigma']); sys.exit(not ok)"
+gray_rig nogray "[0, 0, 60, 60]"
+check "a reference ROI with no ball in it: exit 1, named" run 1 "the gray ball" capture probe --config "$tmp/nogray.json"
+
 echo "$((checks - fails)) passed, $fails failed"
 [ "$fails" = 0 ]

@@ -20,17 +20,17 @@
  * yellow-plastic; rig: what the sim board put in view, sim/world.h),
  * gray (the probe a gray/chrome pair: a matte ball of this albedo beside
  * the chrome one, glint_sim_probe_pair_scene()), decades (the test card's
- * dynamic range, default 6, plus its bright disk), psf (the lens's Gaussian blur in pixels, default 0.6)
- * and olpf (the optical low-pass filter, default 1: every view reaches the
- * sensor through both, sim/sensor.h), timescale (real seconds per simulated
- * second, default 1: tests and demos run a 2 s exposure in 20 ms with 0.01),
- * world (scene=rig only: a file that says what is in view instead of the sim
- * board, for a rig whose board is real hardware: "LIGHTS DEGREES", the
- * lamps on (0 none, 1 the one lamp, bit k - 1 lamp k of a rig with
- * several) and the turntable's angle, 0 the probe and 180 the
- * sample; the file is read before each frame and replaced whole by its
- * writer; while it is missing the lab is dark).  It must come last: the
- * path runs to the end of the string.
+ * dynamic range, default 6, plus its bright disk), psf (the lens's Gaussian
+ * blur in pixels, default 0.6) and olpf (the optical low-pass filter, default
+ * 1: every view reaches the sensor through both, sim/sensor.h), timescale (real
+ * seconds per simulated second, default 1: tests and demos run a 2 s exposure
+ * in 20 ms with 0.01), world (scene=rig only: a file that says what is in view
+ * instead of the sim board, for a rig whose board is real hardware: "LIGHTS
+ * DEGREES", the lamps on (0 none, 1 the one lamp, bit k - 1 lamp k of a rig
+ * with several) and the turntable's angle, 0 the probe and 180 the sample; the
+ * file is read before each frame and replaced whole by its writer; while it is
+ * missing the lab is dark).  It must come last: the path runs to the end of the
+ * string.
  */
 #define _POSIX_C_SOURCE 200809L
 #include "camera_sim.h"

@@ -13,6 +13,7 @@
 #include "sim/light_class.h"
 
 #include <errno.h>
+#include <sys/wait.h>
 
 static double texel_omega(const struct glint_image *img, int j)
 {
@@ -205,12 +206,39 @@ static void test_refusals(void)
 	      "a width under 64");
 }
 
-int main(void)
+/* glint demo --light: an unknown class is a usage error naming the
+ * choices, before anything is written. */
+static void test_demo_option(const char *glint)
+{
+	char cmd[2048], out[512];
+	snprintf(out, sizeof(out), "%s/demo", test_tmpdir());
+	snprintf(cmd, sizeof(cmd),
+		 "'%s' demo -q --light disco --out '%s' 2>'%s/err'", glint, out,
+		 test_tmpdir());
+	int st = system(cmd);
+	CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 2, "status %d", st);
+	char path[600], msg[1024] = "";
+	snprintf(path, sizeof(path), "%s/err", test_tmpdir());
+	FILE *f = fopen(path, "r");
+	if (f) {
+		size_t n = fread(msg, 1, sizeof(msg) - 1, f);
+		msg[n] = '\0';
+		fclose(f);
+	}
+	CHECK_MSG(msg, "disco");
+	CHECK_MSG(msg, "night-lamps");
+	snprintf(path, sizeof(path), "%s/photo.exr", out);
+	CHECK(access(path, F_OK) != 0, "nothing written: %s", path);
+}
+
+int main(int argc, char **argv)
 {
 	RUN(test_maps_are_sane);
 	RUN(test_small_sources_keep_their_irradiance);
 	RUN(test_overcast_is_cie);
 	RUN(test_window_room_is_lit_from_the_horizon);
 	RUN(test_refusals);
+	if (argc > 1)
+		RUN_ARG(test_demo_option, argv[1]);
 	return test_result();
 }

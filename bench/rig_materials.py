@@ -12,7 +12,11 @@ rig-materials.md and rig-materials.png (with --write).
 --check: exit 1 unless every material run has every true value inside its
 interval and within tolerance (the heavy suite's `rig-materials` runs three).
 
-usage: bench/rig_materials.py [BUILD_DIR] [--only NAME,NAME] [--write] [--check]"""
+--config RIG: another simulated rig file (data/rig-sim-gray.json: the
+gray/chrome pair); its page is rig-materials-NAME.md, NAME the file's
+name less "rig-sim-".
+
+usage: bench/rig_materials.py [BUILD_DIR] [--config RIG] [--only NAME,NAME] [--write] [--check]"""
 import json
 import os
 import platform
@@ -33,8 +37,8 @@ def tolerance(name, truth):
     return 0.01
 
 
-def run(glint, material, tmp, cache):
-    r = json.load(open(os.path.join(ROOT, "data", "rig-sim.json")))
+def run(glint, material, tmp, cache, config):
+    r = json.load(open(config))
     out = os.path.join(tmp, material)
     r["output"] = out
     r["board"]["scenario"] = os.path.join(ROOT, "data", "sim-press.json")
@@ -60,11 +64,17 @@ def main():
         print(usage)
         return
     unknown = [a for a in args if a.startswith("-")
-               and a not in ("--only", "--write", "--check")]
+               and a not in ("--only", "--write", "--check", "--config")]
     if unknown:
         print(f"{unknown[0]}: not an argument of this benchmark\n{usage}",
               file=sys.stderr)
         sys.exit(2)
+    config = os.path.join(ROOT, "data", "rig-sim.json")
+    page = "rig-materials"
+    if "--config" in args:
+        config = os.path.abspath(args[args.index("--config") + 1])
+        stem = os.path.splitext(os.path.basename(config))[0]
+        page += "-" + stem.replace("rig-sim-", "") if stem != "rig-sim" else ""
     build = next((a for a in args if not a.startswith("--") and "," not in a
                   and os.path.isdir(a)), os.path.join(ROOT, "build"))
     glint = os.path.join(build, "cmd", "glint")
@@ -84,7 +94,7 @@ def main():
                 truth["specular." + c] = m["specular"][k]
             truth["roughness"] = m["roughness"]
             truth["ior"] = m["ior"]
-            fit, secs, err = run(glint, m["name"], tmp, cache)
+            fit, secs, err = run(glint, m["name"], tmp, cache, config)
             if fit is None:
                 rows.append(f"| {m['name']} | failed: {' '.join(err)} | | | |")
                 print(m["name"], "failed:", err)
@@ -136,25 +146,28 @@ def main():
     commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
                             capture_output=True, text=True).stdout.strip()
     when = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    with open(os.path.join(res, "rig-materials.md"), "w") as f:
+    rig_name = os.path.relpath(config, ROOT)
+    with open(os.path.join(res, page + ".md"), "w") as f:
         f.write("# The rig's own results against the truth\n\n"
-                "`bench/rig_materials.py --write` (commit %s, %s, %s, %d cores):\n"
-                "`glint rig --once` on the shipped simulated rig with each opaque\n"
+                "`bench/rig_materials.py%s --write` (commit %s, %s, %s, %d cores):\n"
+                "`glint rig --once` on the simulated rig %s with each opaque\n"
                 "Table-1 material on the turntable; the simulator's reference\n"
                 "renderer made the photos (its lens and optical low-pass filter\n"
                 "on, the probe's sun unresolved).  %s\n\n"
-                "![normalised errors](rig-materials.png)\n\n"
+                "![normalised errors](%s.png)\n\n"
                 "The plot: each fitted value's error over its interval's\n"
                 "half-width (inside the interval between -1 and 1).\n\n"
-                % (commit, when, platform.machine(), os.cpu_count(), summary))
+                % ("" if page == "rig-materials" else " --config " + rig_name,
+                   commit, when, platform.machine(), os.cpu_count(), rig_name,
+                   summary, page))
         f.write(text + "\n")
-    data = os.path.join(res, "rig-materials.dat")
+    data = os.path.join(res, page + ".dat")
     names = sorted({p[0] for p in points})
     with open(data, "w") as f:
         for p in points:
             f.write(f"{names.index(p[0])} {p[1]:.4f}\n")
     xt = ", ".join(f'"{n}" {k}' for k, n in enumerate(names))
-    gp = (f"set terminal png size 800,400; set output '{res}/rig-materials.png';"
+    gp = (f"set terminal png size 800,400; set output '{res}/{page}.png';"
           f"set xtics ({xt}) rotate by 30 right; set xrange [-0.5:{len(names) - 0.5}];"
           "set ylabel 'error / interval half-width'; set grid ytics;"
           "set arrow from -0.5,1 to %d,1 nohead dt 2;"

@@ -158,6 +158,7 @@ static int load_inputs(struct glint_fit_job *job, struct glint_fit_job *also,
 		a->photo_path = in->photo[k];
 		a->srgb = job->srgb;
 		a->nthreads = job->nthreads;
+		a->render_budget_s = job->render_budget_s;
 		job->nalso = k;
 		ret = glint_fit_job_load(a, in->weights[k]);
 		if (ret == 0)

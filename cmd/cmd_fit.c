@@ -222,6 +222,13 @@ void cmd_fit_help(void)
 	       "folder name)\n"
 	       "  --max-iter N          LM iterations per pass (default 60)\n"
 	       "  --threads N           worker threads (default: all CPUs)\n"
+	       "  --render-seconds S    the final render's time budget "
+	       "(default: half the\n"
+	       "                        fit's time, at least 1 s); within "
+	       "it, its samples\n"
+	       "                        depend on the machine's speed; "
+	       "1e9 makes them\n"
+	       "                        depend on the photo alone\n"
 	       "  --wait                SESSION: wait for a running fit of "
 	       "it to end; its result,\n"
 	       "                        when it leaves one, is the answer\n"
@@ -448,6 +455,7 @@ int cmd_fit(int argc, char **argv)
 		CMD_CALL("export", &job->exports, parse_exports),
 		CMD_INT("max-iter", &job->opts.max_iter, 1, 10000),
 		CMD_INT("threads", &job->nthreads, 0, 256),
+		CMD_REAL("render-seconds", &job->render_budget_s, 0.01, 1e9),
 		CMD_FLAG("wait", 0, &req.wait),
 		CMD_INT("seed", &seed, 0, 2147483647),
 		CMD_INT("anneal-evals", &job->opts.anneal_evals, 10, 1000000),

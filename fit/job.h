@@ -35,6 +35,11 @@ struct glint_fit_job {
 	 * fit runs beneath its session's descriptor, named "."). */
 	const char *shown_dir;
 	int nthreads;
+	/* the final render's time budget in seconds; 0: half the fit's
+	 * time and at least 1 s.  The render's sample counts, and so its
+	 * pixels and the misfit, depend on the machine's speed within a
+	 * budget; a large one (1e9) makes them depend on the photo alone. */
+	double render_budget_s;
 	/* > 0: run the fidelity ladder (fit/ladder.h) with this limit in
 	 * standard errors and report its fit */
 	double ladder;

@@ -41,7 +41,8 @@
  * samples), at most RENDER_MAX_FACTOR times the scene's, and the two
  * means are combined by inverse variance.  The whole render keeps to a
  * time budget, RENDER_BUDGET_SHARE of the fit's time and at least
- * RENDER_MIN_BUDGET_S: the second pair is made only when the time left
+ * RENDER_MIN_BUDGET_S, or the job's render_budget_s (--render-seconds):
+ * the second pair is made only when the time left
  * after the first affords it (a pair's time grows with its samples).  A
  * render held above the target by the budget is noisier than the photo
  * allows for, not wrong: its measured noise goes with it into the misfit
@@ -209,8 +210,10 @@ int job_render_final(struct glint_renderer *r, const struct glint_fit_job *job,
 		ret = glint_error_set(ENOMEM, "out of memory");
 		goto out;
 	}
-	double budget_s =
-		fmax(RENDER_BUDGET_SHARE * fit_s, RENDER_MIN_BUDGET_S);
+	double budget_s = job->render_budget_s > 0
+				  ? job->render_budget_s
+				  : fmax(RENDER_BUDGET_SHARE * fit_s,
+					 RENDER_MIN_BUDGET_S);
 	/* A large image's first pair is sized by a pilot of every 16th row:
 	 * fewer samples where the render is already far below the photo's
 	 * noise, and within the time budget. */

@@ -303,6 +303,7 @@ check "--max-samples 2: params.json states 2 + 2 samples" python3 -c "
 import json; m=json.load(open('$tmp/fitcap/params.json'))['method']
 assert m['light_samples']==2 and m['lobe_samples']==2, m"
 check "--max-samples out of range" run 2 "--max-samples '0'" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/x" --max-samples 0
+check "--render-seconds out of range" run 2 "--render-seconds '0'" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/x" --render-seconds 0
 check "--ladder-limit out of range" run 2 "--ladder-limit" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/x" --ladder-limit 0
 check "--ladder-knobs unknown" run 2 "expected knobs among dof" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/x" --ladder-knobs env,focus
 

@@ -128,6 +128,9 @@ static struct glint_fit_job job_of(const struct glint_scene *sc,
 	glint_fit_default_opts(&job.opts);
 	job.no_auto_select = 1;
 	job.accept_rmse = 10; /* the comparison is the point, not the verdict */
+	/* the render's samples from the photo's noise alone, not from how
+	 * fast this machine is at the moment */
+	job.render_budget_s = 1e9;
 	return job;
 }
 
@@ -193,6 +196,7 @@ static int pilot(void)
 	glint_renderer_release(&r);
 	struct glint_image *weight = flat_weights(560, 560);
 	struct glint_fit_job job = job_of(&sc, m, photo, weight);
+	job.render_budget_s = 0; /* the default budget, named when it binds */
 	json_t *doc = photo && weight ? run(&job, "pilot", 1, 0) : NULL;
 	int h = job.scene.cam.height, w = job.scene.cam.width;
 	printf("window %dx%d of 560x560\n", w, h);
@@ -298,6 +302,10 @@ int main(int argc, char **argv)
 		      json_integer_value(json_object_get(jw, "frame_width")) ==
 			      192,
 	      "params.json render.window");
+	double bs = json_real_value(json_object_get(
+		json_object_get(b, "render"), "budget_seconds"));
+	CHECK(bs == 1e9, "render.budget_seconds %g: expected the job's 1e9",
+	      bs);
 
 	/* A photo that is not the camera's size is left for the fit to
 	 * refuse. */

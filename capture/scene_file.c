@@ -97,6 +97,27 @@ static int env_reference(const char *sample_dir, const char *probe_dir,
 	return 0;
 }
 
+/* The relative standard uncertainty of the probe's map per channel, when
+ * a gray ball calibrated it (env-calibration.json beside env.exr): 1, or
+ * 0 when there is none or it is not whole. */
+static int calibration_sigma(const char *probe_dir, double rel[3])
+{
+	char path[PATH_MAX + 32];
+	snprintf(path, sizeof(path), "%s/env-calibration.json", probe_dir);
+	json_t *doc = glint_json_read_quiet(path);
+	json_t *s = json_object_get(doc, "scale"),
+	       *e = json_object_get(doc, "scale_sigma");
+	int ok = json_array_size(s) == 3 && json_array_size(e) == 3;
+	for (int c = 0; ok && c < 3; c++) {
+		double v = json_number_value(json_array_get(s, c)),
+		       sg = json_number_value(json_array_get(e, c));
+		rel[c] = sg / v;
+		ok = v > 0 && sg >= 0 && rel[c] <= 1;
+	}
+	json_decref(doc);
+	return ok;
+}
+
 int glint_sample_write_scene(const char *dir, const struct glint_image *sample,
 			     const struct glint_scene_optics *o,
 			     const char *probe_dir, struct glint_circle *found)
@@ -133,6 +154,10 @@ int glint_sample_write_scene(const char *dir, const struct glint_image *sample,
 		"sphere", "diameter_m", o->diameter_m, "circle_px", "cx", c.cx,
 		"cy", c.cy, "r", c.r, "environment", "path", env);
 	json_t *cam = doc ? json_object_get(doc, "camera") : NULL;
+	double rel[3];
+	if (doc && calibration_sigma(probe_dir, rel))
+		json_object_set_new(json_object_get(doc, "environment"),
+				    "scale_sigma", glint_json_reals(rel, 3));
 	if (cam && o->psf_sigma_px > 0)
 		json_object_set_new(cam, "psf_sigma_px",
 				    json_real(o->psf_sigma_px));

@@ -335,6 +335,14 @@ void cmd_print_params(const json_t *doc, const double *truth)
 		printf("  a model discrepancy (the residual's structure: "
 		       "%.1f %% of the signal),\n",
 		       100 * share);
+	json_t *ls = json_object_get(unc, "light_scale_sigma");
+	double l[3];
+	for (int c = 0; c < 3; c++)
+		l[c] = json_real_value(json_array_get(ls, c));
+	if (l[0] > 0 || l[1] > 0 || l[2] > 0)
+		printf("  the light's scale (%.1f / %.1f / %.1f %% per "
+		       "channel, as the scene states it),\n",
+		       100 * l[0], 100 * l[1], 100 * l[2]);
 	printf("  and the render's systematic accuracy (docs/fitting.md, "
 	       "\"Uncertainty\")\n");
 	json_array_foreach(json_object_get(unc, "findings"), i, p)

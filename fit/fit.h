@@ -105,6 +105,12 @@ struct glint_fit_opts {
 	/* leave out the model-discrepancy term a structured residual adds
 	 * (fit.c, discrepancy(); its calibration: bench/misfit) */
 	int no_discrepancy;
+	/* the relative standard uncertainty of the light's radiance per
+	 * channel (the scene's environment.scale_sigma; the largest of a
+	 * joint fit's photos): a lobe albedo of channel c gains
+	 * |albedo| x light_scale_sigma[c] (the photo is linear in the light
+	 * and in the albedos together) */
+	double light_scale_sigma[3];
 	/* leave the sampling lean in the answer (fit.c, remove_lean();
 	 * benchmarks' comparison) */
 	int keep_lean;
@@ -182,6 +188,10 @@ struct glint_fit_result {
 	 * each parameter (fit.c, discrepancy()), in se */
 	double misfit_share;
 	double discrepancy[GLINT_MAX_PARAMS];
+	/* the light scale's standard uncertainty in each parameter
+	 * (opts.light_scale_sigma), and the sigma it came from */
+	double light_stderr[GLINT_MAX_PARAMS];
+	double light_scale_sigma[3];
 	int pixels;   /* pixels in the final pass */
 	int interior; /* pixels wholly on the sphere */
 	int specular_pixels;

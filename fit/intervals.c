@@ -84,9 +84,22 @@ static int covariance(struct objective *ob, const struct selections *sl,
 	memset(res->discrepancy, 0, sizeof(res->discrepancy));
 	if (!ob->o->no_discrepancy)
 		fit_discrepancy(m, ob->p, share, res->discrepancy);
+	/* The light's scale: the photo is linear in the light and the lobe
+	 * albedos together, so a relative error s in the light's channel c
+	 * is the same relative error, opposite, in every albedo of c. */
+	memcpy(res->light_scale_sigma, ob->o->light_scale_sigma,
+	       sizeof(res->light_scale_sigma));
+	for (int k = 0; k < m->nparams; k++) {
+		int c = ob->chan_of[k];
+		res->light_stderr[k] =
+			ob->lobe_of[k] >= 0 && c >= 0 && c < 3
+				? fabs(ob->p[k]) * ob->o->light_scale_sigma[c]
+				: 0;
+	}
 	for (int k = 0; k < m->nparams; k++)
 		sys[k] = sqrt(sys[k] * sys[k] + ob->lean_var[k] +
-			      res->discrepancy[k] * res->discrepancy[k]);
+			      res->discrepancy[k] * res->discrepancy[k] +
+			      res->light_stderr[k] * res->light_stderr[k]);
 	struct glint_unc_problem pr = {
 		.n = m->nparams,
 		.m = 3 * sl->nall,

@@ -430,6 +430,11 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 	}
 	struct glint_fit_opts o = job->opts;
 	o.nthreads = job->nthreads;
+	for (int k = 0; k < nv; k++)
+		for (int c = 0; c < 3; c++)
+			o.light_scale_sigma[c] =
+				fmax(o.light_scale_sigma[c],
+				     outs[k].job->scene.env_scale_sigma[c]);
 	struct glint_fit_view views[GLINT_FIT_MAX_VIEWS];
 	for (int k = 0; k < nv; k++)
 		views[k] = (struct glint_fit_view){ &rs[k], outs[k].job->photo,

@@ -289,16 +289,20 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 			json_array_append_new(find, json_string(msg));
 		}
 	}
-	return json_pack(
+	json_t *light = json_array();
+	for (int k = 0; k < n; k++)
+		json_array_append_new(light, json_real(r->light_stderr[k]));
+	json_t *doc = json_pack(
 		"{s:s,s:f,s:f,s:i,s:i,s:i,s:o,s:o,s:o,s:o,s:o,s:f,s:o,s:o,s:o,"
-		"s:o,s:f}",
+		"s:o,s:f,s:o,s:o}",
 		"method",
 		"cluster-robust covariance over spatial blocks (not below "
 		"chi2/dof-scaled, nor, when the residual is structured, below "
 		"a delete-one-region jackknife over regions that see the "
 		"light differently) plus the spread over independent sample "
-		"sets plus the fast render's systematic accuracy plus a "
-		"model discrepancy in proportion to the residual structure's "
+		"sets plus the fast render's systematic accuracy plus the "
+		"light scale's stated uncertainty plus a model discrepancy in "
+		"proportion to the residual structure's "
 		"share of the signal, calibrated on materials outside the "
 		"model; Student t at "
 		"Welch-Satterthwaite degrees of freedom",
@@ -309,7 +313,10 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 		"systematic_stderr", sys, "model_error_stderr", me,
 		"misfit_share", r->misfit_share, "model_discrepancy_stderr", md,
 		"sampling_lean_removed", lean, "findings", find, "combinations",
-		comb, "seconds", r->unc_seconds);
+		comb, "seconds", r->unc_seconds, "light_scale_sigma",
+		glint_json_reals(r->light_scale_sigma, 3), "light_stderr",
+		light);
+	return doc;
 }
 
 void glint_fit_result_view(const struct glint_fit_result *res, int k,

@@ -171,7 +171,7 @@ static int load_env(const char *file, const char *dir, json_t *o,
 		    struct glint_scene *s)
 {
 	static const char *const known[] = { "path", "rotation_deg", "scale",
-					     NULL };
+					     "scale_sigma", NULL };
 	const char *p = NULL;
 	int ret;
 
@@ -186,6 +186,18 @@ static int load_env(const char *file, const char *dir, json_t *o,
 	if (!ret)
 		ret = glint_json_number(file, "environment", o, "scale", 0,
 					positive, &s->env_scale);
+	/* one number for every channel, or one per channel */
+	json_t *sg = json_object_get(o, "scale_sigma");
+	struct glint_range rel = { 0, 1, 0, 0 };
+	if (!ret && json_is_array(sg))
+		ret = glint_json_numbers(file, "environment", o, "scale_sigma",
+					 0, 3, rel, s->env_scale_sigma);
+	else if (!ret && sg) {
+		ret = glint_json_number(file, "environment", o, "scale_sigma",
+					0, rel, &s->env_scale_sigma[0]);
+		s->env_scale_sigma[1] = s->env_scale_sigma[2] =
+			s->env_scale_sigma[0];
+	}
 	if (ret < 0)
 		return ret;
 	if (p[0] == '/' || !dir[0])

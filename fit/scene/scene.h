@@ -23,6 +23,10 @@ struct glint_scene {
 	char env_path[GLINT_PATH_MAX]; /* resolved against the scene's dir */
 	double env_rotation[3];	       /* degrees about X, Y, Z */
 	double env_scale;
+	/* the relative standard uncertainty of the map's radiance per
+	 * channel (environment.scale_sigma: a probe calibrated by a gray
+	 * ball states it); 0: the map is taken as exact */
+	double env_scale_sigma[3];
 	/* the map is an 8-bit image taken as sRGB-encoded (--srgb); else
 	 * such a map is refused (glint_radiance_check) */
 	int env_srgb;

@@ -356,6 +356,49 @@ assert r['final']['effect_se'] < 1 and r['threshold_se']==0.5, r['final']
 for k in r['knobs']:
     assert k['why'] and k['chosen'] in [l['value'] for l in k['levels']], k
 assert [d['name'] for d in r['decided']]==['bounce depth','stand'], r['decided']"
+# A light whose scale is known to 5 % (environment.scale_sigma, as a
+# probe calibrated by a gray ball states it): a photo under a light 5 %
+# brighter than the map says is fitted with every albedo 5 % high; the
+# intervals with the light's term cover the material, without it red's
+# does not, and roughness and ior do not move with the light's scale.
+python3 - "$tmp" <<'PY'
+import json, sys
+d = sys.argv[1]
+s = json.load(open(d + "/fscene.json"))
+s["environment"]["scale"] = 1.05
+json.dump(s, open(d + "/bright.json", "w"))
+s["environment"]["scale"] = 1
+s["environment"]["scale_sigma"] = 0.05
+json.dump(s, open(d + "/lsigma.json", "w"))
+s["environment"]["scale_sigma"] = [0.05, 2, 0.05]
+json.dump(s, open(d + "/lbad.json", "w"))
+PY
+check "render a photo under a light 5 % brighter" run 0 "" render "$tmp/bright.json" --paper satin-paint -o "$tmp/bright.exr" -q
+check "fit it with the light taken as exact" run 0 "" fit "$tmp/fscene.json" "$tmp/bright.exr" -o "$tmp/fitbright" --json -q
+check "fit it with the light's scale known to 5 %" run 0 "" fit "$tmp/lsigma.json" "$tmp/bright.exr" -o "$tmp/fitlsig"
+check "... its intervals say they hold the light's scale" grep -qF "the light's scale (5.0 / 5.0 / 5.0 %" "$tmp/out"
+check "... the diffuse albedos 5 % high; the light's term covers them, only it" python3 -c "
+import json
+truth = [0.124, 0.026]
+a = {p['name']: p for p in json.load(open('$tmp/fitbright/params.json'))['parameters']}
+r = json.load(open('$tmp/fitlsig/params.json'))
+b = {p['name']: p for p in r['parameters']}
+u = r['uncertainty']
+assert u['light_scale_sigma'] == [0.05, 0.05, 0.05], u['light_scale_sigma']
+names = [p['name'] for p in r['parameters']]
+for c, t in zip(['diffuse.r', 'diffuse.g'], truth):
+    lo, hi = a[c]['interval']
+    assert abs(a[c]['value'] / t - 1.05) < 0.03, (c, a[c])
+    assert c != 'diffuse.r' or not lo <= t <= hi, (c, a[c])
+    lo, hi = b[c]['interval']
+    assert lo <= t <= hi, (c, b[c])
+    ls = u['light_stderr'][names.index(c)]
+    assert abs(ls - 0.05 * b[c]['value']) < 1e-9, (c, ls)
+for c in ['roughness', 'ior']:
+    assert u['light_stderr'][names.index(c)] == 0, c
+    assert abs(a[c]['value'] - b[c]['value']) < 0.2 * b[c]['stderr'] + 1e-9, (c, a[c], b[c])
+print('  diffuse.r', a['diffuse.r']['interval'], 'with the light', b['diffuse.r']['interval'])"
+check "environment.scale_sigma above 1: refused, named" run 1 "environment.scale_sigma" fit "$tmp/lbad.json" "$tmp/bright.exr" -o "$tmp/fitlbad"
 # At 1 + 1 samples the fit's own noise limits this photo: it raises them
 # (to 4 + 4 here) unless --max-samples holds it lower.
 check "fit --samples 1 raises its samples" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fitraise" --samples 1 -q

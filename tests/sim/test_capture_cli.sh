@@ -274,6 +274,20 @@ import json, sys
 d = json.load(open('$(only_session "$tmp/gray")/env-calibration.json'))
 ok = all(abs(s - 1) < 3 * e and e < 0.05 for s, e in zip(d['scale'], d['scale_sigma']))
 print(d['scale'], d['scale_sigma']); sys.exit(not ok)"
+# The sample's scene then states the calibrated map's uncertainty, which
+# the fit carries into the albedos' intervals (here the gray ball stands
+# in for the sample: the camera does not move without a board).
+sed 's/"roi": {"probe": \[0, 0, 163, 240\]}/"roi": {"probe": [0, 0, 163, 240], "sample": [163, 0, 320, 240]}/' "$tmp/gray.json" >"$tmp/graysample.json"
+check "a sample after the calibrated probe" run 0 "" capture sample --config "$tmp/graysample.json" -q
+check "... its scene.json states the map's relative uncertainty, the calibration's" python3 -c "
+import glob, json, sys
+cal = json.load(open('$(only_session "$tmp/gray")/env-calibration.json'))
+scene = [json.load(open(p)) for p in glob.glob('$tmp/gray/sample-*/scene.json')]
+assert len(scene) == 1, scene
+got = scene[0]['environment']['scale_sigma']
+want = [e / s for s, e in zip(cal['scale'], cal['scale_sigma'])]
+print(got, want)
+sys.exit(not all(abs(a - b) < 1e-6 * b for a, b in zip(got, want)))"
 gray_rig nogray "[0, 0, 60, 60]"
 check "a reference ROI with no ball in it: exit 1, named" run 1 "the gray ball" capture probe --config "$tmp/nogray.json"
 

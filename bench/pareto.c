@@ -303,7 +303,8 @@ int main(int argc, char **argv)
 	FILE *gp = fopen("bench-out/pareto.gp", "w");
 	fprintf(gp,
 		"set datafile separator ','\n"
-		"set logscale xy\nset key outside right\n"
+		"set logscale x\nset yrange [0:*]\nset grid\n"
+		"set key outside right\n"
 		"set xlabel 'median fit time (s)'\n"
 		"set ylabel 'median worst parameter error (tolerance units)'\n"
 		"set title 'glint: speed against accuracy (Pareto front "
@@ -312,13 +313,20 @@ int main(int argc, char **argv)
 		"dt 2\n"
 		"plot_it = \"plot ");
 	const char *methods[] = { "three-pass", "naive", "varpro", "anneal" };
+	const char *colours[] = { "#1f77b4", "#2ca02c", "#d62728", "#9467bd" };
+	/* Points, not lines: a method's configurations differ in more than
+	 * one setting, and a line between them would read as a trend. Each
+	 * point is labelled with what differs from the default. */
 	for (int k = 0; k < 4; k++)
 		fprintf(gp,
 			"'bench-out/pareto-%s.csv' using 1:2 with "
-			"linespoints pt 7 title '%s', ",
-			methods[k], methods[k]);
+			"points pt 7 ps 1.3 lc rgb '%s' title '%s', "
+			"'bench-out/pareto-%s.csv' using 1:2:3 with labels "
+			"offset char 0.6,0.7 left font ',8' notitle, ",
+			methods[k], colours[k], methods[k], methods[k]);
 	fprintf(gp, "'bench-out/pareto-front.csv' skip 1 using 1:2 with "
-		    "steps lw 2 lc rgb 'black' title 'Pareto front'\"\n"
+		    "points pt 6 ps 3 lw 2 lc rgb 'black' title "
+		    "'Pareto front'\"\n"
 		    "set terminal pngcairo noenhanced size 1000,560\n"
 		    "set output 'bench-out/pareto.png'\neval plot_it\n"
 		    "set terminal svg noenhanced size 1000,560\n"
@@ -331,8 +339,17 @@ int main(int argc, char **argv)
 		/* one curve per method, sorted by time */
 		for (int j = 0; j < NC; j++) {
 			int c = order[j];
-			if (!strcmp(configs[c].method, methods[k]))
-				fprintf(f, "%.4f,%.4f\n", med_t[c], med_e[c]);
+			if (strcmp(configs[c].method, methods[k]))
+				continue;
+			fprintf(f, "%.4f,%.4f,\"%d px", med_t[c], med_e[c],
+				configs[c].px);
+			if (configs[c].samples != 8)
+				fprintf(f, " %d smp", configs[c].samples);
+			if (configs[c].env_w != 1024)
+				fprintf(f, " map %d", configs[c].env_w);
+			if (!configs[c].dof)
+				fprintf(f, " no DoF");
+			fprintf(f, "\"\n");
 		}
 		fclose(f);
 	}

@@ -155,9 +155,20 @@ int glint_sample_write_scene(const char *dir, const struct glint_image *sample,
 		"cy", c.cy, "r", c.r, "environment", "path", env);
 	json_t *cam = doc ? json_object_get(doc, "camera") : NULL;
 	double rel[3];
-	if (doc && calibration_sigma(probe_dir, rel))
-		json_object_set_new(json_object_get(doc, "environment"),
-				    "scale_sigma", glint_json_reals(rel, 3));
+	json_t *envo = doc ? json_object_get(doc, "environment") : NULL;
+	if (envo && calibration_sigma(probe_dir, rel))
+		json_object_set_new(envo, "scale_sigma",
+				    glint_json_reals(rel, 3));
+	/* the probe's compact sources, named as the map is (beside it) */
+	char src[PATH_MAX + 32];
+	size_t el = strlen(env);
+	snprintf(path, sizeof(path), "%s/env-sources.json", probe_dir);
+	if (envo && is_file(path) && el >= 7 &&
+	    !strcmp(env + el - 7, "env.exr")) {
+		snprintf(src, sizeof(src), "%.*senv-sources.json",
+			 (int)(el - 7), env);
+		json_object_set_new(envo, "sources", json_string(src));
+	}
 	if (cam && o->psf_sigma_px > 0)
 		json_object_set_new(cam, "psf_sigma_px",
 				    json_real(o->psf_sigma_px));

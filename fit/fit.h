@@ -64,6 +64,16 @@ enum glint_fit_weighting {
 	GLINT_WEIGHT_UNIFORM,
 };
 
+/* A compact light source of the map whose flux is uncertain (a probe's
+ * env-sources.json: capture/probe/probe_sources.h), in the map's frame. */
+struct glint_fit_light_source {
+	double dir[3];	      /* unit, the map's frame */
+	double radius_deg;    /* the map's texels within this angle are its */
+	double flux[3];	      /* integral of L d(omega), the map's units */
+	double flux_sigma[3]; /* its standard uncertainty, per channel */
+	int saturated;	      /* clipped in the probe: its flux a lower bound */
+};
+
 struct glint_fit_opts {
 	enum glint_fit_method method;
 	enum glint_fit_weighting weighting;
@@ -111,6 +121,11 @@ struct glint_fit_opts {
 	 * |albedo| x light_scale_sigma[c] (the photo is linear in the light
 	 * and in the albedos together) */
 	double light_scale_sigma[3];
+	/* The map's compact sources with their flux's uncertainty (one photo
+	 * only; fit/light_sources.c): each one's part of every parameter's
+	 * standard error joins its systematic part. */
+	const struct glint_fit_light_source *sources;
+	int nsources;
 	/* leave the sampling lean in the answer (fit.c, remove_lean();
 	 * benchmarks' comparison) */
 	int keep_lean;
@@ -125,6 +140,9 @@ struct glint_fit_opts {
 };
 
 void glint_fit_default_opts(struct glint_fit_opts *o);
+
+/* The light sources whose flux the fit's intervals carry: at most. */
+#define GLINT_FIT_MAX_SOURCES 8
 
 #define GLINT_FIT_MAX_PASSES 8
 
@@ -192,6 +210,11 @@ struct glint_fit_result {
 	 * (opts.light_scale_sigma), and the sigma it came from */
 	double light_stderr[GLINT_MAX_PARAMS];
 	double light_scale_sigma[3];
+	/* each of opts.sources' part of each parameter's standard error
+	 * (0 for a saturated one, whose flux has no sigma) */
+	int nsources;
+	struct glint_fit_light_source source[GLINT_FIT_MAX_SOURCES];
+	double source_stderr[GLINT_FIT_MAX_SOURCES][GLINT_MAX_PARAMS];
 	int pixels;   /* pixels in the final pass */
 	int interior; /* pixels wholly on the sphere */
 	int specular_pixels;

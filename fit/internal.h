@@ -106,6 +106,13 @@ extern const struct fit_method fit_method_naive;
 extern const struct fit_method fit_method_varpro;
 extern const struct fit_method fit_method_anneal;
 
+/* Each of o->sources' part of every parameter's standard error at the
+ * optimum ob->p (fit/light_sources.c), into res->source_stderr, from the
+ * Jacobian jac (3 ob->nsel x nparams) over the selection; a single photo
+ * only.  Returns 0 or a negative errno. */
+int fit_source_terms(struct objective *ob, const double *jac,
+		     struct glint_fit_result *res);
+
 /* The coarse stage the options ask for (annealing when the optimizer is
  * annealing, else the method's; NULL for an unknown method), and a
  * method's entry by name (a valid enum value). */

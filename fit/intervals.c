@@ -96,10 +96,22 @@ static int covariance(struct objective *ob, const struct selections *sl,
 				? fabs(ob->p[k]) * ob->o->light_scale_sigma[c]
 				: 0;
 	}
-	for (int k = 0; k < m->nparams; k++)
-		sys[k] = sqrt(sys[k] * sys[k] + ob->lean_var[k] +
-			      res->discrepancy[k] * res->discrepancy[k] +
-			      res->light_stderr[k] * res->light_stderr[k]);
+	/* each compact source's flux (its rows are the selection's) */
+	res->nsources = 0;
+	if (ob->nsel == sl->nall) {
+		int ret = fit_source_terms(ob, jac, res);
+		if (ret < 0)
+			return ret;
+	}
+	for (int k = 0; k < m->nparams; k++) {
+		double v = sys[k] * sys[k] + ob->lean_var[k] +
+			   res->discrepancy[k] * res->discrepancy[k] +
+			   res->light_stderr[k] * res->light_stderr[k];
+		for (int s = 0; s < res->nsources; s++)
+			v += res->source_stderr[s][k] *
+			     res->source_stderr[s][k];
+		sys[k] = sqrt(v);
+	}
 	struct glint_unc_problem pr = {
 		.n = m->nparams,
 		.m = 3 * sl->nall,

@@ -430,6 +430,14 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 	}
 	struct glint_fit_opts o = job->opts;
 	o.nthreads = job->nthreads;
+	/* the sources' flux terms on one photo (fit/light_sources.c) */
+	if (nv == 1) {
+		o.sources = job->sources;
+		o.nsources = job->nsources;
+	} else if (job->nsources)
+		glint_log_warn("a joint fit does not carry its light sources' "
+			       "flux uncertainty into the intervals: each "
+			       "photo's fit alone does");
 	for (int k = 0; k < nv; k++)
 		for (int c = 0; c < 3; c++)
 			o.light_scale_sigma[c] =

@@ -40,6 +40,10 @@ struct glint_fit_job {
 	 * pixels and the misfit, depend on the machine's speed within a
 	 * budget; a large one (1e9) makes them depend on the photo alone. */
 	double render_budget_s;
+	/* the scene's light sources (environment.sources), read by
+	 * glint_fit_job_load() */
+	struct glint_fit_light_source sources[GLINT_FIT_MAX_SOURCES];
+	int nsources;
 	/* > 0: run the fidelity ladder (fit/ladder.h) with this limit in
 	 * standard errors and report its fit */
 	double ladder;

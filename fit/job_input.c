@@ -109,12 +109,85 @@ static int read_whole(struct glint_fit_job *job, const char *weights_path)
 
 static int read_photo(struct glint_fit_job *job, const char *weights_path);
 
+/*
+ * A probe's sources file (capture/probe/probe_sources.c writes it): each
+ * source's direction in the map's frame, flux and its sigma per channel,
+ * its size and the probe pixel's angle there, whether it clipped.  Its
+ * texels in the map are those within 3 times its RMS radius or 2 probe
+ * pixels, whichever is larger.  At most GLINT_FIT_MAX_SOURCES, the
+ * brightest (the file lists them brightest first); a source whose flux
+ * is not positive is skipped.
+ */
+static int read_sources(const char *path, struct glint_fit_light_source *out,
+			int *n)
+{
+	json_t *doc = NULL, *arr, *e;
+	size_t i;
+	int ret = glint_json_load(path, &doc);
+
+	*n = 0;
+	if (ret < 0)
+		return ret;
+	arr = json_object_get(doc, "sources");
+	if (!json_is_array(arr)) {
+		json_decref(doc);
+		return glint_error_set(EINVAL, "%s: no \"sources\" array",
+				       path);
+	}
+	json_array_foreach(arr, i, e)
+	{
+		if (*n >= GLINT_FIT_MAX_SOURCES)
+			break;
+		struct glint_fit_light_source s = { 0 };
+		double flux[3], sigma[3], size = 0, pix = 0;
+		char where[48];
+		int sat = 0;
+		snprintf(where, sizeof(where), "sources[%zu]", i);
+		struct glint_range any = { -1, 1, 0, 0 },
+				   pos = { 0, INFINITY, 0, 0 };
+		ret = glint_json_numbers(path, where, e, "direction", 1, 3, any,
+					 s.dir);
+		if (!ret)
+			ret = glint_json_numbers(path, where, e, "flux", 1, 3,
+						 pos, flux);
+		if (!ret)
+			ret = glint_json_numbers(path, where, e, "flux_sigma",
+						 1, 3, pos, sigma);
+		if (!ret)
+			ret = glint_json_number(path, where, e, "size_deg", 0,
+						pos, &size);
+		if (!ret)
+			ret = glint_json_number(path, where, e, "pixel_deg", 0,
+						pos, &pix);
+		if (!ret)
+			ret = glint_json_bool(path, where, e, "saturated",
+					      &sat);
+		if (ret < 0)
+			break;
+		double len = sqrt(s.dir[0] * s.dir[0] + s.dir[1] * s.dir[1] +
+				  s.dir[2] * s.dir[2]);
+		if (!(len > 0.5) || !(flux[0] + flux[1] + flux[2] > 0))
+			continue;
+		for (int c = 0; c < 3; c++) {
+			s.dir[c] /= len;
+			s.flux[c] = flux[c];
+			s.flux_sigma[c] = sigma[c];
+		}
+		s.radius_deg = fmax(3 * size, 2 * pix);
+		s.saturated = sat;
+		out[(*n)++] = s;
+	}
+	json_decref(doc);
+	return ret < 0 ? ret : 0;
+}
+
 int glint_fit_job_load(struct glint_fit_job *job, const char *weights_path)
 {
 	int ret = glint_scene_load(job->scene_path, &job->scene);
 
 	job->weights_path = weights_path;
 	job->photo = job->weight = NULL;
+	job->nsources = 0;
 	if (ret == 0)
 		ret = glint_radiance_check(job->photo_path, job->srgb);
 	if (ret < 0)
@@ -131,6 +204,9 @@ int glint_fit_job_load(struct glint_fit_job *job, const char *weights_path)
 						  job->window.x, job->window.y);
 	if (ret == 0 && glint_image_encoded(job->photo_path))
 		glint_image_from_srgb(job->photo_path, job->photo);
+	if (ret == 0 && job->scene.env_sources_path[0])
+		ret = read_sources(job->scene.env_sources_path, job->sources,
+				   &job->nsources);
 	return ret;
 }
 

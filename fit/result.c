@@ -207,6 +207,71 @@ int glint_fit_needs_selection(const struct glint_fit_result *r)
 	return 0;
 }
 
+/* The light sources' parts of the standard errors (fit/light_sources.c),
+ * and findings: a parameter whose error is mostly one source's flux names
+ * it; a clipped source's flux, a lower bound, is not in the intervals.
+ * NULL without sources. */
+static json_t *light_sources(const struct glint_fit_result *r, json_t *find)
+{
+	const struct glint_model *m = r->model;
+	int n = r->unc.n;
+	char msg[400];
+
+	if (!r->nsources)
+		return NULL;
+	json_t *arr = json_array();
+	for (int s = 0; s < r->nsources; s++) {
+		const struct glint_fit_light_source *src = &r->source[s];
+		double el = asin(fmax(-1, fmin(1, src->dir[1]))) * 180 / M_PI;
+		double az = atan2(src->dir[0], -src->dir[2]) * 180 / M_PI;
+		json_t *o = json_object();
+		json_object_set_new(o, "direction",
+				    glint_json_reals(src->dir, 3));
+		json_object_set_new(o, "flux", glint_json_reals(src->flux, 3));
+		json_object_set_new(o, "flux_sigma",
+				    glint_json_reals(src->flux_sigma, 3));
+		json_object_set_new(o, "saturated",
+				    json_boolean(src->saturated));
+		json_object_set_new(o, "stderr",
+				    glint_json_reals(r->source_stderr[s], n));
+		json_array_append_new(arr, o);
+		if (src->saturated) {
+			snprintf(msg, sizeof(msg),
+				 "light source %d (azimuth %.0f, elevation "
+				 "%.0f degrees in the map) is clipped in the "
+				 "probe: its flux is a lower bound, and these "
+				 "intervals cannot hold its error (a gray ball "
+				 "beside the probe measures it: glint probe "
+				 "calibrate)",
+				 s + 1, az, el);
+			json_array_append_new(find, json_string(msg));
+		}
+	}
+	/* which light limits which parameter: its part over half the
+	 * parameter's standard error */
+	for (int k = 0; k < n; k++) {
+		int best = -1;
+		double top = 0;
+		for (int s = 0; s < r->nsources; s++)
+			if (r->source_stderr[s][k] > top)
+				top = r->source_stderr[s][k], best = s;
+		if (best < 0 || !(top > 0.5 * r->unc.se[k]))
+			continue;
+		const struct glint_fit_light_source *src = &r->source[best];
+		double f = src->flux[0] + src->flux[1] + src->flux[2];
+		double sg = src->flux_sigma[0] + src->flux_sigma[1] +
+			    src->flux_sigma[2];
+		snprintf(msg, sizeof(msg),
+			 "%s is limited by the light: light source %d (flux "
+			 "known to %.1f %%) makes %.0f %% of its standard "
+			 "error's variance",
+			 m->params[k].name, best + 1, f > 0 ? 100 * sg / f : 0,
+			 100 * top * top / (r->unc.se[k] * r->unc.se[k]));
+		json_array_append_new(find, json_string(msg));
+	}
+	return arr;
+}
+
 json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 {
 	const struct glint_model *m = r->model;
@@ -292,6 +357,7 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 	json_t *light = json_array();
 	for (int k = 0; k < n; k++)
 		json_array_append_new(light, json_real(r->light_stderr[k]));
+	json_t *sources = light_sources(r, find);
 	json_t *doc = json_pack(
 		"{s:s,s:f,s:f,s:i,s:i,s:i,s:o,s:o,s:o,s:o,s:o,s:f,s:o,s:o,s:o,"
 		"s:o,s:f,s:o,s:o}",
@@ -316,6 +382,8 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 		comb, "seconds", r->unc_seconds, "light_scale_sigma",
 		glint_json_reals(r->light_scale_sigma, 3), "light_stderr",
 		light);
+	if (doc && sources)
+		json_object_set_new(doc, "light_sources", sources);
 	return doc;
 }
 

@@ -18,7 +18,7 @@
  * scales do not hide a null direction); unseen[k] is set for parameters
  * with a component along a direction J does not see.
  */
-static int normal_inverse(const double *a, int n, double *ainv, int *unseen)
+int glint_unc_normal_inverse(const double *a, int n, double *ainv, int *unseen)
 {
 	double as[N * N], d[N];
 	int ret = 0;
@@ -174,7 +174,7 @@ static int region_covariance(const struct glint_unc_problem *pr,
 			continue;
 		for (int k = 0; k < n * n; k++)
 			rest[k] = a[k] - ag[(size_t)b * n * n + k];
-		ret = normal_inverse(rest, n, rinv, unseen);
+		ret = glint_unc_normal_inverse(rest, n, rinv, unseen);
 		if (ret < 0)
 			goto out;
 		double *db = d + (size_t)used * n;
@@ -263,7 +263,7 @@ static int sampling_lean(const struct glint_unc_problem *pr, const double *a,
 	for (int i = 0; i < nf; i++)
 		for (int j = 0; j < nf; j++)
 			af[i * nf + j] = a[f[i] * n + f[j]];
-	int ret = normal_inverse(af, nf, ainv, unseen);
+	int ret = glint_unc_normal_inverse(af, nf, ainv, unseen);
 	if (ret < 0)
 		return ret;
 	for (int b = 0; b < g; b++)
@@ -317,7 +317,7 @@ int glint_uncertainty_compute(const struct glint_unc_problem *pr,
 		rr += pr->r[i] * pr->r[i];
 	}
 	u->chi2_dof = rr / (m - n);
-	int ret = normal_inverse(a, n, ainv, unseen);
+	int ret = glint_unc_normal_inverse(a, n, ainv, unseen);
 	if (ret < 0)
 		return ret;
 	for (int k = 0; k < n * n; k++)

@@ -108,6 +108,12 @@ struct glint_uncertainty {
 	int nblocks, ndraws, nregions;
 };
 
+/* The inverse of the normal matrix a (n x n, symmetric), through its
+ * eigen-decomposition scaled to a unit diagonal, eigenvalues below 1e-12
+ * of the largest dropped; unseen[k] is 1 where a's diagonal is 0.
+ * Returns 0 or a negative errno. */
+int glint_unc_normal_inverse(const double *a, int n, double *ainv, int *unseen);
+
 /* Fill u from pr.  Returns 0 or a negative errno with the message set
  * (bad sizes, out of memory). */
 int glint_uncertainty_compute(const struct glint_unc_problem *pr,

@@ -170,12 +170,16 @@ static int load_sphere(const char *file, json_t *o, struct glint_scene *s)
 static int load_env(const char *file, const char *dir, json_t *o,
 		    struct glint_scene *s)
 {
-	static const char *const known[] = { "path", "rotation_deg", "scale",
-					     "scale_sigma", NULL };
-	const char *p = NULL;
+	static const char *const known[] = { "path",	"rotation_deg",
+					     "scale",	"scale_sigma",
+					     "sources", NULL };
+	const char *p = NULL, *src = NULL;
 	int ret;
 
 	ret = glint_json_known_keys(file, "environment", o, known);
+	if (!ret)
+		ret = glint_json_string(file, "environment", o, "sources", 0,
+					&src);
 	if (!ret)
 		ret = glint_json_string(file, "environment", o, "path", 1, &p);
 	if (!ret)
@@ -204,6 +208,13 @@ static int load_env(const char *file, const char *dir, json_t *o,
 		snprintf(s->env_path, sizeof(s->env_path), "%s", p);
 	else
 		snprintf(s->env_path, sizeof(s->env_path), "%s/%s", dir, p);
+	s->env_sources_path[0] = 0;
+	if (src && (src[0] == '/' || !dir[0]))
+		snprintf(s->env_sources_path, sizeof(s->env_sources_path), "%s",
+			 src);
+	else if (src)
+		snprintf(s->env_sources_path, sizeof(s->env_sources_path),
+			 "%s/%s", dir, src);
 	return 0;
 }
 

@@ -27,6 +27,10 @@ struct glint_scene {
 	 * channel (environment.scale_sigma: a probe calibrated by a gray
 	 * ball states it); 0: the map is taken as exact */
 	double env_scale_sigma[3];
+	/* environment.sources: a probe's env-sources.json (its compact
+	 * sources and their flux's uncertainty), resolved against the
+	 * scene's folder; "" when none */
+	char env_sources_path[GLINT_PATH_MAX];
 	/* the map is an 8-bit image taken as sRGB-encoded (--srgb); else
 	 * such a map is refused (glint_radiance_check) */
 	int env_srgb;

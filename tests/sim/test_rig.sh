@@ -442,7 +442,7 @@ if [ "$(id -u)" = 0 ] && command -v setpriv >/dev/null; then
 	# his own session's fit is written as him.
 	mine="$tmp/one/nobody-sess"
 	cp -r "$sess" "$mine" && rm -rf "$mine/fit"
-	# scene.json's probe path made absolute (the copy is elsewhere);
+	# scene.json's probe paths made absolute (the copy is elsewhere);
 	# with SECRET, a root-only copy of the probe.
 	env_to() { # SCENE [SECRET]
 		python3 - "$sess" "$@" <<'PY'
@@ -455,6 +455,8 @@ if len(sys.argv) > 3:
     os.chmod(sys.argv[3], 0o600)
     env = sys.argv[3]
 d["environment"]["path"] = os.path.abspath(env)
+if "sources" in d["environment"]:
+    d["environment"]["sources"] = os.path.abspath(os.path.join(orig, d["environment"]["sources"]))
 json.dump(d, open(scene, "w"), indent=1)
 PY
 	}

@@ -160,8 +160,12 @@ int fit_source_terms(struct objective *ob, const double *jac,
 		if (src->saturated)
 			continue; /* no sigma: result.c says so */
 		ret = render_source(ob, src, c);
-		if (ret)
+		if (ret > 0) { /* black in the map: nothing to carry */
+			ret = 0;
 			continue;
+		}
+		if (ret < 0)
+			break;
 		double b[GLINT_UNC_MAX_N] = { 0 };
 		for (int i = 0; i < rows; i++)
 			for (int k = 0; k < n; k++)

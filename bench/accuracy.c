@@ -746,6 +746,9 @@ static int selected(const char *list, const char *material)
 	return 0;
 }
 
+/* The map's index in the run (the chart's x position: write_chart()). */
+static int map_index;
+
 /* with_bias 0: no second reference photo, and no bias ratio (the tests,
  * which judge the fits alone: one render per case less). */
 static void one_map(const char *map, const char *const *mats, int nmats,
@@ -982,14 +985,17 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			fflush(stdout);
 			if (csv)
 				fprintf(csv,
-					"%s,%s,%s,%.4f,%s,%.4f,%.5f,%d,%.3f\n",
+					"%s,%s,%s,%.4f,%s,%.4f,%.5f,%d,%.3f,"
+					"%.3f\n",
 					base(map), mats[i], photo_names[lv],
 					bias,
 					bound ? "within-bound"
 					      : outcome_names[out],
 					err,
 					out == REFUSED ? NAN : res.rel_rmse,
-					smp, ideal);
+					smp, ideal,
+					map_index + 0.1 +
+						0.8 * (i + 0.5) / nmats);
 		next:
 			glint_image_free(photo);
 			glint_image_free(w);
@@ -998,6 +1004,42 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 		glint_image_free(b);
 	}
 	glint_renderer_release(&r);
+}
+
+/* bench-out/accuracy.png: each case's worst error in tolerance units
+ * (log scale; at or under 1 meets every tolerance) by map, the materials
+ * side by side within a map's column, one colour per kind of photo. */
+static void write_chart(const char *const *maps, int nmaps)
+{
+	FILE *gp = fopen("bench-out/accuracy.gp", "w");
+	if (!gp)
+		return;
+	fprintf(gp,
+		"set terminal pngcairo noenhanced size 1100,460\n"
+		"set output 'bench-out/accuracy.png'\n"
+		"set datafile separator ','\nset key outside right top\n"
+		"set logscale y\nset yrange [0.01:100]\n"
+		"set ylabel 'worst error (tolerance units)'\n"
+		"set title 'glint fits of reference photos: each "
+		"material under each map'\n"
+		"set xrange [0:%d]\nset xtics rotate by -30 (",
+		nmaps);
+	for (int i = 0; i < nmaps; i++)
+		fprintf(gp, "%s'%s' %.1f", i ? ", " : "", base(maps[i]),
+			i + 0.5);
+	fprintf(gp, ")\nset grid ytics\n"
+		    "k(s, want) = s eq want ? 1 : NaN\nplot ");
+	for (int k = 0; k < NPHOTO; k++)
+		fprintf(gp,
+			"'bench-out/accuracy.csv' skip 1 using 10:($6 * "
+			"k(strcol(3), '%s')) with points pt %d ps 1.2 "
+			"title '%s', ",
+			photo_names[k], 7 - 2 * k, photo_names[k]);
+	fprintf(gp, "1 with lines dt 2 lc 'black' title 'tolerance'\n");
+	fclose(gp);
+	if (system("command -v gnuplot >/dev/null 2>&1") == 0 &&
+	    system("gnuplot bench-out/accuracy.gp") == 0)
+		printf("plot: bench-out/accuracy.png\n");
 }
 
 int main(int argc, char **argv)
@@ -1060,13 +1102,17 @@ int main(int argc, char **argv)
 			return 1;
 		}
 		fprintf(csv, "map,material,noise,bias_ratio,outcome,error_tol,"
-			     "relative_rmse,light_samples,ideal_within\n");
+			     "relative_rmse,light_samples,ideal_within,x\n");
 	}
-	for (int i = 0; i < nmaps; i++)
+	for (int i = 0; i < nmaps; i++) {
+		map_index = i;
 		one_map(maps[i], mats, nmats, !check && !within, csv,
 			&tally[i]);
-	if (csv)
+	}
+	if (csv) {
 		fclose(csv);
+		write_chart(maps, nmaps);
+	}
 
 	printf("\n%-26s %6s %7s %7s %6s %7s %5s %7s %11s %17s  %s\n", "map",
 	       "cases", "within", "(bound)", "ideal", "flagged", "wrong",

@@ -34,10 +34,10 @@
  * (about 10 electrons a pixel), fitted without a weight image, as a
  * user's own dark HDR photo would be: glint's default variance (signal
  * proportional, its scale unknown) must be evaluated at the fit's
- * prediction, not at the photo's own noisy values, which gave a dark
- * pixel more weight and left every albedo 20 % low with intervals that
- * missed (studio's aluminium bronze, bench/accuracy's
- * ACCURACY_NO_WEIGHTS=1, 2026-11-27).  Checked: the diffuse albedos
+ * prediction, not at the photo's own noisy values, which would give a
+ * dark pixel more weight and leave every albedo 20 % low with intervals
+ * that miss (bench/accuracy's ACCURACY_NO_WEIGHTS=1 shows it on the
+ * studio's aluminium bronze).  Checked: the diffuse albedos
  * within 0.01 and the truth no dearer than the fit on its own
  * objective.
  *   test_fit_accuracy MATERIAL MAP ROTATION_Y [F_NUMBER | dark]

@@ -813,8 +813,8 @@ static void test_header_bombs(void)
 	expect_read_error(tmp_path("chlist.exr"),
 			  "header attribute 'chennals' of type chlist says "
 			  "55 bytes");
-	/* A preview of 2^32 - 1 squared pixels: 4wh overflowed 64 bits in
-	 * the check itself (found by fuzz_exr under UBSan, 2026-11-27). */
+	/* A preview of 2^32 - 1 squared pixels: 4wh overflows 64 bits if
+	 * the check multiplies it out first (a fuzz_exr input). */
 	copy_prefix(GLINT_TEST_DATA "/../fuzz/regressions/exr/"
 				    "preview-4wh-overflows-64-bits",
 		    tmp_path("preview.exr"), 832);

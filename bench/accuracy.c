@@ -102,6 +102,7 @@
 #include "sim/light_class.h"
 #include "sim/reference.h"
 
+#include <errno.h>
 #include <gsl/gsl_eigen.h>
 #include <gsl/gsl_randist.h>
 #include <gsl/gsl_rng.h>
@@ -257,6 +258,11 @@ static struct glint_image *reference(const struct glint_renderer *r,
 	    glint_reference_render(&r->scene, r->env, m, p, &ro, img) < 0) {
 		glint_image_free(img);
 		img = NULL;
+	}
+	if (dir && mkdir(dir, 0777) < 0 && errno != EEXIST) {
+		glint_error_set(errno, "%s: cannot make the cache folder", dir);
+		glint_image_free(img);
+		return NULL;
 	}
 	if (img && dir && glint_image_write(path, img, NULL) < 0) {
 		glint_image_free(img);

@@ -686,7 +686,7 @@ static void rim_statistic(const struct edge_map *em, const double c[3],
 int glint_sphere_detect(const struct glint_image *img, double r_min,
 			double r_max, struct glint_circle *out)
 {
-	int w = img->width, h = img->height, ret = 0, np = 0;
+	int w = img->width, h = img->height, ret = 0, np = 0, x0 = 0, y0 = 0;
 	struct edge_map em = { 0 };
 	double *px = NULL, *py = NULL, c[3], band = 4;
 
@@ -717,7 +717,26 @@ int glint_sphere_detect(const struct glint_image *img, double r_min,
 		c[1] = sc.cy * k;
 		c[2] = sc.r * k;
 		band = 2.0 * k;
-		ret = edge_detect(img, &em);
+		/* The full frame's edges near that circle alone: its square
+		 * with a margin for the band, the gradient's 3 px either side
+		 * and the reduced copy's error (a 12 MP frame's edge arrays
+		 * would take 300 MB). */
+		int m = (int)ceil(c[2] + 2 * band + 16);
+		int x1 = (int)fmin(w, ceil(c[0]) + m),
+		    y1 = (int)fmin(h, ceil(c[1]) + m);
+		x0 = (int)fmax(0, floor(c[0]) - m);
+		y0 = (int)fmax(0, floor(c[1]) - m);
+		struct glint_image *near = NULL;
+		if (x1 - x0 < 16 || y1 - y0 < 16)
+			x0 = y0 = 0; /* the whole frame, as it is */
+		else if (!(near = glint_image_crop(img, x0, y0, x1 - x0,
+						   y1 - y0)))
+			return glint_error_set(
+				ENOMEM, "sphere detection: out of memory");
+		ret = edge_detect(near ? near : img, &em);
+		glint_image_free(near);
+		c[0] -= x0;
+		c[1] -= y0;
 	} else {
 		ret = edge_detect(img, &em);
 		if (ret == 0)
@@ -741,6 +760,13 @@ int glint_sphere_detect(const struct glint_image *img, double r_min,
 		if (np < 8)
 			break;
 		circle_fit(px, py, NULL, np, 0.5, c);
+	}
+	/* Back to the full frame's coordinates. */
+	c[0] += x0;
+	c[1] += y0;
+	for (int k = 0; k < np; k++) {
+		px[k] += x0;
+		py[k] += y0;
 	}
 	if (np >= 8 && c[2] > 0 && (ret = rim_refine(img, c)) < 0)
 		goto out;

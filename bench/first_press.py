@@ -5,7 +5,9 @@ and then ROUNDS warm ones, each stage's median over the warm rounds and
 the whole from the press to the printed result; the peak memory of the
 processes.  Stages are read off the run's own JSON log lines (their UTC
 times), so the breakdown is glint's own account of where the time went.
-Writes docs/results/first-press.md (with --write).
+Writes docs/results/first-press.md and, from the last round's fit, its
+compare.png (photo | render | render - photo) as first-press.png, the
+README's picture (with --write).
 
 usage: bench/first_press.py [BUILD_DIR] [--rounds N] [--write]"""
 import json
@@ -63,6 +65,8 @@ def one_round(glint, rig, cache):
     stages["  of it: render.exr, within half the fit's time"] = fit["render"]["seconds"]
     stages["press to printed result"] = t_end - at[0]
     stages["process, start to end"] = t_end - t_start
+    with open(os.path.join(res["sample"], "fit", "compare.png"), "rb") as f:
+        stages["compare.png"] = f.read()
     return stages
 
 
@@ -81,6 +85,9 @@ def main():
         cache = os.path.join(tmp, "cache")
         cold = one_round(glint, rig, cache)
         warm = [one_round(glint, rig, cache) for _ in range(rounds)]
+    picture = warm[-1]["compare.png"] if warm else cold["compare.png"]
+    for st in [cold] + warm:
+        del st["compare.png"]
     peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
     names = list(cold)
     rows = ["| stage | cold (views rendered) | warm, median of %d | warm, min .. max |" % rounds,
@@ -102,7 +109,12 @@ def main():
                     "run's own log.  Seconds of wall-clock time on %d cores (load %.1f\n"
                     "when written); the peak memory of one glint process %.0f MiB.\n\n"
                     % (rounds, os.cpu_count(), os.getloadavg()[0], peak))
-            f.write(text + "\n")
+            f.write(text + "\n\nThe last round's fit, its `compare.png`: the photo, the render of\n"
+                    "the fitted material, and render − photo (blue darker, red brighter;\n"
+                    "the scale bar in the photo's units):\n\n"
+                    "![photo, render, render - photo](first-press.png)\n")
+        with open(os.path.join(ROOT, "docs", "results", "first-press.png"), "wb") as f:
+            f.write(picture)
 
 
 if __name__ == "__main__":

@@ -154,9 +154,17 @@ int glint_compare_png_plots(const char *path, const struct glint_image *photo,
 		const float *a = photo->data + 3 * i, *b = render->data + 3 * i;
 		err[i] = rgb_luminance(b[0], b[1], b[2]) -
 			 rgb_luminance(a[0], a[1], a[2]);
-		if ((!mask || mask->data[3 * i] > 0) && isfinite(err[i]))
+		/* The scale from the pixels the sphere covers whole: a
+		 * blurred rim, half sphere and half background, would set it
+		 * and leave the rest of the panel white. */
+		if ((!mask || mask->data[3 * i] >= 0.999f) && isfinite(err[i]))
 			mag[nm++] = fabs(err[i]);
 	}
+	if (!nm) /* no whole pixel: every one on the sphere */
+		for (size_t i = 0; i < n; i++)
+			if ((!mask || mask->data[3 * i] > 0) &&
+			    isfinite(err[i]))
+				mag[nm++] = fabs(err[i]);
 	double es = 0;
 	if (nm) {
 		qsort(mag, nm, sizeof(double), cmp_d);

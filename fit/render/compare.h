@@ -14,9 +14,10 @@
  * compare.png: photo | render | signed error (render - photo, luminance)
  * side by side.  Photo and render share one exposure (the photo's auto
  * exposure, docs/conventions.md); the error panel maps -s..+s to blue,
- * white, red, with s the 99th percentile of |error| on the sphere, shown on
- * a scale bar.  mask (may be NULL) marks the pixels on the sphere (> 0);
- * elsewhere the error panel is grey.
+ * white, red, with s the 99th percentile of |error| over the pixels the
+ * sphere covers whole, shown on a scale bar (the rim's part-covered pixels
+ * saturate).  mask (may be NULL) is the sphere's coverage of each pixel:
+ * above 0 on the sphere, 1 where whole; elsewhere the error panel is grey.
  */
 /*
  * A residual plot under the three panels: bands of some angle, each with

@@ -101,6 +101,15 @@ static inline const char *test_tmpdir(void)
 	return dir;
 }
 
+/* Removes a scratch directory the test made (mkdtemp), with its files. */
+static inline void test_remove_dir(const char *dir)
+{
+	char cmd[600];
+	snprintf(cmd, sizeof(cmd), "rm -rf '%s'", dir);
+	if (system(cmd) != 0)
+		fprintf(stderr, "could not remove %s\n", dir);
+}
+
 static inline const char *tmp_path(const char *name)
 {
 	static char buf[8][512];

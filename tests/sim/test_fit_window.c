@@ -159,10 +159,7 @@ static int setup(const struct glint_scene *sc, const struct glint_model **m,
 
 static void remove_tmpdir(void)
 {
-	char cmd[600];
-	snprintf(cmd, sizeof(cmd), "rm -rf '%s'", tmpdir);
-	if (system(cmd) != 0)
-		fprintf(stderr, "could not remove %s\n", tmpdir);
+	test_remove_dir(tmpdir);
 }
 
 /* A pixel's mean value. */

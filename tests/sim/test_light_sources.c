@@ -271,9 +271,6 @@ int main(void)
 	glint_image_free(photo);
 
 	job_reads_sources(plain);
-	char cmd[600];
-	snprintf(cmd, sizeof(cmd), "rm -rf '%s'", tmpdir);
-	if (system(cmd) != 0)
-		fprintf(stderr, "could not remove %s\n", tmpdir);
+	test_remove_dir(tmpdir);
 	return test_result();
 }

@@ -361,9 +361,6 @@ int main(void)
 	RUN_ARG(test_special_files, dir);
 	RUN(test_printable);
 	RUN(test_negative_limit);
-	char cmd[600];
-	snprintf(cmd, sizeof(cmd), "rm -rf '%s'", dir);
-	if (system(cmd) != 0)
-		fprintf(stderr, "could not remove %s\n", dir);
+	test_remove_dir(dir);
 	return test_result();
 }

@@ -14,6 +14,7 @@
 #include <Imath/half.h>
 #include <OpenEXR/openexr.h>
 
+#include <limits.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -444,8 +445,18 @@ int glint_exr_size(const char *path, int *width, int *height)
 	else if ((rv = exr_get_data_window(ctx, 0, &dw)) != EXR_ERR_SUCCESS)
 		ret = exr_fail(path, "reading the header", rv);
 	else {
-		*width = dw.max.x - dw.min.x + 1;
-		*height = dw.max.y - dw.min.y + 1;
+		long long w = (long long)dw.max.x - dw.min.x + 1;
+		long long h = (long long)dw.max.y - dw.min.y + 1;
+
+		if (w < 1 || h < 1 || w > INT_MAX || h > INT_MAX)
+			ret = glint_error_set(EINVAL,
+					      "%s: dataWindow %lld x %lld is "
+					      "not a valid size",
+					      path, w, h);
+		else {
+			*width = (int)w;
+			*height = (int)h;
+		}
 	}
 	if (ctx)
 		exr_finish(&ctx);

@@ -10,6 +10,8 @@ extern "C" {
 #include <OpenEXR/ImfArray.h>
 #include <OpenEXR/ImfRgbaFile.h>
 
+#include <climits>
+#include <cstdint>
 #include <exception>
 
 extern "C" int glint_exr_read_cxx(const char *path, struct glint_image **out)
@@ -20,14 +22,33 @@ extern "C" int glint_exr_read_cxx(const char *path, struct glint_image **out)
 	try {
 		Imf::RgbaInputFile file(path);
 		Imath::Box2i dw = file.dataWindow();
-		int w = dw.max.x - dw.min.x + 1;
-		int h = dw.max.y - dw.min.y + 1;
+		/* 64-bit: a damaged header's corners may be far apart */
+		int64_t w64 = (int64_t)dw.max.x - dw.min.x + 1;
+		int64_t h64 = (int64_t)dw.max.y - dw.min.y + 1;
+		if (w64 < 1 || h64 < 1 || w64 > INT_MAX || h64 > INT_MAX)
+			return glint_error_set(
+				EINVAL,
+				"%s: data window (%d,%d)-(%d,%d) "
+				"is not a valid size",
+				path, dw.min.x, dw.min.y, dw.max.x, dw.max.y);
+		int w = (int)w64, h = (int)h64;
 		img = glint_image_new(w, h);
 		if (!img)
 			return glint_error_prefix(EINVAL, "%s: data window",
 						  path);
 		Imf::Array2D<Imf::Rgba> px(h, w);
-		file.setFrameBuffer(&px[0][0] - dw.min.x - dw.min.y * w, 1, w);
+		/*
+		 * OpenEXR addresses pixel (x, y) as base + x + y * w, with
+		 * (x, y) in the data window's coordinates.  The base lies
+		 * outside the array when the window does not start at the
+		 * origin, so it is formed in unsigned address arithmetic,
+		 * which wraps, rather than as a pointer that would overflow.
+		 */
+		uintptr_t origin = (uintptr_t)dw.min.x +
+				   (uintptr_t)dw.min.y * (uintptr_t)w;
+		uintptr_t base = reinterpret_cast<uintptr_t>(&px[0][0]) -
+				 origin * sizeof(Imf::Rgba);
+		file.setFrameBuffer(reinterpret_cast<Imf::Rgba *>(base), 1, w);
 		file.readPixels(dw.min.y, dw.max.y);
 		for (int y = 0; y < h; y++) {
 			for (int x = 0; x < w; x++) {

@@ -78,6 +78,10 @@ int glint_png_write_rgb8(const char *path, int w, int h, const uint8_t *px);
  * code values as stored, no gamma or colour conversion. */
 int glint_png_read_rgb8(const char *path, int *w, int *h, uint8_t **px);
 
+/* Read a JPEG as 8-bit RGB (w * h * 3 bytes, caller frees) through
+ * libjpeg-turbo; any corrupt-data warning is an error. */
+int glint_jpeg_read_rgb8(const char *path, int *w, int *h, uint8_t **px);
+
 /* Walk a PNG's chunks before libpng reads it: libpng allocates what a
  * chunk's length says, so each must fit in the file; one promising more
  * is an error naming the chunk and its offset.  0 for a non-PNG (libpng

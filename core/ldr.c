@@ -1,15 +1,17 @@
 /* SPDX-License-Identifier: MIT */
 /*
- * 8-bit images (TGA, JPEG, BMP through stb_image; PNG through libpng; TIFF
- * through libtiff) for
+ * 8-bit images (JPEG through libjpeg-turbo; TGA, BMP through stb_image;
+ * PNG through libpng; TIFF through libtiff) for
  * detection and previews: camera-encoded code values, not radiance.
  */
 #include "error.h"
 #include "formats.h"
 #include "image.h"
+#include "path.h"
 #include "tiff.h"
 
 #include <stb_image.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -24,6 +26,17 @@ int glint_ldr_read(const char *path, int *w, int *h, uint8_t **rgb)
 		return glint_png_read_rgb8(path, w, h, rgb);
 	if (!strcmp(ext, "tif") || !strcmp(ext, "tiff"))
 		return glint_tiff_read_rgb8(path, w, h, rgb);
+	/* JPEG by its signature, whatever the name: libjpeg-turbo, never
+	 * stb's decoder (which asserts, and so aborts, on some damaged
+	 * Huffman tables). */
+	unsigned char sig[3] = { 0 };
+	FILE *fp = glint_fopen_regular(path, "rb");
+	if (!fp)
+		return -errno;
+	size_t got = fread(sig, 1, sizeof(sig), fp);
+	fclose(fp);
+	if (got == 3 && sig[0] == 0xff && sig[1] == 0xd8 && sig[2] == 0xff)
+		return glint_jpeg_read_rgb8(path, w, h, rgb);
 	/* stb allocates what the header says: check the size first.  Its
 	 * densest formats (run-length TGA: 128 pixels in 2 bytes; JPEG
 	 * blocks of a flat image) stay under 1032 pixels a byte. */

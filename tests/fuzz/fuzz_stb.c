@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-/* 8-bit TGA, JPEG, BMP through stb_image (any format stb detects). */
+/* 8-bit images by content, as glint_ldr_read takes them: a JPEG through
+ * libjpeg-turbo, TGA and BMP through stb_image. */
 #include "fuzz.h"
 
 #include "core/formats.h"

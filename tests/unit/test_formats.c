@@ -323,6 +323,85 @@ static void test_exr_dwab(void)
 	glint_image_free(img);
 }
 
+/*
+ * A copy of the DWAB map whose data window starts at (dx, dy) rather than
+ * the origin: the header's dataWindow and each chunk's first row move by
+ * the same amounts, so the pixels are the same.  DWAB chunks hold 256 rows.
+ */
+static int shift_dwab_window(const char *src, const char *dst, int32_t dx,
+			     int32_t dy)
+{
+	FILE *f = fopen(src, "rb");
+	static unsigned char b[1 << 22];
+	size_t n = f ? fread(b, 1, sizeof(b), f) : 0;
+	int32_t box[4] = { 0 };
+	size_t pos = 8, dwpos = 0;
+
+	if (f)
+		fclose(f);
+	if (n < 8 || n == sizeof(b))
+		return -1;
+	while (pos < n && b[pos]) { /* name, type, size, value */
+		size_t name = pos, type = pos + strlen((char *)b + pos) + 1;
+		size_t sz = type + strlen((char *)b + type) + 1;
+		int32_t len;
+		if (sz + 4 > n)
+			return -1;
+		memcpy(&len, b + sz, 4);
+		if (!strcmp((char *)b + name, "dataWindow") && len == 16)
+			dwpos = sz + 4;
+		pos = sz + 4 + (size_t)len;
+	}
+	if (!dwpos || ++pos > n)
+		return -1;
+	memcpy(box, b + dwpos, 16);
+	int chunks = (box[3] - box[1] + 1 + 255) / 256;
+	box[0] += dx, box[2] += dx, box[1] += dy, box[3] += dy;
+	memcpy(b + dwpos, box, 16);
+	for (int c = 0; c < chunks; c++) {
+		uint64_t off;
+		int32_t y;
+		memcpy(&off, b + pos + 8 * (size_t)c, 8);
+		if (off + 4 > n)
+			return -1;
+		memcpy(&y, b + off, 4);
+		y += dy;
+		memcpy(b + off, &y, 4);
+	}
+	f = fopen(dst, "wb");
+	if (!f)
+		return -1;
+	int ok = fwrite(b, 1, n, f) == n;
+	return fclose(f) == 0 && ok ? 0 : -1;
+}
+
+/* The C++ reader's frame buffer is addressed from the data window's
+ * origin; one far from (0, 0) (here min.y × width > INT_MAX) reads the
+ * same pixels as the map at the origin. */
+static void test_exr_dwab_offset_window(void)
+{
+	const char *p = GLINT_TEST_DATA "/studio_dwab.exr";
+	const char *q = tmp_path("dwab-offset.exr");
+	struct glint_image *a = NULL, *b = NULL;
+
+	CHECK(shift_dwab_window(p, q, -7, 1000000000) == 0,
+	      "could not write the shifted copy");
+	CHECK(glint_image_read(p, &a) == 0, "%s", glint_error_msg());
+	CHECK(glint_image_read(q, &b) == 0, "%s", glint_error_msg());
+	if (a && b) {
+		size_t n = (size_t)a->width * a->height * 3, diff = 0;
+		CHECK(b->width == a->width && b->height == a->height,
+		      "size %dx%d", b->width, b->height);
+		for (size_t i = 0;
+		     i < n && b->width == a->width && b->height == a->height;
+		     i++)
+			diff += a->data[i] != b->data[i];
+		CHECK(diff == 0, "%zu values differ", diff);
+	}
+	glint_image_free(a);
+	glint_image_free(b);
+}
+
 static void test_rgbe_roundtrip(void)
 {
 	int widths[2] = { 123, 5 }; /* RLE scanlines, and flat (< 8) */
@@ -497,6 +576,59 @@ static int write_jpeg_exif(const char *path, unsigned num, unsigned den)
 	fclose(fp);
 	free(blob);
 	return 0;
+}
+
+/* JPEG through libjpeg-turbo: a smooth card written by stb's encoder reads
+ * back within a few code values, under any name; a JPEG cut short and one
+ * with a damaged Huffman table are errors naming the file. */
+static void test_jpeg_read(void)
+{
+	enum { W = 64, H = 48 };
+	static uint8_t px[W * H * 3];
+	for (int y = 0; y < H; y++)
+		for (int x = 0; x < W; x++) {
+			uint8_t *p = px + 3 * (y * W + x);
+			p[0] = (uint8_t)(40 + 2 * x);
+			p[1] = (uint8_t)(30 + 3 * y);
+			p[2] = 128;
+		}
+	const char *names[2] = { tmp_path("card.jpg"), tmp_path("card.tga") };
+	for (int k = 0; k < 2; k++) {
+		uint8_t *rgb = NULL;
+		int w = 0, h = 0, worst = 0;
+		CHECK(stbi_write_jpg(names[k], W, H, 3, px, 100), "writing");
+		CHECK(glint_ldr_read(names[k], &w, &h, &rgb) == 0 && rgb &&
+			      w == W && h == H,
+		      "%s: %s", names[k], glint_error_msg());
+		for (int i = 0; rgb && i < W * H * 3; i++)
+			if (abs(rgb[i] - px[i]) > worst)
+				worst = abs(rgb[i] - px[i]);
+		CHECK(worst <= 4, "%s: off by %d code values", names[k], worst);
+		free(rgb);
+	}
+	/* cut after 60 % of its bytes: libjpeg would pad it with grey */
+	const char *cut = tmp_path("cut.jpg");
+	FILE *in = fopen(names[0], "rb"), *out = fopen(cut, "wb");
+	static uint8_t buf[65536];
+	size_t n = in ? fread(buf, 1, sizeof(buf), in) : 0;
+	if (out)
+		fwrite(buf, 1, n * 6 / 10, out);
+	if (in)
+		fclose(in);
+	if (out)
+		fclose(out);
+	uint8_t *rgb = NULL;
+	int w, h;
+	CHECK(glint_ldr_read(cut, &w, &h, &rgb) == -EIO && !rgb,
+	      "a cut JPEG was read");
+	CHECK_MSG(glint_error_msg(), "cut.jpg: not a readable JPEG");
+	glint_error_clear();
+	const char *bad = GLINT_TEST_DATA "/../fuzz/regressions/exif/"
+					  "jpeg-huffman-table-stb-asserts";
+	CHECK(glint_ldr_read(bad, &w, &h, &rgb) == -EIO && !rgb,
+	      "a damaged Huffman table was read");
+	CHECK_MSG(glint_error_msg(), "not a readable JPEG");
+	glint_error_clear();
 }
 
 static void test_exif(void)
@@ -957,10 +1089,12 @@ int main(void)
 	RUN(test_exr_tiled_read);
 	RUN(test_read_window);
 	RUN(test_exr_dwab);
+	RUN(test_exr_dwab_offset_window);
 	RUN(test_rgbe_roundtrip);
 	RUN(test_pfm_roundtrip);
 	RUN(test_tiff);
 	RUN(test_exif);
+	RUN(test_jpeg_read);
 	RUN(test_png_tonemap);
 	RUN(test_bad_exr);
 	RUN(test_bad_rgbe);

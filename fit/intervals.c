@@ -178,9 +178,10 @@ static int estimate_on_sets(struct objective *ob, struct fit_data *d,
  * noisy model leans to where its noise fits; silver under Venice at
  * 192 px, 0.36 at 8 + 8 and roughness 9 % low, within 5 % at 16 + 16),
  * which the first cannot see.  Over 1, or over 0.25 (the model's noise
- * above half the residual's), the caches are rebuilt with 2x the samples
- * (4x when four times over), up to max_samples (64 + 64 by default),
- * and the stage runs again.
+ * above half the residual's), the caches are rebuilt with the samples
+ * times the power of two that brings both under (each falls as
+ * 1 / samples), up to max_samples (64 + 64 by default), and the stage
+ * runs again: once where the estimate holds, again where it fell short.
  * Returns 1 to go again, 0 when done, or a negative errno.
  */
 static int more_samples(struct objective *ob, const struct glint_uncertainty *u,
@@ -214,9 +215,12 @@ static int more_samples(struct objective *ob, const struct glint_uncertainty *u,
 	ob->model_noise = vals;
 	if (!(worst > 1 || vals > 0.25) || base * ob->sample_scale * 2 > cap)
 		return 0;
-	int f = (worst > 4 || vals > 1) && base * ob->sample_scale * 4 <= cap
-			? 4
-			: 2;
+	/* Both ratios fall as 1 / samples: one step to the power of two
+	 * that brings them under their limits, or to the cap. */
+	double need = fmax(worst, vals / 0.25);
+	int f = 2;
+	while (f < need && base * ob->sample_scale * f * 2 <= cap)
+		f *= 2;
 	glint_log_info(
 		"the fit's own sampling noise is %.2f of the residual "
 		"per value and %.2f of the noise per parameter "

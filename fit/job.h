@@ -156,6 +156,15 @@ int glint_render_factor(double q1, double pair_s, double budget_s,
 double glint_render_first_factor(double q_pilot, double pair_s, double budget_s,
 				 const char **limited_by);
 
+/*
+ * The pixel step of the final render (glint_shade_opts.pixel_step): 1 when
+ * a pair at `factor` of the scene's samples, pair_s at factor 1 over every
+ * pixel, fits budget_s; else the step k whose grid (a k-th of the rows
+ * and of the columns: 1/k^2 of the shading) does, at most 8 (8 when
+ * nothing is left of the budget).
+ */
+int glint_render_pixel_step(double factor, double pair_s, double budget_s);
+
 /* The upper bound glint reports for a roughness below the photo's pixel
  * footprint (its interval's top or the footprint, the larger), or NAN
  * when the roughness is reported as a value (params.json's

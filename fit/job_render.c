@@ -43,7 +43,9 @@
  * time budget, RENDER_BUDGET_SHARE of the fit's time and at least
  * RENDER_MIN_BUDGET_S, or the job's render_budget_s (--render-seconds):
  * the second pair is made only when the time left
- * after the first affords it (a pair's time grows with its samples).  A
+ * after the first affords it (a pair's time grows with its samples), and
+ * a large image's pairs shade a grid of every k-th pixel when even an
+ * eighth of the samples over every pixel would not fit.  A
  * render held above the target by the budget is noisier than the photo
  * allows for, not wrong: its measured noise goes with it into the misfit
  * analysis, which counts it in the residual's variance.  What limited the
@@ -66,6 +68,13 @@
 
 #define RENDER_MIN_FACTOR 0.125
 
+/* Where even an eighth of the samples over every pixel would overrun the
+ * budget (a 12 MP photo: the sphere's 3.6 MP at 4 primary samples each),
+ * the first pair shades a grid of every k-th pixel of every k-th row and
+ * interpolates between grid pixels on the sphere (fit/render/render.h),
+ * k at most RENDER_MAX_STEP. */
+#define RENDER_MAX_STEP 8
+
 double glint_render_first_factor(double q_pilot, double pair_s, double budget_s,
 				 const char **limited_by)
 {
@@ -80,6 +89,16 @@ double glint_render_first_factor(double q_pilot, double pair_s, double budget_s,
 		*limited_by = "time: the budget_seconds it may take";
 	}
 	return fmax(f, RENDER_MIN_FACTOR);
+}
+
+int glint_render_pixel_step(double factor, double pair_s, double budget_s)
+{
+	if (!(pair_s > 0) || factor * pair_s <= budget_s)
+		return 1;
+	if (!(budget_s > 0)) /* the pilot took it all */
+		return RENDER_MAX_STEP;
+	int k = (int)ceil(sqrt(factor * pair_s / budget_s) - 1e-9);
+	return k < RENDER_MAX_STEP ? k : RENDER_MAX_STEP;
 }
 
 int glint_render_factor(double q1, double pair_s, double budget_s,
@@ -103,10 +122,12 @@ int glint_render_factor(double q1, double pair_s, double budget_s,
 	return factor;
 }
 
+/* The pair's noise over the pixels it shaded (with a pixel step, the
+ * grid's: an interpolated pixel's noise is its corners' mean's). */
 static double render_noise(const struct glint_image *a,
 			   const struct glint_image *b,
 			   const struct glint_image *cov,
-			   const struct glint_image *w, long *nv)
+			   const struct glint_image *w, int step, long *nv)
 {
 	double sum = 0;
 	long n = 0;
@@ -114,6 +135,9 @@ static double render_noise(const struct glint_image *a,
 	for (size_t i = 0; i < np; i++) {
 		if (cov->data[3 * i] < 1)
 			continue; /* rim or backdrop */
+		if (step > 1 &&
+		    ((i % a->width) % step || (i / a->width) % step))
+			continue;
 		for (int c = 0; c < 3; c++) {
 			double wi = w->data[3 * i + c];
 			double d = a->data[3 * i + c] - b->data[3 * i + c];
@@ -137,7 +161,7 @@ static int scaled(int n, double factor)
  * `seed`, of every row_step-th row. */
 static int shade(struct glint_renderer *r, const struct glint_fit_job *job,
 		 const struct glint_model *model, const double *p,
-		 double factor, uint32_t seed, int row_step,
+		 double factor, uint32_t seed, int row_step, int pixel_step,
 		 struct glint_image *out, struct glint_image *cov)
 {
 	struct glint_shade_opts so = {
@@ -147,6 +171,7 @@ static int shade(struct glint_renderer *r, const struct glint_fit_job *job,
 		.nthreads = job->nthreads,
 		.seed = seed,
 		.row_step = row_step,
+		.pixel_step = pixel_step,
 	};
 	return glint_renderer_shade(r, model, p, &so, out, cov);
 }
@@ -157,16 +182,18 @@ static int render_pair(struct glint_renderer *r,
 		       const struct glint_fit_job *job,
 		       const struct glint_model *model, const double *p,
 		       double factor, uint32_t seed, int row_step,
-		       struct glint_image *img, struct glint_image *b,
-		       struct glint_image *cov, double *q, long *nv)
+		       int pixel_step, struct glint_image *img,
+		       struct glint_image *b, struct glint_image *cov,
+		       double *q, long *nv)
 {
-	int ret = shade(r, job, model, p, factor, seed, row_step, img, cov);
+	int ret = shade(r, job, model, p, factor, seed, row_step, pixel_step,
+			img, cov);
 	if (ret == 0)
-		ret = shade(r, job, model, p, factor, seed + 1, row_step, b,
-			    NULL);
+		ret = shade(r, job, model, p, factor, seed + 1, row_step,
+			    pixel_step, b, NULL);
 	if (ret < 0)
 		return ret;
-	*q = render_noise(img, b, cov, job->weight, nv);
+	*q = render_noise(img, b, cov, job->weight, pixel_step, nv);
 	for (size_t i = 0; i < (size_t)img->width * img->height * 3; i++)
 		img->data[i] = 0.5f * (img->data[i] + b->data[i]);
 	return 0;
@@ -196,7 +223,7 @@ int job_render_final(struct glint_renderer *r, const struct glint_fit_job *job,
 	*info = NULL;
 	if (!w || glint_model_is_transparent(model) || w->width != img->width ||
 	    w->height != img->height) {
-		ret = shade(r, job, model, p, 1, 0, 1, img, cov);
+		ret = shade(r, job, model, p, 1, 0, 1, 1, img, cov);
 		if (ret < 0)
 			return ret;
 		*info = json_pack("{s:i, s:i, s:s}", "light_samples",
@@ -218,19 +245,24 @@ int job_render_final(struct glint_renderer *r, const struct glint_fit_job *job,
 	 * fewer samples where the render is already far below the photo's
 	 * noise, and within the time budget. */
 	double f1 = 1, qp = NAN;
+	int step = 1;
 	const char *first_limit = NULL;
 	if (img->height >= RENDER_PILOT_MIN_ROWS) {
 		double tp = glint_clock_monotonic();
-		ret = render_pair(r, job, model, p, 1, 0, RENDER_PILOT_STEP,
+		ret = render_pair(r, job, model, p, 1, 0, RENDER_PILOT_STEP, 1,
 				  img, b, cov, &qp, &nv);
 		if (ret < 0)
 			goto out;
-		f1 = glint_render_first_factor(
-			qp, (glint_clock_monotonic() - tp) * RENDER_PILOT_STEP,
-			budget_s, &first_limit);
+		double full_s =
+			(glint_clock_monotonic() - tp) * RENDER_PILOT_STEP;
+		double left_s = budget_s - (glint_clock_monotonic() - t0);
+		f1 = glint_render_first_factor(qp, full_s, left_s,
+					       &first_limit);
+		step = glint_render_pixel_step(f1, full_s, left_s);
 	}
 	double t1 = glint_clock_monotonic();
-	ret = render_pair(r, job, model, p, f1, 0, 1, img, b, cov, &q1, &nv);
+	ret = render_pair(r, job, model, p, f1, 0, 1, step, img, b, cov, &q1,
+			  &nv);
 	if (ret < 0)
 		goto out;
 	double q = q1, pair_s = glint_clock_monotonic() - t1;
@@ -248,8 +280,8 @@ int job_render_final(struct glint_renderer *r, const struct glint_fit_job *job,
 	double pair2_s = 0;
 	if (factor) {
 		double t2 = glint_clock_monotonic();
-		ret = render_pair(r, job, model, p, f1 * factor, 2, 1, more, b,
-				  cov, &q2, &nv);
+		ret = render_pair(r, job, model, p, f1 * factor, 2, 1, step,
+				  more, b, cov, &q2, &nv);
 		if (ret < 0)
 			goto out;
 		pair2_s = glint_clock_monotonic() - t2;
@@ -295,13 +327,28 @@ int job_render_final(struct glint_renderer *r, const struct glint_fit_job *job,
 					      RENDER_PILOT_STEP, "noise",
 					      glint_json_real_or_null(qp),
 					      "first_pair_factor", f1));
+	if (*info)
+		json_object_set_new(*info, "pixel_step", json_integer(step));
 	if (!*info) {
 		ret = glint_error_set(ENOMEM, "out of memory");
 		goto out;
 	}
-	glint_log_info("final render: %d + %d samples, its noise %.2f of the "
+	char grid[96] = "";
+	if (step > 1)
+		snprintf(grid, sizeof(grid),
+			 " on every %d%s pixel of every %d%s row, interpolated "
+			 "between",
+			 step,
+			 step == 2   ? "nd"
+			 : step == 3 ? "rd"
+				     : "th",
+			 step,
+			 step == 2   ? "nd"
+			 : step == 3 ? "rd"
+				     : "th");
+	glint_log_info("final render: %d + %d samples%s, its noise %.2f of the "
 		       "photo's variance (target %.2f), %.1f s%s%s",
-		       total_l, total_b, q, RENDER_NOISE_TARGET,
+		       total_l, total_b, grid, q, RENDER_NOISE_TARGET,
 		       glint_clock_monotonic() - t0,
 		       q > RENDER_NOISE_TARGET && limited_by ? "; limited by "
 							     : "",

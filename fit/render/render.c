@@ -108,70 +108,146 @@ struct shade_job {
 	const double *params;
 	const struct glint_shade_opts *opts;
 	struct glint_image *out, *coverage;
+	int step;      /* pixel_step, at least 1 */
+	uint8_t *full; /* pixel_step > 1: the grid's pixels all on the sphere */
+	int grid_w;    /* grid columns: (width - 1) / step + 1 */
+	int filling;   /* the second pass */
 	int failed;
 };
 
+/* Pixel (x, y) from its spp hits hs: the mean of its samples into out,
+ * its hits' share into coverage.  Returns its hits. */
+static int shade_pixel(struct shade_job *job, const struct glint_hit *hs, int x,
+		       int y)
+{
+	const struct glint_gbuffer *gb = job->gb;
+	int spp = gb->spp, hits = 0;
+	size_t pix = (size_t)y * gb->width + x;
+	double sum[3] = { 0, 0, 0 }, rgb[3];
+
+	for (int s = 0; s < spp; s++) {
+		const struct glint_hit *h = &hs[s];
+		if (h->geom < 0) {
+			if (!job->opts->background)
+				continue;
+			glint_envmap_lookup(job->env, hvec(h->d), rgb);
+		} else {
+			hits++;
+			glint_shade_hit(
+				h,
+				glint_hash32(
+					glint_gbuffer_frame_pixel(gb, pix) *
+						(uint32_t)spp +
+					(uint32_t)s +
+					job->opts->seed * 0x9e3779b9u),
+				job->tracer, job->env, job->model, job->params,
+				job->opts->light_samples,
+				job->opts->brdf_samples, rgb);
+		}
+		for (int c = 0; c < 3; c++)
+			sum[c] += rgb[c];
+	}
+	float *o = glint_image_px(job->out, x, y);
+	for (int c = 0; c < 3; c++)
+		o[c] = (float)(sum[c] / spp);
+	if (job->coverage) {
+		float *cv = glint_image_px(job->coverage, x, y);
+		cv[0] = cv[1] = cv[2] = (float)hits / spp;
+	}
+	return hits;
+}
+
+/* Pixel (x, y) between grid pixels that all lie on the sphere, as they
+ * do: bilinear in the grid's four corners.  0 when it is not (a corner
+ * off the image or off the sphere, or the pixel itself not wholly on it). */
+static int interpolate_pixel(struct shade_job *job, const struct glint_hit *hs,
+			     int x, int y)
+{
+	const struct glint_gbuffer *gb = job->gb;
+	int k = job->step, gx = x / k, gy = y / k;
+
+	if ((gx + 1) * k >= gb->width || (gy + 1) * k >= gb->height)
+		return 0;
+	for (int s = 0; s < gb->spp; s++)
+		if (hs[s].geom < 0)
+			return 0;
+	const uint8_t *f = job->full + (size_t)gy * job->grid_w + gx;
+	if (!f[0] || !f[1] || !f[job->grid_w] || !f[job->grid_w + 1])
+		return 0;
+	double u = (double)(x - gx * k) / k, v = (double)(y - gy * k) / k;
+	const float *a = glint_image_px(job->out, gx * k, gy * k);
+	const float *b = glint_image_px(job->out, gx * k + k, gy * k);
+	const float *c = glint_image_px(job->out, gx * k, gy * k + k);
+	const float *d = glint_image_px(job->out, gx * k + k, gy * k + k);
+	float *o = glint_image_px(job->out, x, y);
+	for (int ch = 0; ch < 3; ch++)
+		o[ch] = (float)((1 - v) * ((1 - u) * a[ch] + u * b[ch]) +
+				v * ((1 - u) * c[ch] + u * d[ch]));
+	if (job->coverage) {
+		float *cv = glint_image_px(job->coverage, x, y);
+		cv[0] = cv[1] = cv[2] = 1;
+	}
+	return 1;
+}
+
+/* Row y of the first pass: every pixel (every row_step-th row for a
+ * pilot), or with pixel_step k the grid's pixels only, each grid pixel's
+ * "all on the sphere" kept for the second pass. */
+static void shade_row(struct shade_job *job, int y, struct glint_hit *buf)
+{
+	const struct glint_gbuffer *gb = job->gb;
+	int spp = gb->spp, k = job->step;
+
+	if ((job->opts->row_step > 1 && y % job->opts->row_step) || y % k)
+		return;
+	const struct glint_hit *row = glint_gbuffer_row(gb, y, buf);
+	for (int x = 0; x < gb->width; x += k) {
+		int hits = shade_pixel(job, row + (size_t)x * spp, x, y);
+		if (k > 1)
+			job->full[(size_t)(y / k) * job->grid_w + x / k] =
+				hits == spp;
+	}
+}
+
+/* Row y of a pixel-step render's second pass: each pixel off the grid
+ * interpolated where the grid around it lies on the sphere, shaded
+ * where it does not (the rim, the backdrop). */
+static void fill_row(struct shade_job *job, int y, struct glint_hit *buf)
+{
+	const struct glint_gbuffer *gb = job->gb;
+	int spp = gb->spp, k = job->step;
+	const struct glint_hit *row = glint_gbuffer_row(gb, y, buf);
+
+	for (int x = 0; x < gb->width; x++) {
+		const struct glint_hit *hs = row + (size_t)x * spp;
+		if ((y % k == 0 && x % k == 0) ||
+		    interpolate_pixel(job, hs, x, y))
+			continue;
+		shade_pixel(job, hs, x, y);
+	}
+}
+
+/* A worker's rows of the pass job->filling says; the progress counts
+ * each row once, in the last pass. */
 static void shade_rows(void *ctx, int y0, int y1, int thread)
 {
 	struct shade_job *job = ctx;
 	const struct glint_gbuffer *gb = job->gb;
-	int spp = gb->spp;
 	struct glint_hit *buf = NULL;
 
 	(void)thread;
 	glint_thread_ftz();
 	if (!gb->hits &&
-	    !(buf = malloc((size_t)gb->width * spp * sizeof(*buf)))) {
+	    !(buf = malloc((size_t)gb->width * gb->spp * sizeof(*buf)))) {
 		job->failed = 1;
 		return;
 	}
 	for (int y = y0; y < y1; y++) {
-		if (job->opts->row_step > 1 && y % job->opts->row_step) {
-			if (job->opts->progress)
-				glint_progress_add(job->opts->progress, 1);
-			continue;
-		}
-		const struct glint_hit *row = glint_gbuffer_row(gb, y, buf);
-		for (int x = 0; x < gb->width; x++) {
-			size_t pix = (size_t)y * gb->width + x;
-			const struct glint_hit *hs = row + (size_t)x * spp;
-			double sum[3] = { 0, 0, 0 }, rgb[3];
-			int hits = 0;
-			for (int s = 0; s < spp; s++) {
-				const struct glint_hit *h = &hs[s];
-				if (h->geom < 0) {
-					if (!job->opts->background)
-						continue;
-					glint_envmap_lookup(job->env,
-							    hvec(h->d), rgb);
-				} else {
-					hits++;
-					glint_shade_hit(
-						h,
-						glint_hash32(
-							glint_gbuffer_frame_pixel(
-								gb, pix) *
-								(uint32_t)spp +
-							(uint32_t)s +
-							job->opts->seed *
-								0x9e3779b9u),
-						job->tracer, job->env,
-						job->model, job->params,
-						job->opts->light_samples,
-						job->opts->brdf_samples, rgb);
-				}
-				for (int c = 0; c < 3; c++)
-					sum[c] += rgb[c];
-			}
-			float *o = glint_image_px(job->out, x, y);
-			for (int c = 0; c < 3; c++)
-				o[c] = (float)(sum[c] / spp);
-			if (job->coverage) {
-				float *cv = glint_image_px(job->coverage, x, y);
-				cv[0] = cv[1] = cv[2] = (float)hits / spp;
-			}
-		}
-		if (job->opts->progress)
+		if (job->filling)
+			fill_row(job, y, buf);
+		else
+			shade_row(job, y, buf);
+		if (job->opts->progress && (job->filling || job->step == 1))
 			glint_progress_add(job->opts->progress, 1);
 	}
 	free(buf);
@@ -184,8 +260,16 @@ int glint_render_shade(const struct glint_gbuffer *gb,
 		       const struct glint_shade_opts *opts,
 		       struct glint_image *out, struct glint_image *coverage)
 {
-	struct shade_job job = { gb,   tracer, env,	 model, params,
-				 opts, out,    coverage, 0 };
+	struct shade_job job = {
+		.gb = gb,
+		.tracer = tracer,
+		.env = env,
+		.model = model,
+		.params = params,
+		.opts = opts,
+		.out = out,
+		.coverage = coverage,
+	};
 
 	if (out->width != gb->width || out->height != gb->height ||
 	    (coverage &&
@@ -199,9 +283,28 @@ int glint_render_shade(const struct glint_gbuffer *gb,
 				       "light samples %d, BRDF samples %d: "
 				       "expected >= 0 and not both 0",
 				       opts->light_samples, opts->brdf_samples);
+	if (opts->pixel_step > 1 && opts->row_step > 1)
+		return glint_error_set(EINVAL,
+				       "a pilot (row step %d) at a pixel step "
+				       "of %d: expected one or the other",
+				       opts->row_step, opts->pixel_step);
 	if (tracer && glint_tracer_is_convex(tracer))
 		job.tracer = NULL;
+	job.step = opts->pixel_step > 1 ? opts->pixel_step : 1;
+	if (job.step > 1) {
+		job.grid_w = (gb->width - 1) / job.step + 1;
+		size_t grid_h = (size_t)(gb->height - 1) / job.step + 1;
+		job.full = calloc((size_t)job.grid_w * grid_h, 1);
+		if (!job.full)
+			return glint_error_set(ENOMEM, "out of memory");
+	}
 	glint_parallel_for(gb->height, 2, opts->nthreads, shade_rows, &job);
+	if (job.step > 1 && !job.failed) {
+		job.filling = 1;
+		glint_parallel_for(gb->height, 2, opts->nthreads, shade_rows,
+				   &job);
+	}
+	free(job.full);
 	if (job.failed)
 		return glint_error_set(ENOMEM, "out of memory");
 	return 0;

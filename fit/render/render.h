@@ -37,6 +37,12 @@ struct glint_shade_opts {
 	/* > 1: shade only the rows y with y % row_step == 0 (a pilot);
 	 * the others are left as they are */
 	int row_step;
+	/* > 1: shade every pixel_step-th pixel of every pixel_step-th row,
+	 * then each pixel between four of them that lie wholly on the
+	 * sphere bilinearly from them, and shade the rest (the rim, the
+	 * backdrop): a render for a budget too small for every pixel, whose
+	 * grid pixels are the full render's own bits */
+	int pixel_step;
 };
 
 /*

@@ -193,7 +193,10 @@ static int pilot(void)
 	glint_renderer_release(&r);
 	struct glint_image *weight = flat_weights(560, 560);
 	struct glint_fit_job job = job_of(&sc, m, photo, weight);
-	job.render_budget_s = 0; /* the default budget, named when it binds */
+	/* A budget no render of every pixel meets, even at an eighth of the
+	 * samples: the render shades a grid and interpolates (the step
+	 * comes from the pilot's time, at most 8). */
+	job.render_budget_s = 0.01;
 	json_t *doc = photo && weight ? run(&job, "pilot", 1, 0) : NULL;
 	int h = job.scene.cam.height, w = job.scene.cam.width;
 	printf("window %dx%d of 560x560\n", w, h);
@@ -215,16 +218,42 @@ static int pilot(void)
 	      f1);
 	CHECK(q > 0 && (q <= 0.25 || lim), "render noise %g, limited by %s", q,
 	      lim ? lim : "nothing said");
+	long long step = json_integer_value(json_object_get(ren, "pixel_step"));
+	printf("pixel step %lld\n", step);
+	CHECK(step > 1 && step <= 8 && lim && strstr(lim, "time"),
+	      "render.pixel_step %lld (limited by %s): expected a grid", step,
+	      lim ? lim : "nothing said");
 	/* Every row through the sphere's middle column is rendered (a row
-	 * the pilot skipped and the pair missed would stay 0). */
+	 * the pilot skipped and the pair missed would stay 0), and every
+	 * column through its middle row; both near the photo there. */
 	char path[600];
 	struct glint_image *ri = NULL;
 	snprintf(path, sizeof(path), "%s/pilot/render.exr", tmpdir);
 	CHECK(glint_image_read(path, &ri) == 0, "%s", glint_error_msg());
 	int dark = 0;
+	double dev = 0;
+	int ndev = 0;
 	for (int y = h / 4; ri && y < 3 * h / 4; y++)
 		dark += !(px_mean(ri, w / 2, y) > 0);
-	CHECK(ri && !dark, "%d rows through the sphere are black", dark);
+	for (int x = w / 4; ri && x < 3 * w / 4; x++)
+		dark += !(px_mean(ri, x, h / 2) > 0);
+	CHECK(ri && !dark, "%d rows or columns through the sphere are black",
+	      dark);
+	/* Each value is as noisy as the samples the budget left; their
+	 * sum, over the middle row and column, is not. */
+	double sum_p = 0;
+	for (int k = -h / 5; ri && ri->width == 560 && k <= h / 5; k++) {
+		int c = 280; /* the frame's middle: the sphere's */
+		dev += px_mean(ri, c, c + k) + px_mean(ri, c + k, c);
+		sum_p += px_mean(photo, c, c + k) + px_mean(photo, c + k, c);
+		ndev += 2;
+	}
+	printf("render - photo through the middle: %+.2f %% of the photo\n",
+	       sum_p > 0 ? 100 * (dev / sum_p - 1) : NAN);
+	CHECK(ndev && sum_p > 0 && fabs(dev / sum_p - 1) < 0.02,
+	      "the render is %+.1f %% off the photo through the sphere's "
+	      "middle (%d values)",
+	      sum_p > 0 ? 100 * (dev / sum_p - 1) : NAN, ndev);
 	glint_image_free(ri);
 	json_decref(doc);
 	glint_fit_job_unload(&job);

@@ -369,6 +369,102 @@ static void test_deterministic(void)
 	teardown(&s);
 }
 
+/* A render at a pixel step: the grid's pixels and every pixel it does not
+ * interpolate (the rim, the backdrop) are the full render's own bits; the
+ * interpolated ones, all wholly on the sphere, stay within the full
+ * render's noise of it; the coverage is the full render's. */
+static void test_pixel_step(void)
+{
+	enum { W = 61, H = 47 };
+	struct setup s;
+	struct glint_image *m = glint_image_new(32, 16);
+	struct glint_envmap *env = NULL;
+	for (int y = 0; y < 16; y++)
+		for (int x = 0; x < 32; x++)
+			for (int c = 0; c < 3; c++)
+				glint_image_px(m, x, y)[c] =
+					(float)(1 + 0.5 * sin(0.2 * x + c) +
+						0.3 * cos(0.3 * y));
+	glint_envmap_new(m, NULL, 1, "smooth", &env);
+	double p[8] = { 0.3, 0.2, 0.1, 0.2, 0.2, 0.2, 0.3, 1.5 };
+	make_camera(&s.cam, W, H, 60, 0, 0);
+	setup_sphere(&s, v3(0, 0, -3), 1, 4);
+	struct glint_image *a = glint_image_new(W, H),
+			   *b = glint_image_new(W, H);
+	struct glint_image *ca = glint_image_new(W, H),
+			   *cb = glint_image_new(W, H);
+	struct glint_image *a2 = glint_image_new(W, H);
+	struct glint_shade_opts o = { .light_samples = 16,
+				      .brdf_samples = 16,
+				      .background = 1,
+				      .nthreads = 2 };
+	CHECK(glint_render_shade(&s.gb, NULL, env,
+				 &glint_model_torrance_sparrow, p, &o, a,
+				 ca) == 0,
+	      "%s", glint_error_msg());
+	o.seed = 1; /* the full render's own noise: another sample set */
+	glint_render_shade(&s.gb, NULL, env, &glint_model_torrance_sparrow, p,
+			   &o, a2, NULL);
+	o.seed = 0;
+	o.pixel_step = 3;
+	CHECK(glint_render_shade(&s.gb, NULL, env,
+				 &glint_model_torrance_sparrow, p, &o, b,
+				 cb) == 0,
+	      "%s", glint_error_msg());
+	int same = 0, interp = 0, rim_differs = 0, grid_differs = 0;
+	double d_interp = 0, d_noise = 0;
+	for (int y = 0; y < H; y++)
+		for (int x = 0; x < W; x++) {
+			const float *pa = glint_image_px(a, x, y),
+				    *pb = glint_image_px(b, x, y),
+				    *p2 = glint_image_px(a2, x, y);
+			float cov = glint_image_px(ca, x, y)[0];
+			int eq = !memcmp(pa, pb, 3 * sizeof(float));
+			CHECK(glint_image_px(cb, x, y)[0] == cov,
+			      "coverage differs at (%d, %d)", x, y);
+			if (x % 3 == 0 && y % 3 == 0)
+				grid_differs += !eq;
+			else if (cov < 1)
+				rim_differs += !eq;
+			if (eq) {
+				same++;
+				continue;
+			}
+			interp++;
+			for (int c = 0; c < 3; c++) {
+				d_interp += fabs(pb[c] - pa[c]);
+				d_noise += fabs(p2[c] - pa[c]);
+			}
+		}
+	CHECK(grid_differs == 0 && rim_differs == 0,
+	      "%d grid and %d rim or backdrop pixels differ from the full "
+	      "render",
+	      grid_differs, rim_differs);
+	CHECK(interp > 600 && same > 600,
+	      "%d pixels interpolated, %d shaded", interp, same);
+	/* An interpolated pixel is the mean of four at the same noise, with
+	 * the smooth map's curvature between them: nearer the full render
+	 * than another full render's noise. */
+	CHECK(d_interp < d_noise,
+	      "interpolated pixels differ by %g, "
+	      "another sample set by %g",
+	      d_interp / (3 * interp), d_noise / (3 * interp));
+	/* a pilot at a pixel step is refused */
+	o.row_step = 4;
+	CHECK(glint_render_shade(&s.gb, NULL, env,
+				 &glint_model_torrance_sparrow, p, &o, b,
+				 NULL) == -EINVAL,
+	      "a row step with a pixel step was taken");
+	glint_error_clear();
+	glint_image_free(a);
+	glint_image_free(a2);
+	glint_image_free(b);
+	glint_image_free(ca);
+	glint_image_free(cb);
+	glint_envmap_free(env);
+	teardown(&s);
+}
+
 /* The fast per-pixel sample pattern equals glint_pixel_sample()'s, and
  * samples stay inside their pixel. */
 static void test_sample_pattern(void)
@@ -449,6 +545,17 @@ static void test_render_factor(void)
 	/* Between: 100 s against 50 s. */
 	g = glint_render_first_factor(0.5, 100, 50, &why);
 	CHECK(fabs(g - 0.5) < 1e-12 && why, "first factor %g", g);
+	/* The pixel step: 1 while an eighth of the samples fits; a
+	 * 12 MP render 160 s at an eighth against 4 s: 1/k^2 of it,
+	 * k = ceil(sqrt(40)) = 7; far beyond, at most 8. */
+	CHECK(glint_render_pixel_step(0.125, 80, 20) == 1, "%s", "fits");
+	CHECK(glint_render_pixel_step(0.125, 1280, 4) == 7, "step %d",
+	      glint_render_pixel_step(0.125, 1280, 4));
+	CHECK(glint_render_pixel_step(1, 40, 10) == 2, "step %d",
+	      glint_render_pixel_step(1, 40, 10));
+	CHECK(glint_render_pixel_step(0.125, 1e6, 1) == 8, "%s", "cap");
+	CHECK(glint_render_pixel_step(0.125, 10, -0.5) == 8, "%s",
+	      "no budget left");
 	/* No pilot noise (no values): the budget alone. */
 	g = glint_render_first_factor(NAN, 10, 20, &why);
 	CHECK(g == 1 && !why, "first factor %g", g);
@@ -727,5 +834,6 @@ int main(void)
 	RUN(test_thin_lens);
 	RUN(test_mesh_furnace);
 	RUN(test_deterministic);
+	RUN(test_pixel_step);
 	return test_result();
 }

@@ -60,9 +60,15 @@
 
 #define RENDER_MIN_BUDGET_S 1.0
 
-/* The first pair's pilot: every 16th row, on images of 512 rows or more;
- * its samples are cut at most to an eighth. */
+/* The first pair's pilot, on images of 512 rows or more: every 16th row,
+ * or on a taller image about RENDER_PILOT_ROWS of them (their noise is
+ * measured on tens of thousands of values either way), at an eighth of
+ * the scene's samples (the least the first pair takes); the pair's noise
+ * and time at the scene's samples are scaled from it (noise as 1 /
+ * samples; time as samples, which overstates it by the rays' share). */
 #define RENDER_PILOT_STEP 16
+
+#define RENDER_PILOT_ROWS 32
 
 #define RENDER_PILOT_MIN_ROWS 512
 
@@ -244,18 +250,22 @@ int job_render_final(struct glint_renderer *r, const struct glint_fit_job *job,
 	/* A large image's first pair is sized by a pilot of every 16th row:
 	 * fewer samples where the render is already far below the photo's
 	 * noise, and within the time budget. */
-	double f1 = 1, qp = NAN;
+	double f1 = 1, qp = NAN, pilot_s = 0;
 	int step = 1;
 	const char *first_limit = NULL;
+	int pilot_step = img->height / RENDER_PILOT_ROWS;
+	if (pilot_step < RENDER_PILOT_STEP)
+		pilot_step = RENDER_PILOT_STEP;
 	if (img->height >= RENDER_PILOT_MIN_ROWS) {
 		double tp = glint_clock_monotonic();
-		ret = render_pair(r, job, model, p, 1, 0, RENDER_PILOT_STEP, 1,
-				  img, b, cov, &qp, &nv);
+		ret = render_pair(r, job, model, p, RENDER_MIN_FACTOR, 0,
+				  pilot_step, 1, img, b, cov, &qp, &nv);
 		if (ret < 0)
 			goto out;
-		double full_s =
-			(glint_clock_monotonic() - tp) * RENDER_PILOT_STEP;
+		pilot_s = glint_clock_monotonic() - tp;
+		double full_s = pilot_s * pilot_step / RENDER_MIN_FACTOR;
 		double left_s = budget_s - (glint_clock_monotonic() - t0);
+		qp *= RENDER_MIN_FACTOR; /* at the scene's samples */
 		f1 = glint_render_first_factor(qp, full_s, left_s,
 					       &first_limit);
 		step = glint_render_pixel_step(f1, full_s, left_s);
@@ -322,11 +332,12 @@ int job_render_final(struct glint_renderer *r, const struct glint_fit_job *job,
 		"budget_seconds", budget_s, "limited_by",
 		q <= RENDER_NOISE_TARGET ? NULL : limited_by, "steps", steps);
 	if (*info && img->height >= RENDER_PILOT_MIN_ROWS)
-		json_object_set_new(*info, "pilot",
-				    json_pack("{s:i, s:o, s:f}", "row_step",
-					      RENDER_PILOT_STEP, "noise",
-					      glint_json_real_or_null(qp),
-					      "first_pair_factor", f1));
+		json_object_set_new(
+			*info, "pilot",
+			json_pack("{s:i, s:f, s:o, s:f, s:f}", "row_step",
+				  pilot_step, "factor", RENDER_MIN_FACTOR,
+				  "noise", glint_json_real_or_null(qp),
+				  "first_pair_factor", f1, "seconds", pilot_s));
 	if (*info)
 		json_object_set_new(*info, "pixel_step", json_integer(step));
 	if (!*info) {

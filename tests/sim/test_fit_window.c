@@ -211,7 +211,7 @@ static int pilot(void)
 	       json_real_value(json_object_get(pl, "noise")), f1, q,
 	       lim ? lim : "below target",
 	       json_real_value(json_object_get(ren, "seconds")));
-	CHECK(json_integer_value(json_object_get(pl, "row_step")) == 16 &&
+	CHECK(json_integer_value(json_object_get(pl, "row_step")) == 17 &&
 		      f1 >= 0.125 && f1 <= 1,
 	      "render.pilot: step %lld, factor %g",
 	      (long long)json_integer_value(json_object_get(pl, "row_step")),

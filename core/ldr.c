@@ -38,8 +38,8 @@ int glint_ldr_read(const char *path, int *w, int *h, uint8_t **rgb)
 	if (got == 3 && sig[0] == 0xff && sig[1] == 0xd8 && sig[2] == 0xff)
 		return glint_jpeg_read_rgb8(path, w, h, rgb);
 	/* stb allocates what the header says: check the size first.  Its
-	 * densest formats (run-length TGA: 128 pixels in 2 bytes; JPEG
-	 * blocks of a flat image) stay under 1032 pixels a byte. */
+	 * densest format (run-length TGA: 128 pixels in 2 bytes) stays under
+	 * 1032 pixels a byte. */
 	if (!stbi_info(path, w, h, &n))
 		return glint_error_set(EIO, "%s: %s", path,
 				       stbi_failure_reason());

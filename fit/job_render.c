@@ -247,9 +247,9 @@ int job_render_final(struct glint_renderer *r, const struct glint_fit_job *job,
 				  ? job->render_budget_s
 				  : fmax(RENDER_BUDGET_SHARE * fit_s,
 					 RENDER_MIN_BUDGET_S);
-	/* A large image's first pair is sized by a pilot of every 16th row:
-	 * fewer samples where the render is already far below the photo's
-	 * noise, and within the time budget. */
+	/* A large image's first pair is sized by a pilot (RENDER_PILOT_STEP
+	 * above): fewer samples where the render is already far below the
+	 * photo's noise, and within the time budget, on a grid if need be. */
 	double f1 = 1, qp = NAN, pilot_s = 0;
 	int step = 1;
 	const char *first_limit = NULL;
@@ -344,19 +344,11 @@ int job_render_final(struct glint_renderer *r, const struct glint_fit_job *job,
 		ret = glint_error_set(ENOMEM, "out of memory");
 		goto out;
 	}
-	char grid[96] = "";
+	char grid[64] = "";
 	if (step > 1)
 		snprintf(grid, sizeof(grid),
-			 " on every %d%s pixel of every %d%s row, interpolated "
-			 "between",
-			 step,
-			 step == 2   ? "nd"
-			 : step == 3 ? "rd"
-				     : "th",
-			 step,
-			 step == 2   ? "nd"
-			 : step == 3 ? "rd"
-				     : "th");
+			 " on a grid of every %d pixels, interpolated between",
+			 step);
 	glint_log_info("final render: %d + %d samples%s, its noise %.2f of the "
 		       "photo's variance (target %.2f), %.1f s%s%s",
 		       total_l, total_b, grid, q, RENDER_NOISE_TARGET,

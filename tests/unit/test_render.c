@@ -440,8 +440,8 @@ static void test_pixel_step(void)
 	      "%d grid and %d rim or backdrop pixels differ from the full "
 	      "render",
 	      grid_differs, rim_differs);
-	CHECK(interp > 600 && same > 600,
-	      "%d pixels interpolated, %d shaded", interp, same);
+	CHECK(interp > 600 && same > 600, "%d pixels interpolated, %d shaded",
+	      interp, same);
 	/* An interpolated pixel is the mean of four at the same noise, with
 	 * the smooth map's curvature between them: nearer the full render
 	 * than another full render's noise. */

@@ -14,6 +14,9 @@ void glint_reference_default_opts(struct glint_reference_opts *o)
 	o->samples = 128;
 	o->seed = 1;
 	o->nthreads = 0;
+	o->rel_noise = 0;
+	o->max_rounds = 16;
+	o->rounds = NULL;
 }
 
 /* xoshiro128+ (Blackman & Vigna): small, fast, independent streams. */
@@ -57,7 +60,8 @@ struct ref_job {
 	struct glint_bxdf bx; /* an opaque sphere's */
 	const struct glint_reference_opts *o;
 	struct glint_image *out;
-	int failed; /* a thread ran out of memory */
+	int failed;  /* a thread ran out of memory */
+	long rounds; /* of spp primary samples, over every pixel */
 };
 
 /* Nearest hit of a ray with the sphere, double precision; -1 if none. */
@@ -231,12 +235,57 @@ static void pixel_position(int s, int spp, int k, const int *perm,
 	}
 }
 
+/* One round of spp primary samples of pixel (x, y), added to sum; the
+ * sum of their mean-over-channels and its square into s1, s2. */
+static void pixel_round(const struct ref_job *job, int x, int y, int *perm,
+			struct rng *rng, double sum[3], double *s1, double *s2)
+{
+	const struct glint_pinhole *cam = &job->sc->cam;
+	int spp = job->o->spp, k = (int)lround(sqrt(spp));
+	double rgb[3];
+
+	for (int s = 0; s < spp; s++) {
+		int r = (int)(rng_u01(rng) * (s + 1));
+		perm[s] = perm[r];
+		perm[r] = s;
+	}
+	for (int s = 0; s < spp; s++) {
+		struct vec3 o, d;
+		double px, py;
+		pixel_position(s, spp, k, perm, rng, &px, &py);
+		double lu = rng_u01(rng), lv = rng_u01(rng);
+		glint_pinhole_ray(cam, x + px, y + py, lu, lv, &o, &d);
+		double th = hit_sphere(o, d, job->sc->sphere_centre,
+				       job->sc->sphere_radius);
+		if (th < 0)
+			glint_envmap_lookup(job->env, d, rgb);
+		else if (job->m)
+			shade_dielectric(job, v3_add(o, v3_scale(d, th)), d,
+					 rng, rgb);
+		else
+			shade(job, v3_add(o, v3_scale(d, th)), d, rng, rgb);
+		double v = (rgb[0] + rgb[1] + rgb[2]) / 3;
+		for (int c = 0; c < 3; c++)
+			sum[c] += rgb[c];
+		*s1 += v;
+		*s2 += v * v;
+	}
+}
+
+/*
+ * Each pixel: one round of spp primary samples; with opts.rel_noise set,
+ * a pixel whose round has a relative standard error above it (a
+ * highlight's heavy tail) gets the rounds that bring it under, at most
+ * opts.max_rounds, and its value is their mean alone, so that the
+ * choice made on the first round does not lean the value.
+ */
 static void ref_rows(void *ctx, int y0, int y1, int thread)
 {
 	struct ref_job *job = ctx;
 	const struct glint_pinhole *cam = &job->sc->cam;
-	int spp = job->o->spp, k = (int)lround(sqrt(spp));
+	int spp = job->o->spp;
 	int *perm = malloc((size_t)spp * sizeof(*perm));
+	long rounds = 0;
 
 	(void)thread;
 	glint_thread_ftz();
@@ -247,41 +296,33 @@ static void ref_rows(void *ctx, int y0, int y1, int thread)
 	for (int y = y0; y < y1; y++)
 		for (int x = 0; x < cam->width; x++) {
 			struct rng rng;
-			double sum[3] = { 0, 0, 0 }, rgb[3];
+			double sum[3] = { 0, 0, 0 }, s1 = 0, s2 = 0;
+			int n = 1;
 			rng_seed(&rng, ((uint64_t)job->o->seed << 40) ^
 					       ((uint64_t)y * cam->width + x));
-			for (int s = 0; s < spp; s++) {
-				int r = (int)(rng_u01(&rng) * (s + 1));
-				perm[s] = perm[r];
-				perm[r] = s;
+			pixel_round(job, x, y, perm, &rng, sum, &s1, &s2);
+			double mean = s1 / spp;
+			double var = spp > 1 ? fmax(0, s2 - s1 * mean) /
+						       (spp - 1) / spp
+					     : 0;
+			double want = job->o->rel_noise * fabs(mean);
+			if (job->o->rel_noise > 0 && var > want * want) {
+				double need = ceil(var / (want * want));
+				n = need < job->o->max_rounds
+					    ? (int)need
+					    : job->o->max_rounds;
+				memset(sum, 0, sizeof(sum));
+				for (int i = 0; i < n; i++)
+					pixel_round(job, x, y, perm, &rng, sum,
+						    &s1, &s2);
 			}
-			for (int s = 0; s < spp; s++) {
-				struct vec3 o, d;
-				double px, py;
-				pixel_position(s, spp, k, perm, &rng, &px, &py);
-				double lu = rng_u01(&rng), lv = rng_u01(&rng);
-				glint_pinhole_ray(cam, x + px, y + py, lu, lv,
-						  &o, &d);
-				double th =
-					hit_sphere(o, d, job->sc->sphere_centre,
-						   job->sc->sphere_radius);
-				if (th < 0)
-					glint_envmap_lookup(job->env, d, rgb);
-				else if (job->m)
-					shade_dielectric(
-						job, v3_add(o, v3_scale(d, th)),
-						d, &rng, rgb);
-				else
-					shade(job, v3_add(o, v3_scale(d, th)),
-					      d, &rng, rgb);
-				for (int c = 0; c < 3; c++)
-					sum[c] += rgb[c];
-			}
+			rounds += n;
 			float *dst = glint_image_px(job->out, x, y);
 			for (int c = 0; c < 3; c++)
-				dst[c] = (float)(sum[c] / spp);
+				dst[c] = (float)(sum[c] / ((double)spp * n));
 		}
 	free(perm);
+	__atomic_fetch_add(&job->rounds, rounds, __ATOMIC_RELAXED);
 }
 
 static int render(struct ref_job *job)
@@ -299,9 +340,16 @@ static int render(struct ref_job *job)
 		return glint_error_set(
 			EINVAL, "reference renderer: %d samples per pixel",
 			job->o->spp);
+	if (job->o->rel_noise > 0 && job->o->max_rounds < 1)
+		return glint_error_set(EINVAL,
+				       "reference renderer: at most %d rounds "
+				       "a pixel",
+				       job->o->max_rounds);
 	glint_parallel_for(out->height, 1, job->o->nthreads, ref_rows, job);
 	if (job->failed)
 		return glint_error_set(ENOMEM, "out of memory");
+	if (job->o->rounds)
+		*job->o->rounds = job->rounds;
 	return 0;
 }
 

@@ -38,6 +38,12 @@ struct glint_reference_opts {
 	uint32_t seed;	  /* pseudo-random stream */
 	int nthreads;	  /* 0 = all CPUs */
 	int irradiance_w; /* irradiance map width (height = width / 2) */
+	/* Adaptive sampling (0: off): a pixel whose first round of spp
+	 * samples has a relative standard error above rel_noise is
+	 * rendered again in up to max_rounds rounds, its value their mean. */
+	double rel_noise;
+	int max_rounds;
+	long *rounds; /* if set: the rounds rendered over every pixel */
 };
 
 void glint_reference_default_opts(struct glint_reference_opts *o);

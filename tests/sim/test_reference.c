@@ -169,7 +169,12 @@ static void test_adaptive(void)
 	      adapt, plain);
 	CHECK(rounds > npx && rounds < 16L * npx,
 	      "%ld rounds over %d pixels (1 to 16 each)", rounds, npx);
-	/* the mean against a plain render at 16 times the samples */
+	/* the mean against a plain render at 16 times the samples: what it
+	 * catches is a value not normalised over its rounds (a refined pixel
+	 * off by its round count); measured 0.04856 adaptive against 0.04900,
+	 * the one-round render 0.04852, so 2 % is their own noise.  Keeping
+	 * the first round in the value leans it too little on this scene to
+	 * show here (0.04902). */
 	glint_reference_default_opts(&ro);
 	ro.spp = 64;
 	ro.samples = 4;

@@ -49,7 +49,11 @@ double glint_fit_roughness_bound(const struct glint_fit_result *r)
 {
 	int rk = glint_model_roughness_param(r->model);
 
-	if (rk < 0 || !r->unc.n || !(r->unc.hi[rk] < footprint(r)))
+	/* An interval that reaches below the footprint is not a value's:
+	 * below it the blurred spot of a smoother surface looks the same,
+	 * the objective is flat there, and the interval's low end is its
+	 * curvature at the optimum, not what the pixels exclude. */
+	if (rk < 0 || !r->unc.n || !(r->unc.lo[rk] < footprint(r)))
 		return NAN;
 	return fmax(r->unc.hi[rk], footprint(r));
 }
@@ -276,7 +280,7 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 {
 	const struct glint_model *m = r->model;
 	const struct glint_uncertainty *u = &r->unc;
-	int n = u->n, rk = glint_model_roughness_param(m);
+	int n = u->n;
 	json_t *find, *comb, *tb, *sys, *me, *md, *lean;
 	char msg[320];
 
@@ -314,11 +318,13 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 		json_array_append_new(find, json_string(msg));
 	}
 	specular_fresnel(r, find, comb);
-	if (rk >= 0 && u->hi[rk] < footprint(r)) {
+	if (isfinite(glint_fit_roughness_bound(r))) {
 		snprintf(msg, sizeof(msg),
-			 "roughness is below the pixel footprint (%.4f): an "
-			 "upper bound, roughness < %.4f, not a value",
-			 footprint(r), fmax(u->hi[rk], footprint(r)));
+			 "roughness's interval reaches below the pixel "
+			 "footprint (%.4f), where a smoother surface looks "
+			 "the same: an upper bound, roughness < %.4f, not a "
+			 "value",
+			 footprint(r), glint_fit_roughness_bound(r));
 		json_array_append_new(find, json_string(msg));
 	}
 	for (int k = 0; k < n; k++) {

@@ -206,6 +206,28 @@ static void findings(void)
 	      json_real_value(json_object_get(rough, "upper_bound")),
 	      1 / sqrt(10000 / M_PI));
 	json_decref(params);
+
+	/* An interval that reaches below the footprint (0.0177 here) from
+	 * above it: the bound is its top; one wholly above it: a value. */
+	res.nviews = 1;
+	res.interior = 10000;
+	res.unc.lo[6] = 0.01;
+	res.unc.hi[6] = 0.03;
+	params = glint_fit_params_json(&res);
+	rough = json_array_get(params, 6);
+	CHECK(fabs(json_real_value(json_object_get(rough, "upper_bound")) -
+		   0.03) < 1e-12,
+	      "straddling the footprint: upper bound %g, the interval's top",
+	      json_real_value(json_object_get(rough, "upper_bound")));
+	json_decref(params);
+	res.unc.lo[6] = 0.02;
+	params = glint_fit_params_json(&res);
+	CHECK(!json_object_get(json_array_get(params, 6), "upper_bound"),
+	      "an interval above the footprint: no bound");
+	json_decref(params);
+	unc = glint_fit_uncertainty_json(&res);
+	CHECK(!has_finding(unc, "upper bound"), "and no finding");
+	json_decref(unc);
 }
 
 static const double lo[2] = { -100, -100 }, hi[2] = { 100, 100 };

@@ -291,6 +291,39 @@ static void test_round_trip(void)
 			      "channel %d: total light %g for %g", c, f1[c],
 			      f0[c]);
 	}
+	/* The map written (glint_probe_unwrap_write()): at 4 r (384 texels
+	 * round) the point's four texels would be 0.94 deg wide; it is at
+	 * least 720 wide, its total light that of the map at 4 r. */
+	char dir[] = "/tmp/glint-unwrap-XXXXXX", env_path[64];
+	int ew = 0, eh = 0;
+	struct glint_image *written = NULL;
+	CHECK(mkdtemp(dir) != NULL, "mkdtemp");
+	snprintf(env_path, sizeof(env_path), "%s/env.exr", dir);
+	o.variance = var;
+	CHECK(glint_probe_unwrap_write(ph, &o, env_path, &ew, &eh) == 0, "%s",
+	      glint_error_msg());
+	CHECK(ew == 720 && eh == 360, "a map with a source: %d x %d", ew, eh);
+	CHECK(glint_image_read(env_path, &written) == 0, "%s",
+	      glint_error_msg());
+	if (written && sharp) {
+		double fw[3];
+		glint_latlong_flux(written, fw);
+		for (int c = 0; c < 3; c++)
+			CHECK(fabs(fw[c] / f1[c] - 1) < 0.01,
+			      "channel %d: the written map's light %g for %g",
+			      c, fw[c], f1[c]);
+	}
+	glint_image_free(written);
+	static const char *const made[] = { "env.exr", "env-sources.json",
+					    "env-mask.png", "env-density.exr",
+					    "env-preview.png" };
+	for (size_t i = 0; i < sizeof(made) / sizeof(made[0]); i++) {
+		char f[96];
+		snprintf(f, sizeof(f), "%s/%s", dir, made[i]);
+		unlink(f);
+	}
+	rmdir(dir);
+	o.variance = NULL;
 	if (fd >= 0)
 		close(fd);
 	CHECK(glint_probe_sources_write(path, "photo.exr", &s) == 0, "%s",

@@ -226,6 +226,15 @@ static int fit_or_eval(const struct glint_fit_view *in, int nviews,
 	memcpy(res->p, ob.p, sizeof(res->p));
 	fit_finish_stats(&ob, sl.all, sl.nall, res);
 	fit_baselines(&ob, &d, res);
+	/* A roughness the pixels do not resolve (an upper bound, not a
+	 * value): a smoother surface looks the same, so its interval is
+	 * from the model's smoothest to the bound. */
+	int rk = glint_model_roughness_param(model);
+	double bound = rk >= 0 ? glint_fit_roughness_bound(res) : NAN;
+	if (isfinite(bound)) {
+		res->unc.lo[rk] = model->params[rk].lo;
+		res->unc.hi[rk] = bound;
+	}
 	res->seconds = glint_clock_monotonic() - t0;
 out:
 	fit_objective_free(&ob);

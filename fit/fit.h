@@ -286,4 +286,12 @@ int glint_fit_evaluate(struct glint_renderer *r,
 double glint_fit_discrepancy_scale(const struct glint_model *m, const double *p,
 				   int k, int *cls);
 
+/* The upper bound glint reports for a roughness whose interval reaches
+ * below the photo's pixel footprint (its interval's top or the
+ * footprint, the larger), or NAN
+ * when the roughness is reported as a value (params.json's
+ * "upper_bound"; its interval is then from the model's lowest
+ * roughness to the bound; docs/fitting.md, "What one image determines"). */
+double glint_fit_roughness_bound(const struct glint_fit_result *r);
+
 #endif

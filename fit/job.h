@@ -165,13 +165,6 @@ double glint_render_first_factor(double q_pilot, double pair_s, double budget_s,
  */
 int glint_render_pixel_step(double factor, double pair_s, double budget_s);
 
-/* The upper bound glint reports for a roughness whose interval reaches
- * below the photo's pixel footprint (its interval's top or the
- * footprint, the larger), or NAN
- * when the roughness is reported as a value (params.json's
- * "upper_bound"; docs/fitting.md, "What one image determines"). */
-double glint_fit_roughness_bound(const struct glint_fit_result *r);
-
 /* Parameter k is not determined: its interval spans half its bounds or
  * more, or the photo cannot see it at all. */
 int glint_fit_undetermined(const struct glint_fit_result *r, int k);

@@ -176,6 +176,16 @@ int main(int argc, char **argv)
 		       mt, footprint);
 		CHECK(mf <= footprint, "roughness %.4f: expected <= %.4f", mf,
 		      footprint);
+		/* said so: an upper bound over the truth, and the interval
+		 * from the model's smoothest to it */
+		double bound = glint_fit_roughness_bound(&res);
+		printf("  reported: roughness < %.4f, interval [%.4f, %.4f]\n",
+		       bound, res.unc.lo[6], res.unc.hi[6]);
+		CHECK(isfinite(bound) && mt <= bound &&
+			      res.unc.lo[6] == m->params[6].lo &&
+			      res.unc.hi[6] == bound,
+		      "roughness %.4f: bound %g, interval [%g, %g]", mt, bound,
+		      res.unc.lo[6], res.unc.hi[6]);
 	}
 	int ks_ok = 1;
 	for (int c = 0; c < 3; c++)

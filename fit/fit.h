@@ -72,6 +72,7 @@ struct glint_fit_light_source {
 	double flux[3];	      /* integral of L d(omega), the map's units */
 	double flux_sigma[3]; /* its standard uncertainty, per channel */
 	int saturated;	      /* clipped in the probe: its flux a lower bound */
+	int view;	      /* the photo (of a joint fit) whose probe it is */
 };
 
 struct glint_fit_opts {
@@ -121,8 +122,9 @@ struct glint_fit_opts {
 	 * |albedo| x light_scale_sigma[c] (the photo is linear in the light
 	 * and in the albedos together) */
 	double light_scale_sigma[3];
-	/* The map's compact sources with their flux's uncertainty (one photo
-	 * only; fit/light_sources.c): each one's part of every parameter's
+	/* The maps' compact sources with their flux's uncertainty, each with
+	 * the photo whose map holds it (fit/light_sources.c): each one's part
+	 * of every parameter's
 	 * standard error joins its systematic part. */
 	const struct glint_fit_light_source *sources;
 	int nsources;

@@ -430,14 +430,26 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 	}
 	struct glint_fit_opts o = job->opts;
 	o.nthreads = job->nthreads;
-	/* the sources' flux terms on one photo (fit/light_sources.c) */
-	if (nv == 1) {
-		o.sources = job->sources;
-		o.nsources = job->nsources;
-	} else if (job->nsources)
-		glint_log_warn("a joint fit does not carry its light sources' "
-			       "flux uncertainty into the intervals: each "
-			       "photo's fit alone does");
+	/* the sources' flux terms, each on its own photo's rows
+	 * (fit/light_sources.c) */
+	struct glint_fit_light_source srcs[GLINT_FIT_MAX_SOURCES];
+	o.sources = srcs;
+	o.nsources = 0;
+	for (int k = 0; k < nv; k++) {
+		const struct glint_fit_job *jk = outs[k].job;
+		for (int s = 0; s < jk->nsources; s++) {
+			if (o.nsources == GLINT_FIT_MAX_SOURCES) {
+				glint_log_warn("photo %d's light source %d: "
+					       "the intervals carry the "
+					       "flux of %d sources at most",
+					       k + 1, s + 1,
+					       GLINT_FIT_MAX_SOURCES);
+				break;
+			}
+			srcs[o.nsources] = jk->sources[s];
+			srcs[o.nsources++].view = k;
+		}
+	}
 	for (int k = 0; k < nv; k++)
 		for (int c = 0; c < 3; c++)
 			o.light_scale_sigma[c] =

@@ -4,7 +4,8 @@
  * resolves coarsely (a lamp a pixel or two across on the chrome ball) has
  * a flux known to some per cent, and the answer leans on it.  For each
  * source the fit renders the source alone (the map's texels within its
- * radius, the rest black) over the fitted pixels, at the optimum, with
+ * radius, the rest black) over the fitted pixels of the photo whose map
+ * holds it (a joint fit's other photos saw other lights), at the optimum, with
  * the fit's own sample counts, of the source's one-sigma flux error (its
  * shape in the map carrying each channel's sigma).  The photo is linear
  * in each source's flux, so that error moves the weighted residuals by
@@ -73,16 +74,20 @@ source_error(const struct glint_image *map,
 }
 
 /* The weighted render of source s's one-sigma flux error at ob->p, per
- * residual row, into out (3 * ob->nsel); 1 when it adds nothing there. */
+ * residual row, into out (3 * ob->nsel): over the rows of the photo whose
+ * map holds it, 0 on a joint fit's other photos, whose light it is not;
+ * 1 when it adds nothing. */
 static int render_source(struct objective *ob,
 			 const struct glint_fit_light_source *s, double *out)
 {
-	const struct view *vw = &ob->views[0];
+	if (s->view < 0 || s->view >= ob->nviews)
+		return 1;
+	const struct view *vw = &ob->views[s->view];
 	struct glint_renderer *r = vw->r;
 	struct glint_image *img = source_error(r->env->img, s);
 	struct glint_envmap *env = NULL;
 	struct glint_shade_cache *cache = NULL;
-	int ret;
+	int nj = ob->m->bxdf->nlobes, n = 0, ret;
 
 	if (!img)
 		return 1;
@@ -98,29 +103,35 @@ static int render_source(struct objective *ob,
 			ob->o->no_footprint || r->scene.cam.aperture_radius > 0,
 		.nthreads = ob->o->nthreads,
 	};
-	ret = glint_shade_cache_new(&r->gb, ob->d->pix + vw->off, vw->n, env,
-				    ob->m, &co, &cache);
-	if (ret == 0) {
-		double q[GLINT_MAX_PARAMS];
-		struct glint_shade_cache *fitted = ob->cache;
-		int varpro = ob->varpro;
-		for (int k = 0; k < ob->nfree; k++)
-			q[k] = ob->p[ob->free_idx[k]];
-		ob->cache = cache;
-		ob->varpro = 0;
-		ob->memo_valid = 0;
-		ret = fit_obj_residuals(ob, q, out);
-		ob->cache = fitted;
-		ob->varpro = varpro;
-		ob->memo_valid = 0;
-		/* less the photo's part: the source's own render */
-		for (int t = 0; t < ob->nsel && ret == 0; t++) {
-			int i = ob->sel[t];
-			for (int c = 0; c < 3; c++)
-				out[3 * t + c] += ob->d->sw[3 * i + c] *
-						  ob->d->y[3 * i + c];
-		}
+	int *sel =
+		malloc(sizeof(int) * 2 * (size_t)(ob->nsel > 0 ? ob->nsel : 1));
+	double *lobes = malloc(sizeof(double) * 3 * (size_t)nj *
+			       (size_t)(ob->nsel > 0 ? ob->nsel : 1));
+	ret = sel && lobes
+		      ? glint_shade_cache_new(&r->gb, ob->d->pix + vw->off,
+					      vw->n, env, ob->m, &co, &cache)
+		      : glint_error_set(ENOMEM, "out of memory");
+	/* the view's rows, in its own cache's pixel numbers */
+	int *row = sel ? sel + (ob->nsel > 0 ? ob->nsel : 1) : NULL;
+	for (int t = 0; t < ob->nsel && ret == 0; t++) {
+		int i = ob->sel[t];
+		out[3 * t] = out[3 * t + 1] = out[3 * t + 2] = 0;
+		if (i < vw->off || i >= vw->off + vw->n)
+			continue;
+		sel[n] = i - vw->off;
+		row[n++] = t;
 	}
+	if (ret == 0)
+		glint_shade_cache_lobes_sel(cache, ob->p, sel, n, lobes);
+	for (int k = 0; k < n && ret == 0; k++) {
+		int t = row[k], i = ob->sel[t];
+		for (int c = 0; c < 3; c++)
+			out[3 * t + c] =
+				ob->d->sw[3 * i + c] *
+				fit_pixel_value(ob, ob->p, lobes, k, c);
+	}
+	free(sel);
+	free(lobes);
 	glint_shade_cache_free(cache);
 	glint_envmap_free(env);
 	return ret;
@@ -136,8 +147,7 @@ int fit_source_terms(struct objective *ob, const double *jac,
 	int unseen[GLINT_UNC_MAX_N];
 
 	res->nsources = 0;
-	if (!o->nsources || !ob->cache || ob->nviews != 1 ||
-	    n > GLINT_UNC_MAX_N)
+	if (!o->nsources || !ob->cache || n > GLINT_UNC_MAX_N)
 		return 0;
 	for (int i = 0; i < n; i++)
 		for (int j = 0; j <= i; j++) {

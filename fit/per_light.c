@@ -137,6 +137,15 @@ int glint_fit_per_light(const struct glint_fit_view *views, int nv,
 	for (int v = 0; fit && v < nv && ret == 0; v++) {
 		glint_log_info("per-light fits: photo %d of %d alone", v + 1,
 			       nv);
+		/* its own map's sources alone, as photo 1 of 1 */
+		struct glint_fit_light_source own[GLINT_FIT_MAX_SOURCES];
+		oo.sources = own;
+		oo.nsources = 0;
+		for (int s = 0; s < o->nsources; s++)
+			if (o->sources[s].view == v) {
+				own[oo.nsources] = o->sources[s];
+				own[oo.nsources++].view = 0;
+			}
 		ret = glint_fit_views(&views[v], 1, model, &oo, one);
 		if (ret < 0) {
 			ret = glint_error_prefix(ret,

@@ -211,6 +211,21 @@ int glint_fit_needs_selection(const struct glint_fit_result *r)
 	return 0;
 }
 
+/* "light source N"; on a joint fit "photo P's light source N", N its
+ * number in that photo's map (its env-sources.json). */
+static void source_name(const struct glint_fit_result *r, int s, char *buf,
+			size_t n)
+{
+	int k = 1; /* its number in its own photo's map */
+	for (int i = 0; i < s; i++)
+		k += r->source[i].view == r->source[s].view;
+	if (r->nviews > 1)
+		snprintf(buf, n, "photo %d's light source %d",
+			 r->source[s].view + 1, k);
+	else
+		snprintf(buf, n, "light source %d", s + 1);
+}
+
 /* The light sources' parts of the standard errors (fit/light_sources.c),
  * and findings: a parameter whose error is mostly one source's flux names
  * it; a clipped source's flux, a lower bound, is not in the intervals.
@@ -236,18 +251,23 @@ static json_t *light_sources(const struct glint_fit_result *r, json_t *find)
 				    glint_json_reals(src->flux_sigma, 3));
 		json_object_set_new(o, "saturated",
 				    json_boolean(src->saturated));
+		if (r->nviews > 1)
+			json_object_set_new(o, "photo",
+					    json_integer(src->view + 1));
 		json_object_set_new(o, "stderr",
 				    glint_json_reals(r->source_stderr[s], n));
 		json_array_append_new(arr, o);
 		if (src->saturated) {
+			char name[48];
+			source_name(r, s, name, sizeof(name));
 			snprintf(msg, sizeof(msg),
-				 "light source %d (azimuth %.0f, elevation "
+				 "%s (azimuth %.0f, elevation "
 				 "%.0f degrees in the map) is clipped in the "
 				 "probe: its flux is a lower bound, and these "
 				 "intervals cannot hold its error (a gray ball "
 				 "beside the probe measures it: glint probe "
 				 "calibrate)",
-				 s + 1, az, el);
+				 name, az, el);
 			json_array_append_new(find, json_string(msg));
 		}
 	}
@@ -265,11 +285,13 @@ static json_t *light_sources(const struct glint_fit_result *r, json_t *find)
 		double f = src->flux[0] + src->flux[1] + src->flux[2];
 		double sg = src->flux_sigma[0] + src->flux_sigma[1] +
 			    src->flux_sigma[2];
+		char name[48];
+		source_name(r, best, name, sizeof(name));
 		snprintf(msg, sizeof(msg),
-			 "%s is limited by the light: light source %d (flux "
+			 "%s is limited by the light: %s (flux "
 			 "known to %.1f %%) makes %.0f %% of its standard "
 			 "error's variance",
-			 m->params[k].name, best + 1, f > 0 ? 100 * sg / f : 0,
+			 m->params[k].name, name, f > 0 ? 100 * sg / f : 0,
 			 100 * top * top / (r->unc.se[k] * r->unc.se[k]));
 		json_array_append_new(find, json_string(msg));
 	}

@@ -8,7 +8,9 @@
  * truth; fitted with the lamp stated as a source whose flux is known to
  * 15 %, every truth is inside its interval, the lamp's stated part of
  * diffuse.r's error is the shift the 15 % made (within 25 %), and a
- * finding names the lamp as what limits it.  A clipped source is said to be out
+ * finding names the lamp as what limits it.  In a joint fit of the photo
+ * twice with the lamp stated on the second photo's map, its part is half
+ * as large (it moves half the rows).  A clipped source is said to be out
  * of the intervals.  The scene's environment.sources is read by the job (a
  * probe's env-sources.json), the bad entry named.
  */
@@ -257,6 +259,26 @@ int main(void)
 	      shift);
 	CHECK(said(&with, "diffuse.r is limited by the light: light source 1"),
 	      "no finding names the lamp as what limits diffuse.r");
+
+	/* A joint fit of the photo twice, the lamp stated on the second
+	 * photo's map only: its error moves half the rows, and so the
+	 * answer by half as much; the finding names the photo. */
+	struct glint_fit_view two[2] = { { &r, photo, NULL },
+					 { &r, photo, NULL } };
+	struct glint_fit_result joint;
+	lamp.view = 1;
+	CHECK(glint_fit_views(two, 2, m, &o, &joint) == 0, "%s",
+	      glint_error_msg());
+	double half = test_failures ? 0 : joint.source_stderr[0][0];
+	printf("joint fit, the lamp on photo 2 only: its part of diffuse.r "
+	       "%.4f (one photo's %.4f)\n",
+	       half, part);
+	CHECK(joint.nsources == 1 && fabs(half - 0.5 * part) < 0.125 * part,
+	      "joint fit: the lamp's part %g, half the one photo's %g", half,
+	      0.5 * part);
+	CHECK(said(&joint, "photo 2's light source 1"),
+	      "no finding names the photo whose lamp it is");
+	lamp.view = 0;
 
 	/* clipped: no sigma to carry, and said */
 	lamp.saturated = 1;

@@ -20,33 +20,31 @@
 #include <string.h>
 
 /*
- * The systematic standard uncertainty of each parameter: 0.4 % of the
- * diffuse albedos, 4.6 % of the specular, 4.1 % of roughness and 1.1 % of
- * ior (an absolute 0.0005 floor on albedos, whose small values make
- * relative errors large), the 68th percentiles of |fit - truth| / truth
- * over noise-free fits of photos the reference renderer made at 256
- * samples per technique (tests/sim/test_coverage.c).  Much of that error
- * is those photos' own heavy-tailed Monte Carlo noise in the highlight:
- * on photos rendered until each pixel's relative standard error is under
- * 1 % (what the coverage study now uses) the percentiles are 0.1 %,
- * 0.7 %, 0.7 % and 0.2 %.  The term is not cut to those: a joint fit of
- * the simulated rig's two lamps, each sun unresolved in its probe, misses
- * specular by 4 % with them (the light's colour, which no per-photo term
- * of a joint fit carries), so the one size stays until the light's terms
- * are sized for every fit (docs/fitting.md, "Uncertainty", item 6).
+ * The systematic standard uncertainty of each parameter: 0.1 % of the
+ * diffuse albedos, 0.7 % of the specular, 0.7 % of roughness and 0.2 % of
+ * ior (an absolute 0.0002 floor on albedos, whose small values make
+ * relative errors large): the 68th percentiles of |fit - truth| / truth
+ * over noise-free fits of photos the reference renderer made until each
+ * pixel's relative standard error was under 1 % (tests/sim/test_coverage.c;
+ * the full study under Venice, 27 values a class).  Photos at a fixed 256
+ * samples per technique gave 0.4 %, 4.6 %, 4.1 % and 1.1 %: their own
+ * heavy-tailed Monte Carlo noise in the highlight, which no camera has.
+ * What the light adds is not in this term but in its own: the map's scale
+ * (light_scale_sigma) and each compact source's flux, on every photo of a
+ * joint fit too (fit/light_sources.c).
  */
 void fit_systematic(const struct glint_model *m, const double *p, double *sys)
 {
 	for (int k = 0; k < m->nparams; k++) {
-		double rel = 0.011, floor = 0;
+		double rel = 0.002, floor = 0;
 		for (int j = 0; j < m->bxdf->nlobes; j++)
 			if (k >= m->lobes->param[j] &&
 			    k < m->lobes->param[j] + 3) {
-				rel = m->lobes->varies[j] ? 0.046 : 0.004;
-				floor = 0.0005;
+				rel = m->lobes->varies[j] ? 0.007 : 0.001;
+				floor = 0.0002;
 			}
 		if (k == m->lobes->roughness_param)
-			rel = 0.041;
+			rel = 0.007;
 		sys[k] = hypot(rel * fabs(p[k]), floor);
 	}
 }

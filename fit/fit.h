@@ -124,8 +124,7 @@ struct glint_fit_opts {
 	double light_scale_sigma[3];
 	/* The maps' compact sources with their flux's uncertainty, each with
 	 * the photo whose map holds it (fit/light_sources.c): each one's part
-	 * of every parameter's
-	 * standard error joins its systematic part. */
+	 * of every parameter's standard error joins its systematic part. */
 	const struct glint_fit_light_source *sources;
 	int nsources;
 	/* leave the sampling lean in the answer (fit.c, remove_lean();
@@ -290,10 +289,10 @@ double glint_fit_discrepancy_scale(const struct glint_model *m, const double *p,
 
 /* The upper bound glint reports for a roughness whose interval reaches
  * below the photo's pixel footprint (its interval's top or the
- * footprint, the larger), or NAN
- * when the roughness is reported as a value (params.json's
- * "upper_bound"; its interval is then from the model's lowest
- * roughness to the bound; docs/fitting.md, "What one image determines"). */
+ * footprint, the larger), or NAN when the roughness is reported as a
+ * value (params.json's "upper_bound"; its interval is then from the
+ * model's lowest roughness to the bound; docs/fitting.md, "What one
+ * image determines"). */
 double glint_fit_roughness_bound(const struct glint_fit_result *r);
 
 #endif

@@ -103,16 +103,15 @@ static int render_source(struct objective *ob,
 			ob->o->no_footprint || r->scene.cam.aperture_radius > 0,
 		.nthreads = ob->o->nthreads,
 	};
-	int *sel =
-		malloc(sizeof(int) * 2 * (size_t)(ob->nsel > 0 ? ob->nsel : 1));
-	double *lobes = malloc(sizeof(double) * 3 * (size_t)nj *
-			       (size_t)(ob->nsel > 0 ? ob->nsel : 1));
+	/* the view's rows: sel[] in its own cache's pixel numbers, row[]
+	 * where each is among ob->sel */
+	size_t cap = ob->nsel > 0 ? (size_t)ob->nsel : 1;
+	int *sel = malloc(sizeof(int) * 2 * cap), *row = sel ? sel + cap : NULL;
+	double *lobes = malloc(sizeof(double) * 3 * (size_t)nj * cap);
 	ret = sel && lobes
 		      ? glint_shade_cache_new(&r->gb, ob->d->pix + vw->off,
 					      vw->n, env, ob->m, &co, &cache)
 		      : glint_error_set(ENOMEM, "out of memory");
-	/* the view's rows, in its own cache's pixel numbers */
-	int *row = sel ? sel + (ob->nsel > 0 ? ob->nsel : 1) : NULL;
 	for (int t = 0; t < ob->nsel && ret == 0; t++) {
 		int i = ob->sel[t];
 		out[3 * t] = out[3 * t + 1] = out[3 * t + 2] = 0;

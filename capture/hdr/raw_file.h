@@ -32,6 +32,8 @@
  * Errors: a negative errno with glint_error_msg() naming the file and what
  * was wrong (LibRaw's own message for what it cannot read; sizes checked
  * against glint's image limits and the file's size before unpacking).
+ * LibRaw runs in a forked child process (one per file): a crash of
+ * LibRaw's own parsers on a hostile file is a refusal naming the signal.
  * Threads: re-entrant (libraw_r, one handle per call).  Who frees: the
  * caller, a frame with glint_frame_release().
  */

@@ -125,6 +125,11 @@ echo "not a raw file" >"$tmp/bad.nef"
 check "a file LibRaw cannot read: exit 1, named" run 1 "bad.nef: not a raw file LibRaw reads" hdr "$tmp/bad.nef" "$tmp/mrw/frame-004.mrw" -o "$tmp/y"
 head -c 9000 "$tmp/mrw/frame-004.mrw" >"$tmp/cut.mrw"
 check "a truncated raw file: exit 1, named" run 1 "cut.mrw: its raw data is truncated or corrupt (LibRaw: unexpected end of file)" hdr "$tmp/cut.mrw" "$tmp/mrw/frame-005.mrw" -o "$tmp/y"
+# A file on which Debian's LibRaw 0.20 itself aborts (a fortified strcat
+# in its Hasselblad model parser, found by the fuzz suite): LibRaw runs in a
+# child process, so the crash is one named refusal and glint goes on.
+cp "$here/../fuzz/regressions/raw/hasselblad-model-strcat" "$tmp/crash.mrw"
+check "a file LibRaw crashes on: exit 1, named, nothing written" run 1 "crash.mrw: LibRaw crashed reading it (Aborted)" hdr "$tmp/crash.mrw" "$tmp/mrw/frame-005.mrw" -o "$tmp/y"
 check "frames of two cameras: exit 1, both named" run 1 "frame-005.mrw: Minolta DiMAGE 7Hi (read by LibRaw" hdr "$tmp/dng/frame-004.dng" "$tmp/mrw/frame-005.mrw" -o "$tmp/y"
 check "... nothing written" test ! -e "$tmp/y/hdr.exr"
 # A FIFO given as a photo (LibRaw, libtiff and libexif open by path) is

@@ -9,6 +9,7 @@
 
 #include "appliance/queue.h"
 #include "capture/run.h"
+#include "capture/scene_file.h"
 #include "capture/hdr/session.h"
 #include "core/error.h"
 #include "core/log.h"
@@ -41,16 +42,36 @@ int glint_rig_capture(const struct glint_rig *rig, const char *kind,
 		      struct glint_capture_result *res)
 {
 	struct glint_board *board = NULL;
-	int ret = 0;
+	char found[GLINT_PATH_MAX];
+	int ref = !strcmp(kind, "reference"), ret = 0;
 
 	memset(res, 0, sizeof(*res));
-	if (rig->has_board) {
+	if (ref && !(rig->capture.ref_albedo > 0))
+		return glint_error_set(EINVAL,
+				       "%s: no \"reference\" section (the gray "
+				       "ball's albedo): nothing to capture as "
+				       "a reference",
+				       rig->path);
+	if (ref && !probe) {
+		ret = glint_session_latest_probe(out, found, sizeof(found));
+		probe = found;
+		if (ret < 0)
+			return glint_error_prefix(ret,
+						  "a reference calibrates a "
+						  "probe (capture the probe "
+						  "first, or --probe SESSION)");
+	}
+	if (ret == 0 && rig->has_board) {
 		ret = glint_board_open(&rig->board, "glint capture", &board);
 		if (ret == 0)
 			ret = glint_board_lights(board, 1);
 		if (ret == 0)
-			ret = glint_board_turntable(
-				board, strcmp(kind, "sample") == 0, cancel);
+			ret = glint_board_turntable(board,
+						    ref ? GLINT_TT_AT_REFERENCE
+						    : !strcmp(kind, "sample")
+							    ? GLINT_TT_AT_SAMPLE
+							    : GLINT_TT_AT_PROBE,
+						    cancel);
 	}
 	if (ret == 0)
 		ret = glint_capture_run(&rig->capture, kind, out, probe, cancel,
@@ -82,8 +103,27 @@ static int make_run_dir(const char *output, char *dir, size_t n)
 	return ret;
 }
 
-/* A sample is lit by this run's last probe, captured under the same
- * lamps. */
+/* The gray ball at its own position: this run's last probe calibrated
+ * into the reference session, which lights the samples after it. */
+static int reference_step(const struct glint_rig *rig, atomic_int *cancel,
+			  struct glint_rig_run *ro)
+{
+	struct glint_capture_result res;
+	if (!ro->probe[0])
+		return glint_error_set(EINVAL,
+				       "%s: sequence: \"capture reference\" "
+				       "before \"capture probe\"",
+				       rig->path);
+	int ret = glint_capture_run(&rig->capture, "reference", ro->dir,
+				    ro->probe, cancel, &res);
+	json_decref(res.summary);
+	if (ret == 0)
+		snprintf(ro->probe, sizeof(ro->probe), "%s", res.session);
+	return ret;
+}
+
+/* A sample is lit by this run's last probe (or the reference that
+ * calibrated it), captured under the same lamps. */
 static int capture_step(const struct glint_rig *rig, int probe, int light,
 			atomic_int *cancel, struct glint_rig_run *ro)
 {
@@ -160,8 +200,18 @@ int glint_rig_run_sequence(const struct glint_rig *rig, struct glint_board *b,
 			break;
 		case GLINT_RIG_TURNTABLE_PROBE:
 		case GLINT_RIG_TURNTABLE_SAMPLE:
+		case GLINT_RIG_TURNTABLE_REFERENCE:
 			ret = glint_board_turntable(
-				b, s == GLINT_RIG_TURNTABLE_SAMPLE, cancel);
+				b,
+				s == GLINT_RIG_TURNTABLE_SAMPLE
+					? GLINT_TT_AT_SAMPLE
+				: s == GLINT_RIG_TURNTABLE_REFERENCE
+					? GLINT_TT_AT_REFERENCE
+					: GLINT_TT_AT_PROBE,
+				cancel);
+			break;
+		case GLINT_RIG_CAPTURE_REFERENCE:
+			ret = reference_step(rig, cancel, ro);
 			break;
 		case GLINT_RIG_CAPTURE_PROBE:
 		case GLINT_RIG_CAPTURE_SAMPLE:

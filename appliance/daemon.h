@@ -25,7 +25,8 @@
 /* One run's folders (empty strings for what it did not reach). */
 struct glint_rig_run {
 	char dir[GLINT_PATH_MAX];    /* OUTPUT/run-STAMP */
-	char probe[GLINT_PATH_MAX];  /* its last probe session */
+	char probe[GLINT_PATH_MAX];  /* its last probe session, or the
+				      * reference session that calibrated it */
 	char sample[GLINT_PATH_MAX]; /* its last sample session */
 	char job[64];		     /* the queued fit's id */
 	/* Every sample session, with the lamp it was lit by ("light K"

@@ -25,6 +25,8 @@ const char *const glint_rig_step_names[GLINT_RIG_STEP_COUNT] = {
 	"light 2",
 	"light 3",
 	"light 4",
+	"turntable reference",
+	"capture reference",
 };
 
 static int load_line(const char *path, const char *where, json_t *o,
@@ -125,10 +127,11 @@ static int load_lines(const char *path, json_t *lines,
 static int load_turntable(const char *path, json_t *tt,
 			  struct glint_board_cfg *c)
 {
-	static const char *const keys[] = { "mode",	 "steps_per_turn",
-					    "step_hz",	 "relay_pulse_s",
-					    "probe_deg", "sample_deg",
-					    "settle_s",	 NULL };
+	static const char *const keys[] = {
+		"mode",		 "steps_per_turn", "step_hz",
+		"relay_pulse_s", "probe_deg",	   "sample_deg",
+		"reference_deg", "settle_s",	   NULL
+	};
 	static const char *const modes[] = { "stepper", "relay", "none", NULL };
 	static const enum glint_turntable_mode mode_of[] = { GLINT_TT_STEPPER,
 							     GLINT_TT_RELAY,
@@ -173,6 +176,10 @@ static int load_turntable(const char *path, json_t *tt,
 		ret = glint_json_number(path, w, tt, "sample_deg", 0,
 					(struct glint_range){ -360, 360, 0, 0 },
 					&c->sample_deg);
+	if (!ret)
+		ret = glint_json_number(path, w, tt, "reference_deg", 0,
+					(struct glint_range){ -360, 360, 0, 0 },
+					&c->reference_deg);
 	if (!ret)
 		ret = glint_json_number(path, w, tt, "settle_s", 0,
 					(struct glint_range){ 0, 60, 0, 0 },
@@ -251,8 +258,18 @@ static void default_sequence(struct glint_rig *r)
 	for (int k = 1; k <= (nl > 1 ? nl : 1); k++) {
 		r->steps[r->nsteps++] = nl > 1 ? GLINT_RIG_LIGHT_1 + k - 1
 					       : GLINT_RIG_LIGHTS_ON;
-		for (size_t i = 0; i < sizeof(one) / sizeof(*one); i++)
+		for (size_t i = 0; i < sizeof(one) / sizeof(*one); i++) {
 			r->steps[r->nsteps++] = one[i];
+			/* the gray ball at its own position, after the
+			 * probe it calibrates */
+			if (one[i] == GLINT_RIG_CAPTURE_PROBE &&
+			    r->capture.ref_own) {
+				r->steps[r->nsteps++] =
+					GLINT_RIG_TURNTABLE_REFERENCE;
+				r->steps[r->nsteps++] =
+					GLINT_RIG_CAPTURE_REFERENCE;
+			}
+		}
 	}
 	r->steps[r->nsteps++] = GLINT_RIG_LIGHTS_OFF;
 	r->steps[r->nsteps++] = GLINT_RIG_FIT;
@@ -286,11 +303,13 @@ static int load_sequence(const char *path, struct glint_rig *r)
 				"%s: sequence[%zu] = %s: expected one of "
 				"\"lights on\", \"lights off\", \"light "
 				"K\" (1..%d), \"turntable probe\", "
-				"\"turntable sample\", \"capture probe\", "
-				"\"capture sample\", \"fit\"",
+				"\"turntable sample\", \"turntable "
+				"reference\", \"capture probe\", \"capture "
+				"reference\", \"capture sample\", \"fit\"",
 				path, i, s ? s : "(not a string)",
 				GLINT_MAX_LIGHTS);
-		if (k >= GLINT_RIG_LIGHT_1 && k - GLINT_RIG_LIGHT_1 >= nl)
+		if (k >= GLINT_RIG_LIGHT_1 && k <= GLINT_RIG_LIGHT_4 &&
+		    k - GLINT_RIG_LIGHT_1 >= nl)
 			return glint_error_set(
 				EINVAL,
 				"%s: sequence[%zu] = %s: the board has %d "
@@ -412,8 +431,9 @@ static int load_roi(const char *path, json_t *doc,
 	return ret;
 }
 
-/* reference: the gray ball beside the probe (its albedo, the albedo's
- * uncertainty, where it is in the probe's photo). */
+/* reference: the gray ball (its albedo, the albedo's uncertainty, where
+ * it is in its photo: the probe's beside the chrome ball, or its own at
+ * the turntable's reference position, where roi may be left out). */
 static int load_reference(const char *path, json_t *doc,
 			  struct glint_capture_setup *c)
 {
@@ -435,17 +455,74 @@ static int load_reference(const char *path, json_t *doc,
 					0, (struct glint_range){ 0, 1, 0, 0 },
 					&c->ref_albedo_sigma);
 	if (!ret)
-		ret = glint_json_numbers(path, "reference", ref, "roi", 1, 4,
+		ret = glint_json_numbers(path, "reference", ref, "roi", 0, 4,
 					 (struct glint_range){ 0, 65536, 0, 0 },
 					 v);
-	if (!ret && !(v[2] > v[0] && v[3] > v[1]))
+	if (!ret && json_object_get(ref, "roi") &&
+	    !(v[2] > v[0] && v[3] > v[1]))
 		ret = glint_error_set(EINVAL,
 				      "%s: reference.roi: expected [x0, y0, "
 				      "x1, y1] with x1 > x0 and y1 > y0",
 				      path);
 	c->ref_roi = (struct glint_roi){ (int)v[0], (int)v[1], (int)v[2],
 					 (int)v[3] };
+	/* no roi: not in the probe's photo, so in a photo of its own */
+	c->ref_own = !json_object_get(ref, "roi");
 	return ret;
+}
+
+/* The gray ball's photo: its own ("capture reference", after a "capture
+ * probe", on a table with a third position) or the probe's (its roi
+ * there). */
+static int check_reference(const char *path, struct glint_rig *r)
+{
+	struct glint_capture_setup *c = &r->capture;
+	int probe = 0, own = 0;
+	for (int i = 0; i < r->nsteps; i++) {
+		enum glint_rig_step s = r->steps[i];
+		probe |= s == GLINT_RIG_CAPTURE_PROBE;
+		if (s != GLINT_RIG_CAPTURE_REFERENCE &&
+		    s != GLINT_RIG_TURNTABLE_REFERENCE)
+			continue;
+		if (!(c->ref_albedo > 0))
+			return glint_error_set(EINVAL,
+					       "%s: sequence[%d] = %s: the rig "
+					       "has no \"reference\" section "
+					       "(the gray ball's albedo)",
+					       path, i,
+					       glint_rig_step_names[s]);
+		if (r->has_board && r->board.tt_mode == GLINT_TT_RELAY)
+			return glint_error_set(
+				EINVAL,
+				"%s: sequence[%d] = %s: a relay turntable has "
+				"two positions, probe and sample (a stepper "
+				"has board.turntable.reference_deg; or put the "
+				"gray ball beside the probe, reference.roi)",
+				path, i, glint_rig_step_names[s]);
+		if (s == GLINT_RIG_CAPTURE_REFERENCE && !probe)
+			return glint_error_set(EINVAL,
+					       "%s: sequence[%d] = capture "
+					       "reference before any \"capture "
+					       "probe\": it calibrates the "
+					       "probe's map",
+					       path, i);
+		if (s == GLINT_RIG_CAPTURE_REFERENCE)
+			own = 1;
+	}
+	if (c->ref_albedo > 0 && c->ref_own && !own &&
+	    json_object_get(r->doc, "sequence"))
+		return glint_error_set(EINVAL,
+				       "%s: reference without a roi (the gray "
+				       "ball in a photo of its own) but no "
+				       "\"capture reference\" step in the "
+				       "sequence: add \"turntable "
+				       "reference\", \"capture reference\" "
+				       "after \"capture probe\", or give "
+				       "reference.roi, where it is in the "
+				       "probe's photo",
+				       path);
+	c->ref_own |= own;
+	return 0;
 }
 
 int glint_rig_load(const char *path, struct glint_rig *r)
@@ -493,6 +570,8 @@ int glint_rig_load(const char *path, struct glint_rig *r)
 		ret = load_board(path, r);
 	if (!ret)
 		ret = load_sequence(path, r);
+	if (!ret)
+		ret = check_reference(path, r);
 	if (!ret)
 		r->capture.text = json_dumps(r->doc, JSON_INDENT(2));
 	return ret;

@@ -30,6 +30,8 @@ enum glint_rig_step {
 	GLINT_RIG_LIGHT_2, /* on lines of their own, board.lines.lights a */
 	GLINT_RIG_LIGHT_3, /* list) */
 	GLINT_RIG_LIGHT_4,
+	GLINT_RIG_TURNTABLE_REFERENCE, /* the gray ball's own position */
+	GLINT_RIG_CAPTURE_REFERENCE,   /* its photo calibrates the probe */
 	GLINT_RIG_STEP_COUNT
 };
 #define GLINT_RIG_MAX_STEPS 32

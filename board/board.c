@@ -66,6 +66,7 @@ void glint_board_default_cfg(struct glint_board_cfg *c)
 	c->relay_pulse_s = 0.2;
 	c->probe_deg = 0;
 	c->sample_deg = 180;
+	c->reference_deg = 90;
 	c->settle_s = 0.2;
 }
 
@@ -468,14 +469,29 @@ int glint_board_wait_press(struct glint_board *b, double timeout_s,
 	}
 }
 
+const char *const glint_tt_position_names[3] = { "probe", "sample",
+						 "reference" };
+
 int glint_board_turntable(struct glint_board *b, int which, atomic_int *cancel)
 {
 	const struct glint_board_cfg *c = &b->cfg;
-	double target = which ? c->sample_deg : c->probe_deg;
+	double target = which == GLINT_TT_AT_SAMPLE	 ? c->sample_deg
+			: which == GLINT_TT_AT_REFERENCE ? c->reference_deg
+							 : c->probe_deg;
 	int ret = 0;
 
+	if (which < 0 || which > GLINT_TT_AT_REFERENCE)
+		return glint_error_set(EINVAL, "turntable: position %d", which);
 	if (c->tt_mode == GLINT_TT_NONE)
 		return 0;
+	if (c->tt_mode == GLINT_TT_RELAY && which == GLINT_TT_AT_REFERENCE)
+		return glint_error_set(EINVAL,
+				       "turntable: a relay (indexing) table "
+				       "has two positions, probe and sample: "
+				       "the reference ball needs a stepper "
+				       "(board.turntable.mode \"stepper\") "
+				       "or its own frame beside the probe "
+				       "(reference.roi)");
 	if (c->tt_mode == GLINT_TT_RELAY) {
 		/* An indexing table: one pulse moves it to the next of its
 		 * two positions. */
@@ -523,18 +539,18 @@ int glint_board_turntable(struct glint_board *b, int which, atomic_int *cancel)
 		pthread_mutex_unlock(&b->lock);
 		if (ret < 0)
 			return ret;
-		if (at_probe != !which) {
+		if (at_probe != (which == GLINT_TT_AT_PROBE)) {
 			b->tt_known = 0;
 			return glint_error_set(EIO,
 					       "turntable: moved to the %s but "
 					       "the position sensor "
 					       "(board.lines.position) reads "
 					       "%d: stalled or slipped?",
-					       which ? "sample" : "probe",
+					       glint_tt_position_names[which],
 					       at_probe);
 		}
 	}
-	glint_log_info("turntable at %s (%.0f deg)", which ? "sample" : "probe",
-		       target);
+	glint_log_info("turntable at %s (%.0f deg)",
+		       glint_tt_position_names[which], target);
 	return 0;
 }

@@ -78,7 +78,8 @@ struct glint_board_cfg {
 	double step_hz;		      /* stepper */
 	double relay_pulse_s;	      /* relay */
 	double probe_deg, sample_deg; /* turntable positions */
-	double settle_s;	      /* wait after a move */
+	double reference_deg; /* the gray ball's position (stepper only) */
+	double settle_s;      /* wait after a move */
 	/* The rig file's "board" object, for the keys only the backend
 	 * reads (its ops' cfg_keys); borrowed: valid while the rig file is
 	 * loaded, may be NULL.  rig_file names the file in messages and
@@ -187,8 +188,13 @@ int glint_board_light_only(struct glint_board *b, int k);
  * the lights are lights, lights[1], ... in order, none missing. */
 int glint_board_cfg_nlights(const struct glint_board_cfg *c);
 int glint_board_led(struct glint_board *b, enum glint_led pattern);
-/* Turn the turntable to the probe (which = 0) or sample (1) position.
- * No-op without a turntable.  *cancel stops between steps (-ECANCELED). */
+/* Where the turntable turns: the probe, the sample, or the gray
+ * reference ball (a stepper's third position, reference_deg). */
+enum { GLINT_TT_AT_PROBE, GLINT_TT_AT_SAMPLE, GLINT_TT_AT_REFERENCE };
+extern const char *const glint_tt_position_names[3];
+/* Turn the turntable to position `which` (GLINT_TT_AT_*).  No-op without
+ * a turntable; a relay table has no reference position (-EINVAL).
+ * *cancel stops between steps (-ECANCELED). */
 int glint_board_turntable(struct glint_board *b, int which, atomic_int *cancel);
 /* Lights off, stepper disabled: what SIGTERM and errors leave. */
 void glint_board_safe(struct glint_board *b);

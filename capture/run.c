@@ -50,26 +50,32 @@ static int detect_in(const struct glint_image *img, const struct glint_roi *roi,
 	return 0;
 }
 
-/* The gray ball beside the probe (setup.reference): env.exr and its
- * sources, just written, calibrated by its shading in place, and
- * env-calibration.json beside them. */
-static int calibrate_probe(const char *dir, const struct glint_capture_setup *s,
-			   const struct glint_image *probe,
-			   const struct glint_unwrap_opts *chrome)
+/* The probe session `from`'s env.exr and its sources calibrated by the
+ * gray ball in `photo` (inside setup.reference's roi when given) and
+ * written with env-calibration.json into `dir`: `from` itself for a gray
+ * ball beside the chrome one, the reference session for a gray ball
+ * photographed at its own position.  geom: the camera's optics (and the
+ * photo's merge weights) as the unwrap used them. */
+static int calibrate_into(const char *from, const char *dir,
+			  const struct glint_capture_setup *s,
+			  const struct glint_image *photo,
+			  const char *photo_name,
+			  const struct glint_unwrap_opts *geom)
 {
+	char env_in[GLINT_PATH_MAX], src_in[GLINT_PATH_MAX];
 	char env_path[GLINT_PATH_MAX], src_path[GLINT_PATH_MAX],
 		cal_path[GLINT_PATH_MAX];
-	struct glint_unwrap_opts g = *chrome;
+	struct glint_unwrap_opts g = *geom;
 	struct glint_calibrate_opts co;
 	struct glint_calibration cal;
 	struct glint_light_sources src;
 	struct glint_image *env = NULL;
 	struct glint_circle c;
-	int ret = detect_in(probe, &s->ref_roi, &c);
+	int ret = detect_in(photo, &s->ref_roi, &c);
 
 	if (ret < 0)
-		return glint_error_prefix(ret, "%s/probe.exr: the gray ball",
-					  dir);
+		return glint_error_prefix(ret, "%s/%s: the gray ball", dir,
+					  photo_name);
 	g.ball_cx = c.cx;
 	g.ball_cy = c.cy;
 	g.ball_r = c.r;
@@ -78,9 +84,14 @@ static int calibrate_probe(const char *dir, const struct glint_capture_setup *s,
 		co.albedo[k] = s->ref_albedo;
 		co.albedo_sigma[k] = s->ref_albedo_sigma;
 	}
-	co.weights = chrome->weights;
-	ret = glint_path_join(env_path, sizeof(env_path), dir,
-			      GLINT_SESSION_ENV);
+	co.weights = geom->weights;
+	ret = glint_path_join(env_in, sizeof(env_in), from, GLINT_SESSION_ENV);
+	if (ret == 0)
+		ret = glint_path_sibling(src_in, sizeof(src_in), env_in,
+					 "-sources.json");
+	if (ret == 0)
+		ret = glint_path_join(env_path, sizeof(env_path), dir,
+				      GLINT_SESSION_ENV);
 	if (ret == 0)
 		ret = glint_path_sibling(src_path, sizeof(src_path), env_path,
 					 "-sources.json");
@@ -88,10 +99,10 @@ static int calibrate_probe(const char *dir, const struct glint_capture_setup *s,
 		ret = glint_path_sibling(cal_path, sizeof(cal_path), env_path,
 					 "-calibration.json");
 	if (ret == 0)
-		ret = glint_image_read(env_path, &env);
+		ret = glint_image_read(env_in, &env);
 	int have_src = 0;
 	if (ret == 0) {
-		ret = glint_probe_sources_read(src_path, &src);
+		ret = glint_probe_sources_read(src_in, &src);
 		have_src = ret == 0;
 		if (ret == -ENOENT) { /* no compact source: the scale alone */
 			glint_error_clear();
@@ -99,7 +110,7 @@ static int calibrate_probe(const char *dir, const struct glint_capture_setup *s,
 		}
 	}
 	if (ret == 0)
-		ret = glint_probe_calibrate(env, have_src ? &src : NULL, probe,
+		ret = glint_probe_calibrate(env, have_src ? &src : NULL, photo,
 					    &g, &co, &cal);
 	if (ret == 0) {
 		glint_probe_calibration_apply(&cal, env,
@@ -110,7 +121,7 @@ static int calibrate_probe(const char *dir, const struct glint_capture_setup *s,
 		ret = glint_probe_sources_write(src_path, "probe.exr", &src);
 	if (ret == 0)
 		ret = glint_probe_calibration_write(cal_path, GLINT_SESSION_ENV,
-						    "probe.exr", &cal);
+						    photo_name, &cal);
 	if (ret == 0)
 		glint_log_info("gray ball at (%.2f, %.2f), radius %.2f px: the "
 			       "map x %.3f %.3f %.3f (+- %.3f), %d source%s "
@@ -120,6 +131,49 @@ static int calibrate_probe(const char *dir, const struct glint_capture_setup *s,
 			       cal.nsources == 1 ? "" : "s");
 	glint_image_free(env);
 	return ret < 0 ? glint_error_prefix(ret, "calibration") : 0;
+}
+
+/* The unwrap's optics from the rig (the ball's place left to the
+ * caller). */
+static void optics_opts(const struct glint_capture_setup *s,
+			struct glint_unwrap_opts *o)
+{
+	glint_unwrap_default_opts(o);
+	o->fpx = s->focal_px;
+	o->cx = s->principal[0];
+	o->cy = s->principal[1];
+	o->psf_sigma_px = s->psf_sigma_px;
+	o->olpf = s->olpf;
+}
+
+/* A merged photo of the gray ball at its own turntable position: the
+ * probe session `probe`'s map calibrated into this session (env.exr,
+ * env-sources.json, env-calibration.json), so that a sample captured
+ * after it is lit by this session's map. */
+static int calibrate_reference(const char *dir, const char *probe,
+			       const struct glint_capture_setup *s,
+			       const struct glint_image *photo)
+{
+	char path[GLINT_PATH_MAX];
+	struct glint_unwrap_opts o;
+	struct glint_image *wt = NULL;
+
+	if (!probe || !probe[0])
+		return glint_error_set(EINVAL,
+				       "%s: a reference photo calibrates a "
+				       "probe: capture the probe first (or "
+				       "name its session)",
+				       dir);
+	optics_opts(s, &o);
+	int ret = glint_path_join(path, sizeof(path), dir,
+				  "reference-weights.exr");
+	if (ret == 0)
+		ret = glint_image_read(path, &wt);
+	o.weights = wt;
+	if (ret == 0)
+		ret = calibrate_into(probe, dir, s, photo, "reference.exr", &o);
+	glint_image_free(wt);
+	return ret;
 }
 
 /* The merged probe -> env.exr (+ env-mask.png, env-density.exr): the ball
@@ -136,15 +190,10 @@ static int unwrap_probe(const char *dir, const struct glint_capture_setup *s,
 
 	if (ret < 0)
 		return glint_error_prefix(ret, "%s/probe.exr", dir);
-	glint_unwrap_default_opts(&o);
-	o.fpx = s->focal_px;
-	o.cx = s->principal[0];
-	o.cy = s->principal[1];
+	optics_opts(s, &o);
 	o.ball_cx = c.cx;
 	o.ball_cy = c.cy;
 	o.ball_r = c.r;
-	o.psf_sigma_px = s->psf_sigma_px;
-	o.olpf = s->olpf;
 	glint_log_info("probe ball at (%.2f, %.2f), radius %.2f px "
 		       "(%d edge points, %.2f px rms)",
 		       c.cx, c.cy, c.r, c.points, c.rms_px);
@@ -166,8 +215,8 @@ static int unwrap_probe(const char *dir, const struct glint_capture_setup *s,
 				      GLINT_SESSION_ENV);
 	if (ret == 0)
 		ret = glint_probe_unwrap_write(probe, &o, path, NULL, NULL);
-	if (ret == 0 && s->ref_albedo > 0)
-		ret = calibrate_probe(dir, s, probe, &o);
+	if (ret == 0 && s->ref_albedo > 0 && !s->ref_own)
+		ret = calibrate_into(dir, dir, s, probe, "probe.exr", &o);
 	glint_image_free(var);
 	glint_image_free(wt);
 	return ret;
@@ -251,8 +300,11 @@ static int bracket_into(struct glint_camera *cam,
 	if (ret < 0)
 		return ret;
 	glint_progress_start(&fc.progress, "frames", opts.max_frames);
-	ret = glint_bracket_capture(cam, &s->roi[strcmp(kind, "probe") != 0],
-				    &opts, &glint_clock_real, b);
+	const struct glint_roi *roi =
+		!strcmp(kind, "reference")
+			? &s->ref_roi
+			: &s->roi[strcmp(kind, "probe") != 0];
+	ret = glint_bracket_capture(cam, roi, &opts, &glint_clock_real, b);
 	glint_progress_finish(&fc.progress);
 	*hdr = fc.hdr;
 	if (ret == 0)
@@ -382,9 +434,19 @@ static int merge_session(const struct glint_capture_setup *s, const char *kind,
 			snprintf(files[(*nfiles)++], 64, "env-density.exr");
 			snprintf(files[(*nfiles)++], 64, "env-sources.json");
 			snprintf(files[(*nfiles)++], 64, "env-preview.png");
-			if (s->ref_albedo > 0)
+			if (s->ref_albedo > 0 && !s->ref_own)
 				snprintf(files[(*nfiles)++], 64,
 					 "env-calibration.json");
+		}
+	}
+	if (ret == 0 && !strcmp(kind, "reference")) {
+		*stage = "calibration";
+		ret = calibrate_reference(dir, probe, s, rad);
+		if (ret == 0) {
+			snprintf(files[(*nfiles)++], 64, "%s",
+				 GLINT_SESSION_ENV);
+			snprintf(files[(*nfiles)++], 64,
+				 "env-calibration.json");
 		}
 	}
 	if (ret == 0 && !strcmp(kind, "sample") && s->focal_px > 0) {

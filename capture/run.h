@@ -34,11 +34,14 @@ struct glint_capture_setup {
 	double psf_sigma_px; /* optics.psf_sigma_px: the camera's blur */
 	int olpf;	     /* optics.olpf */
 	double diameter_m;   /* sample.diameter_m */
-	/* reference: a matte gray ball beside the chrome one, in roi[0]'s
-	 * photo at ref_roi, calibrating the probe
-	 * (capture/probe/probe_calibrate.h); ref_albedo 0: none */
+	/* reference: a matte gray ball calibrating the probe
+	 * (capture/probe/probe_calibrate.h); ref_albedo 0: none.  Beside
+	 * the chrome one, in roi[0]'s photo at ref_roi; or with ref_own, at
+	 * its own turntable position, a capture of kind "reference" (ref_roi
+	 * where it is in that photo, all of it when empty). */
 	double ref_albedo, ref_albedo_sigma;
 	struct glint_roi ref_roi;
+	int ref_own;
 };
 
 struct glint_capture_result {
@@ -49,11 +52,13 @@ struct glint_capture_result {
 };
 
 /*
- * Capture `kind` ("probe" or "sample") into a new session under `out`;
- * a sample's scene is lit by the probe session `probe` (NULL: the newest
- * complete probe session under out).  *cancel (may be NULL) stops it
- * with -ECANCELED.  On failure the message names the session kept
- * (incomplete, its frames whole) and res->summary is NULL.
+ * Capture `kind` ("probe", "reference" or "sample") into a new session
+ * under `out`; a sample's scene is lit by the probe session `probe` (NULL:
+ * the newest complete probe session under out).  A reference (the gray
+ * ball alone) calibrates the probe session `probe`'s map into its own
+ * session, which then lights a sample as a probe session does.  *cancel (may be
+ * NULL) stops it with -ECANCELED.  On failure the message names the session
+ * kept (incomplete, its frames whole) and res->summary is NULL.
  */
 int glint_capture_run(const struct glint_capture_setup *setup, const char *kind,
 		      const char *out, const char *probe, atomic_int *cancel,

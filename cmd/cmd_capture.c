@@ -25,7 +25,8 @@
 
 void cmd_capture_help(void)
 {
-	printf("usage: glint capture (probe | sample) [options]\n"
+	printf("usage: glint capture (probe | reference | sample) "
+	       "[options]\n"
 	       "\n"
 	       "Capture an exposure bracket of the light probe or the sample "
 	       "that covers the\nregion of interest's dynamic range: from a "
@@ -41,6 +42,12 @@ void cmd_capture_help(void)
 	       "gets a\nscene.json for glint fit SESSION (the sphere found in "
 	       "sample.exr, lit by\nthe probe's env.exr), when the rig gives "
 	       "optics.focal_px.\n"
+	       "A reference is the rig's gray ball at its own turntable "
+	       "position (the rig's\n\"reference\" section): its photo "
+	       "calibrates the probe session's env.exr into\nthe reference "
+	       "session (env.exr, env-calibration.json), which then lights "
+	       "a\nsample as a probe session does (--probe REFERENCE_SESSION)."
+	       "\n"
 	       "\n"
 	       "  --config FILE       rig configuration (default: the "
 	       "installed appliance's\n"
@@ -51,8 +58,10 @@ void cmd_capture_help(void)
 	       "  -o, --output DIR    sessions go under DIR (default: the "
 	       "config's \"output\")\n"
 	       "  --probe SESSION     the probe session that lights a sample "
-	       "(default: the\n"
-	       "                      newest complete one under DIR)\n"
+	       "or that a\n"
+	       "                      reference calibrates (default: the "
+	       "newest complete\n"
+	       "                      probe session under DIR)\n"
 	       "  -v, --verbose       show camera libraries' own logging\n"
 	       "      --json          print a JSON result on stdout, logs as "
 	       "JSON lines\n"
@@ -89,7 +98,8 @@ static void on_sigint(int sig)
 
 int cmd_capture(int argc, char **argv)
 {
-	static const char *const kinds[] = { "probe", "sample", NULL };
+	static const char *const kinds[] = { "probe", "reference", "sample",
+					     NULL };
 	const char *config = NULL, *out = NULL, *probe = NULL;
 	char default_config[4096];
 	int ret;
@@ -108,9 +118,10 @@ int cmd_capture(int argc, char **argv)
 	glint_camera_set_verbose(a.verbose);
 	if (a.argc != 1)
 		return cmd_usage_error("capture",
-				       "expected what to capture: probe or "
-				       "sample");
-	if (strcmp(a.argv[0], "probe") && strcmp(a.argv[0], "sample")) {
+				       "expected what to capture: probe, "
+				       "reference or sample");
+	if (strcmp(a.argv[0], "probe") && strcmp(a.argv[0], "sample") &&
+	    strcmp(a.argv[0], "reference")) {
 		cmd_choice_error(a.argv[0], kinds);
 		return cmd_usage_error("capture", "'%s': %s", a.argv[0],
 				       glint_error_msg());

@@ -137,6 +137,8 @@ static void update_world(struct sim_board *s)
 		w.view = GLINT_SIM_VIEW_PROBE;
 	else if (fabs(remainder(s->angle - c->sample_deg, 360)) < 1)
 		w.view = GLINT_SIM_VIEW_SAMPLE;
+	else if (fabs(remainder(s->angle - c->reference_deg, 360)) < 1)
+		w.view = GLINT_SIM_VIEW_REFERENCE;
 	else
 		w.view = GLINT_SIM_VIEW_NONE;
 	glint_sim_world_set(s->world, &w);

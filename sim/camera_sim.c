@@ -19,7 +19,9 @@
  * sim/camera_sim.h), material (the sample's Table-1 name, default
  * yellow-plastic; rig: what the sim board put in view, sim/world.h),
  * gray (the probe a gray/chrome pair: a matte ball of this albedo beside
- * the chrome one, glint_sim_probe_pair_scene()), decades (the test card's
+ * the chrome one, glint_sim_probe_pair_scene()), reference (scene=rig: a
+ * matte ball of this albedo at the turntable's reference position,
+ * glint_sim_reference_scene()), decades (the test card's
  * dynamic range, default 6, plus its bright disk), psf (the lens's Gaussian
  * blur in pixels, default 0.6) and olpf (the optical low-pass filter, default
  * 1: every view reaches the sensor through both, sim/sensor.h), timescale (real
@@ -27,10 +29,10 @@
  * in 20 ms with 0.01), world (scene=rig only: a file that says what is in view
  * instead of the sim board, for a rig whose board is real hardware: "LIGHTS
  * DEGREES", the lamps on (0 none, 1 the one lamp, bit k - 1 lamp k of a rig
- * with several) and the turntable's angle, 0 the probe and 180 the sample; the
- * file is read before each frame and replaced whole by its writer; while it is
- * missing the lab is dark).  It must come last: the path runs to the end of the
- * string.
+ * with several) and the turntable's angle, 0 the probe, 180 the sample and 90
+ * the reference ball; the file is read before each frame and replaced whole by
+ * its writer; while it is missing the lab is dark).  It must come last: the
+ * path runs to the end of the string.
  */
 #define _POSIX_C_SOURCE 200809L
 #include "camera_sim.h"
@@ -58,13 +60,14 @@ struct sim_cam {
 	double timescale, decades;
 	enum { SCENE_CARD, SCENE_PROBE, SCENE_SAMPLE, SCENE_RIG } scene;
 	/* scene=rig: what the board's world shows (sim/world.h) */
-	struct glint_image *probe_img, *sample_img;
+	struct glint_image *probe_img, *sample_img, *reference_img;
 	unsigned lamps; /* the lamps they are lit by (sim/world.h) */
 	/* the lights-off or empty view, made on first need */
 	struct glint_image *scratch;
 	const struct glint_image *view; /* what the sensor sees */
 	int scene_scale;
 	double gray;	   /* > 0: the probe is a gray/chrome pair */
+	double reference;  /* > 0: a gray ball at the reference position */
 	char material[48]; /* the sample's Table-1 name */
 	char world[256];   /* scene=rig: what is in view, from this file */
 	char scenario[GLINT_PATH_MAX]; /* sim/scenario.h; "" none */
@@ -108,6 +111,8 @@ static int set_number(struct sim_cam *s, const char *where, const char *key,
 		s->sensor.olpf = v != 0;
 	else if (!strcmp(key, "gray") && v >= 0 && v <= 1)
 		s->gray = v;
+	else if (!strcmp(key, "reference") && v >= 0 && v <= 1)
+		s->reference = v;
 	else
 		return glint_error_set(EINVAL,
 				       "sim camera %s: option "
@@ -116,7 +121,8 @@ static int set_number(struct sim_cam *s, const char *where, const char *key,
 				       "manual, seed, noise, decades "
 				       "(0..8), timescale (0..1], "
 				       "scene_scale (1..64), psf (0..8 px), "
-				       "olpf (0/1) or gray (0..1)",
+				       "olpf (0/1), gray or reference "
+				       "(0..1)",
 				       where, key, v);
 	return 0;
 }
@@ -143,9 +149,10 @@ static int set_scene(struct sim_cam *s, const char *where, const char *word)
 static int apply_scenario(struct sim_cam *s)
 {
 	static const char *const keys[] = {
-		"width",    "height",  "latency",   "manual",	   "seed",
-		"noise",    "decades", "timescale", "scene_scale", "scene",
-		"material", "psf",     "olpf",	    "gray",	   NULL
+		"width",       "height", "latency",   "manual",
+		"seed",	       "noise",	 "decades",   "timescale",
+		"scene_scale", "scene",	 "material",  "psf",
+		"olpf",	       "gray",	 "reference", NULL
 	};
 	const char *f = s->scenario;
 	json_t *doc, *cam, *v;
@@ -322,6 +329,9 @@ static int upscale(struct glint_image **img, int w, int h, int k)
 	return 0;
 }
 
+/* Views: 0 the probe, 1 the sample, 2 the gray reference ball. */
+static const char *const view_names[3] = { "probe", "sample", "reference" };
+
 /* A scene's radiance at the sensor's size, rendered at 1/scene_scale,
  * lit by s->lamps. */
 static int render_view(const struct sim_cam *s, int sample,
@@ -329,8 +339,10 @@ static int render_view(const struct sim_cam *s, int sample,
 {
 	int k = s->scene_scale > 1 ? s->scene_scale : 1;
 	int w = (s->width + k - 1) / k, h = (s->height + k - 1) / k;
-	int ret = sample ? glint_sim_sample_scene(w, h, s->material, s->lamps,
-						  out)
+	int ret = sample == 2 ? glint_sim_reference_scene(w, h, s->lamps,
+							  s->reference, out)
+		  : sample ? glint_sim_sample_scene(w, h, s->material, s->lamps,
+						    out)
 		  : s->gray > 0 ? glint_sim_probe_pair_scene(w, h, s->lamps,
 							     s->gray, out)
 				: glint_sim_probe_scene(w, h, s->lamps, out);
@@ -419,15 +431,17 @@ static int scene_image_raw(const struct sim_cam *s, int sample,
 	snprintf(key, sizeof(key),
 		 "glint sim view 1|%s|%dx%d/%d|lamps %u|%s|gray %g|exe %s|"
 		 "map %s|table %s",
-		 sample ? "sample" : "probe", s->width, s->height,
-		 s->scene_scale, s->lamps, sample ? s->material : "-",
-		 sample ? 0 : s->gray, exe, map, table);
+		 view_names[sample], s->width, s->height, s->scene_scale,
+		 s->lamps, sample == 1 ? s->material : "-",
+		 sample == 1   ? 0
+		 : sample == 2 ? s->reference
+			       : s->gray,
+		 exe, map, table);
 	uint64_t h = 1469598103934665603ull; /* FNV-1a */
 	for (const char *c = key; *c; c++)
 		h = (h ^ (unsigned char)*c) * 1099511628211ull;
 	if (glint_path_fmt(path, sizeof(path), "%s/%s-%016llx.exr", dir,
-			   sample ? "sample" : "probe",
-			   (unsigned long long)h) < 0) {
+			   view_names[sample], (unsigned long long)h) < 0) {
 		glint_error_clear();
 		return render_view(s, sample, out);
 	}
@@ -472,15 +486,19 @@ static int rig_scenes(struct sim_cam *s)
 	world_now(s, &w);
 	glint_image_free(s->probe_img);
 	glint_image_free(s->sample_img);
-	s->sample_img = NULL;
+	glint_image_free(s->reference_img);
+	s->sample_img = s->reference_img = NULL;
 	s->lamps = w.lights ? w.lights : 1;
 	int ret = scene_image(s, 0, &s->probe_img);
 	if (!ret)
 		ret = scene_image(s, 1, &s->sample_img);
+	if (!ret && s->reference > 0)
+		ret = scene_image(s, 2, &s->reference_img);
 	if (ret < 0) {
 		glint_image_free(s->probe_img);
 		glint_image_free(s->sample_img);
-		s->probe_img = s->sample_img = NULL;
+		glint_image_free(s->reference_img);
+		s->probe_img = s->sample_img = s->reference_img = NULL;
 	}
 	return ret;
 }
@@ -574,6 +592,7 @@ static void sim_close(void *priv)
 	glint_image_free(s->radiance);
 	glint_image_free(s->probe_img);
 	glint_image_free(s->sample_img);
+	glint_image_free(s->reference_img);
 	glint_image_free(s->scratch);
 	glint_sim_world_close(s->wobj);
 	free(s);
@@ -581,7 +600,8 @@ static void sim_close(void *priv)
 
 /* world=PATH: "LIGHTS DEGREES" as a board outside this process left them
  * (LIGHTS: bit k - 1 for lamp k, so 1 is the one lamp on); a view only
- * within a degree of the probe (0) or the sample (180). */
+ * within a degree of the probe (0), the sample (180) or the reference
+ * ball (90, either way). */
 static void world_from_file(const char *path, struct glint_sim_state *w)
 {
 	FILE *f = fopen(path, "r");
@@ -598,9 +618,10 @@ static void world_from_file(const char *path, struct glint_sim_state *w)
 						 ((1u << GLINT_MAX_LIGHTS) - 1)
 				       : 0;
 		w->turntable_deg = deg;
-		w->view = a < 1	    ? GLINT_SIM_VIEW_PROBE
-			  : a > 179 ? GLINT_SIM_VIEW_SAMPLE
-				    : GLINT_SIM_VIEW_NONE;
+		w->view = a < 1		     ? GLINT_SIM_VIEW_PROBE
+			  : a > 179	     ? GLINT_SIM_VIEW_SAMPLE
+			  : fabs(a - 90) < 1 ? GLINT_SIM_VIEW_REFERENCE
+					     : GLINT_SIM_VIEW_NONE;
 	}
 	fclose(f);
 }
@@ -643,7 +664,9 @@ static int rig_view(struct sim_cam *s)
 	const struct glint_image *src =
 		w.view == GLINT_SIM_VIEW_PROBE	  ? s->probe_img
 		: w.view == GLINT_SIM_VIEW_SAMPLE ? s->sample_img
-						  : NULL; /* dark */
+		: w.view == GLINT_SIM_VIEW_REFERENCE && s->reference > 0
+			? s->reference_img
+			: NULL; /* dark */
 	if (src && w.lights) {
 		s->view = src;
 		return 0;

@@ -60,6 +60,13 @@ int glint_sim_probe_pair_scene(int w, int h, unsigned lamps, double albedo,
 void glint_sim_probe_pair_circle(int w, int h, int ball, double *cx, double *cy,
 				 double *r);
 
+/* The gray reference ball at its own turntable position ("reference=ALBEDO"
+ * with scene=rig): a matte ball of that albedo where the probe scene's
+ * chrome ball is (centred, 0.4 of the smaller side in radius), over black,
+ * in the same map and camera, rendered as the pair's gray ball is. */
+int glint_sim_reference_scene(int w, int h, unsigned lamps, double albedo,
+			      struct glint_image **out);
+
 /* Its "scene=sample": a 10 cm sphere of a Table-1 material under the same
  * map in the same orientation (so the probe's env.exr lights it as it is),
  * seen by the same camera, 0.35 of the smaller side in radius, in front of

@@ -105,51 +105,40 @@ static struct vec3 ball_centre(int w, int h, double f, double cx, double cy,
 	return v3_scale(d, 1 / sin(atan(r / f)));
 }
 
-int glint_sim_probe_pair_scene(int w, int h, unsigned lamps, double albedo,
-			       struct glint_image **out)
+/* A matte gray ball of `albedo` whose image circle is (cx, cy, r), lit by
+ * env, added to *out over what is there by the share of each pixel its
+ * silhouette covers (4 x 4 rays); the reference renderer (Lambert), 9 x 64
+ * samples a pixel. */
+static int add_gray_ball(const struct glint_image *env, int w, int h, double f,
+			 double cx, double cy, double r, double albedo,
+			 struct glint_image *out)
 {
-	struct glint_image *env = NULL, *gray = NULL, *copy = NULL;
+	struct glint_image *gray = NULL, *copy = NULL;
 	struct glint_envmap *em = NULL;
 	struct glint_scene sc;
 	struct glint_reference_opts ro;
-	double n[3] = { 3.2, 3.2, 3.2 }, k[3] = { 3.3, 3.3, 3.3 };
-	double f = glint_sim_probe_focal_px(w), cx, cy, r;
 	double p[GLINT_MAX_PARAMS] = { albedo, albedo, albedo };
 	const struct glint_model *lambert = glint_model_find("lambert");
-	int ret = glint_sim_rig_map(lamps, &env);
-
-	*out = NULL;
-	if (ret < 0)
-		return glint_error_prefix(ret, "sim probe pair");
-	glint_sim_probe_pair_circle(w, h, 0, &cx, &cy, &r);
-	ret = glint_sim_mirror_ball(env, w, h, f,
-				    ball_centre(w, h, f, cx, cy, r), 1, n, k,
-				    12, out);
-	glint_sim_probe_pair_circle(w, h, 1, &cx, &cy, &r);
 	struct vec3 c = ball_centre(w, h, f, cx, cy, r);
 	glint_scene_defaults(&sc);
-	if (ret == 0)
-		ret = glint_pinhole_init(&sc.cam, w, h, f * 1e-6, 1e-6, 0, 0,
-					 v3(0, 0, 0), v3(0, 0, -1),
-					 v3(0, 1, 0));
+	int ret = glint_pinhole_init(&sc.cam, w, h, f * 1e-6, 1e-6, 0, 0,
+				     v3(0, 0, 0), v3(0, 0, -1), v3(0, 1, 0));
 	sc.sphere_radius = 1;
 	sc.sphere_centre = c;
 	if (ret == 0 && !(copy = glint_image_dup(env)))
-		ret = glint_error_set(ENOMEM, "sim probe pair: out of memory");
+		ret = glint_error_set(ENOMEM, "sim gray ball: out of memory");
 	double rot[3] = { 0, 0, 0 };
 	if (ret == 0) {
 		ret = glint_envmap_new(copy, rot, 1, "rig map", &em);
 		copy = NULL; /* the map's now */
 	}
 	if (ret == 0 && !(gray = glint_image_new(w, h)))
-		ret = glint_error_set(ENOMEM, "sim probe pair: out of memory");
+		ret = glint_error_set(ENOMEM, "sim gray ball: out of memory");
 	glint_reference_default_opts(&ro);
 	ro.spp = 9;
 	ro.samples = 64;
 	if (ret == 0)
 		ret = glint_reference_render(&sc, em, lambert, p, &ro, gray);
-	/* the gray ball over the chrome's black background, by the share
-	 * of each pixel its silhouette covers (4 x 4 rays) */
 	for (int y = 0; ret == 0 && y < h; y++)
 		for (int x = 0; x < w; x++) {
 			if (hypot(x + 0.5 - cx, y + 0.5 - cy) > r + 2)
@@ -166,7 +155,7 @@ int glint_sim_probe_pair_scene(int w, int h, unsigned lamps, double albedo,
 					double b = v3_dot(d, c);
 					hit += b * b - v3_dot(c, c) + 1 > 0;
 				}
-			float *o = glint_image_px(*out, x, y);
+			float *o = glint_image_px(out, x, y);
 			const float *g = glint_image_px(gray, x, y);
 			for (int q = 0; q < 3; q++)
 				o[q] += (float)(hit / 16.0) * g[q];
@@ -174,6 +163,52 @@ int glint_sim_probe_pair_scene(int w, int h, unsigned lamps, double albedo,
 	glint_envmap_free(em);
 	glint_image_free(copy);
 	glint_image_free(gray);
+	return ret;
+}
+
+int glint_sim_probe_pair_scene(int w, int h, unsigned lamps, double albedo,
+			       struct glint_image **out)
+{
+	struct glint_image *env = NULL;
+	double n[3] = { 3.2, 3.2, 3.2 }, k[3] = { 3.3, 3.3, 3.3 };
+	double f = glint_sim_probe_focal_px(w), cx, cy, r;
+	int ret = glint_sim_rig_map(lamps, &env);
+
+	*out = NULL;
+	if (ret < 0)
+		return glint_error_prefix(ret, "sim probe pair");
+	glint_sim_probe_pair_circle(w, h, 0, &cx, &cy, &r);
+	ret = glint_sim_mirror_ball(env, w, h, f,
+				    ball_centre(w, h, f, cx, cy, r), 1, n, k,
+				    12, out);
+	glint_sim_probe_pair_circle(w, h, 1, &cx, &cy, &r);
+	if (ret == 0)
+		ret = add_gray_ball(env, w, h, f, cx, cy, r, albedo, *out);
+	glint_image_free(env);
+	if (ret < 0) {
+		glint_image_free(*out);
+		*out = NULL;
+	}
+	return ret;
+}
+
+int glint_sim_reference_scene(int w, int h, unsigned lamps, double albedo,
+			      struct glint_image **out)
+{
+	struct glint_image *env = NULL;
+	double f = glint_sim_probe_focal_px(w);
+	int ret = glint_sim_rig_map(lamps, &env);
+
+	*out = NULL;
+	if (ret < 0)
+		return glint_error_prefix(ret, "sim reference ball");
+	if (!(*out = glint_image_new(w, h)))
+		ret = glint_error_set(ENOMEM,
+				      "sim reference ball: out of memory");
+	/* where the probe scene's chrome ball is (glint_sim_probe_scene) */
+	if (ret == 0)
+		ret = add_gray_ball(env, w, h, f, w / 2.0, h / 2.0,
+				    0.4 * (w < h ? w : h), albedo, *out);
 	glint_image_free(env);
 	if (ret < 0) {
 		glint_image_free(*out);

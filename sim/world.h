@@ -30,7 +30,8 @@
 enum glint_sim_view {
 	GLINT_SIM_VIEW_NONE,
 	GLINT_SIM_VIEW_PROBE,
-	GLINT_SIM_VIEW_SAMPLE
+	GLINT_SIM_VIEW_SAMPLE,
+	GLINT_SIM_VIEW_REFERENCE /* the gray ball's turntable position */
 };
 
 /* What is in view and how it is lit. */

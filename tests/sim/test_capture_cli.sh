@@ -57,8 +57,8 @@ only_session() { # the one session directory under $1
 
 check "capture --help" run 0 "" capture --help
 check "cameras --help" run 0 "" cameras --help
-check "capture without what: exit 2" run 2 "probe or sample" capture
-check "capture of something else: exit 2" run 2 "'teapot': expected one of probe, sample" capture teapot
+check "capture without what: exit 2" run 2 "probe, reference or sample" capture
+check "capture of something else: exit 2" run 2 "'teapot': expected one of probe, reference, sample" capture teapot
 
 cat >"$tmp/rig.json" <<JSON
 {"camera": {"backend": "sim", "device": "sim:width=96,height=64,timescale=0.01,decades=4"},
@@ -290,6 +290,56 @@ print(got, want)
 sys.exit(not all(abs(a - b) < 1e-6 * b for a, b in zip(got, want)))"
 gray_rig nogray "[0, 0, 60, 60]"
 check "a reference ROI with no ball in it: exit 1, named" run 1 "the gray ball" capture probe --config "$tmp/nogray.json"
+
+
+# The gray ball at its own turntable position (reference_deg): the probe
+# keeps the whole frame, the gray ball has its own bracket ("capture
+# reference"), and the probe session's map is calibrated into the
+# reference session, which then lights the sample.
+cat >"$tmp/own.json" <<JSON
+{"camera": {"backend": "sim", "device": "sim:width=320,height=240,scene=rig,reference=0.18,timescale=0.01"},
+ "optics": {"focal_px": 640, "psf_sigma_px": 0.86, "olpf": true},
+ "sample": {"diameter_m": 0.1},
+ "reference": {"albedo": 0.18, "albedo_sigma": 0.005},
+ "board": {"backend": "sim", "scenario": "$data/sim-press.json",
+  "lines": {"button": {"chip": "gpiochip0", "line": 17, "active_low": true},
+   "lights": {"chip": "gpiochip0", "line": 22},
+   "turntable_step": {"chip": "gpiochip0", "line": 23},
+   "turntable_dir": {"chip": "gpiochip0", "line": 24}},
+  "turntable": {"mode": "stepper", "steps_per_turn": 400, "step_hz": 20000,
+   "probe_deg": 0, "sample_deg": 180, "reference_deg": 90, "settle_s": 0}},
+ "output": "$tmp/own"}
+JSON
+check "a reference before any probe: exit 1, named" run 1 "a reference calibrates a probe (capture the probe first" capture reference --config "$tmp/own.json"
+check "the probe at its position (the whole frame)" run 0 "probe ball at" capture probe --config "$tmp/own.json"
+check "... no calibration in the probe session (the reference's own step does it)" test ! -e "$(only_session "$tmp/own")/env-calibration.json"
+probe_dir=$(only_session "$tmp/own")
+check "the gray ball at its own position: the probe's map calibrated" run 0 "gray ball at" capture reference --config "$tmp/own.json"
+ref_dir=$(ls -d "$tmp"/own/reference-* 2>/dev/null | head -1)
+check "... the reference session complete, env.exr and env-calibration.json in it" python3 -c "
+import json, os, sys
+d = json.load(open('$ref_dir/session.json'))
+print(d['status'], d['kind'])
+sys.exit(not (d['status'] == 'complete' and d['kind'] == 'reference' and
+	all(os.path.getsize('$ref_dir/' + f) > 0 for f in ('env.exr', 'env-calibration.json', 'reference.exr'))))"
+check "... the map's scale 1 within 3 sigma, sigma under 5 %" python3 -c "
+import json, sys
+d = json.load(open('$ref_dir/env-calibration.json'))
+ok = all(abs(s - 1) < 3 * e and e < 0.05 for s, e in zip(d['scale'], d['scale_sigma']))
+print(d['scale'], d['scale_sigma']); sys.exit(not ok)"
+check "... the gray ball found at the probe's place, the size of the probe's ball" bash -c "grep -q 'gray ball at (160' '$tmp/err' || { cat '$tmp/err'; false; }"
+check "a sample lit by the reference session" run 0 "" capture sample --config "$tmp/own.json" --probe "$ref_dir" -q
+check "... its scene names the calibrated map and states its uncertainty" python3 -c "
+import glob, json, sys
+scene = [json.load(open(p)) for p in glob.glob('$tmp/own/sample-*/scene.json')]
+assert len(scene) == 1, scene
+env = scene[0]['environment']
+print(env)
+sys.exit(not (env['path'].startswith('../reference-') and len(env['scale_sigma']) == 3))"
+sed 's/"mode": "stepper"/"mode": "relay"/; s/"output"/"sequence": ["capture probe", "turntable reference", "capture reference"], "output"/' "$tmp/own.json" >"$tmp/relay.json"
+check "a reference position on a relay table: refused at load, named" run 1 "a relay turntable has two positions" capture probe --config "$tmp/relay.json"
+sed 's/"reference": {"albedo": 0.18, "albedo_sigma": 0.005},//' "$tmp/own.json" >"$tmp/noref.json"
+check "capture reference without a reference section: exit 1, named" run 1 "no \"reference\" section" capture reference --config "$tmp/noref.json"
 
 echo "$((checks - fails)) passed, $fails failed"
 [ "$fails" = 0 ]

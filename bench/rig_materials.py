@@ -13,7 +13,7 @@ rig-materials.md and rig-materials.png (with --write).
 interval and within tolerance (the heavy suite's `rig-materials` runs three).
 
 --config RIG: another simulated rig file (data/rig-sim-gray.json: the
-gray/chrome pair); its page is rig-materials-NAME.md, NAME the file's
+gray reference ball at its own turntable position); its page is rig-materials-NAME.md, NAME the file's
 name less "rig-sim-".
 
 usage: bench/rig_materials.py [BUILD_DIR] [--config RIG] [--only NAME,NAME] [--write] [--check]"""

@@ -192,6 +192,35 @@ r['sequence'] = ['lights on', 'turntable sample', 'turntable probe', 'capture pr
 json.dump(r, open('$tmp/pos.json', 'w'))"
 check "position sensor agrees with the moves" run 0 "run complete" rig --config "$tmp/pos.json" --once
 
+# 1b. The gray reference ball at its own turntable position
+# (data/rig-sim-gray.json's sequence): the probe, the gray ball at 90 deg
+# calibrating the probe's map into its session, the sample lit by it.
+rig gray '{"at_s": 0.2}'
+python3 -c "
+import json
+r = json.load(open('$tmp/gray.json'))
+g = json.load(open('$data/rig-sim-gray.json'))
+r['camera']['device'] += ',reference=0.18'
+r['reference'] = g['reference']
+r['sequence'] = g['sequence']
+r['board']['turntable']['reference_deg'] = g['board']['turntable']['reference_deg']
+json.dump(r, open('$tmp/gray.json', 'w'))"
+check "gray ball at its own position: run, calibration, fit" run 0 "run complete" rig --config "$tmp/gray.json" --once --json
+check "... the reference session calibrated the probe's map and lit the sample" python3 -c "
+import glob, json, os
+d = json.load(open('$tmp/out'))
+ref = glob.glob(os.path.join(os.path.dirname(d['sample']), 'reference-*'))
+assert len(ref) == 1, ref
+cal = json.load(open(os.path.join(ref[0], 'env-calibration.json')))
+print('  scale', cal['scale'], '+-', cal['scale_sigma'])
+assert all(abs(s - 1) < 3 * e for s, e in zip(cal['scale'], cal['scale_sigma']))
+env = json.load(open(os.path.join(d['sample'], 'scene.json')))['environment']
+assert env['path'] == '../' + os.path.basename(ref[0]) + '/env.exr', env
+assert 'scale_sigma' in env
+ev = [json.loads(l) for l in open('$tmp/gray-board.log')]
+assert any(abs(e['turntable_deg'] - 90) < 0.5 for e in ev), 'turntable never at the reference'
+"
+
 fi # core
 
 if [ "$part" != core ]; then

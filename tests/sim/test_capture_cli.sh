@@ -327,7 +327,11 @@ import json, sys
 d = json.load(open('$ref_dir/env-calibration.json'))
 ok = all(abs(s - 1) < 3 * e and e < 0.05 for s, e in zip(d['scale'], d['scale_sigma']))
 print(d['scale'], d['scale_sigma']); sys.exit(not ok)"
-check "... the gray ball found at the probe's place, the size of the probe's ball" bash -c "grep -q 'gray ball at (160' '$tmp/err' || { cat '$tmp/err'; false; }"
+check "... the gray ball found at the probe's place, the size of the probe's ball" python3 -c "
+import re, sys
+m = re.search(r'gray ball at \(([-\d.]+), ([-\d.]+)\), radius ([\d.]+)', open('$tmp/err').read())
+print('  ', m and m.groups())
+sys.exit(not (m and abs(float(m[1]) - 160) < 1 and abs(float(m[2]) - 120) < 1 and abs(float(m[3]) - 96) < 2))"
 check "a sample lit by the reference session" run 0 "" capture sample --config "$tmp/own.json" --probe "$ref_dir" -q
 check "... its scene names the calibrated map and states its uncertainty" python3 -c "
 import glob, json, sys

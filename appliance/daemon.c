@@ -52,6 +52,15 @@ int glint_rig_capture(const struct glint_rig *rig, const char *kind,
 				       "ball's albedo): nothing to capture as "
 				       "a reference",
 				       rig->path);
+	if (ref && !rig->capture.ref_own)
+		return glint_error_set(EINVAL,
+				       "%s: the gray ball is in the probe's "
+				       "photo (reference.roi): the probe's "
+				       "capture calibrates its map; a "
+				       "reference capture is for a gray ball "
+				       "at its own turntable position (no "
+				       "reference.roi)",
+				       rig->path);
 	if (ref && !probe) {
 		ret = glint_session_latest_probe(out, found, sizeof(found));
 		probe = found;

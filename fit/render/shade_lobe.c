@@ -12,6 +12,30 @@
 #include <math.h>
 #include <string.h>
 
+/* Lobe j at one point (frame t, b, n; view wo, local) over the hot
+ * points pts[k0 .. k1), each radiance x solid angle, added to out; only
+ * the points whose cosine to r is at least cos_ext count. */
+static void hot_points(const struct glint_model *m, const double *p, int j,
+		       const float *pts, int k0, int k1, double cos_ext,
+		       struct vec3 r, struct vec3 t, struct vec3 b,
+		       struct vec3 n, struct vec3 wo, double out[3])
+{
+	for (int k = k0; k < k1; k++) {
+		const float *pt = pts + 6 * (size_t)k;
+		struct vec3 l = v3(pt[0], pt[1], pt[2]);
+		if (v3_dot(l, r) < cos_ext)
+			continue;
+		struct vec3 wi = v3(v3_dot(l, t), v3_dot(l, b), v3_dot(l, n));
+		if (!(wi.z > 0))
+			continue;
+		double bj = glint_lobe_value_pdf(m, p, j, wo, wi, NULL);
+		if (bj <= 0)
+			continue;
+		for (int ch = 0; ch < 3; ch++)
+			out[ch] += bj * wi.z * pt[3 + ch];
+	}
+}
+
 /* Lobe j over the hot texels, on their fixed points: the map's
  * radiance on the hot texels' area (by_area: with the irradiance of the
  * other texels) or the hot texels' part of the radiance wherever it
@@ -25,28 +49,23 @@ void shade_hot_quadrature(const struct glint_shade_cache *c,
 	struct vec3 wo = fv(h->wo);
 	int npts = by_area ? hot->npts : hot->npart;
 	const float *pts = by_area ? hot->pts : hot->part;
+	struct vec3 r = v3(0, 0, 0);
 
 	if (!npts)
 		return;
 	double ext = glint_lobe_extent(m, p, j);
 	if (ext > 0) {
-		struct vec3 r = local_to_world(h, v3(-wo.x, -wo.y, wo.z));
-		double a = acos(fmin(1, fmax(-1, v3_dot(r, hot->axis))));
-		if (a - hot->radius > ext)
+		r = local_to_world(h, v3(-wo.x, -wo.y, wo.z));
+		if (angle(r, hot->axis) - hot->radius > ext)
 			return;
 	}
-	for (int k = 0; k < npts; k++) {
-		const float *pt = pts + 6 * (size_t)k;
-		struct vec3 d = v3(pt[0], pt[1], pt[2]);
-		struct vec3 wi = v3(v3_dot(d, fv(h->t)), v3_dot(d, fv(h->b)),
-				    v3_dot(d, fv(h->n)));
-		if (!(wi.z > 0))
-			continue;
-		double bj = glint_lobe_value_pdf(m, p, j, wo, wi, NULL);
-		if (bj <= 0)
-			continue;
-		for (int ch = 0; ch < 3; ch++)
-			out[ch] += bj * wi.z * pt[3 + ch];
+	for (int g = 0; g < hot->nclusters; g++) {
+		const struct glint_env_hot_cluster *cl = &hot->clusters[g];
+		if (ext > 0 && angle(r, cl->axis) - cl->radius > ext)
+			continue; /* the lobe is below 1e-12 of it */
+		hot_points(m, p, j, pts, by_area ? cl->pts0 : cl->part0,
+			   by_area ? cl->pts1 : cl->part1, -2, r, fv(h->t),
+			   fv(h->b), fv(h->n), wo, out);
 	}
 }
 
@@ -260,10 +279,12 @@ void shade_foot_fit(const struct glint_gbuffer *gb, int32_t pix,
 }
 
 /* Lobe j's hot part, the mean over pixel i's footprint on a k x k grid;
- * only hot points within ext of a point's mirror direction count. */
+ * only hot points within ext of a point's mirror direction count, of
+ * the clusters near[0 .. ncl) (those within reach of the footprint's
+ * mirror directions; near NULL: all of them). */
 static void hot_grid(const struct glint_shade_cache *c,
 		     const struct cache_foot *f, const double *p, int j, int k,
-		     double ext, double out[3])
+		     double ext, const int *near, int ncl, double out[3])
 {
 	const struct glint_env_hot *hot = c->hot;
 	const struct glint_model *m = c->model;
@@ -281,21 +302,12 @@ static void hot_grid(const struct glint_shade_cache *c,
 			if (!(wo.z > 0))
 				continue;
 			r = v3_norm(r);
-			for (int q = 0; q < hot->npart; q++) {
-				const float *pt = hot->part + 6 * (size_t)q;
-				struct vec3 l = v3(pt[0], pt[1], pt[2]);
-				if (v3_dot(l, r) < cos_ext)
-					continue;
-				struct vec3 wi = v3(v3_dot(l, t), v3_dot(l, b),
-						    v3_dot(l, n));
-				if (!(wi.z > 0))
-					continue;
-				double bj = glint_lobe_value_pdf(m, p, j, wo,
-								 wi, NULL);
-				if (bj <= 0)
-					continue;
-				for (int ch = 0; ch < 3; ch++)
-					out[ch] += bj * wi.z * pt[3 + ch];
+			for (int g = 0; g < ncl; g++) {
+				const struct glint_env_hot_cluster *cl =
+					&hot->clusters[near ? near[g] : g];
+				hot_points(m, p, j, hot->part, cl->part0,
+					   cl->part1, cos_ext, r, t, b, n, wo,
+					   out);
 			}
 		}
 	for (int ch = 0; ch < 3; ch++)
@@ -362,17 +374,32 @@ int shade_hot_footprint(const struct glint_shade_cache *c, int i,
 	if (!(ext > 0))
 		ext = 40 * sd;
 	out[0] = out[1] = out[2] = 0;
-	if (angle(fv(f->r), c->hot->axis) - c->hot->radius > ext + f->turn)
+	const struct glint_env_hot *hot = c->hot;
+	if (angle(fv(f->r), hot->axis) - hot->radius > ext + f->turn)
 		return 1;
+	/* The clusters within reach of any of the footprint's mirror
+	 * directions (each within f->turn of the centre's). */
+	int near_buf[64], *near = near_buf, ncl = 0;
+	for (int g = 0; g < hot->nclusters && near; g++) {
+		const struct glint_env_hot_cluster *cl = &hot->clusters[g];
+		if (angle(fv(f->r), cl->axis) - cl->radius > ext + f->turn)
+			continue;
+		if (ncl == 64) /* many within reach: visit them all */
+			near = NULL;
+		else
+			near[ncl++] = g;
+	}
+	if (!near)
+		ncl = hot->nclusters;
 	lv = fmin(lv, 3);
 	int lo = (int)lv;
 	double w = lv - lo, a[3], b[3] = { 0, 0, 0 };
 	if (lo)
-		hot_grid(c, f, pw, j, 2 << lo, ext, a);
+		hot_grid(c, f, pw, j, 2 << lo, ext, near, ncl, a);
 	else
 		hot_hits(c, i, p, j, a);
 	if (w > 0)
-		hot_grid(c, f, pw, j, 4 << lo, ext, b);
+		hot_grid(c, f, pw, j, 4 << lo, ext, near, ncl, b);
 	for (int ch = 0; ch < 3; ch++)
 		out[ch] = (1 - w) * a[ch] + w * b[ch];
 	return 1;

@@ -459,6 +459,112 @@ static int rest_table(const struct glint_envmap *env, struct glint_env_hot *hot)
 	return 0;
 }
 
+/* Point k of the points of the hot split (pts, then part). */
+static float *hot_point(struct glint_env_hot *hot, int k)
+{
+	return k < hot->npts ? hot->pts + 6 * (size_t)k
+			     : hot->part + 6 * ((size_t)k - hot->npts);
+}
+
+/* The points in cluster order, each array on its own (counting sort,
+ * stable). */
+static int hot_reorder(float *pts, int n, const int *id, int nc, int *first)
+{
+	float *tmp = malloc((size_t)(n ? n : 1) * 6 * sizeof(float));
+	int *at = calloc((size_t)nc + 1, sizeof(int));
+
+	if (!tmp || !at) {
+		free(tmp);
+		free(at);
+		return glint_error_set(ENOMEM, "out of memory");
+	}
+	for (int k = 0; k < n; k++)
+		at[id[k] + 1]++;
+	for (int c = 0; c < nc; c++)
+		at[c + 1] += at[c];
+	memcpy(first, at, (size_t)(nc + 1) * sizeof(int));
+	for (int k = 0; k < n; k++)
+		memcpy(tmp + 6 * (size_t)at[id[k]]++, pts + 6 * (size_t)k,
+		       6 * sizeof(float));
+	memcpy(pts, tmp, (size_t)n * 6 * sizeof(float));
+	free(tmp);
+	free(at);
+	return 0;
+}
+
+/*
+ * Group the hot points by where they are: a point joins the first
+ * cluster whose first point is within `seed` radians, else starts one.
+ * Each cluster's cone: the mean of its points' directions, out to the
+ * farthest plus `margin` (a texel's extent).  Its bound is exact, so the
+ * grouping changes no estimate, only how many points a lobe visits.
+ */
+static int hot_clusters(struct glint_env_hot *hot, double seed, double margin)
+{
+	int np = hot->npts + hot->npart, nc = 0, ret = 0;
+	int *id = malloc((size_t)(np ? np : 1) * sizeof(int));
+	int *lead = malloc((size_t)(np ? np : 1) * sizeof(int));
+	int *first_pts = NULL, *first_part = NULL;
+	double cos_seed = cos(seed);
+
+	if (!id || !lead) {
+		ret = glint_error_set(ENOMEM, "out of memory");
+		goto out;
+	}
+	for (int k = 0; k < np; k++) {
+		const float *pt = hot_point(hot, k);
+		int c = 0;
+		for (; c < nc; c++) {
+			const float *ld = hot_point(hot, lead[c]);
+			if (pt[0] * ld[0] + pt[1] * ld[1] + pt[2] * ld[2] >=
+			    cos_seed)
+				break;
+		}
+		if (c == nc)
+			lead[nc++] = k;
+		id[k] = c;
+	}
+	hot->clusters = calloc((size_t)(nc ? nc : 1), sizeof(*hot->clusters));
+	first_pts = malloc(((size_t)nc + 1) * sizeof(int));
+	first_part = malloc(((size_t)nc + 1) * sizeof(int));
+	if (!hot->clusters || !first_pts || !first_part) {
+		ret = glint_error_set(ENOMEM, "out of memory");
+		goto out;
+	}
+	hot->nclusters = nc;
+	for (int k = 0; k < np; k++) {
+		const float *pt = hot_point(hot, k);
+		struct glint_env_hot_cluster *cl = &hot->clusters[id[k]];
+		cl->axis = v3_add(cl->axis, v3(pt[0], pt[1], pt[2]));
+	}
+	for (int c = 0; c < nc; c++)
+		hot->clusters[c].axis = v3_norm(hot->clusters[c].axis);
+	for (int k = 0; k < np; k++) {
+		const float *pt = hot_point(hot, k);
+		struct glint_env_hot_cluster *cl = &hot->clusters[id[k]];
+		double d = v3_dot(cl->axis, v3(pt[0], pt[1], pt[2]));
+		cl->radius = fmax(cl->radius, acos(fmin(1, fmax(-1, d))));
+	}
+	ret = hot_reorder(hot->pts, hot->npts, id, nc, first_pts);
+	if (ret == 0)
+		ret = hot_reorder(hot->part, hot->npart, id + hot->npts, nc,
+				  first_part);
+	for (int c = 0; c < nc && ret == 0; c++) {
+		struct glint_env_hot_cluster *cl = &hot->clusters[c];
+		cl->radius += margin;
+		cl->pts0 = first_pts[c];
+		cl->pts1 = first_pts[c + 1];
+		cl->part0 = first_part[c];
+		cl->part1 = first_part[c + 1];
+	}
+out:
+	free(id);
+	free(lead);
+	free(first_pts);
+	free(first_part);
+	return ret;
+}
+
 int glint_env_hot_new(const struct glint_envmap *env, double tau,
 		      int max_texels, int q, struct glint_env_hot **out)
 {
@@ -548,8 +654,13 @@ int glint_env_hot_new(const struct glint_envmap *env, double tau,
 		double c = v3_dot(hot->axis, v3(pt[0], pt[1], pt[2]));
 		radius = fmax(radius, acos(fmin(1, fmax(-1, c))));
 	}
-	hot->radius = radius + M_PI / h * 1.5 + 2 * M_PI / w * 1.5;
-	ret = dist_build(env->img, hot->is_hot, &hot->rest);
+	double margin = M_PI / h * 1.5 + 2 * M_PI / w * 1.5;
+	hot->radius = radius + margin;
+	/* A lamp's points within a few degrees (8 texels at least: the
+	 * hot texels of a lamp a texel across span 4 or 5) of its first. */
+	ret = hot_clusters(hot, fmax(2 * M_PI / 180, 16 * M_PI / w), margin);
+	if (ret == 0)
+		ret = dist_build(env->img, hot->is_hot, &hot->rest);
 	if (ret == 0)
 		ret = rest_table(env, hot);
 	if (ret < 0) {
@@ -566,6 +677,7 @@ void glint_env_hot_free(struct glint_env_hot *hot)
 		return;
 	free(hot->pts);
 	free(hot->part);
+	free(hot->clusters);
 	free(hot->is_hot);
 	free(hot->tab);
 	dist_free(&hot->rest);

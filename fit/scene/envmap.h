@@ -105,6 +105,15 @@ double glint_env_dist_pdf_smooth(const struct glint_envmap *env,
  *   parameters never jumps at a hot texel's edge: the fitter's objective
  *   stays smooth in roughness (shade_cache.c).
  */
+/* A group of hot points near one another (a lamp): the points
+ * pts[pts0 .. pts1) and part[part0 .. part1) lie within `radius` radians
+ * of `axis`, so that a lobe that cannot reach the cone skips them all. */
+struct glint_env_hot_cluster {
+	struct vec3 axis;
+	double radius;
+	int pts0, pts1, part0, part1;
+};
+
 struct glint_env_hot {
 	int ntexels;
 	int npts;
@@ -115,6 +124,10 @@ struct glint_env_hot {
 	struct glint_env_dist rest;
 	struct vec3 axis; /* a cone holding every hot texel: */
 	double radius;	  /* axis and half-angle (radians) */
+	/* The points grouped by where they are (pts and part in cluster
+	 * order): a map of several lamps has a cone per lamp. */
+	struct glint_env_hot_cluster *clusters;
+	int nclusters;
 	/* The rest as one table for glint_env_query(): per texel its RGB
 	 * (hot texels black) and its density under `rest`, with a border of
 	 * one texel (wrapped in azimuth, clamped at the poles) so that a

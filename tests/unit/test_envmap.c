@@ -28,6 +28,12 @@ static struct glint_envmap *make_env(int w, int h, const double rot[3])
 	return env;
 }
 
+static double angle_to(struct vec3 axis, const float *pt)
+{
+	double d = v3_dot(axis, v3(pt[0], pt[1], pt[2]));
+	return acos(fmin(1, fmax(-1, d)));
+}
+
 static void test_uv_dir(void)
 {
 	struct vec3 d = glint_latlong_uv_to_dir(0.5, 0.5);
@@ -410,6 +416,71 @@ static void test_hot_split(void)
 	glint_envmap_free(env);
 }
 
+/*
+ * Several lamps (glint_env_hot_new's clusters): a cluster or two per
+ * lamp and none holding two, their ranges partition both point sets,
+ * and every point lies inside its cluster's cone, the bound a lobe's
+ * cull relies on.
+ */
+static void test_hot_clusters(void)
+{
+	double rot[3] = { 0, 40, 0 };
+	int w = 256, h = 128;
+	struct glint_image *img = glint_image_new(w, h);
+	struct glint_envmap *env = NULL;
+	struct glint_env_hot *hot = NULL;
+	/* Five 2 x 2 lamps 40 degrees apart or more, one across u = 0. */
+	static const int lamp[5][2] = {
+		{ 0, 40 }, { 40, 20 }, { 100, 60 }, { 160, 90 }, { 210, 50 }
+	};
+
+	for (int y = 0; y < h; y++)
+		for (int x = 0; x < w; x++)
+			for (int c = 0; c < 3; c++)
+				glint_image_px(img, x, y)[c] = 0.05f;
+	for (int l = 0; l < 5; l++)
+		for (int k = 0; k < 4; k++) {
+			int x = (lamp[l][0] + k % 2 - 1 + w) % w,
+			    y = lamp[l][1] + k / 2;
+			for (int c = 0; c < 3; c++)
+				glint_image_px(img, x, y)[c] = 400.0f + 50 * l;
+		}
+	CHECK(glint_envmap_new(img, rot, 1.0, "lamps", &env) == 0 &&
+		      glint_env_hot_new(env, 0.01, 256, 2, &hot) == 0,
+	      "%s", glint_error_msg());
+	if (test_failures)
+		return;
+	CHECK(hot->ntexels >= 20, "every lamp is hot: %d texels", hot->ntexels);
+	CHECK(hot->nclusters >= 5 && hot->nclusters <= 10,
+	      "a cluster or two per lamp: %d", hot->nclusters);
+	int pts = 0, part = 0;
+	for (int c = 0; c < hot->nclusters; c++) {
+		const struct glint_env_hot_cluster *cl = &hot->clusters[c];
+		CHECK(cl->pts0 == pts && cl->part0 == part,
+		      "cluster %d follows the last", c);
+		CHECK(cl->part1 > cl->part0, "cluster %d holds points", c);
+		/* The lamps are 40 degrees apart or more. */
+		CHECK(cl->radius < 15 * M_PI / 180,
+		      "cluster %d is one lamp: %.1f deg", c,
+		      cl->radius * 180 / M_PI);
+		for (int k = cl->pts0; k < cl->pts1; k++)
+			CHECK(angle_to(cl->axis, hot->pts + 6 * k) <=
+				      cl->radius,
+			      "area point %d in cluster %d's cone", k, c);
+		for (int k = cl->part0; k < cl->part1; k++)
+			CHECK(angle_to(cl->axis, hot->part + 6 * k) <=
+				      cl->radius,
+			      "part point %d in cluster %d's cone", k, c);
+		pts = cl->pts1;
+		part = cl->part1;
+	}
+	CHECK(pts == hot->npts && part == hot->npart,
+	      "the clusters hold every point: %d of %d, %d of %d", pts,
+	      hot->npts, part, hot->npart);
+	glint_env_hot_free(hot);
+	glint_envmap_free(env);
+}
+
 int main(void)
 {
 	RUN(test_uv_dir);
@@ -420,5 +491,6 @@ int main(void)
 	RUN(test_irradiance_odd_sizes);
 	RUN(test_irradiance_softboxes);
 	RUN(test_hot_split);
+	RUN(test_hot_clusters);
 	return test_result();
 }

@@ -496,8 +496,9 @@ static int hot_reorder(float *pts, int n, const int *id, int nc, int *first)
  * Group the hot points by where they are: a point joins the first
  * cluster whose first point is within `seed` radians, else starts one.
  * Each cluster's cone: the mean of its points' directions, out to the
- * farthest plus `margin` (a texel's extent).  Its bound is exact, so the
- * grouping changes no estimate, only how many points a lobe visits.
+ * farthest plus `margin` (a texel's extent).  A lobe skips a cone only
+ * beyond its extent (below 1e-12 of its peak: shade_lobe.c), so the
+ * grouping changes how many points a lobe visits, not what it sums.
  */
 static int hot_clusters(struct glint_env_hot *hot, double seed, double margin)
 {

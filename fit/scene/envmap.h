@@ -88,6 +88,15 @@ double glint_env_dist_pdf_smooth(const struct glint_envmap *env,
 				 const struct glint_env_dist *d,
 				 struct vec3 d_world);
 
+/* A group of hot points near one another (a lamp): the points
+ * pts[pts0 .. pts1) and part[part0 .. part1) lie within `radius` radians
+ * of `axis`, so that a lobe that cannot reach the cone skips them all. */
+struct glint_env_hot_cluster {
+	struct vec3 axis;
+	double radius;
+	int pts0, pts1, part0, part1;
+};
+
 /*
  * The few brightest texels of a map (a sun), to be integrated
  * deterministically rather than sampled: texels whose sampling weight is at
@@ -105,15 +114,6 @@ double glint_env_dist_pdf_smooth(const struct glint_envmap *env,
  *   parameters never jumps at a hot texel's edge: the fitter's objective
  *   stays smooth in roughness (shade_cache.c).
  */
-/* A group of hot points near one another (a lamp): the points
- * pts[pts0 .. pts1) and part[part0 .. part1) lie within `radius` radians
- * of `axis`, so that a lobe that cannot reach the cone skips them all. */
-struct glint_env_hot_cluster {
-	struct vec3 axis;
-	double radius;
-	int pts0, pts1, part0, part1;
-};
-
 struct glint_env_hot {
 	int ntexels;
 	int npts;

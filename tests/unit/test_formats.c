@@ -579,8 +579,10 @@ static int write_jpeg_exif(const char *path, unsigned num, unsigned den)
 }
 
 /* JPEG through libjpeg-turbo: a smooth card written by stb's encoder reads
- * back within a few code values, under any name; a JPEG cut short and one
- * with a damaged Huffman table are errors naming the file. */
+ * back within a few code values, under any name; a JPEG cut short, one
+ * with a damaged Huffman table and one with fill bytes before its SOI are
+ * errors naming the file.  A GIF is refused by name; a PNG named .bmp is
+ * read by libpng. */
 static void test_jpeg_read(void)
 {
 	enum { W = 64, H = 48 };
@@ -629,6 +631,35 @@ static void test_jpeg_read(void)
 	      "a damaged Huffman table was read");
 	CHECK_MSG(glint_error_msg(), "not a readable JPEG");
 	glint_error_clear();
+	/* 0xff fill bytes before the SOI: stb would take it for a JPEG and
+	 * assert on its damaged table; libjpeg-turbo refuses it */
+	const char *fill =
+		GLINT_TEST_DATA "/../fuzz/regressions/stb/"
+				"jpeg-fill-bytes-before-soi-stb-asserts";
+	CHECK(glint_ldr_read(fill, &w, &h, &rgb) == -EIO && !rgb,
+	      "a JPEG with fill bytes before its SOI was read");
+	CHECK_MSG(glint_error_msg(), "not a readable JPEG");
+	glint_error_clear();
+	/* a format stb decodes but glint does not read: named, not decoded */
+	const char *gif = tmp_path("gif-named.tga");
+	FILE *g = fopen(gif, "wb");
+	if (g) {
+		fputs("GIF89a", g);
+		fclose(g);
+	}
+	CHECK(glint_ldr_read(gif, &w, &h, &rgb) == -EIO && !rgb,
+	      "a GIF was read");
+	CHECK_MSG(glint_error_msg(), "a GIF image");
+	glint_error_clear();
+	/* a PNG by its signature, whatever its name: libpng, not stb */
+	const char *png = tmp_path("png-named.bmp");
+	CHECK(glint_png_write_rgb8(png, W, H, px) == 0, "writing %s: %s", png,
+	      glint_error_msg());
+	CHECK(glint_ldr_read(png, &w, &h, &rgb) == 0 && rgb && w == W &&
+		      h == H && !memcmp(rgb, px, sizeof(px)),
+	      "a PNG named .bmp: %s", glint_error_msg());
+	free(rgb);
+	rgb = NULL;
 }
 
 static void test_exif(void)

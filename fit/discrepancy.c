@@ -20,41 +20,53 @@
 #include <string.h>
 
 /*
- * The systematic standard uncertainty of each parameter: 0.1 % of the
- * diffuse albedos, 0.7 % of the specular and 0.2 % of ior (an absolute
- * 0.0002 floor on albedos, whose small values make relative errors
- * large): the 68th percentiles of |fit - truth| / truth over noise-free
- * fits of photos the reference renderer made until each pixel's relative
- * standard error was under 1 % (tests/sim/test_coverage.c; the full study
- * under Venice, 27 values a class).  Photos at a fixed 256 samples per
- * technique gave 0.4 %, 4.6 % and 1.1 %: their own heavy-tailed Monte
- * Carlo noise in the highlight, which no camera has.  What the light adds
- * to those is carried by its own terms: the map's scale
- * (light_scale_sigma) and each compact source's flux, on every photo of a
- * joint fit too (fit/light_sources.c).
+ * The systematic standard uncertainty of each parameter, from what the
+ * light map is made of (map_pixel_deg, struct glint_fit_opts).
  *
- * Roughness keeps 4.1 %: the fast render's own error is 0.7 % under the
- * true map, but a map unwrapped from a probe is that map seen through the
- * probe's pixels (about 2 degrees a pixel on the simulated rig's ball,
- * 3.2 on the gray rig's smaller one), and a highlight under a blurred map
- * is broader, which the fit answers with a smoother surface: on the
- * simulated rig (bench/rig_materials.py) roughness is 2.5 % off at the
- * 68th percentile of the eleven materials and 6.7 % on the gray rig, where
- * the true map gives satin paint 0.0797 for 0.079 and its probe's 0.0770.
- * No term sizes that blur per fit yet.
+ * The fast render against the reference renderer, under a map that is the
+ * light itself: 0.1 % of the diffuse albedos, 0.5 % of the specular, 0.7 %
+ * of roughness and 0.2 % of ior (an absolute 0.0002 floor on albedos,
+ * whose small values make relative errors large): the diffuse albedos and
+ * roughness the 68th percentile of |fit - truth| / truth over noise-free fits
+ * of photos the reference renderer made until each pixel's relative standard
+ * error was under 1 % (tests/sim/test_coverage.c, the full study under Venice,
+ * 27 values a class), the specular albedos and ior their 95th percentile
+ * over 1.96, whose tails are heavier.  What the light's measurement adds
+ * is carried by its own terms: the map's scale (light_scale_sigma) and
+ * each compact source's flux, on every photo of a joint fit too
+ * (fit/light_sources.c).
+ *
+ * A map unwrapped from a probe is that light seen through the probe's
+ * pixels, and a highlight under a blurred map is broader, which the fit
+ * answers with a smoother surface: the specular albedos keep 0.7 % and
+ * ior 0.2 % (the simulated rig's), and roughness gains a term that grows
+ * as the cube of the probe pixel's angle, through two measured
+ * resolutions: roughness 2.5 % off at the 68th percentile of the eleven
+ * materials on the simulated rig (bench/rig_materials.py, its ball 84 px
+ * in radius: 1.93 degrees a pixel at 90 degrees from the probe's axis)
+ * and 6.7 % with the ball at 60 px (2.70 degrees), whose ratio less the
+ * fast render's own 0.7 % is (2.70 / 1.93) to the power 3.0.  A probe of
+ * unknown resolution
+ * (a sources file without map_pixel_deg) keeps 4.1 %.
  */
-void fit_systematic(const struct glint_model *m, const double *p, double *sys)
+void fit_systematic(const struct glint_model *m, const double *p,
+		    double map_pixel_deg, double *sys)
 {
+	int probe = map_pixel_deg != 0;
+	double blur = map_pixel_deg > 0 ? 0.024 * pow(map_pixel_deg / 1.93, 3)
+					: 0.041;
 	for (int k = 0; k < m->nparams; k++) {
 		double rel = 0.002, floor = 0;
 		for (int j = 0; j < m->bxdf->nlobes; j++)
 			if (k >= m->lobes->param[j] &&
 			    k < m->lobes->param[j] + 3) {
-				rel = m->lobes->varies[j] ? 0.007 : 0.001;
+				rel = !m->lobes->varies[j] ? 0.001
+				      : probe		   ? 0.007
+							   : 0.005;
 				floor = 0.0002;
 			}
 		if (k == m->lobes->roughness_param)
-			rel = 0.041;
+			rel = probe ? hypot(0.007, blur) : 0.007;
 		sys[k] = hypot(rel * fabs(p[k]), floor);
 	}
 }

@@ -127,6 +127,13 @@ struct glint_fit_opts {
 	 * of every parameter's standard error joins its systematic part. */
 	const struct glint_fit_light_source *sources;
 	int nsources;
+	/* How finely the map resolves the light, which sizes the systematic
+	 * roughness and specular terms (fit/discrepancy.c): 0, the map is
+	 * the light itself (no probe's record); > 0, the angle in degrees a
+	 * pixel of the probe it was unwrapped from spans (its sources file's
+	 * map_pixel_deg; a joint fit's coarsest); < 0, unwrapped from a
+	 * probe of unknown resolution. */
+	double map_pixel_deg;
 	/* leave the sampling lean in the answer (fit.c, remove_lean();
 	 * benchmarks' comparison) */
 	int keep_lean;

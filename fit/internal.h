@@ -203,7 +203,8 @@ int fit_reweight(struct objective *ob, struct fit_data *d, double *r);
 int fit_reweight_all(struct objective *ob, struct fit_data *d,
 		     const struct selections *sl);
 
-void fit_systematic(const struct glint_model *m, const double *p, double *sys);
+void fit_systematic(const struct glint_model *m, const double *p,
+		    double map_pixel_deg, double *sys);
 
 void fit_discrepancy(const struct glint_model *m, const double *p, double share,
 		     double *u);

@@ -450,6 +450,13 @@ int glint_fit_job_run(const struct glint_fit_job *job, json_t **result)
 			srcs[o.nsources++].view = k;
 		}
 	}
+	for (int k = 0; k < nv; k++) {
+		double pd = outs[k].job->map_pixel_deg;
+		if (pd < 0 || o.map_pixel_deg < 0)
+			o.map_pixel_deg = -1;
+		else
+			o.map_pixel_deg = fmax(o.map_pixel_deg, pd);
+	}
 	for (int k = 0; k < nv; k++)
 		for (int c = 0; c < 3; c++)
 			o.light_scale_sigma[c] =

@@ -44,6 +44,10 @@ struct glint_fit_job {
 	 * glint_fit_job_load() */
 	struct glint_fit_light_source sources[GLINT_FIT_MAX_SOURCES];
 	int nsources;
+	/* the probe's resolution from the sources file (its map_pixel_deg;
+	 * -1 where the file does not say); 0 without a sources file: the
+	 * map is taken as the light itself */
+	double map_pixel_deg;
 	/* > 0: run the fidelity ladder (fit/ladder.h) with this limit in
 	 * standard errors and report its fit */
 	double ladder;

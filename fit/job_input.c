@@ -119,7 +119,7 @@ static int read_photo(struct glint_fit_job *job, const char *weights_path);
  * is not positive is skipped.
  */
 static int read_sources(const char *path, struct glint_fit_light_source *out,
-			int *n)
+			int *n, double *map_pixel_deg)
 {
 	json_t *doc = NULL, *arr, *e;
 	size_t i;
@@ -128,6 +128,16 @@ static int read_sources(const char *path, struct glint_fit_light_source *out,
 	*n = 0;
 	if (ret < 0)
 		return ret;
+	*map_pixel_deg = -1;
+	if (json_object_get(doc, "map_pixel_deg")) {
+		ret = glint_json_number(path, "", doc, "map_pixel_deg", 1,
+					(struct glint_range){ 0, 180, 0, 0 },
+					map_pixel_deg);
+		if (ret < 0) {
+			json_decref(doc);
+			return ret;
+		}
+	}
 	arr = json_object_get(doc, "sources");
 	if (!json_is_array(arr)) {
 		json_decref(doc);
@@ -188,6 +198,7 @@ int glint_fit_job_load(struct glint_fit_job *job, const char *weights_path)
 	job->weights_path = weights_path;
 	job->photo = job->weight = NULL;
 	job->nsources = 0;
+	job->map_pixel_deg = 0;
 	if (ret == 0)
 		ret = glint_radiance_check(job->photo_path, job->srgb);
 	if (ret < 0)
@@ -206,7 +217,7 @@ int glint_fit_job_load(struct glint_fit_job *job, const char *weights_path)
 		glint_image_from_srgb(job->photo_path, job->photo);
 	if (ret == 0 && job->scene.env_sources_path[0])
 		ret = read_sources(job->scene.env_sources_path, job->sources,
-				   &job->nsources);
+				   &job->nsources, &job->map_pixel_deg);
 	return ret;
 }
 

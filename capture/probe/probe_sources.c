@@ -391,6 +391,10 @@ int glint_probe_find_sources(const struct glint_image *photo,
 	memset(out, 0, sizeof(*out));
 	if (cleaned)
 		*cleaned = NULL;
+	/* the reflected direction turns by 2 / (R cos(theta / 2)) radians a
+	 * pixel at theta from the axis: 2 sqrt 2 / R at 90 degrees */
+	if (o->ball_r > 0)
+		out->map_pixel_deg = 2 * sqrt(2.0) / o->ball_r * 180 / M_PI;
 	if ((variance && (variance->width != w || variance->height != h)) ||
 	    (weights && (weights->width != w || weights->height != h)))
 		return glint_error_set(EINVAL,
@@ -526,6 +530,9 @@ int glint_probe_sources_write(const char *path, const char *photo,
 			    "over solid angle in the map's units, sigmas 1 "
 			    "standard deviation"));
 	json_object_set_new(doc, "total_flux", triple(s->total_flux));
+	if (s->map_pixel_deg > 0)
+		json_object_set_new(doc, "map_pixel_deg",
+				    json_real(s->map_pixel_deg));
 	for (int i = 0; i < s->n; i++) {
 		const struct glint_light_source *l = &s->s[i];
 		json_t *o = json_object();
@@ -575,8 +582,10 @@ int glint_probe_sources_write(const char *path, const char *photo,
 
 int glint_probe_sources_read(const char *path, struct glint_light_sources *s)
 {
-	static const char *const top[] = { "generator",	 "photo",   "what",
-					   "total_flux", "sources", NULL };
+	static const char *const top[] = {
+		"generator",	 "photo",   "what", "total_flux",
+		"map_pixel_deg", "sources", NULL
+	};
 	const struct glint_range any = { -1e30, 1e30, 0, 0 };
 	const struct glint_range pos = { 0, 1e30, 0, 0 };
 	json_t *doc, *arr;
@@ -589,6 +598,10 @@ int glint_probe_sources_read(const char *path, struct glint_light_sources *s)
 	if (ret == 0)
 		ret = glint_json_numbers(path, "", doc, "total_flux", 1, 3, pos,
 					 s->total_flux);
+	if (ret == 0)
+		ret = glint_json_number(path, "", doc, "map_pixel_deg", 0,
+					(struct glint_range){ 0, 180, 0, 0 },
+					&s->map_pixel_deg);
 	arr = json_object_get(doc, "sources");
 	if (ret == 0 && !json_is_array(arr))
 		ret = glint_error_set(EINVAL, "%s: sources: expected an array",

@@ -59,6 +59,12 @@ struct glint_light_sources {
 	struct glint_light_source s[GLINT_MAX_SOURCES];
 	/* the whole map's integral of L d(omega) (after the unwrap) */
 	double total_flux[3];
+	/* The angle one probe pixel spans at 90 degrees from the probe
+	 * camera's axis (2 sqrt 2 / ball radius, in degrees): how finely the
+	 * map unwrapped from this probe resolves the light, which sizes the
+	 * fit's systematic roughness term (fit/discrepancy.c).  0: not known
+	 * (a file written without it). */
+	double map_pixel_deg;
 };
 
 /* Detection thresholds (defaults: contrast 8, 70 % of the light within 2

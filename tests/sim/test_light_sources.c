@@ -178,11 +178,40 @@ static void job_reads_sources(const char *map)
 				      job.sources[0].flux_sigma[0] == 0.015 &&
 				      fabs(job.sources[0].radius_deg - 2.4) <
 					      1e-9 &&
-				      fabs(job.sources[0].dir[1] - d.y) < 1e-6,
+				      fabs(job.sources[0].dir[1] - d.y) <
+					      1e-6 &&
+				      job.map_pixel_deg == -1,
 			      "read %d sources: sigma %g, radius %g",
 			      job.nsources, job.sources[0].flux_sigma[0],
 			      job.sources[0].radius_deg);
 		}
+		glint_fit_job_unload(&job);
+	}
+	/* the probe's resolution, and a bad one named */
+	for (int bad = 0; bad < 2; bad++) {
+		f = fopen(src, "w");
+		CHECK(f != NULL, "%s", src);
+		if (!f)
+			return;
+		fprintf(f, "{\"map_pixel_deg\": %s, \"sources\": []}\n",
+			bad ? "-3" : "1.93");
+		fclose(f);
+		struct glint_fit_job job;
+		memset(&job, 0, sizeof(job));
+		job.scene_path = scene;
+		job.photo_path = photo;
+		int ret = glint_fit_job_load(&job, NULL);
+		if (bad)
+			CHECK(ret < 0 && strstr(glint_error_msg(),
+						"map_pixel_deg"),
+			      "a negative map_pixel_deg: %s",
+			      ret < 0 ? glint_error_msg() : "accepted");
+		else
+			CHECK(ret == 0 && job.map_pixel_deg == 1.93 &&
+				      job.nsources == 0,
+			      "map_pixel_deg %g: %s", job.map_pixel_deg,
+			      ret < 0 ? glint_error_msg() : "");
+		glint_error_clear();
 		glint_fit_job_unload(&job);
 	}
 }

@@ -338,6 +338,13 @@ static void test_round_trip(void)
 			      back.s[0].saturated == s.s[0].saturated,
 		      "the source read back differs");
 	}
+	/* the probe's resolution: 2 sqrt 2 / R radians a pixel at 90
+	 * degrees from its axis, kept through the file */
+	double want = 2 * sqrt(2.0) / RADIUS_PX * 180 / M_PI;
+	CHECK(fabs(s.map_pixel_deg - want) < 1e-9 &&
+		      fabs(back.map_pixel_deg - s.map_pixel_deg) < 1e-6,
+	      "map_pixel_deg %g, read back %g, for %g", s.map_pixel_deg,
+	      back.map_pixel_deg, want);
 	/* a broken file names itself and the key */
 	FILE *f = fopen(path, "w");
 	if (f) {

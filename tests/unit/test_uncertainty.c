@@ -18,6 +18,10 @@
  *   - a column of zeros (a parameter the data cannot see) gets an
  *     infinite standard error and its whole bound range;
  *   - the delta method on a product of two parameters;
+ *   - the systematic term sized by the light map (fit/discrepancy.c): a
+ *     map that is the light, one from a probe of a given resolution (its
+ *     roughness term growing with the probe pixel's angle) and one of
+ *     unknown resolution;
  *   - what params.json says the photo does not determine: a
  *     Torrance-Sparrow result whose specular albedos and ior correlate
  *     (the trade-off, with specular x F0(ior) and its error), whose
@@ -28,6 +32,7 @@
 #include "test.h"
 
 #include "fit/brdf/microfacet.h"
+#include "fit/internal.h"
 #include "fit/job.h"
 #include "fit/optim/uncertainty.h"
 
@@ -481,9 +486,44 @@ static void lean(void)
 	      "standard error %.4f, spread %.4f", lse, lsd);
 }
 
+/* fit_systematic() per map: the fast render's own accuracy under a map
+ * that is the light; the probe's blur added to roughness, growing with
+ * its pixel's angle; 4.1 % where the probe does not say. */
+static void systematic_by_map(void)
+{
+	static const double p[8] = {
+		0.3, 0.1, 0.03, 0.3, 0.27, 0.24, 0.04, 1.43
+	};
+	const struct glint_model *m = glint_model_find("torrance-sparrow");
+	double given[8], rig[8], coarse[8], unknown[8];
+	fit_systematic(m, p, 0, given);
+	fit_systematic(m, p, 1.93, rig);
+	fit_systematic(m, p, 2.70, coarse);
+	fit_systematic(m, p, -1, unknown);
+	CHECK(fabs(given[6] / p[6] - 0.007) < 1e-9,
+	      "roughness under the true map: %g %%", 100 * given[6] / p[6]);
+	CHECK(fabs(rig[6] / p[6] - 0.025) < 0.0005,
+	      "roughness at 1.93 degrees a pixel: %g %%", 100 * rig[6] / p[6]);
+	CHECK(fabs(coarse[6] / p[6] - 0.067) < 0.002,
+	      "roughness at 2.70 degrees a pixel: %g %%",
+	      100 * coarse[6] / p[6]);
+	CHECK(fabs(unknown[6] / p[6] - hypot(0.007, 0.041)) < 1e-9,
+	      "roughness from a probe of unknown resolution: %g %%",
+	      100 * unknown[6] / p[6]);
+	CHECK(fabs(given[3] - hypot(0.005 * p[3], 0.0002)) < 1e-12 &&
+		      fabs(rig[3] - hypot(0.007 * p[3], 0.0002)) < 1e-12,
+	      "specular: %g under the map, %g from a probe", given[3], rig[3]);
+	CHECK(fabs(given[0] - hypot(0.001 * p[0], 0.0002)) < 1e-12 &&
+		      given[0] == rig[0],
+	      "diffuse: %g, %g", given[0], rig[0]);
+	CHECK(fabs(given[7] - 0.002 * p[7]) < 1e-12 && given[7] == rig[7],
+	      "ior: %g, %g", given[7], rig[7]);
+}
+
 int main(void)
 {
 	RUN(acceptance);
+	RUN(systematic_by_map);
 	RUN(lean);
 	static double jac[2 * M], r[M], draws[4 * M];
 	static int block[M];

@@ -46,20 +46,22 @@
  * pixels, and a highlight under a blurred map is broader, which the fit
  * answers with a smoother surface: the specular albedos keep 0.7 % and
  * ior 0.2 % (the simulated rig's), and roughness gains a term that grows
- * as the cube of the probe pixel's angle, through two measured
- * resolutions: roughness 2.5 % off at the 68th percentile of the eleven
- * materials on the simulated rig (bench/rig_materials.py, its ball 84 px
- * in radius: 1.93 degrees a pixel at 90 degrees from the probe's axis)
- * and 6.7 % with the ball at 60 px (2.70 degrees), whose ratio less the
- * fast render's 0.7 % is (2.70 / 1.93) to the power 3.0; beside the
- * 1.3 % above, 2.7 % on the shipped rig.  A probe of unknown resolution
+ * as the square of the probe pixel's angle (a lobe of width m fitted
+ * under light blurred by b: m^2 - b^2 / 4 to first order), through the
+ * two resolutions measured: roughness 2.5 % off at the 68th percentile of
+ * the eleven materials on the simulated rig (bench/rig_materials.py, its
+ * ball 96 px in radius: 1.69 degrees a pixel at 90 degrees from the
+ * probe's axis) and 6.7 % with the ball at 60 px (2.70 degrees), whose
+ * ratio less the fast render's 0.7 % is (2.70 / 1.69) to the power 2.2;
+ * beside the 1.3 % above, 2.7 % on the shipped rig (6.3 % at 60 px).
+ * A probe of unknown resolution
  * (a sources file without map_pixel_deg) gets 4.1 % for the blur.
  */
 void fit_systematic(const struct glint_model *m, const double *p,
 		    double map_pixel_deg, double *sys)
 {
 	int probe = map_pixel_deg != 0;
-	double blur = map_pixel_deg > 0 ? 0.024 * pow(map_pixel_deg / 1.93, 3)
+	double blur = map_pixel_deg > 0 ? 0.024 * pow(map_pixel_deg / 1.69, 2)
 					: 0.041;
 	for (int k = 0; k < m->nparams; k++) {
 		double rel = 0.002, floor = 0;

@@ -33,11 +33,11 @@
  * term the 68th percentile of |fit - truth| / truth over noise-free fits, the
  * specular albedos' and ior's their 95th percentile over 1.96, since
  * their tails are heavier.  Roughness's noise-free 68th percentile is
- * 0.7 %, but at 0.7 % the broad lobes' intervals on dim photos (matte
- * paint and teflon at 10 000 and 1 000 electrons) missed 8 of 52, their
- * statistical part short of what the noise does to a broad, faint
- * highlight; 1.3 % covers all but 3 of them and keeps the noise-free
- * median |error| / sigma near 0.45.  What the light's measurement adds
+ * 0.7 %, but at 0.7 % 8 of the 52 roughness intervals on dim photos (10 000
+ * and 1 000 electrons) missed, 7 of them broad lobes (matte paint and
+ * teflon), whose statistical part falls short of what the noise does to
+ * a broad, faint highlight; at 1.3 % 3 miss (92-96 % covered) and the
+ * noise-free median |error| / sigma is 0.47.  What the light's measurement adds
  * is carried by its own terms: the map's scale (light_scale_sigma) and
  * each compact source's flux, on every photo of a joint fit too
  * (fit/light_sources.c).

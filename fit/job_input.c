@@ -128,15 +128,13 @@ static int read_sources(const char *path, struct glint_fit_light_source *out,
 	*n = 0;
 	if (ret < 0)
 		return ret;
-	*map_pixel_deg = -1;
-	if (json_object_get(doc, "map_pixel_deg")) {
-		ret = glint_json_number(path, "", doc, "map_pixel_deg", 1,
-					(struct glint_range){ 0, 180, 0, 0 },
-					map_pixel_deg);
-		if (ret < 0) {
-			json_decref(doc);
-			return ret;
-		}
+	*map_pixel_deg = -1; /* absent: a probe of unknown resolution */
+	ret = glint_json_number(path, "", doc, "map_pixel_deg", 0,
+				(struct glint_range){ 0, 180, 0, 0 },
+				map_pixel_deg);
+	if (ret < 0) {
+		json_decref(doc);
+		return ret;
 	}
 	arr = json_object_get(doc, "sources");
 	if (!json_is_array(arr)) {

@@ -126,8 +126,28 @@ static int said(const struct glint_fit_result *res, const char *what)
 	return found;
 }
 
+/* Writes text as the sources file src, then loads the scene's job into
+ * *job (the caller unloads it); returns the load's result, -1 where src
+ * could not be written. */
+static int load_with_sources(const char *scene, const char *photo,
+			     const char *src, const char *text,
+			     struct glint_fit_job *job)
+{
+	FILE *f = fopen(src, "w");
+	CHECK(f != NULL, "%s", src);
+	memset(job, 0, sizeof(*job));
+	if (!f)
+		return -1;
+	fputs(text, f);
+	fclose(f);
+	job->scene_path = scene;
+	job->photo_path = photo;
+	return glint_fit_job_load(job, NULL);
+}
+
 /* The scene file's environment.sources through the job: the lamp read
- * with its sigma; a source without a flux named. */
+ * with its sigma; a source without a flux named; the probe's resolution
+ * read, absent taken as unknown (-1), a negative one named. */
 static void job_reads_sources(const char *map)
 {
 	char scene[600], src[600], photo[600];
@@ -149,22 +169,15 @@ static void job_reads_sources(const char *map)
 		map);
 	fclose(f);
 	for (int bad = 0; bad < 2; bad++) {
-		f = fopen(src, "w");
-		CHECK(f != NULL, "%s", src);
-		if (!f)
-			return;
-		fprintf(f,
-			"{\"sources\": [{\"direction\": [%.9f, %.9f, %.9f], "
-			"\"flux\": [0.1, 0.08, 0.05], %s\"size_deg\": 0.8, "
-			"\"pixel_deg\": 1.2, \"saturated\": false}]}\n",
-			d.x, d.y, d.z,
-			bad ? "" : "\"flux_sigma\": [0.015, 0.012, 0.0075], ");
-		fclose(f);
+		char text[400];
+		snprintf(text, sizeof(text),
+			 "{\"sources\": [{\"direction\": [%.9f, %.9f, %.9f], "
+			 "\"flux\": [0.1, 0.08, 0.05], %s\"size_deg\": 0.8, "
+			 "\"pixel_deg\": 1.2, \"saturated\": false}]}\n",
+			 d.x, d.y, d.z,
+			 bad ? "" : "\"flux_sigma\": [0.015, 0.012, 0.0075], ");
 		struct glint_fit_job job;
-		memset(&job, 0, sizeof(job));
-		job.scene_path = scene;
-		job.photo_path = photo;
-		int ret = glint_fit_job_load(&job, NULL);
+		int ret = load_with_sources(scene, photo, src, text, &job);
 		if (bad) {
 			CHECK(ret < 0 &&
 				      strstr(glint_error_msg(), "sources[0]") &&
@@ -189,18 +202,12 @@ static void job_reads_sources(const char *map)
 	}
 	/* the probe's resolution, and a bad one named */
 	for (int bad = 0; bad < 2; bad++) {
-		f = fopen(src, "w");
-		CHECK(f != NULL, "%s", src);
-		if (!f)
-			return;
-		fprintf(f, "{\"map_pixel_deg\": %s, \"sources\": []}\n",
-			bad ? "-3" : "1.93");
-		fclose(f);
 		struct glint_fit_job job;
-		memset(&job, 0, sizeof(job));
-		job.scene_path = scene;
-		job.photo_path = photo;
-		int ret = glint_fit_job_load(&job, NULL);
+		int ret = load_with_sources(
+			scene, photo, src,
+			bad ? "{\"map_pixel_deg\": -3, \"sources\": []}\n"
+			    : "{\"map_pixel_deg\": 1.93, \"sources\": []}\n",
+			&job);
 		if (bad)
 			CHECK(ret < 0 && strstr(glint_error_msg(),
 						"map_pixel_deg"),

@@ -108,6 +108,87 @@ static void test_pdf_integrates(void)
 	glint_envmap_free(env);
 }
 
+/* The interval holding x in a CDF of n intervals by a full scan: the
+ * last whose start is at most x. */
+static int scan_cdf(const double *cdf, int n, double x)
+{
+	int i = 0;
+	for (int k = 1; k < n; k++)
+		if (cdf[k] <= x)
+			i = k;
+	return i;
+}
+
+/* Sampling inverts the CDFs as a full scan does: samples at random and
+ * at every interval's edge (and just below it), on a map with a sun,
+ * black rows and black runs within rows (zero-width intervals). */
+static void test_sampling_inverse(void)
+{
+	double rot[3] = { 0, 70, 0 };
+	int w = 64, h = 32, worst_i = 0;
+	struct glint_image *img = glint_image_new(w, h);
+	struct glint_envmap *env;
+	double worst = 0;
+
+	for (int y = 0; y < h; y++)
+		for (int x = 0; x < w; x++) {
+			float *p = glint_image_px(img, x, y);
+			int black = (y >= 20 && y < 24) || (x >= 10 && x < 30);
+			for (int c = 0; c < 3; c++)
+				p[c] = black ? 0 : (float)(0.1 + 0.01 * x);
+		}
+	for (int c = 0; c < 3; c++)
+		glint_image_px(img, 40, 8)[c] = 1e5f;
+	int ret = glint_envmap_new(img, rot, 1.0, "cdf", &env);
+	CHECK(ret == 0, "%s", glint_error_msg());
+	if (ret < 0)
+		return;
+	const struct glint_env_dist *dd = &env->dist;
+	int n = 20000 + 4 * (h + 1) * (w + 1);
+	for (int k = 0; k < n; k++) {
+		double u1, u2;
+		if (k < 20000) {
+			u1 = glint_u01(glint_hash32(2 * k + 3));
+			u2 = glint_u01(glint_hash32(2 * k + 9999));
+		} else { /* each row's and column's edge, and just below */
+			int e = (k - 20000) / 4, j = e / (w + 1),
+			    i = e % (w + 1);
+			u1 = dd->marginal[j] / dd->total;
+			u2 = (double)i / w;
+			if ((k & 1) && u1 > 0)
+				u1 = nextafter(u1, 0);
+			if ((k & 2) && u2 > 0)
+				u2 = nextafter(u2, 0);
+			u1 = fmin(u1, nextafter(1, 0));
+			u2 = fmin(u2, nextafter(1, 0));
+		}
+		struct vec3 d;
+		glint_envmap_sample(env, u1, u2, &d);
+		double x = u1 * dd->total;
+		int j = scan_cdf(dd->marginal, h, x);
+		double row_w = dd->marginal[j + 1] - dd->marginal[j];
+		double fv = row_w > 0 ? (x - dd->marginal[j]) / row_w : 0.5;
+		const double *c = dd->cond + (size_t)j * (w + 1);
+		double y = u2 * c[w];
+		int i = scan_cdf(c, w, y);
+		double cell = c[i + 1] - c[i];
+		double fu = cell > 0 ? (y - c[i]) / cell : 0.5;
+		struct vec3 e = m3_mul(
+			&env->rot,
+			glint_latlong_uv_to_dir((i + fu) / w, (j + fv) / h));
+		double dist = v3_len(v3_sub(d, e));
+		if (dist > worst) {
+			worst = dist;
+			worst_i = k;
+		}
+	}
+	CHECK(worst < 1e-9,
+	      "sample %d: %.3g from the full scan's direction (another "
+	      "interval)",
+	      worst_i, worst);
+	glint_envmap_free(env);
+}
+
 /* Samples return the pdf glint_envmap_pdf gives, and their histogram
  * over texels matches the pdf (chi-square). */
 static void test_sampling_histogram(void)
@@ -487,6 +568,7 @@ int main(void)
 	RUN(test_lookup);
 	RUN(test_pdf_integrates);
 	RUN(test_sampling_histogram);
+	RUN(test_sampling_inverse);
 	RUN(test_bad_maps);
 	RUN(test_irradiance_odd_sizes);
 	RUN(test_irradiance_softboxes);

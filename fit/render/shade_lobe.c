@@ -100,6 +100,52 @@ static int hit_at(const struct cache_foot *f, const double at[2],
 	return 1;
 }
 
+/* One lobe sample between choosing its direction and reading its light
+ * (lobe_sample_start(), lobe_sample_finish()). */
+struct lobe_pending {
+	struct glint_env_query q;
+	double bjz, pb, w;
+};
+
+/* One lobe sample (uniforms uu) at hit h: its direction, and its texels
+ * prefetched; 0 where the lobe gives it no weight. */
+static int lobe_sample_start(const struct glint_shade_cache *c,
+			     const struct cache_hit *h, const double *p, int j,
+			     const double uu[2], double w,
+			     struct lobe_pending *lp)
+{
+	struct vec3 wi;
+	double bj;
+
+	double pb = glint_lobe_sample_value(c->model, p, j, fv(h->wo), uu, &wi,
+					    &bj);
+	if (!(pb > 0) || bj <= 0)
+		return 0;
+	/* The rest's radiance, continuous across the hot texels' edges
+	 * (their part is shade_hot_quadrature()'s). */
+	glint_env_query_start(c->hot, local_to_world(h, wi), &lp->q);
+	lp->bjz = bj * wi.z;
+	lp->pb = pb;
+	lp->w = w;
+	return 1;
+}
+
+/* The sample's light, weighted by the balance heuristic against nl env
+ * samples and by its w, added to out. */
+static void lobe_sample_finish(const struct glint_shade_cache *c, int nl,
+			       int nb, const struct lobe_pending *lp,
+			       double out[3])
+{
+	double l[3], ps = 0;
+
+	glint_env_query_finish(c->hot, &lp->q, l, &ps);
+	if (!nl)
+		ps = 0;
+	double w = lp->w * (lp->bjz / (nl * ps + nb * lp->pb));
+	for (int ch = 0; ch < 3; ch++)
+		out[ch] += w * l[ch];
+}
+
 /* One lobe sample (uniforms uu) at hit h, weighted by the balance
  * heuristic against nl env samples and by w, added to out. */
 static void lobe_sample(const struct glint_shade_cache *c,
@@ -107,23 +153,10 @@ static void lobe_sample(const struct glint_shade_cache *c,
 			int nl, int nb, const double uu[2], double w,
 			double out[3])
 {
-	const struct glint_model *m = c->model;
-	struct vec3 wi;
-	double bj;
+	struct lobe_pending lp;
 
-	double pb = glint_lobe_sample_value(m, p, j, fv(h->wo), uu, &wi, &bj);
-	if (!(pb > 0) || bj <= 0)
-		return;
-	struct vec3 ww = local_to_world(h, wi);
-	double l[3], ps = 0;
-	/* The rest's radiance, continuous across the hot texels' edges
-	 * (their part is shade_hot_quadrature()'s). */
-	glint_env_query(c->hot, ww, l, &ps);
-	if (!nl)
-		ps = 0;
-	w *= bj * wi.z / (nl * ps + nb * pb);
-	for (int ch = 0; ch < 3; ch++)
-		out[ch] += w * l[ch];
+	if (lobe_sample_start(c, h, p, j, uu, w, &lp))
+		lobe_sample_finish(c, nl, nb, &lp, out);
 }
 
 /*
@@ -173,6 +206,9 @@ void shade_lobe_at_hit(const struct glint_shade_cache *c,
 			out[ch] += w * e->l[ch];
 	}
 	double w_hit = sp ? 1 - sp->w : 1;
+	int spread = sp && sp->w > 0;
+	struct lobe_pending pend[8];
+	int npend = 0;
 	for (int k = 0; k < nb; k++) {
 		double uu[2];
 		if (hs >= 0) {
@@ -185,9 +221,24 @@ void shade_lobe_at_hit(const struct glint_shade_cache *c,
 			uu[0] -= uu[0] >= 1;
 			uu[1] -= uu[1] >= 1;
 		}
+		if (!spread) {
+			/* The hit's samples alone: up to 8 directions
+			 * first, then their light, so that their table reads
+			 * overlap (the same sums in the same order). */
+			if (w_hit > 0)
+				npend += lobe_sample_start(c, h, p, j, uu,
+							   w_hit, &pend[npend]);
+			if (npend == 8 || (k == nb - 1 && npend)) {
+				for (int e = 0; e < npend; e++)
+					lobe_sample_finish(c, nl, nb, &pend[e],
+							   out);
+				npend = 0;
+			}
+			continue;
+		}
 		if (w_hit > 0)
 			lobe_sample(c, h, p, j, nl, nb, uu, w_hit, out);
-		if (sp && sp->w > 0) {
+		if (spread) {
 			/* Point q of a (0, 2)-set over the pixel, shifted;
 			 * the points shuffled among the samples (by index,
 			 * x would follow the lobe sample's own first

@@ -696,23 +696,38 @@ static void rest_uv(const struct glint_envmap *env,
 		lookup_uv(env, u, v, rgb);
 }
 
-void glint_env_query(const struct glint_env_hot *hot, struct vec3 d,
-		     double rgb[3], double *pdf_smooth)
+void glint_env_query_start(const struct glint_env_hot *hot, struct vec3 d,
+			   struct glint_env_query *q)
 {
 	const struct glint_envmap *env = hot->env;
 	int w = env->img->width, h = env->img->height;
 	struct vec3 dm = m3_tmul(&env->rot, d);
-	double u, v, cy = fmin(fmax(dm.y, -1), 1);
+	double u, v;
 
+	q->cy = fmin(fmax(dm.y, -1), 1);
 	glint_latlong_dir_to_uv(dm, &u, &v);
 	/* u, v in [0, 1]: x, y within half a texel of the map, whose
 	 * border in the table holds what wrapping and clamping would read. */
 	double x = fmin(fmax(u * w - 0.5, -0.5), w - 0.5);
 	double y = fmin(fmax(v * h - 0.5, -0.5), h - 0.5);
-	double fx = floor(x), fy = floor(y), tx = x - fx, ty = y - fy;
-	size_t stride = (size_t)w + 2;
-	const float *t = hot->tab + 4 * ((size_t)((int)fy + 1) * stride +
-					 (size_t)((int)fx + 1));
+	double fx = floor(x), fy = floor(y);
+	q->tx = x - fx;
+	q->ty = y - fy;
+	q->stride = (size_t)w + 2;
+	q->t = hot->tab +
+	       4 * ((size_t)((int)fy + 1) * q->stride + (size_t)((int)fx + 1));
+	__builtin_prefetch(q->t);
+	__builtin_prefetch(q->t + 4 * q->stride);
+}
+
+void glint_env_query_finish(const struct glint_env_hot *hot,
+			    const struct glint_env_query *qs, double rgb[3],
+			    double *pdf_smooth)
+{
+	const struct glint_envmap *env = hot->env;
+	const float *t = qs->t;
+	size_t stride = qs->stride;
+	double tx = qs->tx, ty = qs->ty, cy = qs->cy;
 	const float *q[4] = { t, t + 4, t + 4 * stride, t + 4 * stride + 4 };
 	double wt[4] = { (1 - ty) * (1 - tx), (1 - ty) * tx, ty * (1 - tx),
 			 ty * tx };
@@ -727,6 +742,15 @@ void glint_env_query(const struct glint_env_hot *hot, struct vec3 d,
 	double s = sqrt(1 - cy * cy); /* sin(pi v) */
 	*pdf_smooth =
 		s > 0 && hot->rest.total > 0 ? p / (2 * M_PI * M_PI * s) : 0;
+}
+
+void glint_env_query(const struct glint_env_hot *hot, struct vec3 d,
+		     double rgb[3], double *pdf_smooth)
+{
+	struct glint_env_query q;
+
+	glint_env_query_start(hot, d, &q);
+	glint_env_query_finish(hot, &q, rgb, pdf_smooth);
 }
 
 void glint_env_rest_lookup(const struct glint_envmap *env,

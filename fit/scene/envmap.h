@@ -144,6 +144,19 @@ struct glint_env_hot {
  */
 void glint_env_query(const struct glint_env_hot *hot, struct vec3 d,
 		     double rgb[3], double *pdf_smooth);
+/* glint_env_query() in two steps, so that several queries' table reads
+ * overlap: _start converts the direction and prefetches the texels,
+ * _finish reads them; the same values as glint_env_query(). */
+struct glint_env_query {
+	const float *t;
+	size_t stride;
+	double tx, ty, cy;
+};
+void glint_env_query_start(const struct glint_env_hot *hot, struct vec3 d,
+			   struct glint_env_query *q);
+void glint_env_query_finish(const struct glint_env_hot *hot,
+			    const struct glint_env_query *q, double rgb[3],
+			    double *pdf_smooth);
 /* The radiance of the map's rest alone (glint_env_query()). */
 void glint_env_rest_lookup(const struct glint_envmap *env,
 			   const struct glint_env_hot *hot, struct vec3 d,

@@ -76,53 +76,102 @@ static double hit_sphere(struct vec3 o, struct vec3 d, struct vec3 c, double r)
 	return t > 0 ? t : -1;
 }
 
-static void shade(const struct ref_job *job, struct vec3 pos, struct vec3 d,
-		  struct rng *rng, double rgb[3])
+/* shade()'s samples in batches of this many (shade_batch()). */
+enum { REF_BATCH = 16 };
+
+static int imin(int a, int b)
+{
+	return a < b ? a : b;
+}
+
+/* One of shade()'s samples between drawing its direction and reading its
+ * light. */
+struct ref_pending {
+	struct vec3 wi;
+	struct glint_envmap_loc q;
+	double pl, pb; /* light's and lobe's pdfs (pl of a lobe sample: 0
+			* until read) */
+};
+
+/* A batch of shade()'s samples of lobe j, k in [k0, k1) (every one of one
+ * technique): their uniforms drawn in order, their directions, then their
+ * light, so that their table reads overlap; the same sums in the same
+ * order as one at a time. */
+static void shade_batch(const struct ref_job *job, int j, int k0, int k1,
+			struct vec3 t, struct vec3 b, struct vec3 n,
+			struct vec3 wo, struct rng *rng, double rgb[3])
 {
 	const struct glint_bxdf_ops *ops = job->bx.ops;
 	const void *self = job->bx.self;
+	const double *alb = ops->albedo(self, j);
+	int ns = job->o->samples, m = k1 - k0, env = k0 < ns, np = 0;
+	double u1[REF_BATCH], u2[REF_BATCH], pl[REF_BATCH];
+	double lobes[GLINT_MAX_PARAMS];
+	struct vec3 ww[REF_BATCH];
+	struct ref_pending pend[REF_BATCH];
+
+	for (int e = 0; e < m; e++) {
+		/* env-map samples on jittered strata; lobe samples free */
+		u1[e] = env ? (k0 + e + rng_u01(rng)) / ns : rng_u01(rng);
+		u2[e] = rng_u01(rng);
+	}
+	if (env)
+		glint_envmap_sample_n(job->env, m, u1, u2, ww, pl);
+	for (int e = 0; e < m; e++) {
+		struct ref_pending *q = &pend[np];
+		if (env) {
+			q->wi = v3(v3_dot(ww[e], t), v3_dot(ww[e], b),
+				   v3_dot(ww[e], n));
+			if (!(pl[e] > 0) || !(q->wi.z > 0))
+				continue;
+			q->pl = pl[e];
+			q->pb = ops->pdf_lobe(self, j, wo, q->wi);
+		} else {
+			double u[2] = { u1[e], u2[e] };
+			q->pb = ops->sample_lobe(self, j, wo, u, &q->wi);
+			if (!(q->pb > 0))
+				continue;
+			ww[e] = v3_add(v3_add(v3_scale(t, q->wi.x),
+					      v3_scale(b, q->wi.y)),
+				       v3_scale(n, q->wi.z));
+		}
+		glint_envmap_locate(job->env, ww[e], &q->q);
+		np++;
+	}
+	for (int e = 0; e < np; e++) {
+		const struct ref_pending *q = &pend[e];
+		double l[3],
+			p_l = env ? q->pl
+				  : glint_envmap_located_pdf(job->env, &q->q);
+		ops->eval_lobes(self, wo, q->wi, lobes);
+		if (lobes[j] <= 0)
+			continue;
+		/* Power heuristic, one sample of ns per technique. */
+		double pk = env ? p_l : q->pb, po = env ? q->pb : p_l;
+		double w = pk * pk / (pk * pk + po * po);
+		glint_envmap_located_lookup(job->env, &q->q, l);
+		for (int c = 0; c < 3; c++)
+			rgb[c] += alb[c] * lobes[j] * l[c] * q->wi.z * w /
+				  (pk * ns);
+	}
+}
+
+static void shade(const struct ref_job *job, struct vec3 pos, struct vec3 d,
+		  struct rng *rng, double rgb[3])
+{
 	int ns = job->o->samples;
 	struct vec3 n = v3_norm(v3_sub(pos, job->sc->sphere_centre)), t, b;
-	double lobes[GLINT_MAX_PARAMS], l[3];
 
 	v3_frame(n, &t, &b);
 	struct vec3 wo = v3(-v3_dot(d, t), -v3_dot(d, b), -v3_dot(d, n));
 	rgb[0] = rgb[1] = rgb[2] = 0;
-	for (int j = 0; j < ops->nlobes; j++) {
-		const double *alb = ops->albedo(self, j);
-		for (int k = 0; k < 2 * ns; k++) {
-			struct vec3 wi, ww;
-			double pl, pb;
-			if (k < ns) { /* env-map sample, jittered strata */
-				double u1 = (k + rng_u01(rng)) / ns;
-				double u2 = rng_u01(rng);
-				pl = glint_envmap_sample(job->env, u1, u2, &ww);
-				wi = v3(v3_dot(ww, t), v3_dot(ww, b),
-					v3_dot(ww, n));
-				if (!(pl > 0) || !(wi.z > 0))
-					continue;
-				pb = ops->pdf_lobe(self, j, wo, wi);
-			} else { /* lobe sample */
-				double u[2] = { rng_u01(rng), rng_u01(rng) };
-				pb = ops->sample_lobe(self, j, wo, u, &wi);
-				if (!(pb > 0))
-					continue;
-				ww = v3_add(v3_add(v3_scale(t, wi.x),
-						   v3_scale(b, wi.y)),
-					    v3_scale(n, wi.z));
-				pl = glint_envmap_pdf(job->env, ww);
-			}
-			ops->eval_lobes(self, wo, wi, lobes);
-			if (lobes[j] <= 0)
-				continue;
-			/* Power heuristic, one sample of ns per technique. */
-			double pk = k < ns ? pl : pb, po = k < ns ? pb : pl;
-			double w = pk * pk / (pk * pk + po * po);
-			glint_envmap_lookup(job->env, ww, l);
-			for (int c = 0; c < 3; c++)
-				rgb[c] += alb[c] * lobes[j] * l[c] * wi.z * w /
-					  (pk * ns);
-		}
+	for (int j = 0; j < job->bx.ops->nlobes; j++) {
+		for (int k = 0; k < ns; k += REF_BATCH) /* env-map samples */
+			shade_batch(job, j, k, imin(k + REF_BATCH, ns), t, b, n,
+				    wo, rng, rgb);
+		for (int k = ns; k < 2 * ns; k += REF_BATCH) /* lobe samples */
+			shade_batch(job, j, k, imin(k + REF_BATCH, 2 * ns), t,
+				    b, n, wo, rng, rgb);
 	}
 }
 

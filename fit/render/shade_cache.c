@@ -26,33 +26,47 @@ static void draw_env_samples(const struct glint_envmap *env,
 			     const struct cache_hit *h, int nl, uint32_t salt,
 			     int s, uint32_t seed, struct env_sample *es)
 {
+	enum { BATCH = 16 }; /* drawn side by side (glint_env_dist_sample_n) */
+	double u1[BATCH], u2[BATCH], pdfs[BATCH];
+	struct vec3 ds[BATCH];
+
 	for (int k = 0; k < nl; k++) {
-		double u[2], l[3];
-		struct vec3 d;
-		glint_sobol2((uint32_t)(s * nl + k), seed ^ salt, u);
-		double pdf =
-			glint_env_dist_sample(env, &hot->rest, u[0], u[1], &d);
-		struct env_sample *e = &es[k];
+		int e = k % BATCH;
+		if (!e) {
+			int cnt = nl - k < BATCH ? nl - k : BATCH;
+			for (int a = 0; a < cnt; a++) {
+				double u[2];
+				glint_sobol2((uint32_t)(s * nl + k + a),
+					     seed ^ salt, u);
+				u1[a] = u[0];
+				u2[a] = u[1];
+			}
+			glint_env_dist_sample_n(env, &hot->rest, cnt, u1, u2,
+						ds, pdfs);
+		}
+		double l[3], pdf = pdfs[e];
+		struct vec3 d = ds[e];
+		struct env_sample *es_k = &es[k];
 		struct vec3 wi = v3(v3_dot(d, fv(h->t)), v3_dot(d, fv(h->b)),
 				    v3_dot(d, fv(h->n)));
-		memset(e, 0, sizeof(*e));
+		memset(es_k, 0, sizeof(*es_k));
 		if (!(pdf > 0) || !(wi.z > 0))
 			continue; /* contributes nothing: b = 0 below */
 		glint_env_rest_lookup(env, hot, d, l);
-		e->wi[0] = (float)wi.x;
-		e->wi[1] = (float)wi.y;
-		e->wi[2] = (float)wi.z;
+		es_k->wi[0] = (float)wi.x;
+		es_k->wi[1] = (float)wi.y;
+		es_k->wi[2] = (float)wi.z;
 		for (int ch = 0; ch < 3; ch++)
-			e->l[ch] = (float)l[ch];
-		e->pdf = (float)pdf;
-		e->pdf_smooth =
+			es_k->l[ch] = (float)l[ch];
+		es_k->pdf = (float)pdf;
+		es_k->pdf_smooth =
 			(float)glint_env_dist_pdf_smooth(env, &hot->rest, d);
 		/* A sample whose smooth pdf vanishes must keep its weight
 		 * finite: fall back to the sampling pdf. */
-		if (!(e->pdf_smooth > 0))
-			e->pdf_smooth = e->pdf;
+		if (!(es_k->pdf_smooth > 0))
+			es_k->pdf_smooth = es_k->pdf;
 		if (m->lobes->geometry)
-			m->lobes->geometry(fv(h->wo), wi, e->g);
+			m->lobes->geometry(fv(h->wo), wi, es_k->g);
 	}
 }
 

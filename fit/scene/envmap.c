@@ -247,22 +247,28 @@ void glint_envmap_lookup(const struct glint_envmap *env, struct vec3 d,
 	lookup_uv(env, u, v, rgb);
 }
 
-/* Index i with cdf[i] <= x < cdf[i + 1] among n intervals. */
-static int cdf_find(const double *cdf, int n, double x)
+/* Largest i < n with cdf[i] <= x (0 where none is), for count searches
+ * at once (cdf[k], x[k]) in lockstep: each step is a select, not a
+ * branch, so that the searches' table reads overlap.  The CDFs do not
+ * decrease, so this is the same index a bisection finds.  Then past the
+ * zero-width intervals a search may land on: cdf[i] <= x < cdf[i + 1]. */
+static void cdf_find_n(const double *const *cdf, int n, const double *x,
+		       int count, int *out)
 {
-	int lo = 0, hi = n - 1;
+	int len = n;
 
-	while (lo < hi) {
-		int mid = (lo + hi + 1) / 2;
-		if (cdf[mid] <= x)
-			lo = mid;
-		else
-			hi = mid - 1;
+	for (int k = 0; k < count; k++)
+		out[k] = 0;
+	while (len > 1) {
+		int half = len / 2;
+		for (int k = 0; k < count; k++)
+			out[k] = cdf[k][out[k] + half] <= x[k] ? out[k] + half
+							       : out[k];
+		len -= half;
 	}
-	/* Skip zero-width intervals that a search may land on. */
-	while (lo < n - 1 && cdf[lo + 1] <= cdf[lo])
-		lo++;
-	return lo;
+	for (int k = 0; k < count; k++)
+		while (out[k] < n - 1 && cdf[k][out[k] + 1] <= cdf[k][out[k]])
+			out[k]++;
 }
 
 double glint_envmap_sample(const struct glint_envmap *env, double u1, double u2,
@@ -271,33 +277,74 @@ double glint_envmap_sample(const struct glint_envmap *env, double u1, double u2,
 	return glint_env_dist_sample(env, &env->dist, u1, u2, dir);
 }
 
+void glint_envmap_sample_n(const struct glint_envmap *env, int count,
+			   const double *u1, const double *u2, struct vec3 *dir,
+			   double *pdf)
+{
+	glint_env_dist_sample_n(env, &env->dist, count, u1, u2, dir, pdf);
+}
+
 double glint_env_dist_sample(const struct glint_envmap *env,
 			     const struct glint_env_dist *dd, double u1,
 			     double u2, struct vec3 *dir)
 {
+	double pdf;
+
+	glint_env_dist_sample_n(env, dd, 1, &u1, &u2, dir, &pdf);
+	return pdf;
+}
+
+void glint_env_dist_sample_n(const struct glint_envmap *env,
+			     const struct glint_env_dist *dd, int count,
+			     const double *u1, const double *u2,
+			     struct vec3 *dir, double *pdf)
+{
 	int w = env->img->width, h = env->img->height;
 
 	if (!(dd->total > 0)) {
-		*dir = v3(0, 1, 0);
-		return 0;
+		for (int k = 0; k < count; k++) {
+			dir[k] = v3(0, 1, 0);
+			pdf[k] = 0;
+		}
+		return;
 	}
-	double x = u1 * dd->total;
-	int j = cdf_find(dd->marginal, h, x);
-	double row_w = dd->marginal[j + 1] - dd->marginal[j];
-	double fv = row_w > 0 ? (x - dd->marginal[j]) / row_w : 0.5;
-	const double *c = dd->cond + (size_t)j * (w + 1);
-	double y = u2 * c[w];
-	int i = cdf_find(c, w, y);
-	double cell = c[i + 1] - c[i];
-	double fu = cell > 0 ? (y - c[i]) / cell : 0.5;
-	double u = (i + fu) / w, v = (j + fv) / h;
-	double s = sin(M_PI * v);
+	while (count > 0) {
+		enum { BATCH = 16 };
+		int m = count < BATCH ? count : BATCH, row[BATCH], col[BATCH];
+		const double *cdf[BATCH];
+		double x[BATCH], y[BATCH];
+		for (int k = 0; k < m; k++) {
+			cdf[k] = dd->marginal;
+			x[k] = u1[k] * dd->total;
+		}
+		cdf_find_n(cdf, h, x, m, row);
+		for (int k = 0; k < m; k++) {
+			cdf[k] = dd->cond + (size_t)row[k] * (w + 1);
+			y[k] = u2[k] * cdf[k][w];
+		}
+		cdf_find_n(cdf, w, y, m, col);
+		for (int k = 0; k < m; k++) {
+			int j = row[k], i = col[k];
+			const double *c = cdf[k];
+			double row_w = dd->marginal[j + 1] - dd->marginal[j];
+			double fv = row_w > 0 ? (x[k] - dd->marginal[j]) / row_w
+					      : 0.5;
+			double cell = c[i + 1] - c[i];
+			double fu = cell > 0 ? (y[k] - c[i]) / cell : 0.5;
+			double u = (i + fu) / w, v = (j + fv) / h;
+			double s = sin(M_PI * v);
 
-	*dir = m3_mul(&env->rot, glint_latlong_uv_to_dir(u, v));
-	if (!(s > 0) || !(cell > 0))
-		return 0;
-	/* Density over (u, v) is cell * W * H / total; dA = 2 pi^2 sin. */
-	return cell * w * h / dd->total / (2 * M_PI * M_PI * s);
+			dir[k] = m3_mul(&env->rot,
+					glint_latlong_uv_to_dir(u, v));
+			/* Density over (u, v) is cell * W * H / total;
+			 * dA = 2 pi^2 sin. */
+			pdf[k] = !(s > 0) || !(cell > 0)
+					 ? 0
+					 : cell * w * h / dd->total /
+						   (2 * M_PI * M_PI * s);
+		}
+		u1 += m, u2 += m, dir += m, pdf += m, count -= m;
+	}
 }
 
 double glint_envmap_pdf(const struct glint_envmap *env, struct vec3 d)
@@ -305,15 +352,14 @@ double glint_envmap_pdf(const struct glint_envmap *env, struct vec3 d)
 	return glint_env_dist_pdf(env, &env->dist, d);
 }
 
-double glint_env_dist_pdf(const struct glint_envmap *env,
-			  const struct glint_env_dist *dd, struct vec3 d)
+/* dd's pdf at map coordinates (u, v). */
+static double dist_pdf_uv(const struct glint_envmap *env,
+			  const struct glint_env_dist *dd, double u, double v)
 {
 	int w = env->img->width, h = env->img->height;
-	double u, v;
 
 	if (!(dd->total > 0))
 		return 0;
-	glint_latlong_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
 	int i = (int)(u * w), j = (int)(v * h);
 	i = i < 0 ? 0 : i >= w ? w - 1 : i;
 	j = j < 0 ? 0 : j >= h ? h - 1 : j;
@@ -323,6 +369,50 @@ double glint_env_dist_pdf(const struct glint_envmap *env,
 	if (!(s > 0))
 		return 0;
 	return cell * w * h / dd->total / (2 * M_PI * M_PI * s);
+}
+
+double glint_env_dist_pdf(const struct glint_envmap *env,
+			  const struct glint_env_dist *dd, struct vec3 d)
+{
+	double u, v;
+
+	if (!(dd->total > 0))
+		return 0;
+	glint_latlong_dir_to_uv(m3_tmul(&env->rot, d), &u, &v);
+	return dist_pdf_uv(env, dd, u, v);
+}
+
+void glint_envmap_locate(const struct glint_envmap *env, struct vec3 d,
+			 struct glint_envmap_loc *q)
+{
+	const struct glint_image *img = env->img;
+	int w = img->width, h = img->height;
+
+	glint_latlong_dir_to_uv(m3_tmul(&env->rot, d), &q->u, &q->v);
+	/* The texel holding (u, v), the row beside it that a bilinear
+	 * read takes, and the texel's sampling weight. */
+	double y = q->v * h;
+	int i = (int)(q->u * w), j = (int)y;
+	i = i < 0 ? 0 : i >= w ? w - 1 : i;
+	j = j < 0 ? 0 : j >= h ? h - 1 : j;
+	int jn = y - j < 0.5 ? j - 1 : j + 1;
+	jn = jn < 0 ? 0 : jn >= h ? h - 1 : jn;
+	__builtin_prefetch(glint_image_px(img, i, j));
+	__builtin_prefetch(glint_image_px(img, i, jn));
+	__builtin_prefetch(env->dist.cond + (size_t)j * (w + 1) + i);
+}
+
+double glint_envmap_located_pdf(const struct glint_envmap *env,
+				const struct glint_envmap_loc *q)
+{
+	return dist_pdf_uv(env, &env->dist, q->u, q->v);
+}
+
+void glint_envmap_located_lookup(const struct glint_envmap *env,
+				 const struct glint_envmap_loc *q,
+				 double rgb[3])
+{
+	lookup_uv(env, q->u, q->v, rgb);
 }
 
 /* Sampling density over (u, v) of texel (i, j) (wrapping i, clamping j). */

@@ -67,6 +67,12 @@ void glint_envmap_lookup(const struct glint_envmap *env, struct vec3 d,
 double glint_envmap_sample(const struct glint_envmap *env, double u1, double u2,
 			   struct vec3 *dir);
 
+/* glint_envmap_sample()'s draws for count pairs (u1[k], u2[k]) at once,
+ * their table searches side by side: the same directions and pdfs. */
+void glint_envmap_sample_n(const struct glint_envmap *env, int count,
+			   const double *u1, const double *u2, struct vec3 *dir,
+			   double *pdf);
+
 /* The pdf glint_envmap_sample() has for world direction d. */
 double glint_envmap_pdf(const struct glint_envmap *env, struct vec3 d);
 
@@ -78,10 +84,32 @@ double glint_envmap_pdf(const struct glint_envmap *env, struct vec3 d);
  */
 double glint_envmap_pdf_smooth(const struct glint_envmap *env, struct vec3 d);
 
+/*
+ * A direction located on the map once: glint_envmap_locate() converts it
+ * to map coordinates and prefetches the texels that a bilinear read and
+ * the pdf take, so that several directions' reads overlap;
+ * glint_envmap_located_pdf() and _lookup() then give what
+ * glint_envmap_pdf() and glint_envmap_lookup() give for it, bit for bit.
+ */
+struct glint_envmap_loc {
+	double u, v;
+};
+void glint_envmap_locate(const struct glint_envmap *env, struct vec3 d,
+			 struct glint_envmap_loc *q);
+double glint_envmap_located_pdf(const struct glint_envmap *env,
+				const struct glint_envmap_loc *q);
+void glint_envmap_located_lookup(const struct glint_envmap *env,
+				 const struct glint_envmap_loc *q,
+				 double rgb[3]);
+
 /* The same three for another distribution over this map's texels. */
 double glint_env_dist_sample(const struct glint_envmap *env,
 			     const struct glint_env_dist *d, double u1,
 			     double u2, struct vec3 *dir);
+void glint_env_dist_sample_n(const struct glint_envmap *env,
+			     const struct glint_env_dist *d, int count,
+			     const double *u1, const double *u2,
+			     struct vec3 *dir, double *pdf);
 double glint_env_dist_pdf(const struct glint_envmap *env,
 			  const struct glint_env_dist *d, struct vec3 d_world);
 double glint_env_dist_pdf_smooth(const struct glint_envmap *env,

@@ -8,6 +8,9 @@
 #include "fit/render/irradiance.h"
 #include "fit/render/sampling.h"
 
+#include <stdlib.h>
+#include <string.h>
+
 /* A synthetic map with a small bright "sun", a sky gradient, dark ground. */
 static struct glint_envmap *make_env(int w, int h, const double rot[3])
 {
@@ -82,6 +85,19 @@ static void test_lookup(void)
 		glint_envmap_lookup(turned, m3_mul(&turned->rot, dd), p2);
 		CHECK(fabs(p1[0] - p2[0]) < 1e-6 * (1 + p1[0]),
 		      "rotation: %g vs %g", p1[0], p2[0]);
+		/* Located once, the direction reads the same, bit for bit,
+		 * as the lookup and the pdf do on their own. */
+		struct glint_envmap_loc q;
+		double p3[3], wd[2];
+		glint_envmap_locate(turned, dd, &q);
+		glint_envmap_lookup(turned, dd, p2);
+		glint_envmap_located_lookup(turned, &q, p3);
+		wd[0] = glint_envmap_pdf(turned, dd);
+		wd[1] = glint_envmap_located_pdf(turned, &q);
+		CHECK(!memcmp(p2, p3, sizeof(p2)) &&
+			      !memcmp(&wd[0], &wd[1], sizeof(wd[0])),
+		      "located: %.17g %.17g vs %.17g %.17g", p3[0], wd[1],
+		      p2[0], wd[0]);
 	}
 	glint_envmap_free(plain);
 	glint_envmap_free(turned);
@@ -125,7 +141,7 @@ static int scan_cdf(const double *cdf, int n, double x)
 static void test_sampling_inverse(void)
 {
 	double rot[3] = { 0, 70, 0 };
-	int w = 64, h = 32, worst_i = 0;
+	int w = 70, h = 35, worst_i = 0, unlike = 0;
 	struct glint_image *img = glint_image_new(w, h);
 	struct glint_envmap *env;
 	double worst = 0;
@@ -145,6 +161,12 @@ static void test_sampling_inverse(void)
 		return;
 	const struct glint_env_dist *dd = &env->dist;
 	int n = 20000 + 4 * (h + 1) * (w + 1);
+	double *us = malloc(2 * (size_t)n * sizeof(*us));
+	double *pdfs = malloc((size_t)n * sizeof(*pdfs));
+	struct vec3 *dirs = malloc((size_t)n * sizeof(*dirs));
+	CHECK(us && pdfs && dirs, "out of memory");
+	if (!us || !pdfs || !dirs)
+		n = 0;
 	for (int k = 0; k < n; k++) {
 		double u1, u2;
 		if (k < 20000) {
@@ -163,7 +185,10 @@ static void test_sampling_inverse(void)
 			u2 = fmin(u2, nextafter(1, 0));
 		}
 		struct vec3 d;
-		glint_envmap_sample(env, u1, u2, &d);
+		us[k] = u1;
+		us[n + k] = u2;
+		pdfs[k] = glint_envmap_sample(env, u1, u2, &d);
+		dirs[k] = d;
 		double x = u1 * dd->total;
 		int j = scan_cdf(dd->marginal, h, x);
 		double row_w = dd->marginal[j + 1] - dd->marginal[j];
@@ -186,6 +211,23 @@ static void test_sampling_inverse(void)
 	      "sample %d: %.3g from the full scan's direction (another "
 	      "interval)",
 	      worst_i, worst);
+	/* Drawn in batches of 37 (across the searches' own batches), each
+	 * sample is the one drawn alone, bit for bit. */
+	for (int k0 = 0; k0 < n; k0 += 37) {
+		int m = n - k0 < 37 ? n - k0 : 37;
+		struct vec3 d[37];
+		double pdf[37];
+		glint_envmap_sample_n(env, m, us + k0, us + n + k0, d, pdf);
+		for (int e = 0; e < m; e++)
+			unlike +=
+				memcmp(&d[e], &dirs[k0 + e], sizeof(d[e])) ||
+				memcmp(&pdf[e], &pdfs[k0 + e], sizeof(pdf[e]));
+	}
+	CHECK(unlike == 0,
+	      "%d of %d batched samples unlike the one drawn alone", unlike, n);
+	free(us);
+	free(pdfs);
+	free(dirs);
 	glint_envmap_free(env);
 }
 

@@ -143,16 +143,21 @@ static void shade_batch(const struct ref_job *job, int j, int k0, int k1,
 		double l[3],
 			p_l = env ? q->pl
 				  : glint_envmap_located_pdf(job->env, &q->q);
-		ops->eval_lobes(self, wo, q->wi, lobes);
-		if (lobes[j] <= 0)
+		double bj;
+		if (ops->eval_lobe) {
+			bj = ops->eval_lobe(self, j, wo, q->wi);
+		} else {
+			ops->eval_lobes(self, wo, q->wi, lobes);
+			bj = lobes[j];
+		}
+		if (bj <= 0)
 			continue;
 		/* Power heuristic, one sample of ns per technique. */
 		double pk = env ? p_l : q->pb, po = env ? q->pb : p_l;
 		double w = pk * pk / (pk * pk + po * po);
 		glint_envmap_located_lookup(job->env, &q->q, l);
 		for (int c = 0; c < 3; c++)
-			rgb[c] += alb[c] * lobes[j] * l[c] * q->wi.z * w /
-				  (pk * ns);
+			rgb[c] += alb[c] * bj * l[c] * q->wi.z * w / (pk * ns);
 	}
 }
 

@@ -53,6 +53,10 @@ struct glint_bxdf_ops {
 	/* b_j(wo, wi) for every lobe j into b[nlobes]. */
 	void (*eval_lobes)(const void *self, struct vec3 wo, struct vec3 wi,
 			   double *b);
+	/* b_j(wo, wi) of lobe j alone, the value eval_lobes() gives it; NULL
+	 * where a model has only eval_lobes(). */
+	double (*eval_lobe)(const void *self, int j, struct vec3 wo,
+			    struct vec3 wi);
 	/* Sample lobe j (density ~ b_j cos where possible); returns the
 	 * pdf, 0 if no direction was produced. */
 	double (*sample_lobe)(const void *self, int j, struct vec3 wo,

@@ -28,13 +28,20 @@ static const struct glint_param ggx_params[] = {
 static const int ggx_lobe_param[2] = { KD, KS };
 static const int ggx_lobe_varies[2] = { 0, 1 };
 
-static void ggx_lobes(const void *self, struct vec3 wo, struct vec3 wi,
-		      double *b)
+static double ggx_lobe(const void *self, int j, struct vec3 wo, struct vec3 wi)
 {
 	const double *p = self;
 
-	b[0] = wo.z > 0 && wi.z > 0 ? 1 / M_PI : 0;
-	b[1] = glint_ggx_lobe(p[ROUGH], p[IOR], wo, wi);
+	if (j)
+		return glint_ggx_lobe(p[ROUGH], p[IOR], wo, wi);
+	return wo.z > 0 && wi.z > 0 ? 1 / M_PI : 0;
+}
+
+static void ggx_lobes(const void *self, struct vec3 wo, struct vec3 wi,
+		      double *b)
+{
+	b[0] = ggx_lobe(self, 0, wo, wi);
+	b[1] = ggx_lobe(self, 1, wo, wi);
 }
 
 static void ggx_eval(const void *self, struct vec3 wo, struct vec3 wi,
@@ -95,6 +102,7 @@ static const struct glint_bxdf_ops ggx_bxdf = {
 	.nlobes = 2,
 	.albedo = ggx_albedo,
 	.eval_lobes = ggx_lobes,
+	.eval_lobe = ggx_lobe,
 	.sample_lobe = ggx_sample_lobe,
 	.pdf_lobe = ggx_pdf_lobe,
 };

@@ -93,13 +93,20 @@ static double ts_sample(const void *self, struct vec3 wo, const double u[3],
 static const int ts_lobe_param[2] = { KD, KS };
 static const int ts_lobe_varies[2] = { 0, 1 };
 
-static void ts_lobes(const void *self, struct vec3 wo, struct vec3 wi,
-		     double *b)
+static double ts_lobe(const void *self, int j, struct vec3 wo, struct vec3 wi)
 {
 	const double *p = self;
 
-	b[0] = wo.z > 0 && wi.z > 0 ? 1 / M_PI : 0;
-	b[1] = ts_spec(p, wo, wi);
+	if (j)
+		return ts_spec(p, wo, wi);
+	return wo.z > 0 && wi.z > 0 ? 1 / M_PI : 0;
+}
+
+static void ts_lobes(const void *self, struct vec3 wo, struct vec3 wi,
+		     double *b)
+{
+	b[0] = ts_lobe(self, 0, wo, wi);
+	b[1] = ts_lobe(self, 1, wo, wi);
 }
 
 static double ts_pdf_lobe(const void *self, int j, struct vec3 wo,
@@ -171,6 +178,7 @@ static const struct glint_bxdf_ops ts_bxdf = {
 	.nlobes = 2,
 	.albedo = ts_albedo,
 	.eval_lobes = ts_lobes,
+	.eval_lobe = ts_lobe,
 	.sample_lobe = ts_sample_lobe,
 	.pdf_lobe = ts_pdf_lobe,
 };
@@ -248,6 +256,14 @@ static void nf_lobes(const void *self, struct vec3 wo, struct vec3 wi,
 	ts_lobes(q, wo, wi, b);
 }
 
+static double nf_lobe(const void *self, int j, struct vec3 wo, struct vec3 wi)
+{
+	const double *p = self;
+
+	NF_P(q, p);
+	return ts_lobe(q, j, wo, wi);
+}
+
 static double nf_lobe_value_pdf(const double *p, int j, struct vec3 wo,
 				struct vec3 wi, double *pdf)
 {
@@ -272,6 +288,7 @@ static const struct glint_bxdf_ops nf_bxdf = {
 	.nlobes = 2,
 	.albedo = ts_albedo,
 	.eval_lobes = nf_lobes,
+	.eval_lobe = nf_lobe,
 	.sample_lobe = ts_sample_lobe,
 	.pdf_lobe = ts_pdf_lobe,
 };

@@ -7,7 +7,10 @@
  *     rtcIntersect1, user-geometry sphere and RTC_GEOMETRY_TYPE_SPHERE_POINT;
  *   - glint's primary pass (ray generation, packets, exact hit re-solve,
  *     G-buffer), one thread and all threads;
- *   - shading (MIS, 32 + 32 samples per hit).
+ *   - shading (MIS, 32 + 32 samples per hit);
+ *   - the simulator's reference renderer on the same scene (its own
+ *     rays, 4 a pixel, 32 + 32 samples a lobe and hit: the ground truth
+ *     tests and benchmarks fit, and most of their time).
  * Prints medians and ratios, writes bench-out/render.csv and, with gnuplot,
  * bench-out/render.png.
  *   bench/render [ROUNDS]
@@ -20,6 +23,7 @@
 #include "core/log.h"
 #include "core/parallel.h"
 #include "fit/render/render.h"
+#include "sim/reference.h"
 
 #include <stdio.h>
 #include <string.h>
@@ -33,6 +37,7 @@ enum {
 	PRIMARY_1T,
 	PRIMARY_MT,
 	SHADE_MT,
+	REFERENCE_MT,
 	NVARIANTS
 };
 
@@ -44,6 +49,7 @@ static const char *names[NVARIANTS] = {
 	"glint primary pass, 1 thread",
 	"glint primary pass, all threads",
 	"glint shading (32+32 MIS), all threads",
+	"sim/ reference render (32+32), all threads",
 };
 
 static struct glint_tracer *make_tracer(const struct glint_scene *s,
@@ -100,6 +106,10 @@ int main(int argc, char **argv)
 	struct glint_tracer *user = make_tracer(&sc, GLINT_SPHERE_USER);
 	struct glint_tracer *point = make_tracer(&sc, GLINT_SPHERE_POINT);
 	struct glint_image *img = glint_image_new(sc.cam.width, sc.cam.height);
+	struct glint_reference_opts ro;
+	glint_reference_default_opts(&ro);
+	ro.spp = sc.spp;
+	ro.samples = 32;
 	double *t[NVARIANTS];
 	for (int v = 0; v < NVARIANTS; v++)
 		t[v] = calloc((size_t)rounds, sizeof(double));
@@ -137,6 +147,14 @@ int main(int argc, char **argv)
 				glint_render_shade(&r.gb, r.tracer, r.env,
 						   model, p, &so, img, NULL);
 				break;
+			case REFERENCE_MT:
+				if (glint_reference_render(&sc, r.env, model, p,
+							   &ro, img) < 0) {
+					fprintf(stderr, "bench: %s\n",
+						glint_error_msg());
+					return 1;
+				}
+				break;
 			}
 			t[v][k] = glint_clock_monotonic() - t0;
 		}
@@ -151,11 +169,15 @@ int main(int argc, char **argv)
 	for (int v = 0; v < NVARIANTS; v++)
 		med[v] = bench_median(t[v], rounds);
 	for (int v = 0; v < NVARIANTS; v++) {
-		/* Shading counts shaded samples (hits x 64), not rays. */
-		double units = v == SHADE_MT ? (double)hits * 64 : (double)n;
+		/* Shading counts shaded samples (hits x 64 a lobe), not
+		 * rays; the reference renderer samples both of the
+		 * material's lobes. */
+		double units = v == SHADE_MT	   ? (double)hits * 64
+			       : v == REFERENCE_MT ? (double)hits * 128
+						   : (double)n;
 		double rate = units / med[v] / 1e6;
 		fprintf(csv, "\"%s\",%.6f,%.3f\n", names[v], med[v], rate);
-		if (v == SHADE_MT)
+		if (v >= SHADE_MT)
 			printf("%-42s %10.1f %12.2f %8s  (M shaded "
 			       "samples/s)\n",
 			       names[v], 1e3 * med[v], rate, "");

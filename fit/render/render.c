@@ -40,16 +40,47 @@ static int visible(struct glint_tracer *tracer, const struct glint_hit *h,
 	return !glint_tracer_occluded(tracer, o, wi, 1e-6, INFINITY);
 }
 
+/* One of glint_shade_hit()'s samples between its direction and its
+ * light. */
+struct hit_pending {
+	double f[3], w, pb; /* w: the env samples' weight (pb: a BRDF
+			     * sample's pdf, its weight once pl is read) */
+	struct glint_envmap_loc q;
+};
+
+/* The pending samples' light, added in order. */
+static void hit_flush(const struct glint_envmap *env, int nl, int nb,
+		      const struct hit_pending *pend, int np, int brdf,
+		      double rgb[3])
+{
+	for (int e = 0; e < np; e++) {
+		const struct hit_pending *q = &pend[e];
+		double le[3], w = q->w;
+		if (brdf) {
+			double pl =
+				nl ? glint_envmap_located_pdf(env, &q->q) : 0;
+			w = w / (nl * pl + nb * q->pb);
+		}
+		glint_envmap_located_lookup(env, &q->q, le);
+		for (int c = 0; c < 3; c++)
+			rgb[c] += q->f[c] * le[c] * w;
+	}
+}
+
 void glint_shade_hit(const struct glint_hit *h, uint32_t seed,
 		     struct glint_tracer *tracer,
 		     const struct glint_envmap *env,
 		     const struct glint_model *model, const double *params,
 		     int nl, int nb, double rgb[3])
 {
+	enum { BATCH = 16 }; /* samples whose table reads overlap */
 	struct vec3 n = hvec(h->n), t, b;
 	struct vec3 wo_w = v3_scale(hvec(h->d), -1);
-	double f[3], le[3];
 	struct glint_bxdf bx = glint_model_bxdf(model, params);
+	struct hit_pending pend[BATCH];
+	double u1[BATCH], u2[BATCH], pls[BATCH];
+	struct vec3 ws[BATCH];
+	int np = 0;
 
 	rgb[0] = rgb[1] = rgb[2] = 0;
 	v3_frame(n, &t, &b);
@@ -57,46 +88,61 @@ void glint_shade_hit(const struct glint_hit *h, uint32_t seed,
 	if (!(wo.z > 0))
 		return;
 	/* Env-map samples; balance heuristic weight nl pdf_l/(nl pdf_l +
-	 * nb pdf_b) folded into the estimator's denominator. */
-	for (int k = 0; k < nl; k++) {
-		double u[2];
-		struct vec3 wi_w;
-		glint_hammersley((uint32_t)k, (uint32_t)nl, seed, u);
-		double pl = glint_envmap_sample(env, u[0], u[1], &wi_w);
-		struct vec3 wi = to_local(wi_w, t, b, n);
-		if (!(pl > 0) || !(wi.z > 0))
-			continue;
-		glint_bxdf_eval(&bx, wo, wi, f);
-		if (f[0] + f[1] + f[2] <= 0)
-			continue;
-		if (!visible(tracer, h, n, wi_w))
-			continue;
-		double pb = nb ? glint_bxdf_pdf(&bx, wo, wi) : 0;
-		double w = wi.z / (nl * pl + nb * pb);
-		glint_envmap_lookup(env, wi_w, le);
-		for (int c = 0; c < 3; c++)
-			rgb[c] += f[c] * le[c] * w;
+	 * nb pdf_b) folded into the estimator's denominator.  In batches:
+	 * their directions drawn side by side, then each one's BRDF and
+	 * its texels prefetched, then their light. */
+	for (int k0 = 0; k0 < nl; k0 += BATCH) {
+		int m = nl - k0 < BATCH ? nl - k0 : BATCH;
+		for (int e = 0; e < m; e++) {
+			double u[2];
+			glint_hammersley((uint32_t)(k0 + e), (uint32_t)nl, seed,
+					 u);
+			u1[e] = u[0];
+			u2[e] = u[1];
+		}
+		glint_envmap_sample_n(env, m, u1, u2, ws, pls);
+		np = 0;
+		for (int e = 0; e < m; e++) {
+			struct hit_pending *q = &pend[np];
+			struct vec3 wi = to_local(ws[e], t, b, n);
+			if (!(pls[e] > 0) || !(wi.z > 0))
+				continue;
+			glint_bxdf_eval(&bx, wo, wi, q->f);
+			if (q->f[0] + q->f[1] + q->f[2] <= 0)
+				continue;
+			if (!visible(tracer, h, n, ws[e]))
+				continue;
+			double pb = nb ? glint_bxdf_pdf(&bx, wo, wi) : 0;
+			q->w = wi.z / (nl * pls[e] + nb * pb);
+			glint_envmap_locate(env, ws[e], &q->q);
+			np++;
+		}
+		hit_flush(env, nl, nb, pend, np, 0, rgb);
 	}
+	np = 0;
 	for (int k = 0; k < nb; k++) {
 		double u[3];
 		struct vec3 wi;
+		struct hit_pending *q = &pend[np];
 		glint_hammersley((uint32_t)k, (uint32_t)nb, seed ^ 0x68e31da4u,
 				 u + 1);
 		u[0] = glint_u01(glint_hash3(seed, (uint32_t)k, 0xb5297a4du));
 		double pb = glint_bxdf_sample(&bx, wo, u, &wi);
-		if (!(pb > 0) || !(wi.z > 0))
-			continue;
-		struct vec3 wi_w = to_world(wi, t, b, n);
-		glint_bxdf_eval(&bx, wo, wi, f);
-		if (f[0] + f[1] + f[2] <= 0)
-			continue;
-		if (!visible(tracer, h, n, wi_w))
-			continue;
-		double pl = nl ? glint_envmap_pdf(env, wi_w) : 0;
-		double w = wi.z / (nl * pl + nb * pb);
-		glint_envmap_lookup(env, wi_w, le);
-		for (int c = 0; c < 3; c++)
-			rgb[c] += f[c] * le[c] * w;
+		if (pb > 0 && wi.z > 0) {
+			struct vec3 wi_w = to_world(wi, t, b, n);
+			glint_bxdf_eval(&bx, wo, wi, q->f);
+			if (q->f[0] + q->f[1] + q->f[2] > 0 &&
+			    visible(tracer, h, n, wi_w)) {
+				q->w = wi.z;
+				q->pb = pb;
+				glint_envmap_locate(env, wi_w, &q->q);
+				np++;
+			}
+		}
+		if (np == BATCH || (k == nb - 1 && np)) {
+			hit_flush(env, nl, nb, pend, np, 1, rgb);
+			np = 0;
+		}
 	}
 }
 

@@ -86,21 +86,6 @@ static inline const char *shared_file(const char *rel)
 	return buf;
 }
 
-/* A scratch directory for the test's files (removed by the OS's tmp). */
-static inline const char *test_tmpdir(void)
-{
-	static char dir[256];
-	if (!dir[0]) {
-		snprintf(dir, sizeof(dir), "%s/glint-test-XXXXXX",
-			 getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp");
-		if (!mkdtemp(dir)) {
-			perror("mkdtemp");
-			exit(1);
-		}
-	}
-	return dir;
-}
-
 /* Removes a scratch directory the test made (mkdtemp), with its files. */
 static inline void test_remove_dir(const char *dir)
 {
@@ -108,6 +93,36 @@ static inline void test_remove_dir(const char *dir)
 	snprintf(cmd, sizeof(cmd), "rm -rf '%s'", dir);
 	if (system(cmd) != 0)
 		fprintf(stderr, "could not remove %s\n", dir);
+}
+
+static char test_tmpdir_path[256];
+static pid_t test_tmpdir_owner;
+
+/* At the test's exit: its scratch directory goes, unless
+ * GLINT_TEST_KEEP is set (to look at what a failed test wrote); a child
+ * the test forked leaves it to the test. */
+static inline void test_tmpdir_remove(void)
+{
+	if (test_tmpdir_path[0] && getpid() == test_tmpdir_owner &&
+	    !getenv("GLINT_TEST_KEEP"))
+		test_remove_dir(test_tmpdir_path);
+}
+
+/* A scratch directory for the test's files, removed when it exits. */
+static inline const char *test_tmpdir(void)
+{
+	if (!test_tmpdir_path[0]) {
+		snprintf(test_tmpdir_path, sizeof(test_tmpdir_path),
+			 "%s/glint-test-XXXXXX",
+			 getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp");
+		if (!mkdtemp(test_tmpdir_path)) {
+			perror("mkdtemp");
+			exit(1);
+		}
+		test_tmpdir_owner = getpid();
+		atexit(test_tmpdir_remove);
+	}
+	return test_tmpdir_path;
 }
 
 static inline const char *tmp_path(const char *name)

@@ -89,8 +89,8 @@ static int imin(int a, int b)
 struct ref_pending {
 	struct vec3 wi;
 	struct glint_envmap_loc q;
-	double pl, pb; /* light's and lobe's pdfs (pl of a lobe sample: 0
-			* until read) */
+	double pl, pb; /* light's and lobe's pdfs (pl: an env sample's; a
+			* lobe sample's is read with its light) */
 };
 
 /* A batch of shade()'s samples of lobe j, k in [k0, k1) (every one of one

@@ -109,7 +109,11 @@ def main():
                     "run's own log.  Seconds of wall-clock time on %d cores (load %.1f\n"
                     "when written); the peak memory of one glint process %.0f MiB.\n\n"
                     % (rounds, os.cpu_count(), os.getloadavg()[0], peak))
-            f.write(text + "\n\nThe last round's fit, its `compare.png`: the photo, the render of\n"
+            f.write(text + "\n\nCold, the camera renders the view in sight (the probe) before\n"
+                    "its bracket and the sample's on a thread of its own meanwhile; the\n"
+                    "probe's capture waits for that thread when it closes the camera,\n"
+                    "which is the cold unwrap stage's extra time.\n"
+                    "\nThe last round's fit, its `compare.png`: the photo, the render of\n"
                     "the fitted material, and render − photo (blue darker, red brighter;\n"
                     "the scale bar in the photo's units):\n\n"
                     "![photo, render, render - photo](first-press.png)\n")

@@ -49,6 +49,7 @@
 
 #include <math.h>
 #include <errno.h>
+#include <pthread.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -62,6 +63,14 @@ struct sim_cam {
 	/* scene=rig: what the board's world shows (sim/world.h) */
 	struct glint_image *probe_img, *sample_img, *reference_img;
 	unsigned lamps; /* the lamps they are lit by (sim/world.h) */
+	int views_made; /* rig_scenes has made them (or their thread) */
+	/* the views out of sight, made on a thread of their own while the
+	 * sensor streams (rig_ahead): owned by it until joined */
+	pthread_t ahead;
+	unsigned ahead_views; /* bit v: view v is the thread's */
+	struct glint_image *ahead_img[3];
+	int ahead_ret;
+	char ahead_err[1024];
 	/* the lights-off or empty view, made on first need */
 	struct glint_image *scratch;
 	const struct glint_image *view; /* what the sensor sees */
@@ -477,29 +486,116 @@ static int scene_image(const struct sim_cam *s, int sample,
 
 static void world_now(const struct sim_cam *s, struct glint_sim_state *w);
 
-/* scene=rig: its two views lit by the lamps on now (lamp 1 while none
- * is); the sensor looks at one of them in place (a 12 MP view is
- * 148 MB), a lights-off or empty one is made on first need (rig_view). */
+static struct glint_image **rig_slot(struct sim_cam *s, int v)
+{
+	return v == 0	? &s->probe_img
+	       : v == 1 ? &s->sample_img
+			: &s->reference_img;
+}
+
+/* The thread of rig_ahead: its views rendered (or read) in turn; the
+ * first failure ends it, its message kept for the capture that needs
+ * the view. */
+static void *ahead_main(void *arg)
+{
+	struct sim_cam *s = arg;
+	int ret = 0;
+	for (int v = 0; ret == 0 && v < 3; v++)
+		if (s->ahead_views & 1u << v)
+			ret = scene_image(s, v, &s->ahead_img[v]);
+	if (ret < 0)
+		snprintf(s->ahead_err, sizeof(s->ahead_err), "%s",
+			 glint_error_msg());
+	s->ahead_ret = ret;
+	return NULL;
+}
+
+/* The views out of sight, on their own thread: a rig's first capture
+ * photographs the probe while the sample's view renders (a reference
+ * render takes seconds, the probe's bracket seconds of camera time), and
+ * the next capture reads it from the cache.  Without a thread they are
+ * made here. */
+static int rig_ahead(struct sim_cam *s, unsigned views)
+{
+	s->ahead_ret = 0;
+	s->ahead_err[0] = '\0';
+	s->ahead_views = views;
+	if (views && pthread_create(&s->ahead, NULL, ahead_main, s) != 0) {
+		s->ahead_views = 0;
+		for (int v = 0; v < 3; v++) {
+			int ret = views & 1u << v
+					  ? scene_image(s, v, rig_slot(s, v))
+					  : 0;
+			if (ret < 0)
+				return ret;
+		}
+	}
+	return 0;
+}
+
+/* The thread's views, in place once it has ended; its result (0 or a
+ * negative errno, its message in ahead_err), the error state untouched. */
+static int rig_wait(struct sim_cam *s)
+{
+	if (!s->ahead_views)
+		return 0;
+	pthread_join(s->ahead, NULL);
+	for (int v = 0; v < 3; v++) {
+		if (!(s->ahead_views & 1u << v))
+			continue;
+		glint_image_free(*rig_slot(s, v));
+		*rig_slot(s, v) = s->ahead_img[v];
+		s->ahead_img[v] = NULL;
+	}
+	s->ahead_views = 0;
+	return s->ahead_ret;
+}
+
+/* rig_wait for a view the sensor needs: 0, or the thread's error. */
+static int rig_join(struct sim_cam *s)
+{
+	int ret = rig_wait(s);
+	if (ret < 0) {
+		s->views_made = 0; /* made again at the next frame */
+		return glint_error_set(-ret, "%s", s->ahead_err);
+	}
+	return 0;
+}
+
+/* The views gone, their thread ended (it is never left running: a
+ * close waits for it), the error state untouched. */
+static void rig_free(struct sim_cam *s)
+{
+	rig_wait(s);
+	s->views_made = 0;
+	for (int v = 0; v < 3; v++) {
+		glint_image_free(*rig_slot(s, v));
+		*rig_slot(s, v) = NULL;
+	}
+}
+
+/* scene=rig: its views lit by the lamps on now (lamp 1 while none is):
+ * the one in sight (the probe while none is) made now, the others on a
+ * thread of their own (rig_ahead); the sensor looks at one of them in
+ * place (a 12 MP view is 148 MB), a lights-off or empty one is made on
+ * first need (rig_view). */
 static int rig_scenes(struct sim_cam *s)
 {
 	struct glint_sim_state w;
 	world_now(s, &w);
-	glint_image_free(s->probe_img);
-	glint_image_free(s->sample_img);
-	glint_image_free(s->reference_img);
-	s->sample_img = s->reference_img = NULL;
+	rig_free(s);
 	s->lamps = w.lights ? w.lights : 1;
-	int ret = scene_image(s, 0, &s->probe_img);
+	int now = w.view == GLINT_SIM_VIEW_SAMPLE			   ? 1
+		  : w.view == GLINT_SIM_VIEW_REFERENCE && s->reference > 0 ? 2
+									   : 0;
+	unsigned later =
+		(1u << 0 | 1u << 1 | (s->reference > 0) << 2) & ~(1u << now);
+	int ret = scene_image(s, now, rig_slot(s, now));
 	if (!ret)
-		ret = scene_image(s, 1, &s->sample_img);
-	if (!ret && s->reference > 0)
-		ret = scene_image(s, 2, &s->reference_img);
-	if (ret < 0) {
-		glint_image_free(s->probe_img);
-		glint_image_free(s->sample_img);
-		glint_image_free(s->reference_img);
-		s->probe_img = s->sample_img = s->reference_img = NULL;
-	}
+		ret = rig_ahead(s, later);
+	if (ret < 0)
+		rig_free(s);
+	s->views_made = ret == 0;
 	return ret;
 }
 
@@ -589,10 +685,8 @@ static void sim_close(void *priv)
 	struct sim_cam *s = priv;
 	if (!s)
 		return;
+	rig_free(s);
 	glint_image_free(s->radiance);
-	glint_image_free(s->probe_img);
-	glint_image_free(s->sample_img);
-	glint_image_free(s->reference_img);
 	glint_image_free(s->scratch);
 	glint_sim_world_close(s->wobj);
 	free(s);
@@ -634,8 +728,8 @@ static void world_now(const struct sim_cam *s, struct glint_sim_state *w)
 		glint_sim_world_get(s->wobj, w);
 }
 
-/* scene=rig, before the stream: the views for the lamps on now, so that
- * no frame waits on a render. */
+/* scene=rig, before the stream: the views for the lamps on now (the one
+ * in sight made here, so that its frames wait on no render; rig_scenes). */
 static int sim_start(void *priv)
 {
 	struct sim_cam *s = priv;
@@ -644,7 +738,7 @@ static int sim_start(void *priv)
 	if (s->scene != SCENE_RIG)
 		return 0;
 	world_now(s, &w);
-	if (s->probe_img && (!w.lights || w.lights == s->lamps))
+	if (s->views_made && (!w.lights || w.lights == s->lamps))
 		return 0;
 	int ret = rig_scenes(s);
 	return ret < 0 ? glint_error_prefix(ret, "sim camera") : 0;
@@ -656,8 +750,17 @@ static int rig_view(struct sim_cam *s)
 {
 	struct glint_sim_state w;
 	world_now(s, &w);
-	if (!s->probe_img || (w.lights && w.lights != s->lamps)) {
+	if (!s->views_made || (w.lights && w.lights != s->lamps)) {
 		int ret = rig_scenes(s);
+		if (ret < 0)
+			return ret;
+	}
+	int v = w.view == GLINT_SIM_VIEW_PROBE	     ? 0
+		: w.view == GLINT_SIM_VIEW_SAMPLE    ? 1
+		: w.view == GLINT_SIM_VIEW_REFERENCE ? 2
+						     : -1;
+	if (v >= 0 && s->ahead_views & 1u << v) {
+		int ret = rig_join(s);
 		if (ret < 0)
 			return ret;
 	}

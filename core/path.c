@@ -6,6 +6,7 @@
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <pthread.h>
 #include <stdarg.h>
 #include <sys/stat.h>
 #include <stdlib.h>
@@ -110,17 +111,27 @@ static void installed(char *buf, size_t n, const char *path)
 		snprintf(buf, n, "%.*s%s", (int)(ld - lb), dir, path);
 }
 
+/* The installed data folder, found once: threads ask for it at once
+ * (the simulated camera renders a view on a thread of its own). */
+static char installed_data[GLINT_PATH_MAX];
+
+static void find_installed_data(void)
+{
+	installed(installed_data, sizeof(installed_data),
+		  GLINT_INSTALL_DATA_DIR);
+}
+
 const char *glint_data_dir(void)
 {
-	static char data[GLINT_PATH_MAX];
+	static pthread_once_t once = PTHREAD_ONCE_INIT;
 	const char *env = getenv("GLINT_DATA_DIR");
 
 	if (env && env[0])
 		return env;
 	if (glint_in_build_tree())
 		return GLINT_SOURCE_DATA_DIR;
-	installed(data, sizeof(data), GLINT_INSTALL_DATA_DIR);
-	return data;
+	pthread_once(&once, find_installed_data);
+	return installed_data;
 }
 
 const char *glint_rig_config_default(void)

@@ -227,16 +227,25 @@ static int unwrap_probe(const char *dir, const struct glint_capture_setup *s,
  * the warning says what to do; a given probe that is wrong is an error. */
 static int sample_scene(const char *dir, const char *root, const char *probe,
 			const struct glint_capture_setup *s,
-			const struct glint_image *rad, char *scene_path,
-			size_t n)
+			const struct glint_image *rad, const char *format,
+			char *scene_path, size_t n)
 {
+	static const char *const bayer[] = { "RGGB16", "GRBG16", "GBRG16",
+					     "BGGR16" };
 	char found[GLINT_PATH_MAX];
-	struct glint_scene_optics o = {
-		s->focal_px,	 { s->principal[0], s->principal[1] },
-		s->pitch_um,	 s->diameter_m,
-		s->psf_sigma_px, s->olpf
-	};
+	struct glint_scene_optics o = { s->focal_px,
+					{ s->principal[0], s->principal[1] },
+					s->pitch_um,
+					s->diameter_m,
+					s->psf_sigma_px,
+					s->olpf,
+					"" };
 	int ret = 0;
+
+	/* a Bayer layout (RGGB16 ...): its colours; MONO16 and RGB16 none */
+	for (size_t k = 0; k < sizeof(bayer) / sizeof(bayer[0]); k++)
+		if (!strcmp(format, bayer[k]))
+			snprintf(o.cfa, sizeof(o.cfa), "%.4s", bayer[k]);
 
 	if (!probe) {
 		ret = glint_session_latest_probe(root, found, sizeof(found));
@@ -407,6 +416,7 @@ static int merge_session(const struct glint_capture_setup *s, const char *kind,
 	struct glint_hdr_report rep;
 	struct glint_raw_hdr raw;
 	struct glint_image *rad = NULL;
+	char format[sizeof(raw.format)] = "";
 	long valid_px;
 	int w, h, ret;
 
@@ -420,8 +430,10 @@ static int merge_session(const struct glint_capture_setup *s, const char *kind,
 		ret = glint_hdr_stream_finish(hdr, &raw, &rep);
 	if (ret == 0 && (ret = check_raw(&raw, kind, file)) < 0)
 		glint_raw_hdr_release(&raw);
-	if (ret == 0)
+	if (ret == 0) {
+		snprintf(format, sizeof(format), "%s", raw.format);
 		ret = glint_hdr_write(&raw, dir, np, &w, &h, &valid_px, &rad);
+	}
 	for (int i = 0; ret == 0 && i < 5; i++)
 		snprintf(files[(*nfiles)++], 64, "%s", names[i]);
 	if (ret == 0 && !strcmp(kind, "probe") && s->focal_px > 0) {
@@ -451,7 +463,7 @@ static int merge_session(const struct glint_capture_setup *s, const char *kind,
 	}
 	if (ret == 0 && !strcmp(kind, "sample") && s->focal_px > 0) {
 		*stage = "scene";
-		ret = sample_scene(dir, out, probe, s, rad, res->scene,
+		ret = sample_scene(dir, out, probe, s, rad, format, res->scene,
 				   sizeof(res->scene));
 		if (ret == 0 && res->scene[0])
 			snprintf(files[(*nfiles)++], 64, "%s",

@@ -174,6 +174,8 @@ int glint_sample_write_scene(const char *dir, const struct glint_image *sample,
 				    json_real(o->psf_sigma_px));
 	if (cam && o->olpf)
 		json_object_set_new(cam, "olpf", json_true());
+	if (cam && o->cfa[0])
+		json_object_set_new(cam, "cfa", json_string(o->cfa));
 	char *text =
 		doc ? json_dumps(doc, JSON_INDENT(2) | JSON_REAL_PRECISION(10))
 		    : NULL;

@@ -23,6 +23,9 @@ struct glint_scene_optics {
 	 * given, so that the fit renders the photo's pixels */
 	double psf_sigma_px;
 	int olpf;
+	/* the mosaic the photo was demosaiced from ("RGGB" ...; "" none),
+	 * so that the fit takes each pixel's measured colour */
+	char cfa[8];
 };
 
 /* The newest complete probe session with an env.exr under root. */

@@ -4,6 +4,7 @@
 #include "core/error.h"
 
 #include <math.h>
+#include <string.h>
 
 int glint_pinhole_init(struct glint_pinhole *cam, int width, int height,
 		       double focal_m, double pitch_m, double f_number,
@@ -23,6 +24,7 @@ int glint_pinhole_init(struct glint_pinhole *cam, int width, int height,
 	cam->frame_x = cam->frame_y = cam->frame_width = 0;
 	cam->psf_sigma_px = 0;
 	cam->olpf = 0;
+	cam->cfa[0] = cam->cfa[1] = cam->cfa[2] = cam->cfa[3] = -1;
 	cam->fpx = focal_m / pitch_m;
 	cam->cx = width / 2.0;
 	cam->cy = height / 2.0;
@@ -33,6 +35,28 @@ int glint_pinhole_init(struct glint_pinhole *cam, int width, int height,
 	cam->right = v3_norm(right);
 	cam->up = v3_cross(cam->right, fwd);
 	return 0;
+}
+
+int glint_pinhole_set_cfa(struct glint_pinhole *cam, const char *layout)
+{
+	static const char *const known[] = { "RGGB", "GRBG", "GBRG", "BGGR" };
+
+	cam->cfa[0] = cam->cfa[1] = cam->cfa[2] = cam->cfa[3] = -1;
+	if (!layout || !*layout)
+		return 0;
+	for (size_t k = 0; k < sizeof(known) / sizeof(known[0]); k++) {
+		if (strcmp(layout, known[k]))
+			continue;
+		for (int i = 0; i < 4; i++)
+			cam->cfa[i] = (signed char)(layout[i] == 'R'   ? 0
+						    : layout[i] == 'G' ? 1
+								       : 2);
+		return 0;
+	}
+	return glint_error_set(EINVAL,
+			       "colour filter array '%s': expected RGGB, "
+			       "GRBG, GBRG or BGGR",
+			       layout);
 }
 
 int glint_pixel_filter_on(const struct glint_pinhole *cam)

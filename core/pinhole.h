@@ -29,12 +29,21 @@ struct glint_pinhole {
 	int frame_x, frame_y, frame_width;
 	/* The camera's blur, which a rendered pixel takes in as a pixel
 	 * filter (glint_pixel_filter_*): a Gaussian of psf_sigma_px (the
-	 * lens and the demosaic) and, with olpf, the optical low-pass
-	 * filter's split of each ray into two, one pixel apart, along each
-	 * axis; 0 and 0: the pixel's own square. */
+	 * lens; without cfa, the demosaic's spread too) and, with olpf, the
+	 * optical low-pass filter's split of each ray into two, one pixel
+	 * apart, along each axis; 0 and 0: the pixel's own square. */
 	double psf_sigma_px;
 	int olpf;
+	/* The photo's colour filter array, when its pixels were demosaiced
+	 * from one: cfa[(X & 1) + 2 (Y & 1)] is the colour (0 red, 1 green,
+	 * 2 blue) measured at frame pixel (X, Y), the other two being
+	 * interpolated; cfa[0] < 0: every pixel measured in all three. */
+	signed char cfa[4];
 };
+
+/* "RGGB", "GRBG", "GBRG" or "BGGR" (the colours at (0, 0), (1, 0),
+ * (0, 1), (1, 1)) into cam->cfa; NULL or "" clears it. */
+int glint_pinhole_set_cfa(struct glint_pinhole *cam, const char *layout);
 
 /*
  * The pixel filter as a sampling map: the inverse of the cumulative

@@ -56,6 +56,15 @@
  * beside the 1.3 % above, 2.7 % on the shipped rig (6.3 % at 60 px).
  * A probe of unknown resolution
  * (a sources file without map_pixel_deg) gets 4.1 % for the blur.
+ *
+ * Under a probe's light the diffuse albedos also take up part of what the
+ * map gets wrong about the specular lobe's light: on the simulated rig,
+ * its photos fitted in their measured colours (fit_data.c), every
+ * material's red diffuse came out low, paints' by 0.3-0.5 % and the
+ * metals' diffuse by 0.0005-0.0016, 2-3 % of it, growing with the
+ * specular albedo (copper, nickel: 0.0009-0.0016 where the specular's
+ * mean is 0.54 and 0.77).  A diffuse albedo's term gains 0.25 % of the
+ * mean of the varying lobes' albedos, the largest of those ratios.
  */
 void fit_systematic(const struct glint_model *m, const double *p,
 		    double map_pixel_deg, double *sys)
@@ -63,8 +72,18 @@ void fit_systematic(const struct glint_model *m, const double *p,
 	int probe = map_pixel_deg != 0;
 	double blur = map_pixel_deg > 0 ? 0.024 * pow(map_pixel_deg / 1.69, 2)
 					: 0.041;
+	double lobe_mean = 0;
+	int nvary = 0;
+	for (int j = 0; j < m->bxdf->nlobes; j++) {
+		if (!m->lobes->varies[j])
+			continue;
+		for (int c = 0; c < 3; c++)
+			lobe_mean += fabs(p[m->lobes->param[j] + c]) / 3;
+		nvary++;
+	}
+	lobe_mean = nvary ? lobe_mean / nvary : 0;
 	for (int k = 0; k < m->nparams; k++) {
-		double rel = 0.002, floor = 0;
+		double rel = 0.002, floor = 0, cross = 0;
 		for (int j = 0; j < m->bxdf->nlobes; j++)
 			if (k >= m->lobes->param[j] &&
 			    k < m->lobes->param[j] + 3) {
@@ -72,10 +91,12 @@ void fit_systematic(const struct glint_model *m, const double *p,
 				      : probe		   ? 0.007
 							   : 0.005;
 				floor = 0.0002;
+				if (probe && !m->lobes->varies[j])
+					cross = 0.0025 * lobe_mean;
 			}
 		if (k == m->lobes->roughness_param)
 			rel = probe ? hypot(0.013, blur) : 0.013;
-		sys[k] = hypot(rel * fabs(p[k]), floor);
+		sys[k] = hypot(hypot(rel * fabs(p[k]), floor), cross);
 	}
 }
 

@@ -24,7 +24,42 @@ int fit_data_interior(const struct glint_gbuffer *gb, int x, int y)
 }
 
 /*
- * Pixels wholly on the sphere, every `stride`-th row and column.  A pixel
+ * Is frame pixel (X, Y) on the fine grid of stride s?  Every s-th row and
+ * column; on a demosaiced photo (cfa) at an even stride that would be one
+ * colour's sites only, every one of them fitted in the other two colours
+ * as the demosaic interpolated them, so there each s x s block gives the
+ * pixel at its corner's offset (p & 1, p >> 1), p = (bx + 2 by) mod 4 of
+ * the block (bx, by): the four sites of the mosaic take turns, every
+ * fourth block along a row or two rows down.
+ */
+int fit_data_fine_pick(const signed char cfa[4], int X, int Y, int s)
+{
+	if (cfa[0] < 0 || s % 2)
+		return X % s == 0 && Y % s == 0;
+	int p = (X / s + 2 * (Y / s)) & 3;
+	return X % s == (p & 1) && Y % s == (p >> 1);
+}
+
+/* Is fine pixel (X, Y) (fit_data_fine_pick()) on the coarse grid, every
+ * 4th of the fine grid's rows and columns?  On a demosaiced photo the
+ * 4 x 4 blocks of fine blocks take turns at their blocks (p & 1, p >> 1),
+ * p = (BX + 2 BY) mod 4, which puts every kind of site on the coarse
+ * grid too. */
+int fit_data_coarse_pick(const signed char cfa[4], int X, int Y, int s)
+{
+	if (cfa[0] < 0)
+		return X % (4 * s) == 0 && Y % (4 * s) == 0;
+	int bx = X / s, by = Y / s, p = (bx / 4 + 2 * (by / 4)) & 3;
+	return bx % 4 == (p & 1) && by % 4 == (p >> 1);
+}
+
+/*
+ * Pixels wholly on the sphere, every `stride`-th row and column
+ * (fit_data_fine_pick()).  On a demosaiced photo each pixel is fitted in
+ * the colour its site measured, the other two having weight 0: the
+ * demosaic's interpolation, which no blur of the render reproduces (a
+ * highlight a few pixels wide comes out in the wrong colour), is left out
+ * of the fit.  A pixel
  * whose primary samples all hit can still be partly background between
  * them, which mixes the backdrop into the photo's value: only pixels whose
  * whole 3x3 neighbourhood is covered are used (fit_data_interior()).
@@ -51,9 +86,10 @@ static int collect_pixels(const struct glint_gbuffer *gb, int stride,
 			if (!fit_data_interior(gb, x, y))
 				continue;
 			(*interior)++;
-			if ((x + gb->frame_x) % stride ||
-			    (y + gb->frame_y) % stride)
+			int X = x + gb->frame_x, Y = y + gb->frame_y;
+			if (!fit_data_fine_pick(gb->cfa, X, Y, stride))
 				continue;
+			int site = gb->cfa[(X & 1) + 2 * (Y & 1)];
 			const float *v = glint_image_px(photo, x, y);
 			const float *w =
 				weight ? glint_image_px(weight, x, y) : NULL;
@@ -63,7 +99,7 @@ static int collect_pixels(const struct glint_gbuffer *gb, int stride,
 			for (int c = 0; c < 3; c++) {
 				double wc = w ? w[c] : 1;
 				int ok = isfinite(v[c]) && isfinite(wc) &&
-					 wc > 0;
+					 wc > 0 && (site < 0 || c == site);
 				d->y[3 * n + c] = ok ? v[c] : 0;
 				d->sw[3 * n + c] = ok ? sqrt(wc) : 0;
 			}

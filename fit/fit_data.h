@@ -38,6 +38,13 @@ struct fit_data {
 
 void free_data(struct fit_data *d);
 
+/* Which frame pixels (X, Y) the fine set of stride s takes, and which of
+ * those the coarse set does, given the photo's colour filter array (cfa,
+ * pinhole.h): every s-th (4 s-th) row and column, the mosaic's sites
+ * taking turns on a demosaiced photo. */
+int fit_data_fine_pick(const signed char cfa[4], int X, int Y, int s);
+int fit_data_coarse_pick(const signed char cfa[4], int X, int Y, int s);
+
 /* Is pixel (x, y) wholly on the sphere as a fit takes it: every hit of
  * its whole 3 x 3 neighbourhood on it (a pixel whose own hits all hit
  * can still be part backdrop between them)? */

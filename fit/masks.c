@@ -140,10 +140,9 @@ int fit_make_selections(struct objective *ob, struct selections *sl)
 		goto out;
 	for (int s = 0; s < d->n; s++) {
 		const struct view *vw = &ob->views[fit_view_of(ob, s)];
-		int on_grid =
-			(d->xy[2 * s] + vw->frame_x) % (4 * vw->stride) == 0 &&
-			(d->xy[2 * s + 1] + vw->frame_y) % (4 * vw->stride) ==
-				0;
+		int on_grid = fit_data_coarse_pick(
+			vw->r->gb.cfa, d->xy[2 * s] + vw->frame_x,
+			d->xy[2 * s + 1] + vw->frame_y, vw->stride);
 		if (is_spec[s])
 			sl->spec[sl->nspec++] = s;
 		if (on_grid || is_spec[s])

@@ -259,6 +259,7 @@ static int gbuffer_begin(struct glint_tracer *t,
 	gb->frame_x = cam->frame_x;
 	gb->frame_y = cam->frame_y;
 	gb->frame_width = cam->frame_width;
+	memcpy(gb->cfa, cam->cfa, sizeof(gb->cfa));
 	gb->src = calloc(1, sizeof(*gb->src));
 	gb->cover =
 		malloc((size_t)cam->width * cam->height * sizeof(*gb->cover));

@@ -63,6 +63,7 @@ struct glint_gbuffer {
 	int width, height, spp;
 	struct glint_hit *hits; /* dense: [(y * width + x) * spp + s] */
 	int frame_x, frame_y, frame_width; /* the camera's (pinhole.h) */
+	signed char cfa[4];		   /* the camera's (pinhole.h) */
 	uint16_t *cover;		   /* [y * width + x]: hits of spp */
 	int32_t *slot;		  /* sparse: pixel's row of stored, or -1 */
 	struct glint_hit *stored; /* sparse: [slot * spp + s] */

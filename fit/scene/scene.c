@@ -6,6 +6,7 @@
 
 #include <libgen.h>
 #include <math.h>
+#include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -16,6 +17,19 @@ void glint_scene_defaults(struct glint_scene *s)
 	s->spp = 4;
 	s->light_samples = 32;
 	s->brdf_samples = 32;
+}
+
+/*
+ * Primary hits a pixel when the scene does not say: 4 for the pixel's own
+ * square; 16 under the camera's blur, whose filter spreads a pixel's hits
+ * over 2 to 3 pixels a side.  At 4 there a highlight a few pixels wide
+ * falls between them: on the simulated rig (lens, OLPF, mosaic) the
+ * eleven opaque Table-1 materials give 5 of 11 within tolerance at 4 and
+ * 10 of 11 at 16 (bench/rig_materials.py, docs/fitting.md).
+ */
+int glint_scene_spp_default(const struct glint_pinhole *cam)
+{
+	return glint_pixel_filter_on(cam) ? 16 : 4;
 }
 
 static const struct glint_range positive = { 0, INFINITY, 1, 0 };
@@ -35,6 +49,7 @@ static int load_camera(const char *file, json_t *o, struct glint_scene *s)
 					     "up",
 					     "psf_sigma_px",
 					     "olpf",
+					     "cfa",
 					     NULL };
 	double focal = 0, sensor = 0, pitch_um = 0, fnum = 0, focus = 0;
 	double psf = 0;
@@ -102,6 +117,16 @@ static int load_camera(const char *file, json_t *o, struct glint_scene *s)
 		return glint_error_prefix(ret, "%s", file);
 	s->cam.psf_sigma_px = psf;
 	s->cam.olpf = olpf;
+	json_t *cfa = json_object_get(o, "cfa");
+	if (cfa && !json_is_string(cfa))
+		return glint_error_set(EINVAL,
+				       "%s: camera.cfa: expected a string "
+				       "(RGGB, GRBG, GBRG or BGGR)",
+				       file);
+	ret = glint_pinhole_set_cfa(&s->cam,
+				    cfa ? json_string_value(cfa) : NULL);
+	if (ret < 0)
+		return glint_error_prefix(ret, "%s: camera", file);
 	return 0;
 }
 
@@ -273,8 +298,11 @@ int glint_scene_from_json(const char *file, const char *dir, json_t *root,
 		ret = load_sphere(file, sph, s);
 	if (!ret)
 		ret = load_env(file, dir, env, s);
+	s->spp = 0; /* unless the file says: glint_scene_spp_default() */
 	if (!ret && rnd)
 		ret = load_render(file, rnd, s);
+	if (!ret && !s->spp)
+		s->spp = glint_scene_spp_default(&s->cam);
 	return ret;
 }
 

@@ -42,6 +42,10 @@ struct glint_scene {
 /* Defaults: see docs/scene.md. */
 void glint_scene_defaults(struct glint_scene *s);
 
+/* The primary hits a pixel of a scene whose file does not give
+ * render.samples_per_pixel: 4, or 16 when cam has a blur. */
+int glint_scene_spp_default(const struct glint_pinhole *cam);
+
 /* Parse and validate a scene file; messages name the key and bounds. */
 int glint_scene_load(const char *path, struct glint_scene *s);
 

@@ -288,6 +288,11 @@ got = scene[0]['environment']['scale_sigma']
 want = [e / s for s, e in zip(cal['scale'], cal['scale_sigma'])]
 print(got, want)
 sys.exit(not all(abs(a - b) < 1e-6 * b for a, b in zip(got, want)))"
+check "... and names the mosaic it was demosaiced from (the sim's RGGB) and the optics' blur" python3 -c "
+import glob, json, sys
+cam = json.load(open(glob.glob('$tmp/gray/sample-*/scene.json')[0]))['camera']
+print(cam)
+sys.exit(not (cam.get('cfa') == 'RGGB' and cam.get('psf_sigma_px') == 0.86 and cam.get('olpf') is True))"
 check "capture reference on the pair (the probe's capture calibrated it): exit 1, named" run 1 "the gray ball is in the probe's photo (reference.roi)" capture reference --config "$tmp/gray.json"
 gray_rig nogray "[0, 0, 60, 60]"
 check "a reference ROI with no ball in it: exit 1, named" run 1 "the gray ball" capture probe --config "$tmp/nogray.json"

@@ -302,8 +302,8 @@ static void test_small_ball(void)
 }
 
 /* The rig's sample sphere in a 96 x 72 frame (the VM test's camera)
- * through the rig's optics (data/rig-sim.json: a lens of 0.86 px and the
- * OLPF): the blur widens the rim's edge band, and the low-contrast rim
+ * through a lens of 0.86 px (wider than the rig's, data/rig-sim.json) and
+ * the OLPF: the blur widens the rim's edge band, and the low-contrast rim
  * against the ground must still count. */
 static void test_small_blurred_sample(void)
 {

@@ -3,6 +3,7 @@
 #include "test.h"
 
 #include "core/error.h"
+#include "fit/fit_data.h"
 #include "fit/scene/scene.h"
 
 #include <jansson.h>
@@ -37,6 +38,96 @@ static void test_good_scene(void)
 	CHECK(strstr(s.env_path, test_tmpdir()) == s.env_path,
 	      "env path '%s' not resolved against the scene's folder",
 	      s.env_path);
+}
+
+/* A camera with a blur gets 16 primary hits a pixel unless the file says;
+ * the colour filter array names each site's colour. */
+static void test_blur_and_mosaic(void)
+{
+	struct glint_scene s;
+	const char *p = write_file(
+		"plain.json", "{" CAMERA ", \"sphere\": {\"diameter_m\": 0.1, "
+			      "\"centre\": [0, 0, -1]}, " ENV "}");
+	CHECK(glint_scene_load(p, &s) == 0, "%s", glint_error_msg());
+	CHECK(s.spp == 4 && s.cam.cfa[0] < 0, "plain: spp %d, cfa %d", s.spp,
+	      s.cam.cfa[0]);
+	p = write_file("mosaic.json",
+		       "{\"camera\": {\"width\": 64, \"height\": 48, "
+		       "\"focal_length_mm\": 5, \"sensor_width_mm\": 36, "
+		       "\"psf_sigma_px\": 0.6, \"olpf\": true, \"cfa\": "
+		       "\"GRBG\"}, \"sphere\": {\"diameter_m\": 0.1, "
+		       "\"centre\": [0, 0, -1]}, " ENV "}");
+	CHECK(glint_scene_load(p, &s) == 0, "%s", glint_error_msg());
+	CHECK(s.spp == 16, "blurred camera: spp %d, expected 16", s.spp);
+	CHECK(s.cam.cfa[0] == 1 && s.cam.cfa[1] == 0 && s.cam.cfa[2] == 2 &&
+		      s.cam.cfa[3] == 1,
+	      "GRBG read as %d %d %d %d", s.cam.cfa[0], s.cam.cfa[1],
+	      s.cam.cfa[2], s.cam.cfa[3]);
+	p = write_file("mosaic9.json",
+		       "{\"camera\": {\"width\": 64, \"height\": 48, "
+		       "\"focal_length_mm\": 5, \"sensor_width_mm\": 36, "
+		       "\"olpf\": true}, \"sphere\": {\"diameter_m\": 0.1, "
+		       "\"centre\": [0, 0, -1]}, " ENV
+		       ", \"render\": {\"samples_per_pixel\": 9}}");
+	CHECK(glint_scene_load(p, &s) == 0, "%s", glint_error_msg());
+	CHECK(s.spp == 9, "the file's spp with a blur: %d, expected 9", s.spp);
+}
+
+/* The fit's pixel sets on a demosaiced photo: one pixel of each s x s
+ * block, and the mosaic's four sites equally often in the fine set and in
+ * the coarse one; without a mosaic, every s-th row and column. */
+static void check_picks(const signed char cfa[4], int s)
+{
+	int fine[4] = { 0 }, coarse[4] = { 0 }, n = 48 * s;
+
+	for (int by = 0; by < n / s; by++)
+		for (int bx = 0; bx < n / s; bx++) {
+			int in_block = 0;
+			for (int y = by * s; y < (by + 1) * s; y++)
+				for (int x = bx * s; x < (bx + 1) * s; x++) {
+					if (!fit_data_fine_pick(cfa, x, y, s))
+						continue;
+					in_block++;
+					int site = (x & 1) + 2 * (y & 1);
+					fine[site]++;
+					coarse[site] += fit_data_coarse_pick(
+						cfa, x, y, s);
+					if (cfa[0] < 0)
+						CHECK(x % s == 0 && y % s == 0,
+						      "no mosaic, stride %d: "
+						      "(%d, %d) picked",
+						      s, x, y);
+				}
+			CHECK(in_block == 1,
+			      "stride %d: block (%d, %d) gave %d", s, bx, by,
+			      in_block);
+		}
+	int blocks = (n / s) * (n / s);
+	for (int k = 0; k < 4 && cfa[0] >= 0; k++) {
+		CHECK(fine[k] == blocks / 4,
+		      "stride %d: site %d %d times of %d", s, k, fine[k],
+		      blocks);
+		CHECK(coarse[k] == blocks / 64,
+		      "stride %d: coarse site %d %d times, expected %d", s, k,
+		      coarse[k], blocks / 64);
+	}
+	if (cfa[0] < 0)
+		CHECK(coarse[0] + coarse[1] + coarse[2] + coarse[3] ==
+			      blocks / 16,
+		      "no mosaic, stride %d: coarse %d", s,
+		      coarse[0] + coarse[1] + coarse[2] + coarse[3]);
+}
+
+static void test_mosaic_picks(void)
+{
+	struct glint_pinhole cam;
+	CHECK(glint_pinhole_set_cfa(&cam, "RGGB") == 0, "%s",
+	      glint_error_msg());
+	for (int s = 1; s <= 4; s++)
+		check_picks(cam.cfa, s);
+	glint_pinhole_set_cfa(&cam, NULL);
+	for (int s = 1; s <= 4; s++)
+		check_picks(cam.cfa, s);
 }
 
 static void test_circle_scene(void)
@@ -121,6 +212,18 @@ static void test_bad_scenes(void)
 		     "\"f_number\": 2.8}, \"sphere\": {\"diameter_m\": 0.1, "
 		     "\"centre\": [0,0,-1]}, " ENV "}",
 		     "needs camera.focus_distance_m", NULL);
+	expect_error("cfa.json",
+		     "{\"camera\": {\"width\": 64, \"height\": 48, "
+		     "\"focal_length_mm\": 5, \"sensor_width_mm\": 36, "
+		     "\"cfa\": \"RGBG\"}, \"sphere\": {\"diameter_m\": 0.1, "
+		     "\"centre\": [0,0,-1]}, " ENV "}",
+		     "colour filter array 'RGBG'", "RGGB, GRBG, GBRG or BGGR");
+	expect_error("cfa2.json",
+		     "{\"camera\": {\"width\": 64, \"height\": 48, "
+		     "\"focal_length_mm\": 5, \"sensor_width_mm\": 36, "
+		     "\"cfa\": 4}, \"sphere\": {\"diameter_m\": 0.1, "
+		     "\"centre\": [0,0,-1]}, " ENV "}",
+		     "camera.cfa: expected a string", NULL);
 	struct glint_scene s;
 	CHECK(glint_scene_load(tmp_path("absent.json"), &s) < 0,
 	      "missing file loaded");
@@ -130,6 +233,8 @@ static void test_bad_scenes(void)
 int main(void)
 {
 	RUN(test_good_scene);
+	RUN(test_blur_and_mosaic);
+	RUN(test_mosaic_picks);
 	RUN(test_circle_scene);
 	RUN(test_bad_scenes);
 	return test_result();

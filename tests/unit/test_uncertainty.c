@@ -488,7 +488,8 @@ static void lean(void)
 
 /* fit_systematic() per map: the fast render's own accuracy under a map
  * that is the light; the probe's blur added to roughness, growing with
- * its pixel's angle; 4.1 % where the probe does not say. */
+ * its pixel's angle; 4.1 % where the probe does not say; under a probe
+ * the diffuse albedos a share of the specular's. */
 static void systematic_by_map(void)
 {
 	static const double p[8] = {
@@ -513,9 +514,14 @@ static void systematic_by_map(void)
 	CHECK(fabs(given[3] - hypot(0.005 * p[3], 0.0002)) < 1e-12 &&
 		      fabs(rig[3] - hypot(0.007 * p[3], 0.0002)) < 1e-12,
 	      "specular: %g under the map, %g from a probe", given[3], rig[3]);
+	/* under a probe the diffuse albedo takes up 0.25 % of the specular
+	 * lobe's mean albedo (0.27 here) */
+	double cross = 0.0025 * (p[3] + p[4] + p[5]) / 3;
 	CHECK(fabs(given[0] - hypot(0.001 * p[0], 0.0002)) < 1e-12 &&
-		      given[0] == rig[0],
-	      "diffuse: %g, %g", given[0], rig[0]);
+		      fabs(rig[0] - hypot(hypot(0.001 * p[0], 0.0002), cross)) <
+			      1e-12 &&
+		      rig[0] == coarse[0],
+	      "diffuse: %g under the map, %g from a probe", given[0], rig[0]);
 	CHECK(fabs(given[7] - 0.002 * p[7]) < 1e-12 && given[7] == rig[7],
 	      "ior: %g, %g", given[7], rig[7]);
 }

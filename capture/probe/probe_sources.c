@@ -69,6 +69,32 @@ static int pixel_geom(const struct probe_ball *b,
 	return 1;
 }
 
+/*
+ * A source's aperture and background ring may reach past the map's
+ * grazing limit: a lamp behind the sample (the light 120-150 degrees from
+ * the view) lies at 0.87-0.97 of the ball's radius, where the ball
+ * compresses it into a few pixels whose 4-pixel aperture crosses the
+ * 80-degree line.  Left in the photo, the unwrap stretches that spot over
+ * degrees of the map and a glossy sphere's rim highlight under it is
+ * fitted with too smooth a surface.  Their pixels count up to 89 degrees
+ * of incidence (the ball's Fresnel and solid angle are still exact
+ * there): the aperture's anywhere on the ball (a spot a few pixels inside
+ * the rim loses nothing past it to the blur), the ring's only inside the
+ * rim that the camera's blur mixes with the backdrop
+ * (glint_unwrap_rim_margin_px()), where the background is the ball's.
+ */
+static int source_geom(const struct probe_ball *b,
+		       const struct glint_unwrap_opts *o, int x, int y,
+		       double margin, struct px_geom *g)
+{
+	struct glint_unwrap_opts so = *o;
+	if (o->ball_r > 0 && hypot(x + 0.5 - o->ball_cx, y + 0.5 - o->ball_cy) >
+				     o->ball_r - margin)
+		return 0;
+	so.grazing_deg = fmax(o->grazing_deg, 89);
+	return pixel_geom(b, &so, x, y, g);
+}
+
 /* The median of n values (reorders them). */
 static int cmp_double(const void *a, const void *b)
 {
@@ -95,7 +121,7 @@ static int ring_pixel(const struct glint_image *photo,
 	int rr = dx * dx + dy * dy;
 	return rr >= RING_IN * RING_IN && rr <= RING_OUT * RING_OUT && x >= 0 &&
 	       y >= 0 && x < photo->width && y < photo->height &&
-	       pixel_geom(b, o, x, y, &g);
+	       source_geom(b, o, x, y, glint_unwrap_rim_margin_px(o), &g);
 }
 
 static int ring_plane(const struct glint_image *photo,
@@ -214,9 +240,16 @@ static int measure(const struct glint_image *photo,
 			struct px_geom g;
 			if (rr > APERTURE * APERTURE)
 				continue;
+			/* the core must lie on the ball; the rest of the
+			 * aperture may be cut by its rim (what the cut loses
+			 * shows in the flux's convergence term) */
 			if (x < 0 || y < 0 || x >= photo->width ||
-			    y >= photo->height || !pixel_geom(b, o, x, y, &g))
-				return 0; /* the aperture leaves the ball */
+			    y >= photo->height ||
+			    !source_geom(b, o, x, y, 0, &g)) {
+				if (rr <= CORE * CORE)
+					return 0;
+				continue;
+			}
 			const float *p = glint_image_px(photo, x, y);
 			double ex[3], ey = 0;
 			for (int c = 0; c < 3; c++) {
@@ -270,8 +303,9 @@ static int measure(const struct glint_image *photo,
 		for (int dx = -APERTURE; dx <= APERTURE; dx++) {
 			int x = x0 + dx, y = y0 + dy;
 			struct px_geom g;
-			if (dx * dx + dy * dy > APERTURE * APERTURE ||
-			    !pixel_geom(b, o, x, y, &g))
+			if (dx * dx + dy * dy > APERTURE * APERTURE || x < 0 ||
+			    y < 0 || x >= photo->width || y >= photo->height ||
+			    !source_geom(b, o, x, y, 0, &g))
 				continue;
 			const float *p = glint_image_px(photo, x, y);
 			double ey = 0;

@@ -13,7 +13,9 @@
  * whose light lies within a 2-pixel radius), measures each one's flux
  * (radiance x solid angle, divided by the ball's reflectance, over a
  * 4-pixel aperture less the background fitted as a plane to the ring
- * around it), its direction (the flux-weighted mean of the directions the
+ * around it, both up to 89 degrees of incidence: a lamp behind the
+ * sample lies near the ball's rim, past the map's grazing limit), its
+ * direction (the flux-weighted mean of the directions the
  * aperture's pixels reflect) and their uncertainties, takes it out of the
  * photo (the background in its place) before the unwrap and puts it back
  * into the map as a point: its flux in the texels around its direction

@@ -4,8 +4,8 @@
  * against ground truth: a chrome ball reflecting the Venice map, rendered
  * by the simulator's independent forward renderer (sim/probe_sim.c) and
  * blurred by the sim camera's lens and optical low-pass filter
- * (sim/sensor.h), with noise.  The sun, turned to four places on the ball
- * from near its centre to near its rim, is found once, in its direction
+ * (sim/sensor.h), with noise.  The sun, turned to six places on the ball
+ * from near its centre to 0.95 of its radius, is found once, in its direction
  * (within 1 degree and 3 sigma) with its flux (within 3 % and 3 sigma);
  * maps that hold no compact source (smoothed Venice, the studio's
  * softboxes, a flat grey) give no false alarm over many noise draws; the
@@ -153,13 +153,20 @@ static void sun_truth(const struct glint_image *m, struct vec3 *dir,
 static void test_sun(void)
 {
 	/* the sun (at azimuth 36 deg in the map) turned to 60, 90, 120 and
-	 * 150 deg from the view direction: incidence 60 deg (near the
-	 * ball's rim) to 15 (near its centre) */
-	static const int shifts[] = { -68, -154, -239, -324 };
+	 * 150 deg from the direction straight behind the ball, incidence
+	 * 60 deg to 15 (near the ball's centre), then to 45 and 35 deg:
+	 * incidence 67 and 72 deg, 0.92 and 0.95 of the ball's radius,
+	 * where the 4-pixel aperture crosses the map's 80-degree grazing
+	 * line (a lamp behind the sample).  There a pixel spans 3.5-4.7 deg
+	 * (a quarter pixel of centroid error is 0.9-1.2 deg): the direction
+	 * within a third of a pixel and 3 sigma; the flux within 3 % and
+	 * 3 sigma, in the dim green of a sunset sun (15 % of its red,
+	 * sigma 3-5 %) within 3 sigma and 10 %. */
+	static const int shifts[] = { -68, -154, -239, -324, -25, 3 };
 	struct glint_source_opts so;
 
 	glint_source_default_opts(&so);
-	for (int k = 0; k < 4; k++) {
+	for (int k = 0; k < 6; k++) {
 		struct glint_image *map = turned(venice, shifts[k]), *var;
 		struct glint_image *ph = photo_of(map, SPP, 11 + k, &var);
 		struct glint_unwrap_opts o;
@@ -187,12 +194,15 @@ static void test_sun(void)
 			       l->flux[0] / flux[0], l->flux[1] / flux[1],
 			       l->flux_sigma[0] / flux[0],
 			       l->flux_sigma[1] / flux[1]);
-			CHECK(a < 1 && a < 3 * l->dir_sigma_deg,
+			int rim = k >= 4;
+			CHECK(a < (rim ? l->px_deg / 3 : 1) &&
+				      a < 3 * l->dir_sigma_deg,
 			      "direction %.2f deg off (sigma %.2f)", a,
 			      l->dir_sigma_deg);
 			for (int c = 0; c < 2; c++) {
 				double e = fabs(l->flux[c] - flux[c]);
-				CHECK(e < 0.03 * flux[c] &&
+				double tol = rim && c == 1 ? 0.10 : 0.03;
+				CHECK(e < tol * flux[c] &&
 					      e < 3 * l->flux_sigma[c],
 				      "channel %d flux %g for %g (sigma %g)", c,
 				      l->flux[c], flux[c], l->flux_sigma[c]);

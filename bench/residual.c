@@ -103,6 +103,7 @@ int main(int argc, char **argv)
 	/* The fit's own samples (its defaults, before it raises them). */
 	struct glint_fit_opts fo;
 	glint_fit_default_opts(&fo);
+	glint_fit_resolve_samples(&fo, gb->spp);
 	struct glint_shade_cache_opts co = {
 		.light_samples = fo.light_samples,
 		.lobe_samples = fo.lobe_samples,

@@ -49,13 +49,15 @@ void glint_fit_default_opts(struct glint_fit_opts *o)
 	o->method = GLINT_FIT_THREE_PASS;
 	o->coarse_to_fine = 1;
 	o->mask_threshold = 0.1;
-	/* 4096 pixels and 8 + 8 samples: a 512 x 512 fit in under 2 s here
-	 * with roughness within 5 % (README, bench/fit). */
+	/* 4096 pixels and 8 + 8 samples a hit at 4 hits a pixel: a 512 x 512
+	 * fit in under 2 s here with roughness within 5 % (README,
+	 * bench/fit).  The sample counts follow the scene's hits a pixel
+	 * (glint_fit_resolve_samples()). */
 	o->max_pixels = 4096;
-	o->light_samples = 8;
-	o->lobe_samples = 8;
+	o->light_samples = 0;
+	o->lobe_samples = 0;
 	o->static_samples = 128;
-	o->max_samples = 64;
+	o->max_samples = 0;
 	o->max_iter = 60;
 	o->optimizer = GLINT_OPT_AUTO;
 	o->seed = 1;
@@ -63,6 +65,21 @@ void glint_fit_default_opts(struct glint_fit_opts *o)
 	o->mc_draws = 2;
 	o->polish_iter = 4;
 	o->level = 0.95;
+}
+
+int glint_fit_samples_per_hit(int given, int per_pixel, int spp)
+{
+	if (given > 0)
+		return given;
+	int s = (int)lround((double)per_pixel / (spp > 4 ? spp : 4));
+	return s > 1 ? s : 1;
+}
+
+void glint_fit_resolve_samples(struct glint_fit_opts *o, int spp)
+{
+	o->light_samples = glint_fit_samples_per_hit(o->light_samples, 32, spp);
+	o->lobe_samples = glint_fit_samples_per_hit(o->lobe_samples, 32, spp);
+	o->max_samples = glint_fit_samples_per_hit(o->max_samples, 256, spp);
 }
 
 int glint_fit_optimizer_parse(const char *s, enum glint_fit_optimizer *o)
@@ -140,13 +157,20 @@ static int fit_or_eval(const struct glint_fit_view *in, int nviews,
 	struct objective ob = { 0 };
 	struct selections sl = { 0 };
 	struct view views[GLINT_FIT_MAX_VIEWS];
-	int ret, interior = 0;
+	struct glint_fit_opts ro = *o;
+	int ret, interior = 0, spp = 0;
 	double t0 = glint_clock_monotonic();
 
 	if (nviews < 1 || nviews > GLINT_FIT_MAX_VIEWS)
 		return glint_error_set(EINVAL,
 				       "%d photos: a joint fit takes 1 to %d",
 				       nviews, GLINT_FIT_MAX_VIEWS);
+	/* the sample counts the scenes' hits a pixel call for (the most
+	 * hits' fewest samples) */
+	for (int v = 0; v < nviews; v++)
+		spp = in[v].r->scene.spp > spp ? in[v].r->scene.spp : spp;
+	glint_fit_resolve_samples(&ro, spp);
+	o = &ro;
 	if (nviews > 1 && (glint_model_is_transparent(model) || o->faithful))
 		return glint_error_set(
 			EINVAL,

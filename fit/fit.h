@@ -82,15 +82,18 @@ struct glint_fit_opts {
 	int faithful;	       /* full trace + render per evaluation */
 	double mask_threshold; /* photo / white above (1 + t) x median */
 	int max_pixels;	       /* cap on fitted pixels (every s-th pixel) */
-	int light_samples;     /* shade cache: env samples per hit */
-	int lobe_samples;      /* shade cache: lobe samples per hit */
-	int static_samples;    /* shade cache: for constant lobes */
-	int max_samples;       /* ... light (and lobe) samples the fit may
-				* raise them to where its own sampling noise
-				* limits the answer (fit.c, more_samples()) */
-	int no_footprint;      /* shade cache: near-mirrors' hot texels on
-				* the hits, not over pixels (benchmarks) */
-	int max_iter;	       /* per LM pass */
+	/* Shade cache: env and lobe samples per hit; 0 (the default): 32 a
+	 * pixel over the scene's hits (glint_fit_samples_per_hit()). */
+	int light_samples;
+	int lobe_samples;
+	int static_samples; /* shade cache: for constant lobes */
+	int max_samples;    /* ... light (and lobe) samples per hit the fit
+			     * may raise them to where its own sampling noise
+			     * limits the answer (intervals.c); 0 (the
+			     * default): 256 a pixel over the hits */
+	int no_footprint;   /* shade cache: near-mirrors' hot texels on
+			     * the hits, not over pixels (benchmarks) */
+	int max_iter;	    /* per LM pass */
 	enum glint_fit_optimizer optimizer;
 	uint64_t seed;	     /* annealing's random stream */
 	int anneal_evals;    /* annealing's budget */
@@ -148,6 +151,18 @@ struct glint_fit_opts {
 };
 
 void glint_fit_default_opts(struct glint_fit_opts *o);
+
+/*
+ * Samples per hit: `given` when it is positive, else `per_pixel` shared by
+ * a pixel's spp hits when it has more than 4 (at least 1), and a quarter
+ * of it when it has 4 or fewer.  A pixel's estimate averages all of its
+ * hits' samples, so its noise follows their total: a blurred camera's 16
+ * hits a pixel (fit/scene/scene.c) take 2 env and 2 lobe samples each,
+ * the 32 a pixel that 4 hits take at 8.
+ */
+int glint_fit_samples_per_hit(int given, int per_pixel, int spp);
+/* o with its automatic sample counts (0) resolved for spp hits a pixel. */
+void glint_fit_resolve_samples(struct glint_fit_opts *o, int spp);
 
 /* The light sources whose flux the fit's intervals carry: at most. */
 #define GLINT_FIT_MAX_SOURCES 8

@@ -180,7 +180,8 @@ static int estimate_on_sets(struct objective *ob, struct fit_data *d,
  * which the first cannot see.  Over 1, or over 0.25 (the model's noise
  * above half the residual's), the caches are rebuilt with the samples
  * times the power of two that brings both under (each falls as
- * 1 / samples), up to max_samples (64 + 64 by default), and the stage
+ * 1 / samples), up to max_samples (64 + 64 a hit by default, 16 + 16 at
+ * a blurred camera's 16 hits a pixel), and the stage
  * runs again: once where the estimate holds, again where it fell short.
  * Returns 1 to go again, 0 when done, or a negative errno.
  */

@@ -255,8 +255,10 @@ static void untried(struct glint_ladder_result *out,
 		if (!knobs || knobs & 1u << k)
 			continue;
 		struct glint_ladder_knob *kn = &out->knob[k];
-		int v = k == GLINT_LADDER_SPP	    ? scene->spp
-			: k == GLINT_LADDER_SAMPLES ? base->light_samples
+		int v = k == GLINT_LADDER_SPP ? scene->spp
+			: k == GLINT_LADDER_SAMPLES
+				? glint_fit_samples_per_hit(base->light_samples,
+							    32, scene->spp)
 			: k == GLINT_LADDER_DOF ? scene->cam.aperture_radius > 0
 						: 1;
 		kn->nlevels = 1;

@@ -45,6 +45,9 @@ void glint_scene_defaults(struct glint_scene *s);
 /* The primary hits a pixel of a scene whose file does not give
  * render.samples_per_pixel: 4, or 16 when cam has a blur. */
 int glint_scene_spp_default(const struct glint_pinhole *cam);
+/* Env-map and BRDF samples a hit when the scene file does not say, for spp
+ * primary hits a pixel: 32 up to 4 hits, 128 / spp above (scene.c). */
+int glint_scene_samples_default(int spp);
 
 /* Parse and validate a scene file; messages name the key and bounds. */
 int glint_scene_load(const char *path, struct glint_scene *s);

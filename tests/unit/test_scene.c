@@ -3,6 +3,7 @@
 #include "test.h"
 
 #include "core/error.h"
+#include "fit/fit.h"
 #include "fit/fit_data.h"
 #include "fit/scene/scene.h"
 
@@ -29,12 +30,15 @@ static void test_good_scene(void)
 		"good.json",
 		"{\"units\": \"metres\", " CAMERA ", \"sphere\": "
 		"{\"diameter_m\": 0.1, \"centre\": [0, 0, -1]}, " ENV ", "
-		"\"render\": {\"samples_per_pixel\": 9}}");
+		"\"render\": {\"samples_per_pixel\": 9, \"light_samples\": "
+		"32}}");
 	CHECK(glint_scene_load(p, &s) == 0, "%s", glint_error_msg());
 	CHECK_NEAR(s.cam.fpx, 50.0 / 36 * 640, 1e-9, "focal length in px");
 	CHECK_NEAR(s.sphere_radius, 0.05, 1e-15, "radius");
-	CHECK(s.spp == 9 && s.light_samples == 32, "render settings %d %d",
-	      s.spp, s.light_samples);
+	/* the file's samples kept; those it does not give, 128 a pixel */
+	CHECK(s.spp == 9 && s.light_samples == 32 && s.brdf_samples == 14,
+	      "render settings %d %d %d", s.spp, s.light_samples,
+	      s.brdf_samples);
 	CHECK(strstr(s.env_path, test_tmpdir()) == s.env_path,
 	      "env path '%s' not resolved against the scene's folder",
 	      s.env_path);
@@ -51,6 +55,9 @@ static void test_blur_and_mosaic(void)
 	CHECK(glint_scene_load(p, &s) == 0, "%s", glint_error_msg());
 	CHECK(s.spp == 4 && s.cam.cfa[0] < 0, "plain: spp %d, cfa %d", s.spp,
 	      s.cam.cfa[0]);
+	CHECK(s.light_samples == 32 && s.brdf_samples == 32,
+	      "plain: %d + %d samples a hit, expected 32 + 32", s.light_samples,
+	      s.brdf_samples);
 	p = write_file("mosaic.json",
 		       "{\"camera\": {\"width\": 64, \"height\": 48, "
 		       "\"focal_length_mm\": 5, \"sensor_width_mm\": 36, "
@@ -59,6 +66,10 @@ static void test_blur_and_mosaic(void)
 		       "\"centre\": [0, 0, -1]}, " ENV "}");
 	CHECK(glint_scene_load(p, &s) == 0, "%s", glint_error_msg());
 	CHECK(s.spp == 16, "blurred camera: spp %d, expected 16", s.spp);
+	/* a pixel's 128 + 128 samples shared by its 16 hits */
+	CHECK(s.light_samples == 8 && s.brdf_samples == 8,
+	      "blurred camera: %d + %d samples a hit, expected 8 + 8",
+	      s.light_samples, s.brdf_samples);
 	CHECK(s.cam.cfa[0] == 1 && s.cam.cfa[1] == 0 && s.cam.cfa[2] == 2 &&
 		      s.cam.cfa[3] == 1,
 	      "GRBG read as %d %d %d %d", s.cam.cfa[0], s.cam.cfa[1],
@@ -200,6 +211,12 @@ static void test_bad_scenes(void)
 		     "\"centre\": [0,0,-1]}, " ENV
 		     ", \"render\": {\"samples_per_pixel\": 0}}",
 		     "render.samples_per_pixel = 0", "[1, 4096]");
+	expect_error("nosamples.json",
+		     "{" CAMERA ", \"sphere\": {\"diameter_m\": 0.1, "
+		     "\"centre\": [0,0,-1]}, " ENV
+		     ", \"render\": {\"light_samples\": 0, "
+		     "\"brdf_samples\": 0}}",
+		     "light_samples + brdf_samples is 0", "at least 1");
 	expect_error("pose.json",
 		     "{\"camera\": {\"width\": 64, \"height\": 48, "
 		     "\"focal_length_mm\": 5, \"sensor_width_mm\": 36, "
@@ -230,10 +247,44 @@ static void test_bad_scenes(void)
 	CHECK_MSG(glint_error_msg(), "absent.json");
 }
 
+/* The fit's env and lobe samples a hit follow the scene's hits a pixel
+ * when not given: 32 a pixel over more than 4 hits, 8 a hit up to 4; the
+ * cap on raising them the same at 256 a pixel; a given count kept. */
+static void test_fit_samples(void)
+{
+	static const int spp[] = { 1, 4, 9, 16, 64 },
+			 want[] = { 8, 8, 4, 2, 1 },
+			 cap[] = { 64, 64, 28, 16, 4 };
+	for (int i = 0; i < 5; i++) {
+		struct glint_fit_opts o;
+		glint_fit_default_opts(&o);
+		glint_fit_resolve_samples(&o, spp[i]);
+		CHECK(o.light_samples == want[i] && o.lobe_samples == want[i] &&
+			      o.max_samples == cap[i],
+		      "%d hits a pixel: %d + %d samples a hit, cap %d; "
+		      "expected %d + %d, cap %d",
+		      spp[i], o.light_samples, o.lobe_samples, o.max_samples,
+		      want[i], want[i], cap[i]);
+		o.light_samples = o.lobe_samples = 5;
+		o.max_samples = 40;
+		glint_fit_resolve_samples(&o, spp[i]);
+		CHECK(o.light_samples == 5 && o.max_samples == 40,
+		      "%d hits: given 5, cap 40 became %d, %d", spp[i],
+		      o.light_samples, o.max_samples);
+	}
+	CHECK(glint_scene_samples_default(4) == 32 &&
+		      glint_scene_samples_default(16) == 8 &&
+		      glint_scene_samples_default(1) == 32,
+	      "render samples a hit: %d at 4 hits, %d at 16, %d at 1",
+	      glint_scene_samples_default(4), glint_scene_samples_default(16),
+	      glint_scene_samples_default(1));
+}
+
 int main(void)
 {
 	RUN(test_good_scene);
 	RUN(test_blur_and_mosaic);
+	RUN(test_fit_samples);
 	RUN(test_mosaic_picks);
 	RUN(test_circle_scene);
 	RUN(test_bad_scenes);

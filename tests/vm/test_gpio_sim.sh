@@ -58,11 +58,6 @@ for role, name in names.items():
 # Settling 0.5 s, as a loaded turntable would, also gives the sampler time
 # to show the camera the new position on a slow host.
 b["turntable"].update(steps_per_turn=40, step_hz=10, settle_s=0.5)
-# The fit told of no blur: 4 primary hits a pixel instead of the 16 a
-# blurred camera gets (fit/scene/scene.c), a third of the fit's time under
-# TCG; this test checks the lines and the run, not the fit's accuracy
-# (its diffuse within 0.03 still holds).
-r["optics"].update(psf_sigma_px=0, olpf=False)
 json.dump(r, open(dst, "w"), indent=1)
 PY
 }

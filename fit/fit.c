@@ -67,7 +67,7 @@ void glint_fit_default_opts(struct glint_fit_opts *o)
 	o->level = 0.95;
 }
 
-int glint_fit_samples_per_hit(int given, int per_pixel, int spp)
+static int samples_per_hit(int given, int per_pixel, int spp)
 {
 	if (given > 0)
 		return given;
@@ -77,9 +77,20 @@ int glint_fit_samples_per_hit(int given, int per_pixel, int spp)
 
 void glint_fit_resolve_samples(struct glint_fit_opts *o, int spp)
 {
-	o->light_samples = glint_fit_samples_per_hit(o->light_samples, 32, spp);
-	o->lobe_samples = glint_fit_samples_per_hit(o->lobe_samples, 32, spp);
-	o->max_samples = glint_fit_samples_per_hit(o->max_samples, 256, spp);
+	o->light_samples = samples_per_hit(o->light_samples, 32, spp);
+	o->lobe_samples = samples_per_hit(o->lobe_samples, 32, spp);
+	o->max_samples = samples_per_hit(o->max_samples, 256, spp);
+}
+
+void glint_fit_resolve_samples_views(struct glint_fit_opts *o,
+				     const struct glint_fit_view *views,
+				     int nviews)
+{
+	int spp = 0;
+	for (int v = 0; v < nviews; v++)
+		if (views[v].r->scene.spp > spp)
+			spp = views[v].r->scene.spp;
+	glint_fit_resolve_samples(o, spp);
 }
 
 int glint_fit_optimizer_parse(const char *s, enum glint_fit_optimizer *o)
@@ -158,18 +169,14 @@ static int fit_or_eval(const struct glint_fit_view *in, int nviews,
 	struct selections sl = { 0 };
 	struct view views[GLINT_FIT_MAX_VIEWS];
 	struct glint_fit_opts ro = *o;
-	int ret, interior = 0, spp = 0;
+	int ret, interior = 0;
 	double t0 = glint_clock_monotonic();
 
 	if (nviews < 1 || nviews > GLINT_FIT_MAX_VIEWS)
 		return glint_error_set(EINVAL,
 				       "%d photos: a joint fit takes 1 to %d",
 				       nviews, GLINT_FIT_MAX_VIEWS);
-	/* the sample counts the scenes' hits a pixel call for (the most
-	 * hits' fewest samples) */
-	for (int v = 0; v < nviews; v++)
-		spp = in[v].r->scene.spp > spp ? in[v].r->scene.spp : spp;
-	glint_fit_resolve_samples(&ro, spp);
+	glint_fit_resolve_samples_views(&ro, in, nviews);
 	o = &ro;
 	if (nviews > 1 && (glint_model_is_transparent(model) || o->faithful))
 		return glint_error_set(

@@ -83,7 +83,7 @@ struct glint_fit_opts {
 	double mask_threshold; /* photo / white above (1 + t) x median */
 	int max_pixels;	       /* cap on fitted pixels (every s-th pixel) */
 	/* Shade cache: env and lobe samples per hit; 0 (the default): 32 a
-	 * pixel over the scene's hits (glint_fit_samples_per_hit()). */
+	 * pixel over the scene's hits (glint_fit_resolve_samples()). */
 	int light_samples;
 	int lobe_samples;
 	int static_samples; /* shade cache: for constant lobes */
@@ -153,15 +153,15 @@ struct glint_fit_opts {
 void glint_fit_default_opts(struct glint_fit_opts *o);
 
 /*
- * Samples per hit: `given` when it is positive, else `per_pixel` shared by
- * a pixel's spp hits when it has more than 4 (at least 1), and a quarter
- * of it when it has 4 or fewer.  A pixel's estimate averages all of its
- * hits' samples, so its noise follows their total: a blurred camera's 16
- * hits a pixel (fit/scene/scene.c) take 2 env and 2 lobe samples each,
- * the 32 a pixel that 4 hits take at 8.
+ * o with its automatic sample counts (0) resolved for spp primary hits a
+ * pixel: light and lobe samples 32 a pixel and max_samples 256 a pixel,
+ * shared by the hits when there are more than 4 (at least 1 each), a
+ * quarter of it a hit when there are 4 or fewer; a count given (positive)
+ * is kept.  A pixel's estimate averages all of its hits' samples, so its
+ * noise follows their total: a blurred camera's 16 hits a pixel
+ * (fit/scene/scene.c) take 2 env and 2 lobe samples each, the 32 a pixel
+ * that 4 hits take at 8.
  */
-int glint_fit_samples_per_hit(int given, int per_pixel, int spp);
-/* o with its automatic sample counts (0) resolved for spp hits a pixel. */
 void glint_fit_resolve_samples(struct glint_fit_opts *o, int spp);
 
 /* The light sources whose flux the fit's intervals carry: at most. */
@@ -179,6 +179,12 @@ struct glint_fit_view {
 	const struct glint_image *photo;
 	const struct glint_image *weight;
 };
+
+/* glint_fit_resolve_samples() for the most hits a pixel of the views'
+ * scenes. */
+void glint_fit_resolve_samples_views(struct glint_fit_opts *o,
+				     const struct glint_fit_view *views,
+				     int nviews);
 
 /* How the result fits one photo (the fields of glint_fit_result of the
  * same names, over that photo's pixels). */

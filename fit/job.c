@@ -208,6 +208,8 @@ static json_t *params_doc(const struct glint_fit_job *job,
 			  const struct glint_fit_result *res)
 {
 	const struct glint_model *model = res->model;
+	struct glint_fit_opts ro = *o; /* the samples it took, if not said */
+	glint_fit_resolve_samples(&ro, job->scene.spp);
 	json_t *doc = json_pack(
 		"{s:s,s:s,s:o,s:o,s:{s:s,s:b,s:b,s:f,s:i,s:i},s:f,s:f,s:f,"
 		"s:i,s:i,s:i,s:o,s:f,s:f,s:{s:o,s:o,s:f},s:s}",
@@ -217,19 +219,13 @@ static json_t *params_doc(const struct glint_fit_job *job,
 		glint_fit_method_name(o->method), "coarse_to_fine",
 		o->coarse_to_fine, "faithful", o->faithful, "mask_threshold",
 		o->mask_threshold, "light_samples",
-		res->light_samples
-			? res->light_samples
-			: glint_fit_samples_per_hit(o->light_samples, 32,
-						    job->scene.spp),
+		res->light_samples ? res->light_samples : ro.light_samples,
 		"lobe_samples",
-		res->lobe_samples
-			? res->lobe_samples
-			: glint_fit_samples_per_hit(o->lobe_samples, 32,
-						    job->scene.spp),
-		"cost", res->cost, "rmse", res->rmse, "relative_rmse",
-		res->rel_rmse, "pixels", res->pixels, "interior_pixels",
-		res->interior, "specular_pixels", res->specular_pixels,
-		"passes", glint_fit_passes_json(res), "seconds", res->seconds,
+		res->lobe_samples ? res->lobe_samples : ro.lobe_samples, "cost",
+		res->cost, "rmse", res->rmse, "relative_rmse", res->rel_rmse,
+		"pixels", res->pixels, "interior_pixels", res->interior,
+		"specular_pixels", res->specular_pixels, "passes",
+		glint_fit_passes_json(res), "seconds", res->seconds,
 		"setup_seconds", res->setup_seconds, "inputs", "scene",
 		glint_fit_job_shown_path(job, job->scene_path), "photo",
 		glint_fit_job_shown_path(job, job->photo_path),

@@ -251,14 +251,15 @@ static void untried(struct glint_ladder_result *out,
 		    const struct glint_scene *scene,
 		    const struct glint_fit_opts *base, unsigned knobs)
 {
+	struct glint_fit_opts ro = *base; /* the samples a fit takes */
+
+	glint_fit_resolve_samples(&ro, scene->spp);
 	for (int k = 0; k < GLINT_LADDER_NKNOBS; k++) {
 		if (!knobs || knobs & 1u << k)
 			continue;
 		struct glint_ladder_knob *kn = &out->knob[k];
-		int v = k == GLINT_LADDER_SPP ? scene->spp
-			: k == GLINT_LADDER_SAMPLES
-				? glint_fit_samples_per_hit(base->light_samples,
-							    32, scene->spp)
+		int v = k == GLINT_LADDER_SPP	    ? scene->spp
+			: k == GLINT_LADDER_SAMPLES ? ro.light_samples
 			: k == GLINT_LADDER_DOF ? scene->cam.aperture_radius > 0
 						: 1;
 		kn->nlevels = 1;

@@ -342,14 +342,11 @@ int glint_select_model_views(const struct glint_fit_view *views, int nviews,
 	ret = fit_data_prepare_views(views, nviews, o, &s.d, s.parts);
 	if (ret < 0)
 		return ret;
-	int spp = 0;
-	for (int v = 0; v < nviews; v++)
-		spp = views[v].r->scene.spp > spp ? views[v].r->scene.spp : spp;
+	struct glint_fit_opts ro = *o;
+	glint_fit_resolve_samples_views(&ro, views, nviews);
 	struct glint_shade_cache_opts co = {
-		.light_samples =
-			glint_fit_samples_per_hit(o->light_samples, 32, spp),
-		.lobe_samples =
-			glint_fit_samples_per_hit(o->lobe_samples, 32, spp),
+		.light_samples = ro.light_samples,
+		.lobe_samples = ro.lobe_samples,
 		.static_samples = o->static_samples,
 		.no_footprint = o->no_footprint,
 		.nthreads = o->nthreads,

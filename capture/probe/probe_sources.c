@@ -241,8 +241,10 @@ static int measure(const struct glint_image *photo,
 			if (rr > APERTURE * APERTURE)
 				continue;
 			/* the core must lie on the ball; the rest of the
-			 * aperture may be cut by its rim (what the cut loses
-			 * shows in the flux's convergence term) */
+			 * aperture may be cut by its rim (what lies past it
+			 * is the blur's tail, 2 px and more from the spot;
+			 * a cut beyond 3 px shows in the flux's convergence
+			 * term) */
 			if (x < 0 || y < 0 || x >= photo->width ||
 			    y >= photo->height ||
 			    !source_geom(b, o, x, y, 0, &g)) {

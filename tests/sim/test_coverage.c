@@ -31,12 +31,16 @@
  * COVERAGE_VERBOSE=1 prints each fit's value and error parts,
  * COVERAGE_NO_MODEL_ERROR=1 leaves out the model-error jackknife (and with
  * it the model discrepancy), COVERAGE_NO_DISCREPANCY=1 the discrepancy alone,
- * COVERAGE_POLISH=N gives the polish on the sample sets N iterations.
+ * COVERAGE_POLISH=N gives the polish on the sample sets N iterations,
+ * COVERAGE_DUMP=FILE appends one JSON line a fitted value (the truth, the
+ * fit, its standard error and the parts of it, the interval) to FILE, for
+ * studies of the error's parts that need no refit (bench/coverage_terms.py).
  */
 #include "test.h"
 
 #include "core/error.h"
 #include "fit/fit.h"
+#include "fit/internal.h"
 #include "fit/job.h"
 #include "sim/reference.h"
 #include "sim/sensor.h"
@@ -111,6 +115,62 @@ static int expose(const struct glint_image *clean, double full_well,
 		ret = glint_sensor_to_radiance(&s, dn, *photo, *weight);
 	glint_image_free(dn);
 	return ret;
+}
+
+/* COVERAGE_DUMP: one line a value, what sizes its interval: the truth,
+ * the fit, its standard error and interval, the parts of it (the blocks',
+ * the sample sets', the systematic in all and the fast render's term in
+ * it, fit_systematic()), null where not finite. */
+static void dump_num(FILE *f, const char *name, double x)
+{
+	if (isfinite(x))
+		fprintf(f, ", \"%s\": %.9g", name, x);
+	else
+		fprintf(f, ", \"%s\": null", name);
+}
+
+static void dump(const char *material, const char *map, const char *rot, int lv,
+		 const struct glint_model *m, const double *truth,
+		 const struct glint_fit_opts *o,
+		 const struct glint_fit_result *res)
+{
+	const char *path = getenv("COVERAGE_DUMP");
+	FILE *f = path ? fopen(path, "a") : NULL;
+	double render[GLINT_MAX_PARAMS];
+	int n = res->unc.n;
+
+	if (!f)
+		return;
+	fit_systematic(m, res->p, o->map_pixel_deg, render);
+	for (int k = 0; k < m->nparams; k++) {
+		double bound = k == m->lobes->roughness_param
+				       ? glint_fit_roughness_bound(res)
+				       : NAN;
+		fprintf(f,
+			"{\"material\": \"%s\", \"map\": \"%s\", "
+			"\"rot\": %s, \"level\": \"%s\", \"param\": \"%s\", "
+			"\"group\": \"%s\", \"k\": %d",
+			material, strrchr(map, '/') + 1, rot, level_names[lv],
+			m->params[k].name, group_names[group_of(k)], k);
+		dump_num(f, "truth", truth[k]);
+		dump_num(f, "fit", res->p[k]);
+		dump_num(f, "se", res->se[k]);
+		dump_num(f, "sys", res->unc.sys[k]);
+		dump_num(f, "sys_render", render[k]);
+		dump_num(f, "blocks", sqrt(res->unc.cov_blocks[k * n + k]));
+		dump_num(f, "mc", sqrt(res->unc.cov_mc[k * n + k]));
+		dump_num(f, "textbook", res->unc.se_textbook[k]);
+		dump_num(f, "t", res->unc.t[k]);
+		dump_num(f, "lo", res->unc.lo[k]);
+		dump_num(f, "hi", res->unc.hi[k]);
+		dump_num(f, "bound", bound);
+		dump_num(f, "range", m->params[k].hi - m->params[k].lo);
+		fprintf(f, ", \"truths\": [");
+		for (int j = 0; j < m->nparams; j++)
+			fprintf(f, "%s%.9g", j ? ", " : "", truth[j]);
+		fprintf(f, "]}\n");
+	}
+	fclose(f);
 }
 
 static void one_case(const char *map, const char *material, int placement,
@@ -220,6 +280,7 @@ static void one_case(const char *map, const char *material, int placement,
 		glint_image_free(weight);
 		if (test_failures)
 			break;
+		dump(material, map, rots, lv, m, truth, &o, &res);
 		printf("%-16s %-18s rot %5s %-10s", material,
 		       strrchr(map, '/') + 1, rots, level_names[lv]);
 		for (int k = 0; k < m->nparams; k++) {

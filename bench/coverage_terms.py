@@ -1,0 +1,151 @@
+#!/usr/bin/env python3
+"""The coverage study's intervals, read back from its fits, and what other
+sizes of the fast render's systematic term would make of them, with no
+refit: the term enters only the interval's width (fit/discrepancy.c,
+fit_systematic()), so each value's other parts, as the study's dump states
+them, stay what they were.
+
+    COVERAGE_DUMP=FILE ./build/tests/test_coverage full MAP...
+
+Prints, per noise level and parameter class, the values counted (those the
+photo determines, roughness not reported as an upper bound), the share of
+95 % intervals that hold the truth and the median |error| / standard error
+(an honest interval: about 0.67), as fitted; then, for the terms given,
+the same with the fast render's term of that class replaced: REL of the
+value with an absolute FLOOR (albedos), and for roughness m, beside REL,
+NOISE x m / 0.1 times its statistical standard error (a bias that grows
+with the noise and the lobe's width, which the linearised spread does not
+show; 0: none).  Classes not given keep the terms they were fitted with.
+Per class, whether the target (90-98 % and 0.4-0.9) is met.  The dumps of
+several maps can be given together or apart: the terms that suit one
+light need not suit another (docs/tests.md, "Coverage").
+
+usage: bench/coverage_terms.py FILE [--diffuse REL FLOOR] [--specular REL FLOOR] [--roughness REL NOISE] [--ior REL]"""
+import json
+import math
+import sys
+
+LEVELS = ["noise-free", "10k e-", "1k e-"]
+GROUPS = ["diffuse", "specular", "roughness", "ior"]
+
+
+def load(path):
+    """The dump's values the study counts, each with its statistical part
+    and the systematic parts other than the fast render's term."""
+    rows = []
+    with open(path) as f:
+        for n, line in enumerate(f, 1):
+            try:
+                r = json.loads(line)
+            except json.JSONDecodeError as e:
+                sys.exit(f"{path}:{n}: not a line of COVERAGE_DUMP ({e})")
+            se, lo, hi = r.get("se"), r.get("lo"), r.get("hi")
+            if se is None or lo is None or hi - lo >= 0.5 * r["range"]:
+                continue  # not determined
+            if r.get("bound") is not None:
+                continue  # roughness below the footprint: a bound
+            stat2 = max(0.0, se * se - r["sys"] ** 2)
+            r.setdefault("noise_bias", 0.0)
+            own = r["sys_render"] ** 2 + r["noise_bias"] ** 2 * stat2
+            r["stat2"] = stat2
+            r["other2"] = max(0.0, r["sys"] ** 2 - own)
+            rows.append(r)
+    if not rows:
+        sys.exit(f"{path}: no values the study counts")
+    return rows
+
+
+def term(terms, r):
+    """(fast render's term, noise bias) for value r under the given terms;
+    None where its class keeps its own."""
+    g, p = r["group"], abs(r["fit"])
+    if g not in terms:
+        return None
+    if g in ("diffuse", "specular"):
+        rel, floor = terms[g]
+        return math.hypot(rel * p, floor), 0.0
+    if g == "roughness":
+        rel, noise = terms[g]
+        return rel * p, noise * p / 0.1
+    return terms[g][0] * p, 0.0
+
+
+def table(rows, sigma, title):
+    print(title)
+    print(f"{'noise':11} {'class':10} {'values':>6} {'covered':>8} "
+          f"{'med|e|/se':>9}  target 90-98 %, 0.4-0.9")
+    for lv in LEVELS:
+        for g in GROUPS:
+            sel = [r for r in rows if r["level"] == lv and r["group"] == g]
+            if not sel:
+                continue
+            z = sorted(abs(r["fit"] - r["truth"]) / sigma(r) for r in sel)
+            cov = sum(abs(r["fit"] - r["truth"]) <= r["t"] * sigma(r)
+                      for r in sel) / len(sel)
+            med = z[(len(z) - 1) // 2]
+            met = 0.9 <= cov <= 0.98 and 0.4 <= med <= 0.9
+            print(f"{lv:11} {g:10} {len(sel):6d} {100 * cov:7.1f}% "
+                  f"{med:9.2f}  {'met' if met else 'missed'}")
+
+
+NARGS = {"--diffuse": 2, "--specular": 2, "--roughness": 2, "--ior": 1}
+
+
+def parse(args, usage):
+    """(dump path, {class: its numbers}); exit 2 naming what is wrong."""
+    def refuse(what):
+        print(f"{what}\n{usage}", file=sys.stderr)
+        sys.exit(2)
+
+    path, terms, i = None, {}, 0
+    while i < len(args):
+        a = args[i]
+        if a in NARGS:
+            vals = args[i + 1:i + 1 + NARGS[a]]
+            try:
+                nums = [float(v) for v in vals]
+            except ValueError:
+                nums = []
+            if len(nums) != NARGS[a] or any(not x >= 0 for x in nums):
+                refuse(f"{a}: takes {NARGS[a]} numbers, 0 or more")
+            terms[a[2:]] = nums
+            i += 1 + NARGS[a]
+        elif a.startswith("-"):
+            refuse(f"{a}: not an argument of this benchmark")
+        elif path is None:
+            path, i = a, i + 1
+        else:
+            refuse(f"{a}: one dump file only")
+    if path is None:
+        refuse("no dump file given")
+    return path, terms
+
+
+def main():
+    usage = __doc__.splitlines()[-1]
+    args = sys.argv[1:]
+    if "-h" in args or "--help" in args:
+        print(usage)
+        return
+    path, terms = parse(args, usage)
+    try:
+        rows = load(path)
+    except OSError as e:
+        sys.exit(f"{path}: {e.strerror}")
+    table(rows, lambda r: r["se"], "as fitted")
+
+    def sigma(r):
+        t = term(terms, r)
+        if t is None:
+            return r["se"]
+        render, noise = t
+        return math.sqrt(r["stat2"] * (1 + noise * noise) + r["other2"] +
+                         render * render)
+
+    if terms:
+        print()
+        table(rows, sigma, "with the terms given")
+
+
+if __name__ == "__main__":
+    main()

@@ -16,11 +16,13 @@ value with an absolute FLOOR (albedos), and for roughness m, beside REL,
 NOISE x m / 0.1 times its statistical standard error (a bias that grows
 with the noise and the lobe's width, which the linearised spread does not
 show; 0: none).  Classes not given keep the terms they were fitted with.
-Per class, whether the target (90-98 % and 0.4-0.9) is met.  The dumps of
-several maps can be given together or apart: the terms that suit one
-light need not suit another (docs/tests.md, "Coverage").
+--sampling K puts K times each value's sample-sets part (the fit's own
+sampling spread) in every class's term instead.  Per class, whether the
+target (90-98 % and 0.4-0.9) is met.  --map NAME counts the values of
+that map (its file name) alone: the terms that suit one light need not
+suit another (docs/tests.md, "Coverage").
 
-usage: bench/coverage_terms.py FILE [--diffuse REL FLOOR] [--specular REL FLOOR] [--roughness REL NOISE] [--ior REL]"""
+usage: bench/coverage_terms.py FILE [--map NAME] [--diffuse REL FLOOR] [--specular REL FLOOR] [--roughness REL NOISE] [--ior REL] [--sampling K]"""
 import json
 import math
 import sys
@@ -29,29 +31,39 @@ LEVELS = ["noise-free", "10k e-", "1k e-"]
 GROUPS = ["diffuse", "specular", "roughness", "ior"]
 
 
-def load(path):
-    """The dump's values the study counts, each with its statistical part
-    and the systematic parts other than the fast render's term."""
+KEYS = ("map", "level", "group", "truth", "fit", "se", "sys", "sys_render",
+        "mc", "t", "lo", "hi", "bound", "range")
+
+
+def load(path, only_map=None):
+    """The dump's values the study counts (of only_map's file alone when
+    given), each with its statistical part and the systematic parts other
+    than the fast render's term."""
     rows = []
     with open(path) as f:
         for n, line in enumerate(f, 1):
             try:
                 r = json.loads(line)
-            except json.JSONDecodeError as e:
+                missing = [k for k in KEYS if k not in r]
+            except (json.JSONDecodeError, TypeError) as e:
                 sys.exit(f"{path}:{n}: not a line of COVERAGE_DUMP ({e})")
-            se, lo, hi = r.get("se"), r.get("lo"), r.get("hi")
-            if se is None or lo is None or hi - lo >= 0.5 * r["range"]:
+            if missing:
+                sys.exit(f"{path}:{n}: not a line of COVERAGE_DUMP "
+                         f"(no {', '.join(missing)})")
+            if only_map is not None and r["map"] != only_map:
+                continue
+            se, lo, hi = r["se"], r["lo"], r["hi"]
+            if se is None or lo is None or hi is None or \
+                    hi - lo >= 0.5 * r["range"]:
                 continue  # not determined
-            if r.get("bound") is not None:
+            if r["bound"] is not None:
                 continue  # roughness below the footprint: a bound
-            stat2 = max(0.0, se * se - r["sys"] ** 2)
-            r.setdefault("noise_bias", 0.0)
-            own = r["sys_render"] ** 2 + r["noise_bias"] ** 2 * stat2
-            r["stat2"] = stat2
-            r["other2"] = max(0.0, r["sys"] ** 2 - own)
+            r["stat2"] = max(0.0, se * se - r["sys"] ** 2)
+            r["other2"] = max(0.0, r["sys"] ** 2 - r["sys_render"] ** 2)
             rows.append(r)
     if not rows:
-        sys.exit(f"{path}: no values the study counts")
+        sys.exit(f"{path}: no values the study counts" +
+                 (f" under {only_map}" if only_map is not None else ""))
     return rows
 
 
@@ -59,6 +71,8 @@ def term(terms, r):
     """(fast render's term, noise bias) for value r under the given terms;
     None where its class keeps its own."""
     g, p = r["group"], abs(r["fit"])
+    if "sampling" in terms:
+        return terms["sampling"][0] * r["mc"], 0.0
     if g not in terms:
         return None
     if g in ("diffuse", "specular"):
@@ -88,19 +102,25 @@ def table(rows, sigma, title):
                   f"{med:9.2f}  {'met' if met else 'missed'}")
 
 
-NARGS = {"--diffuse": 2, "--specular": 2, "--roughness": 2, "--ior": 1}
+NARGS = {"--diffuse": 2, "--specular": 2, "--roughness": 2, "--ior": 1,
+         "--sampling": 1}
 
 
 def parse(args, usage):
-    """(dump path, {class: its numbers}); exit 2 naming what is wrong."""
+    """(dump path, {class: its numbers}, map or None); exit 2 naming what
+    is wrong."""
     def refuse(what):
         print(f"{what}\n{usage}", file=sys.stderr)
         sys.exit(2)
 
-    path, terms, i = None, {}, 0
+    path, terms, only_map, i = None, {}, None, 0
     while i < len(args):
         a = args[i]
-        if a in NARGS:
+        if a == "--map":
+            if i + 1 >= len(args):
+                refuse("--map: takes a map's file name")
+            only_map, i = args[i + 1], i + 2
+        elif a in NARGS:
             vals = args[i + 1:i + 1 + NARGS[a]]
             try:
                 nums = [float(v) for v in vals]
@@ -118,7 +138,9 @@ def parse(args, usage):
             refuse(f"{a}: one dump file only")
     if path is None:
         refuse("no dump file given")
-    return path, terms
+    if "sampling" in terms and len(terms) > 1:
+        refuse("--sampling: replaces every class's term, alone")
+    return path, terms, only_map
 
 
 def main():
@@ -127,9 +149,9 @@ def main():
     if "-h" in args or "--help" in args:
         print(usage)
         return
-    path, terms = parse(args, usage)
+    path, terms, only_map = parse(args, usage)
     try:
-        rows = load(path)
+        rows = load(path, only_map)
     except OSError as e:
         sys.exit(f"{path}: {e.strerror}")
     table(rows, lambda r: r["se"], "as fitted")

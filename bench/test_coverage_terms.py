@@ -47,6 +47,8 @@ def main():
     rows.append(value("roughness", 6, 5.0, bound=0.9))
     # a roughness of 0.2 (its noise bias: 2 x its statistical part)
     rows.append(value("roughness", 6, 1.0, truth=0.2 - 1.0, fit=0.2))
+    # another map's value: counted with the rest, not under --map x.hdr
+    rows.append(value("ior", 7, 3.0, map="y.hdr", mc=0.5))
     fails = 0
 
     def check(cond, what):
@@ -76,6 +78,19 @@ def main():
                                                        "missed"),
               f"as fitted, roughness: {row(out, 'as fitted', 'roughness')}")
         check("with the terms given" not in out, "no terms, no second table")
+        check(row(out, "as fitted", "ior") == (1, 0.0, 3.0, "missed"),
+              f"the other map's value: {row(out, 'as fitted', 'ior')}")
+        out = run("--map", "x.hdr")
+        check(row(out, "as fitted", "ior") is None and
+              row(out, "as fitted", "diffuse") == (10, 90.0, 0.5, "met"),
+              "--map x.hdr: that map's values alone")
+        # K x the sets' part in every class's term: ior's 0.5 x 8 = 4
+        # beside its statistical 0.8, sigma 4.08 (one value covered of
+        # one: above the target's 98 %)
+        out = run("--sampling", "8")
+        check(row(out, "with the terms given", "ior") ==
+              (1, 100.0, 0.74, "missed"),
+              f"--sampling 8, ior: {row(out, 'with the terms given', 'ior')}")
         out = run("--diffuse", "0", "0", "--roughness", "0", "1")
         given = "with the terms given"
         # without the term: sigma 0.8 (the statistical part), 9 of 10
@@ -95,6 +110,16 @@ def main():
                            capture_output=True, text=True)
         check(p.returncode == 2 and "--ior: takes 1 numbers" in p.stderr,
               f"a bad number: exit {p.returncode} {p.stderr}")
+        p = subprocess.run([sys.executable, TOOL, path, "--sampling", "2",
+                            "--ior", "1"], capture_output=True, text=True)
+        check(p.returncode == 2, "--sampling with another term refused")
+        with open(path, "w") as f:
+            f.write('{"map": "x.hdr"}\n')
+        p = subprocess.run([sys.executable, TOOL, path], capture_output=True,
+                           text=True)
+        check(p.returncode != 0 and "dump.jsonl:1: not a line of "
+              "COVERAGE_DUMP (no level" in p.stderr,
+              f"a line without its fields: {p.stderr}")
         with open(path, "w") as f:
             f.write("not json\n")
         p = subprocess.run([sys.executable, TOOL, path], capture_output=True,

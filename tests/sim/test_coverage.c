@@ -139,8 +139,12 @@ static void dump(const char *material, const char *map, const char *rot, int lv,
 	double render[GLINT_MAX_PARAMS];
 	int n = res->unc.n;
 
-	if (!f)
+	if (!f) {
+		if (path)
+			fprintf(stderr, "COVERAGE_DUMP %s: %s\n", path,
+				strerror(errno));
 		return;
+	}
 	fit_systematic(m, res->p, o->map_pixel_deg, render);
 	for (int k = 0; k < m->nparams; k++) {
 		double bound = k == m->lobes->roughness_param

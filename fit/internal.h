@@ -70,6 +70,10 @@ struct objective {
 	/* the sampling lean taken off each parameter (remove_lean()) and
 	 * the variance that adds */
 	double lean_fix[GLINT_MAX_PARAMS], lean_var[GLINT_MAX_PARAMS];
+	/* the fast render's gain term in each parameter (fit_render_gain(),
+	 * scaled: fit/render_gain.c), 0 until the residual's regions are
+	 * known */
+	double gain_sys[GLINT_MAX_PARAMS];
 	double mc_over_noise; /* the largest such ratio at the last check */
 	double model_noise;   /* the sets' variance over the residual's */
 };
@@ -112,6 +116,19 @@ extern const struct fit_method fit_method_anneal;
  * only.  Returns 0 or a negative errno. */
 int fit_source_terms(struct objective *ob, const double *jac,
 		     struct glint_fit_result *res);
+
+/* The fast render's error as a gain per misfit region (fit/render_gain.c):
+ * each parameter's sensitivity to a unit gain error of the varying lobes'
+ * render, independent per region (region: per residual row, -1 for
+ * none), into sens (nparams), and the size of that gain this photo's
+ * residuals r show, into *eps.  Zeros where not known (no shade cache).
+ * Returns 0 or a negative errno. */
+int fit_render_gain(struct objective *ob, const double *jac, const double *r,
+		    const int *region, double *sens, double *eps);
+
+/* The gain term's size in standard uncertainties: sens x eps x this
+ * (fit/render_gain.c says how it was measured). */
+#define FIT_GAIN_COVER 3.0
 
 /* The coarse stage the options ask for (annealing when the optimizer is
  * annealing, else the method's; NULL for an unknown method), and a
@@ -204,7 +221,7 @@ int fit_reweight_all(struct objective *ob, struct fit_data *d,
 		     const struct selections *sl);
 
 void fit_systematic(const struct glint_model *m, const double *p,
-		    double map_pixel_deg, double *sys);
+		    double map_pixel_deg, double *sys, double *noise_bias);
 
 void fit_discrepancy(const struct glint_model *m, const double *p, double share,
 		     double *u);

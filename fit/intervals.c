@@ -75,12 +75,13 @@ static int covariance(struct objective *ob, const struct selections *sl,
 		      struct glint_fit_result *res)
 {
 	const struct glint_model *m = ob->m;
-	double sys[GLINT_MAX_PARAMS];
+	double sys[GLINT_MAX_PARAMS], noise_bias[GLINT_MAX_PARAMS];
 
+	memset(noise_bias, 0, sizeof(noise_bias));
 	if (ob->o->no_systematic)
 		memset(sys, 0, sizeof(sys));
 	else
-		fit_systematic(m, ob->p, ob->o->map_pixel_deg, sys);
+		fit_systematic(m, ob->p, ob->o->map_pixel_deg, sys, noise_bias);
 	memset(res->discrepancy, 0, sizeof(res->discrepancy));
 	if (!ob->o->no_discrepancy)
 		fit_discrepancy(m, ob->p, share, res->discrepancy);
@@ -105,6 +106,7 @@ static int covariance(struct objective *ob, const struct selections *sl,
 	}
 	for (int k = 0; k < m->nparams; k++) {
 		double v = sys[k] * sys[k] + ob->lean_var[k] +
+			   ob->gain_sys[k] * ob->gain_sys[k] +
 			   res->discrepancy[k] * res->discrepancy[k] +
 			   res->light_stderr[k] * res->light_stderr[k];
 		for (int s = 0; s < res->nsources; s++)
@@ -126,6 +128,7 @@ static int covariance(struct objective *ob, const struct selections *sl,
 		.ndraws = nsets > 1 ? nsets : 0,
 		.draws_jr = nsets > 1 ? jr : NULL,
 		.sys = sys,
+		.noise_bias = noise_bias,
 		.level = ob->o->level,
 		.region = nregions ? region : NULL,
 		.nregions = nregions,
@@ -339,16 +342,23 @@ int fit_uncertainty(struct objective *ob, struct fit_data *d,
 	int nregions = ob->o->no_model_error
 			       ? 0
 			       : fit_misfit_regions(ob, sl, r, region, &share);
+	ret = fit_render_gain(ob, jac, r, region, res->render_gain_sens,
+			      &res->render_gain);
+	if (ret < 0)
+		goto out;
+	for (int k = 0; k < n && !ob->o->no_systematic; k++)
+		ob->gain_sys[k] = FIT_GAIN_COVER * res->render_gain *
+				  res->render_gain_sens[k];
+	memcpy(res->render_gain_stderr, ob->gain_sys, sizeof(ob->gain_sys));
 	if (nregions < 3)
 		nregions = 0;
 	/* The model discrepancy wherever the structure has a share (it may
-	 * lie under the noise, where the jackknife has no regions). */
-	if (nregions || (share > 0 && !ob->o->no_discrepancy))
-		ret = covariance(ob, sl, nsets, lo, hi, each, r, jac, block,
-				 fit_pixel_blocks(ob, sl->all, sl->nall, block),
-				 ob->cache && nsets > 1 ? jr : NULL,
-				 nregions ? region : NULL, nregions, share,
-				 res);
+	 * lie under the noise, where the jackknife has no regions), and the
+	 * render's gain term. */
+	ret = covariance(ob, sl, nsets, lo, hi, each, r, jac, block,
+			 fit_pixel_blocks(ob, sl->all, sl->nall, block),
+			 ob->cache && nsets > 1 ? jr : NULL,
+			 nregions ? region : NULL, nregions, share, res);
 	res->misfit_share = share;
 	if (ret < 0)
 		goto out;

@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """The coverage study's intervals, read back from its fits, and what other
-sizes of the fast render's systematic term would make of them, with no
-refit: the term enters only the interval's width (fit/discrepancy.c,
-fit_systematic()), so each value's other parts, as the study's dump states
-them, stay what they were.
+sizes of the fast render's systematic terms would make of them, with no
+refit: the terms enter only the interval's width (fit/discrepancy.c,
+fit_systematic(); fit/render_gain.c), so each value's other parts, as the
+study's dump states them, stay what they were.
 
     COVERAGE_DUMP=FILE ./build/tests/test_coverage full MAP...
 
@@ -11,18 +11,21 @@ Prints, per noise level and parameter class, the values counted (those the
 photo determines, roughness not reported as an upper bound), the share of
 95 % intervals that hold the truth and the median |error| / standard error
 (an honest interval: about 0.67), as fitted; then, for the terms given,
-the same with the fast render's term of that class replaced: REL of the
-value with an absolute FLOOR (albedos), and for roughness m, beside REL,
-NOISE x m / 0.1 times its statistical standard error (a bias that grows
-with the noise and the lobe's width, which the linearised spread does not
-show; 0: none).  Classes not given keep the terms they were fitted with.
---sampling K puts K times each value's sample-sets part (the fit's own
-sampling spread) in every class's term instead.  Per class, whether the
-target (90-98 % and 0.4-0.9) is met.  --map NAME counts the values of
-that map (its file name) alone: the terms that suit one light need not
-suit another (docs/tests.md, "Coverage").
+the same with them replaced.  A class given gets a fixed term of REL of
+the value with an absolute FLOOR (albedos), and for roughness m, beside
+REL, NOISE x m / 0.1 times its statistical standard error (a bias that
+grows with the noise and the lobe's width, which the linearised spread
+does not show; 0: none).  --gain K sizes the albedos' and ior's gain
+term at K times the fast render's gain error per region, as the fit's
+residual showed it, carried to the value (fit/render_gain.c; glint takes
+3, and none for roughness; 0: none).  What is not given keeps what it was
+fitted with.  --sampling K puts K times each value's sample-sets part
+(the fit's own sampling spread) in every class's terms instead.  Per
+class, whether the target (90-98 % and 0.4-0.9) is met.  --map NAME
+counts the values of that map (its file name) alone: the terms that suit
+one light need not suit another (docs/tests.md, "Coverage").
 
-usage: bench/coverage_terms.py FILE [--map NAME] [--diffuse REL FLOOR] [--specular REL FLOOR] [--roughness REL NOISE] [--ior REL] [--sampling K]"""
+usage: bench/coverage_terms.py FILE [--map NAME] [--diffuse REL FLOOR] [--specular REL FLOOR] [--roughness REL NOISE] [--ior REL] [--gain K] [--sampling K]"""
 import json
 import math
 import sys
@@ -32,7 +35,8 @@ GROUPS = ["diffuse", "specular", "roughness", "ior"]
 
 
 KEYS = ("map", "level", "group", "truth", "fit", "se", "sys", "sys_render",
-        "mc", "t", "lo", "hi", "bound", "range")
+        "sys_fixed", "gain_term", "gain_unit", "mc",
+        "t", "lo", "hi", "bound", "range")
 
 
 def load(path, only_map=None):
@@ -67,21 +71,26 @@ def load(path, only_map=None):
     return rows
 
 
-def term(terms, r):
-    """(fast render's term, noise bias) for value r under the given terms;
-    None where its class keeps its own."""
+def sigma(terms, r):
+    """Value r's standard error with the given terms in place of its
+    own: its statistical part (times 1 + the noise bias squared), the
+    systematic parts that are not the fast render's, the fixed term and
+    the gain term."""
     g, p = r["group"], abs(r["fit"])
+    fixed, bias, gain = r["sys_fixed"], 0.0, r["gain_term"]
     if "sampling" in terms:
-        return terms["sampling"][0] * r["mc"], 0.0
-    if g not in terms:
-        return None
-    if g in ("diffuse", "specular"):
-        rel, floor = terms[g]
-        return math.hypot(rel * p, floor), 0.0
-    if g == "roughness":
-        rel, noise = terms[g]
-        return rel * p, noise * p / 0.1
-    return terms[g][0] * p, 0.0
+        fixed, bias, gain = terms["sampling"][0] * r["mc"], 0.0, 0.0
+    elif g in terms:
+        if g in ("diffuse", "specular"):
+            fixed = math.hypot(terms[g][0] * p, terms[g][1])
+        elif g == "roughness":
+            fixed, bias = terms[g][0] * p, terms[g][1] * p / 0.1
+        else:
+            fixed = terms[g][0] * p
+    if "gain" in terms and g != "roughness":
+        gain = terms["gain"][0] * r["gain_unit"]
+    return math.sqrt(r["stat2"] * (1 + bias * bias) + r["other2"] +
+                     fixed * fixed + gain * gain)
 
 
 def table(rows, sigma, title):
@@ -103,7 +112,7 @@ def table(rows, sigma, title):
 
 
 NARGS = {"--diffuse": 2, "--specular": 2, "--roughness": 2, "--ior": 1,
-         "--sampling": 1}
+         "--gain": 1, "--sampling": 1}
 
 
 def parse(args, usage):
@@ -155,18 +164,9 @@ def main():
     except OSError as e:
         sys.exit(f"{path}: {e.strerror}")
     table(rows, lambda r: r["se"], "as fitted")
-
-    def sigma(r):
-        t = term(terms, r)
-        if t is None:
-            return r["se"]
-        render, noise = t
-        return math.sqrt(r["stat2"] * (1 + noise * noise) + r["other2"] +
-                         render * render)
-
     if terms:
         print()
-        table(rows, sigma, "with the terms given")
+        table(rows, lambda r: sigma(terms, r), "with the terms given")
 
 
 if __name__ == "__main__":

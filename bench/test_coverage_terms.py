@@ -19,7 +19,8 @@ def value(group, k, err, **kw):
     r = {"material": "m", "map": "x.hdr", "rot": 0, "level": "noise-free",
          "param": group, "group": group, "k": k, "truth": 0.5,
          "fit": 0.5 + err, "se": 1.0, "sys": 0.6, "sys_render": 0.6,
-         "blocks": 0.8, "mc": 0.0, "textbook": 0.8, "t": 2.0,
+         "sys_fixed": 0.6, "gain_term": 0.0,
+         "gain_unit": 0.0, "blocks": 0.8, "mc": 0.0, "textbook": 0.8, "t": 2.0,
          "lo": 0.5 + err - 2.0, "hi": 0.5 + err + 2.0, "bound": None,
          "range": 100.0, "truths": [0.5] * 8}
     r.update(kw)
@@ -46,7 +47,12 @@ def main():
     rows.append(value("diffuse", 1, 0.3, se=None, lo=0.0, hi=100.0))
     rows.append(value("roughness", 6, 5.0, bound=0.9))
     # a roughness of 0.2 (its noise bias: 2 x its statistical part)
-    rows.append(value("roughness", 6, 1.0, truth=0.2 - 1.0, fit=0.2))
+    # (and a gain term at K 1 of 5, which glint does not take for it)
+    rows.append(value("roughness", 6, 1.0, truth=0.2 - 1.0, fit=0.2,
+                      gain_unit=5.0))
+    # a specular value whose render term is all gain: 0.6 at K 1
+    rows.append(value("specular", 3, 1.0, sys_fixed=0.0, gain_unit=0.6,
+                      gain_term=0.6))
     # another map's value: counted with the rest, not under --map x.hdr
     rows.append(value("ior", 7, 3.0, map="y.hdr", mc=0.5))
     fails = 0
@@ -100,6 +106,17 @@ def main():
         # noise bias 1 x 0.2 / 0.1 = 2: sigma 0.8 sqrt(5)
         check(row(out, given, "roughness") == (1, 100.0, 0.56, "missed"),
               f"noise bias, roughness: {row(out, given, 'roughness')}")
+        # the gain term replaced: none leaves the statistical 0.8; K 2
+        # gives 1.2, sigma sqrt(0.64 + 1.44)
+        check(row(out, "as fitted", "specular") == (1, 100.0, 1.0, "missed"),
+              f"as fitted, specular: {row(out, 'as fitted', 'specular')}")
+        check(row(run("--gain", "0"), given, "specular") ==
+              (1, 100.0, 1.25, "missed"), "--gain 0, specular")
+        out = run("--gain", "2")
+        check(row(out, given, "specular") == (1, 100.0, 0.69, "missed"),
+              "--gain 2, specular")
+        check(row(out, given, "roughness") == (1, 100.0, 1.0, "missed"),
+              "--gain 2 leaves roughness as fitted")
         out = run("--diffuse", "0", "2")
         # sigma sqrt(0.64 + 4): every value covered, median 0.23
         check(row(out, given, "diffuse") == (10, 100.0, 0.23, "missed"),

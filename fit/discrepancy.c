@@ -67,7 +67,7 @@
  * mean of the varying lobes' albedos, the largest of those ratios.
  */
 void fit_systematic(const struct glint_model *m, const double *p,
-		    double map_pixel_deg, double *sys, double *noise_bias)
+		    double map_pixel_deg, double *sys)
 {
 	int probe = map_pixel_deg != 0;
 	double blur = map_pixel_deg > 0 ? 0.024 * pow(map_pixel_deg / 1.69, 2)
@@ -83,27 +83,19 @@ void fit_systematic(const struct glint_model *m, const double *p,
 	}
 	lobe_mean = nvary ? lobe_mean / nvary : 0;
 	for (int k = 0; k < m->nparams; k++) {
-		double rel = probe ? 0.002 : 0.0004, floor = 0, cross = 0;
+		double rel = 0.002, floor = 0, cross = 0;
 		for (int j = 0; j < m->bxdf->nlobes; j++)
 			if (k >= m->lobes->param[j] &&
 			    k < m->lobes->param[j] + 3) {
-				int vary = m->lobes->varies[j];
-				rel = probe  ? (vary ? 0.007 : 0.001)
-				      : vary ? 0.0015
-					     : 0.0001;
-				floor = probe  ? 0.0002
-					: vary ? 0.0001
-					       : 0.00002;
-				if (probe && !vary)
+				rel = !m->lobes->varies[j] ? 0.001
+				      : probe		   ? 0.007
+							   : 0.005;
+				floor = 0.0002;
+				if (probe && !m->lobes->varies[j])
 					cross = 0.0025 * lobe_mean;
 			}
-		if (noise_bias)
-			noise_bias[k] = 0;
-		if (k == m->lobes->roughness_param) {
-			rel = probe ? hypot(0.013, blur) : 0.007;
-			if (noise_bias)
-				noise_bias[k] = 2 * fabs(p[k]) / 0.1;
-		}
+		if (k == m->lobes->roughness_param)
+			rel = probe ? hypot(0.013, blur) : 0.013;
 		sys[k] = hypot(hypot(rel * fabs(p[k]), floor), cross);
 	}
 }

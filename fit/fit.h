@@ -235,12 +235,12 @@ struct glint_fit_result {
 	 * each parameter (fit.c, discrepancy()), in se */
 	double misfit_share;
 	double discrepancy[GLINT_MAX_PARAMS];
-	/* each parameter's sensitivity to a unit gain error of the varying
-	 * lobes' render per misfit region, and the gain error the residual
-	 * shows (fit/render_gain.c) */
-	double render_gain_sens[GLINT_MAX_PARAMS];
-	double render_gain;
-	double render_gain_stderr[GLINT_MAX_PARAMS]; /* the term, in se */
+	/* the fast render's gain error per misfit region, as this photo's
+	 * residual shows it, in each parameter (fit/render_gain.c), and the
+	 * part of the systematic standard error it gives (FIT_GAIN_COVER
+	 * times it) */
+	double render_gain[GLINT_MAX_PARAMS];
+	double render_gain_stderr[GLINT_MAX_PARAMS];
 	/* the light scale's standard uncertainty in each parameter
 	 * (opts.light_scale_sigma), and the sigma it came from */
 	double light_stderr[GLINT_MAX_PARAMS];

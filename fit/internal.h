@@ -118,16 +118,16 @@ int fit_source_terms(struct objective *ob, const double *jac,
 		     struct glint_fit_result *res);
 
 /* The fast render's error as a gain per misfit region (fit/render_gain.c):
- * each parameter's sensitivity to a unit gain error of the varying lobes'
- * render, independent per region (region: per residual row, -1 for
- * none), into sens (nparams), and the size of that gain this photo's
- * residuals r show, into *eps.  Zeros where not known (no shade cache).
- * Returns 0 or a negative errno. */
+ * each parameter's standard uncertainty from the gain error of the
+ * varying lobes' render each region's residual shows (region: per
+ * residual row, -1 for none), carried to the optimum, into term
+ * (nparams; 0 where not known: no shade cache).  Returns 0 or a negative
+ * errno. */
 int fit_render_gain(struct objective *ob, const double *jac, const double *r,
-		    const int *region, double *sens, double *eps);
+		    const int *region, double *term);
 
-/* The gain term's size in standard uncertainties: sens x eps x this
- * (fit/render_gain.c says how it was measured). */
+/* What the intervals take of fit_render_gain()'s term: this many times
+ * it (fit/discrepancy.c says how it was measured). */
 #define FIT_GAIN_COVER 3.0
 
 /* The coarse stage the options ask for (annealing when the optimizer is
@@ -221,7 +221,7 @@ int fit_reweight_all(struct objective *ob, struct fit_data *d,
 		     const struct selections *sl);
 
 void fit_systematic(const struct glint_model *m, const double *p,
-		    double map_pixel_deg, double *sys, double *noise_bias);
+		    double map_pixel_deg, double *sys);
 
 void fit_discrepancy(const struct glint_model *m, const double *p, double share,
 		     double *u);

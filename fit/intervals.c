@@ -75,13 +75,12 @@ static int covariance(struct objective *ob, const struct selections *sl,
 		      struct glint_fit_result *res)
 {
 	const struct glint_model *m = ob->m;
-	double sys[GLINT_MAX_PARAMS], noise_bias[GLINT_MAX_PARAMS];
+	double sys[GLINT_MAX_PARAMS];
 
-	memset(noise_bias, 0, sizeof(noise_bias));
 	if (ob->o->no_systematic)
 		memset(sys, 0, sizeof(sys));
 	else
-		fit_systematic(m, ob->p, ob->o->map_pixel_deg, sys, noise_bias);
+		fit_systematic(m, ob->p, ob->o->map_pixel_deg, sys);
 	memset(res->discrepancy, 0, sizeof(res->discrepancy));
 	if (!ob->o->no_discrepancy)
 		fit_discrepancy(m, ob->p, share, res->discrepancy);
@@ -128,7 +127,6 @@ static int covariance(struct objective *ob, const struct selections *sl,
 		.ndraws = nsets > 1 ? nsets : 0,
 		.draws_jr = nsets > 1 ? jr : NULL,
 		.sys = sys,
-		.noise_bias = noise_bias,
 		.level = ob->o->level,
 		.region = nregions ? region : NULL,
 		.nregions = nregions,
@@ -314,6 +312,7 @@ int fit_uncertainty(struct objective *ob, struct fit_data *d,
 		goto out;
 	}
 	fit_select_all(ob, sl);
+	memset(ob->gain_sys, 0, sizeof(ob->gain_sys));
 	for (int k = 0; k < n; k++) {
 		lo[k] = m->params[k].lo;
 		hi[k] = m->params[k].hi;
@@ -342,23 +341,32 @@ int fit_uncertainty(struct objective *ob, struct fit_data *d,
 	int nregions = ob->o->no_model_error
 			       ? 0
 			       : fit_misfit_regions(ob, sl, r, region, &share);
-	ret = fit_render_gain(ob, jac, r, region, res->render_gain_sens,
-			      &res->render_gain);
+	ret = fit_render_gain(ob, jac, r, region, res->render_gain);
 	if (ret < 0)
 		goto out;
+	/* roughness moves with the highlight's shape, not its gain: the
+	 * study's roughness coverage does not change with the term
+	 * (fit/discrepancy.c) */
 	for (int k = 0; k < n && !ob->o->no_systematic; k++)
-		ob->gain_sys[k] = FIT_GAIN_COVER * res->render_gain *
-				  res->render_gain_sens[k];
+		ob->gain_sys[k] =
+			k == m->lobes->roughness_param
+				? 0
+				: FIT_GAIN_COVER * res->render_gain[k];
 	memcpy(res->render_gain_stderr, ob->gain_sys, sizeof(ob->gain_sys));
+	int gain = 0;
+	for (int k = 0; k < n; k++)
+		gain |= ob->gain_sys[k] > 0;
 	if (nregions < 3)
 		nregions = 0;
 	/* The model discrepancy wherever the structure has a share (it may
 	 * lie under the noise, where the jackknife has no regions), and the
 	 * render's gain term. */
-	ret = covariance(ob, sl, nsets, lo, hi, each, r, jac, block,
-			 fit_pixel_blocks(ob, sl->all, sl->nall, block),
-			 ob->cache && nsets > 1 ? jr : NULL,
-			 nregions ? region : NULL, nregions, share, res);
+	if (nregions || gain || (share > 0 && !ob->o->no_discrepancy))
+		ret = covariance(ob, sl, nsets, lo, hi, each, r, jac, block,
+				 fit_pixel_blocks(ob, sl->all, sl->nall, block),
+				 ob->cache && nsets > 1 ? jr : NULL,
+				 nregions ? region : NULL, nregions, share,
+				 res);
 	res->misfit_share = share;
 	if (ret < 0)
 		goto out;

@@ -382,9 +382,12 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 			json_array_append_new(find, json_string(msg));
 		}
 	}
-	json_t *light = json_array();
-	for (int k = 0; k < n; k++)
+	json_t *light = json_array(), *gain = json_array();
+	for (int k = 0; k < n; k++) {
 		json_array_append_new(light, json_real(r->light_stderr[k]));
+		json_array_append_new(gain,
+				      json_real(r->render_gain_stderr[k]));
+	}
 	json_t *sources = light_sources(r, find);
 	json_t *doc = json_pack(
 		"{s:s,s:f,s:f,s:i,s:i,s:i,s:o,s:o,s:o,s:o,s:o,s:f,s:o,s:o,s:o,"
@@ -394,7 +397,9 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 		"chi2/dof-scaled, nor, when the residual is structured, below "
 		"a delete-one-region jackknife over regions that see the "
 		"light differently) plus the spread over independent sample "
-		"sets plus the fast render's systematic accuracy plus the "
+		"sets plus the fast render's systematic accuracy (a fixed "
+		"part and a gain error per region of the residual) "
+		"plus the "
 		"light scale's stated uncertainty plus a model discrepancy in "
 		"proportion to the residual structure's "
 		"share of the signal, calibrated on materials outside the "
@@ -412,6 +417,10 @@ json_t *glint_fit_uncertainty_json(const struct glint_fit_result *r)
 		light);
 	if (doc && sources)
 		json_object_set_new(doc, "light_sources", sources);
+	if (doc)
+		json_object_set_new(doc, "render_gain_stderr", gain);
+	else
+		json_decref(gain);
 	return doc;
 }
 

@@ -358,12 +358,7 @@ int glint_uncertainty_compute(const struct glint_unc_problem *pr,
 				sc[i] * sc[j] * u->cov_blocks[i * n + j] +
 				u->cov_mc[i * n + j];
 	for (int k = 0; k < n; k++) {
-		double f = pr->noise_bias ? pr->noise_bias[k] : 0,
-		       stat = sc[k] * sc[k] * u->cov_blocks[k * n + k] +
-			      u->cov_mc[k * n + k];
 		u->sys[k] = pr->sys && pr->sys[k] > 0 ? pr->sys[k] : 0;
-		if (f > 0 && stat > 0)
-			u->sys[k] = hypot(u->sys[k], f * sqrt(stat));
 		u->cov[k * n + k] += u->sys[k] * u->sys[k];
 	}
 	for (int k = 0; k < n; k++) {

@@ -80,11 +80,6 @@ struct glint_unc_problem {
 	 * model-error jackknife; NULL or nregions < 3: no such part */
 	const int *region;
 	int nregions;
-	/* n factors, or NULL: a bias that grows with the noise, which the
-	 * linearised spread does not show (a broad, faint lobe's roughness
-	 * under noise), noise_bias[k] times parameter k's statistical
-	 * standard error, joins its systematic part */
-	const double *noise_bias;
 };
 
 struct glint_uncertainty {

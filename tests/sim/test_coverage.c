@@ -120,9 +120,9 @@ static int expose(const struct glint_image *clean, double full_well,
 /* COVERAGE_DUMP: one line a value, what sizes its interval: the truth,
  * the fit, its standard error and interval, the parts of it (the blocks',
  * the sample sets', the systematic in all and the fast render's terms in
- * it: the fixed one, fit_systematic(), with its noise bias factor, and
- * the gain term, fit/render_gain.c, with the gain and the sensitivity it
- * is made of), null where not finite. */
+ * it: the fixed one, fit_systematic(), and the gain term,
+ * fit/render_gain.c, beside that term at a factor of 1),
+ * null where not finite. */
 static void dump_num(FILE *f, const char *name, double x)
 {
 	if (isfinite(x))
@@ -138,7 +138,7 @@ static void dump(const char *material, const char *map, const char *rot, int lv,
 {
 	const char *path = getenv("COVERAGE_DUMP");
 	FILE *f = path ? fopen(path, "a") : NULL;
-	double fixed[GLINT_MAX_PARAMS], bias[GLINT_MAX_PARAMS];
+	double fixed[GLINT_MAX_PARAMS];
 	int n = res->unc.n;
 
 	if (!f) {
@@ -147,14 +147,9 @@ static void dump(const char *material, const char *map, const char *rot, int lv,
 				strerror(errno));
 		return;
 	}
-	fit_systematic(m, res->p, o->map_pixel_deg, fixed, bias);
+	fit_systematic(m, res->p, o->map_pixel_deg, fixed);
 	for (int k = 0; k < m->nparams; k++) {
-		double stat2 = res->se[k] * res->se[k] -
-			       res->unc.sys[k] * res->unc.sys[k];
-		double render = sqrt(fixed[k] * fixed[k] +
-				     bias[k] * bias[k] * fmax(0, stat2) +
-				     res->render_gain_stderr[k] *
-					     res->render_gain_stderr[k]);
+		double render = hypot(fixed[k], res->render_gain_stderr[k]);
 		double bound = k == m->lobes->roughness_param
 				       ? glint_fit_roughness_bound(res)
 				       : NAN;
@@ -170,13 +165,11 @@ static void dump(const char *material, const char *map, const char *rot, int lv,
 		dump_num(f, "sys", res->unc.sys[k]);
 		dump_num(f, "sys_render", render);
 		dump_num(f, "sys_fixed", fixed[k]);
-		dump_num(f, "noise_bias", bias[k]);
 		dump_num(f, "gain_term", res->render_gain_stderr[k]);
 		dump_num(f, "blocks", sqrt(res->unc.cov_blocks[k * n + k]));
 		dump_num(f, "mc", sqrt(res->unc.cov_mc[k * n + k]));
 		dump_num(f, "textbook", res->unc.se_textbook[k]);
-		dump_num(f, "gain", res->render_gain);
-		dump_num(f, "render_sens", res->render_gain_sens[k]);
+		dump_num(f, "gain_unit", res->render_gain[k]);
 		dump_num(f, "t", res->unc.t[k]);
 		dump_num(f, "lo", res->unc.lo[k]);
 		dump_num(f, "hi", res->unc.hi[k]);

@@ -86,6 +86,22 @@ assert u['model_error_regions'] == 0 and not any(u['model_error_stderr']), u
 assert 0 <= u['misfit_share'] < 0.01, u['misfit_share']
 assert not any('model discrepancy' in f for f in u['findings']), u['findings']
 "
+check "the fast render's gain term is stated per parameter, within the systematic part" python3 -c "
+import json
+d = json.load(open('d/fit/params.json'))
+u = d['uncertainty']
+g, s = u['render_gain_stderr'], u['systematic_stderr']
+print('   gain term', g)
+assert len(g) == len(d['parameters']) == len(s), g
+assert all(0 <= e <= x * (1 + 1e-9) for e, x in zip(g, s)), (g, s)
+# the varying lobe's albedos and ior carry it, within 5 % of their value
+# for the true model; roughness none (fit/render_gain.c)
+for p, e in zip(d['parameters'], g):
+    if p['name'].startswith('specular') or p['name'] == 'ior':
+        assert 0 < e < 0.05 * p['value'], (p, e)
+    if p['name'] == 'roughness':
+        assert e == 0, (p, e)
+"
 check "the sampling lean taken off is stated per parameter, within its interval" python3 -c "
 import json
 d = json.load(open('d/fit/params.json'))

@@ -40,7 +40,9 @@
  * noise-free median |error| / sigma is 0.47.  What the light's measurement adds
  * is carried by its own terms: the map's scale (light_scale_sigma) and
  * each compact source's flux, on every photo of a joint fit too
- * (fit/light_sources.c).
+ * (fit/light_sources.c).  This term is one calibration for every map;
+ * the render's error under this photo's light, as its residual shows it
+ * region by region, is a term of its own beside it (fit/render_gain.c).
  *
  * A map unwrapped from a probe is that light seen through the probe's
  * pixels, and a highlight under a blurred map is broader, which the fit

@@ -70,9 +70,9 @@ struct objective {
 	/* the sampling lean taken off each parameter (remove_lean()) and
 	 * the variance that adds */
 	double lean_fix[GLINT_MAX_PARAMS], lean_var[GLINT_MAX_PARAMS];
-	/* the fast render's gain term in each parameter (fit_render_gain(),
-	 * scaled: fit/render_gain.c), 0 until the residual's regions are
-	 * known */
+	/* the fast render's gain term in each parameter (fit_render_gain()
+	 * times FIT_GAIN_COVER; none on roughness), 0 until the residual's
+	 * regions are known */
 	double gain_sys[GLINT_MAX_PARAMS];
 	double mc_over_noise; /* the largest such ratio at the last check */
 	double model_noise;   /* the sets' variance over the residual's */
@@ -126,8 +126,8 @@ int fit_source_terms(struct objective *ob, const double *jac,
 int fit_render_gain(struct objective *ob, const double *jac, const double *r,
 		    const int *region, double *term);
 
-/* What the intervals take of fit_render_gain()'s term: this many times
- * it (fit/discrepancy.c says how it was measured). */
+/* What the intervals take of fit_render_gain()'s term on the albedos and
+ * ior: this many times it (fit/render_gain.c says how it was measured). */
 #define FIT_GAIN_COVER 3.0
 
 /* The coarse stage the options ask for (annealing when the optimizer is

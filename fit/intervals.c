@@ -346,7 +346,7 @@ int fit_uncertainty(struct objective *ob, struct fit_data *d,
 		goto out;
 	/* roughness moves with the highlight's shape, not its gain: the
 	 * study's roughness coverage does not change with the term
-	 * (fit/discrepancy.c) */
+	 * (fit/render_gain.c) */
 	for (int k = 0; k < n && !ob->o->no_systematic; k++)
 		ob->gain_sys[k] =
 			k == m->lobes->roughness_param

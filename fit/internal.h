@@ -117,6 +117,13 @@ extern const struct fit_method fit_method_anneal;
 int fit_source_terms(struct objective *ob, const double *jac,
 		     struct glint_fit_result *res);
 
+/* (J^T J)^-1 of the weighted Jacobian jac (rows x n, n <= GLINT_UNC_MAX_N)
+ * into ainv, with unseen[k] 1 where J cannot see parameter k
+ * (glint_unc_normal_inverse()), for carrying a change of the residuals
+ * to the optimum (A^-1 J^T c).  Returns 0 or a negative errno. */
+int fit_jtj_inverse(const double *jac, int rows, int n, double *ainv,
+		    int *unseen);
+
 /* The fast render's error as a gain per misfit region (fit/render_gain.c):
  * each parameter's standard uncertainty from the gain error of the
  * varying lobes' render each region's residual shows (region: per

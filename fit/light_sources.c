@@ -136,18 +136,11 @@ static int render_source(struct objective *ob,
 	return ret;
 }
 
-int fit_source_terms(struct objective *ob, const double *jac,
-		     struct glint_fit_result *res)
+int fit_jtj_inverse(const double *jac, int rows, int n, double *ainv,
+		    int *unseen)
 {
-	const struct glint_fit_opts *o = ob->o;
-	int n = ob->m->nparams, rows = 3 * ob->nsel, ret = 0;
 	double a[GLINT_UNC_MAX_N * GLINT_UNC_MAX_N];
-	double ainv[GLINT_UNC_MAX_N * GLINT_UNC_MAX_N];
-	int unseen[GLINT_UNC_MAX_N];
 
-	res->nsources = 0;
-	if (!o->nsources || !ob->cache || n > GLINT_UNC_MAX_N)
-		return 0;
 	for (int i = 0; i < n; i++)
 		for (int j = 0; j <= i; j++) {
 			double s = 0;
@@ -156,7 +149,21 @@ int fit_source_terms(struct objective *ob, const double *jac,
 				     jac[(size_t)k * n + j];
 			a[i * n + j] = a[j * n + i] = s;
 		}
-	ret = glint_unc_normal_inverse(a, n, ainv, unseen);
+	return glint_unc_normal_inverse(a, n, ainv, unseen);
+}
+
+int fit_source_terms(struct objective *ob, const double *jac,
+		     struct glint_fit_result *res)
+{
+	const struct glint_fit_opts *o = ob->o;
+	int n = ob->m->nparams, rows = 3 * ob->nsel, ret = 0;
+	double ainv[GLINT_UNC_MAX_N * GLINT_UNC_MAX_N];
+	int unseen[GLINT_UNC_MAX_N];
+
+	res->nsources = 0;
+	if (!o->nsources || !ob->cache || n > GLINT_UNC_MAX_N)
+		return 0;
+	ret = fit_jtj_inverse(jac, rows, n, ainv, unseen);
 	double *c = malloc(sizeof(double) * (size_t)rows);
 	if (!c)
 		return glint_error_set(ENOMEM, "out of memory");

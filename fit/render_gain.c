@@ -83,7 +83,6 @@ int fit_render_gain(struct objective *ob, const double *jac, const double *r,
 {
 	const struct glint_model *m = ob->m;
 	int n = m->nparams, nj = m->bxdf->nlobes, rows = 3 * ob->nsel, nr = 0;
-	double a[GLINT_UNC_MAX_N * GLINT_UNC_MAX_N];
 	double ainv[GLINT_UNC_MAX_N * GLINT_UNC_MAX_N];
 	int unseen[GLINT_UNC_MAX_N], ret;
 
@@ -95,15 +94,7 @@ int fit_render_gain(struct objective *ob, const double *jac, const double *r,
 			nr = region[i] + 1;
 	if (nr < 2)
 		return 0;
-	for (int i = 0; i < n; i++)
-		for (int j = 0; j <= i; j++) {
-			double s = 0;
-			for (int k = 0; k < rows; k++)
-				s += jac[(size_t)k * n + i] *
-				     jac[(size_t)k * n + j];
-			a[i * n + j] = a[j * n + i] = s;
-		}
-	ret = glint_unc_normal_inverse(a, n, ainv, unseen);
+	ret = fit_jtj_inverse(jac, rows, n, ainv, unseen);
 	if (ret < 0)
 		return ret;
 	double *lobes = malloc(sizeof(double) * 3 * (size_t)nj * ob->nsel);

@@ -59,6 +59,35 @@
  * A probe of unknown resolution
  * (a sources file without map_pixel_deg) gets 4.1 % for the blur.
  *
+ * Coarser still, a relative term on roughness is not enough: on the
+ * simulated rig at 160 x 120 (the probe's ball 48 px in radius, 3.37
+ * degrees a pixel) the sun is not found as a compact source (its peak is
+ * 6 times the ring around it, under the detector's 8), stays in the map
+ * as a blob the camera's blur wide, and narrow lobes collapse under it:
+ * yellow plastic (0.039) fits 0.0008, nickel (0.033) 0.007, semi-gloss
+ * paint (0.054) 0.037.  To first order a lobe of width m under light
+ * blurred by b fits m^2 - b^2 / 4, whatever m is: an absolute floor in
+ * m^2.  The term is the larger of the relative one and
+ * sqrt(m^2 + B^2) - m, B = FIT_SYS_LIGHT_FLOOR p^2 (p the probe pixel's
+ * angle in radians): 0.0278 at 3.37 degrees, the least that covers those
+ * three (semi-gloss paint needs 0.027), 0.018 at 2.70 degrees (where
+ * aluminium bronze, 0.023, fits 0.029 with the sun found: its glow
+ * within the 4-pixel aperture becomes a point) and 0.007 on the shipped
+ * rig, under its relative term for every Table-1 lobe that the pixels
+ * resolve.
+ *
+ * The sphere's own size biases the specular albedos and ior: the fit of
+ * the simulated rig's 160 x 120 photo (a sphere 39 px in radius by its
+ * interior pixels) under the 320 x 240 probe's map gives yellow plastic's
+ * specular 12 % high and ior 0.035 low, with the roughness right.  Over
+ * the eleven materials, the specular term a 95 % interval needs, beside
+ * the rest of it, is 0.7 % at 81 px (the shipped rig), about 1 % at 60,
+ * 3.6 % at 50 and 5 % at 39: it switches on steeply below 60 px, and
+ * FIT_SYS_SMALL / R^4 (3.6 % at 50 px, 9.6 % at 39, 0.5 % at 81) follows
+ * it with margin at the smallest; ior takes FIT_SYS_SMALL_IOR of it (0.5 %
+ * needed at 39 and 50 px).  Below 39 px nothing was measured and the
+ * terms are extrapolated (the fit says so: fit.c).
+ *
  * Under a probe's light the diffuse albedos also take up part of what the
  * map gets wrong about the specular lobe's light: on the simulated rig,
  * its photos fitted in their measured colours (fit_data.c), every
@@ -69,11 +98,14 @@
  * mean of the varying lobes' albedos, the largest of those ratios.
  */
 void fit_systematic(const struct glint_model *m, const double *p,
-		    double map_pixel_deg, double *sys)
+		    double map_pixel_deg, double sphere_px, double *sys)
 {
 	int probe = map_pixel_deg != 0;
 	double blur = map_pixel_deg > 0 ? 0.024 * pow(map_pixel_deg / 1.69, 2)
 					: 0.041;
+	double pix = map_pixel_deg > 0 ? map_pixel_deg * M_PI / 180 : 0;
+	double floor_m = FIT_SYS_LIGHT_FLOOR * pix * pix;
+	double small = sphere_px > 0 ? FIT_SYS_SMALL / pow(sphere_px, 4) : 0;
 	double lobe_mean = 0;
 	int nvary = 0;
 	for (int j = 0; j < m->bxdf->nlobes; j++) {
@@ -92,14 +124,34 @@ void fit_systematic(const struct glint_model *m, const double *p,
 				rel = !m->lobes->varies[j] ? 0.001
 				      : probe		   ? 0.007
 							   : 0.005;
+				if (m->lobes->varies[j])
+					rel = hypot(rel, small);
 				floor = 0.0002;
 				if (probe && !m->lobes->varies[j])
 					cross = 0.0025 * lobe_mean;
 			}
 		if (k == m->lobes->roughness_param)
 			rel = probe ? hypot(0.013, blur) : 0.013;
+		else if (!(floor > 0)) /* neither albedo nor roughness: ior */
+			rel = hypot(rel, FIT_SYS_SMALL_IOR * small);
 		sys[k] = hypot(hypot(rel * fabs(p[k]), floor), cross);
+		/* the light's structure below the probe's pixel: m^2 known to
+		 * floor_m^2 (see above) */
+		if (k == m->lobes->roughness_param)
+			sys[k] =
+				fmax(sys[k], hypot(p[k], floor_m) - fabs(p[k]));
 	}
+}
+
+double fit_sphere_px(const struct objective *ob)
+{
+	double r = 0;
+	for (int v = 0; v < ob->nviews; v++) {
+		double rv = sqrt(ob->views[v].interior / M_PI);
+		if (rv > 0 && (r == 0 || rv < r))
+			r = rv;
+	}
+	return r;
 }
 
 double glint_fit_discrepancy_scale(const struct glint_model *m, const double *p,

@@ -203,6 +203,13 @@ static int fit_or_eval(const struct glint_fit_view *in, int nviews,
 	ret = fit_objective_init(&ob, views, nviews, model, &d, o);
 	if (ret < 0)
 		goto out;
+	if (fit_sphere_px(&ob) < FIT_SYS_SMALLEST_PX)
+		glint_log_warn(
+			"the sphere is %.0f px in radius: the intervals' "
+			"systematic terms were measured down to %.0f "
+			"px and are extrapolated below "
+			"(docs/fitting.md, \"Uncertainty\")",
+			fit_sphere_px(&ob), FIT_SYS_SMALLEST_PX);
 	res->setup_seconds = glint_clock_monotonic() - t0;
 	if (eval_p) {
 		memcpy(ob.p, eval_p, (size_t)model->nparams * sizeof(double));

@@ -137,6 +137,18 @@ int fit_render_gain(struct objective *ob, const double *jac, const double *r,
  * ior: this many times it (fit/render_gain.c says how it was measured). */
 #define FIT_GAIN_COVER 3.0
 
+/* The systematic terms that grow as the photos get coarse (fit_systematic(),
+ * fit/discrepancy.c says how they were measured): roughness's floor in
+ * m^2, FIT_SYS_LIGHT_FLOOR times the square of the probe's pixel angle
+ * (radians), squared; the varying lobes' albedos' relative term
+ * FIT_SYS_SMALL / R^4 on a sphere R pixels in radius, ior's that times
+ * FIT_SYS_SMALL_IOR. */
+#define FIT_SYS_LIGHT_FLOOR 8.0
+#define FIT_SYS_SMALL 2.2e5
+#define FIT_SYS_SMALL_IOR 0.15
+/* the smallest sphere (pixels of radius) those were measured on */
+#define FIT_SYS_SMALLEST_PX 38.0
+
 /* The coarse stage the options ask for (annealing when the optimizer is
  * annealing, else the method's; NULL for an unknown method), and a
  * method's entry by name (a valid enum value). */
@@ -228,7 +240,11 @@ int fit_reweight_all(struct objective *ob, struct fit_data *d,
 		     const struct selections *sl);
 
 void fit_systematic(const struct glint_model *m, const double *p,
-		    double map_pixel_deg, double *sys);
+		    double map_pixel_deg, double sphere_px, double *sys);
+
+/* The radius in pixels of the smallest sphere the objective's photos show
+ * (from each view's interior pixels). */
+double fit_sphere_px(const struct objective *ob);
 
 void fit_discrepancy(const struct glint_model *m, const double *p, double share,
 		     double *u);

@@ -80,7 +80,8 @@ static int covariance(struct objective *ob, const struct selections *sl,
 	if (ob->o->no_systematic)
 		memset(sys, 0, sizeof(sys));
 	else
-		fit_systematic(m, ob->p, ob->o->map_pixel_deg, sys);
+		fit_systematic(m, ob->p, ob->o->map_pixel_deg,
+			       fit_sphere_px(ob), sys);
 	memset(res->discrepancy, 0, sizeof(res->discrepancy));
 	if (!ob->o->no_discrepancy)
 		fit_discrepancy(m, ob->p, share, res->discrepancy);

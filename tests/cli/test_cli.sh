@@ -153,6 +153,7 @@ JSON
 check "render a photo to fit" run 0 "" render "$tmp/fscene.json" --paper satin-paint -o "$tmp/photo.exr" -q
 if in_part 1; then
 check "fit it, exporting to every renderer" run 0 "" fit "$tmp/fscene.json" "$tmp/photo.exr" -o "$tmp/fit1" --export gltf,mitsuba,pbrt,blender,materialx --json -q
+check "a sphere 30 px in radius: its intervals' terms are said to be extrapolated" grep -q "measured down to 38 px and are extrapolated" "$tmp/err"
 check "fit --json has values, errors, passes" python3 -c "
 import json; r=json.load(open('$tmp/out'))
 names=[p['name'] for p in r['parameters']]

@@ -144,8 +144,8 @@ int fit_render_gain(struct objective *ob, const double *jac, const double *r,
  * FIT_SYS_SMALL / R^4 on a sphere R pixels in radius, ior's that times
  * FIT_SYS_SMALL_IOR. */
 #define FIT_SYS_LIGHT_FLOOR 8.0
-#define FIT_SYS_SMALL 2.2e5
-#define FIT_SYS_SMALL_IOR 0.15
+#define FIT_SYS_SMALL	    2.2e5
+#define FIT_SYS_SMALL_IOR   0.15
 /* the smallest sphere (pixels of radius) those were measured on */
 #define FIT_SYS_SMALLEST_PX 38.0
 

@@ -147,8 +147,8 @@ static void dump(const char *material, const char *map, const char *rot, int lv,
 				strerror(errno));
 		return;
 	}
-	fit_systematic(m, res->p, o->map_pixel_deg,
-		       sqrt(res->interior / M_PI), fixed);
+	fit_systematic(m, res->p, o->map_pixel_deg, sqrt(res->interior / M_PI),
+		       fixed);
 	for (int k = 0; k < m->nparams; k++) {
 		double render = hypot(fixed[k], res->render_gain_stderr[k]);
 		double bound = k == m->lobes->roughness_param

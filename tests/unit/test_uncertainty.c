@@ -508,8 +508,8 @@ static void systematic_by_map(void)
 	/* at 2.70 degrees the floor in m^2 (systematic_coarse()) passes the
 	 * relative 6.27 % on a lobe this narrow */
 	double pix = 2.70 * M_PI / 180;
-	CHECK(fabs(coarse[6] - fmax(0.0627 * p[6],
-				    hypot(p[6], 8 * pix * pix) - p[6])) <
+	CHECK(fabs(coarse[6] -
+		   fmax(0.0627 * p[6], hypot(p[6], 8 * pix * pix) - p[6])) <
 		      0.0005 * p[6],
 	      "roughness at 2.70 degrees a pixel: %g %%",
 	      100 * coarse[6] / p[6]);
@@ -567,8 +567,8 @@ static void systematic_coarse(void)
 	      small[3], rig[3], big[3]);
 	CHECK(fabs(small[7] - hypot(0.002, 0.15 * rel) * p[7]) < 1e-12 &&
 		      rig[7] < 1.3 * big[7] && small[0] == big[0],
-	      "ior %g at 39 px, %g at 81 px; diffuse %g, %g", small[7],
-	      rig[7], small[0], big[0]);
+	      "ior %g at 39 px, %g at 81 px; diffuse %g, %g", small[7], rig[7],
+	      small[0], big[0]);
 }
 
 int main(void)

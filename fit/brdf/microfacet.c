@@ -3,6 +3,7 @@
 
 #include "model.h"
 
+#include "core/fastmath.h"
 #include "core/vec.h"
 
 #include <math.h>
@@ -107,8 +108,9 @@ static void reflect_about(double tan2, double u, struct vec3 wo,
 			  struct vec3 *wi)
 {
 	double ch = 1 / sqrt(1 + tan2), sh = sqrt(fmax(0, 1 - ch * ch));
-	double phi = 2 * M_PI * u;
-	struct vec3 h = v3(sh * cos(phi), sh * sin(phi), ch);
+	double sp, cp;
+	glint_fast_sincos_2pi(u, &sp, &cp);
+	struct vec3 h = v3(sh * cp, sh * sp, ch);
 	double oh = v3_dot(wo, h);
 
 	*wi = v3_sub(v3_scale(h, 2 * oh), wo);

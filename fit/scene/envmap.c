@@ -2,6 +2,7 @@
 #include "envmap.h"
 
 #include "core/error.h"
+#include "core/fastmath.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -795,7 +796,10 @@ void glint_env_query_start(const struct glint_env_hot *hot, struct vec3 d,
 	double u, v;
 
 	q->cy = fmin(fmax(dm.y, -1), 1);
-	glint_latlong_dir_to_uv(dm, &u, &v);
+	/* glint_latlong_dir_to_uv()'s map, by polynomials: this runs for
+	 * every lobe sample (core/fastmath.h) */
+	u = 0.5 + glint_fast_atan2(dm.x, -dm.z) / (2 * M_PI);
+	v = glint_fast_acos(q->cy) / M_PI;
 	/* u, v in [0, 1]: x, y within half a texel of the map, whose
 	 * border in the table holds what wrapping and clamping would read. */
 	double x = fmin(fmax(u * w - 0.5, -0.5), w - 0.5);

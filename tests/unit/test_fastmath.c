@@ -1,0 +1,113 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * The fit's polynomial atan2, acos and sincos (core/fastmath.h) against
+ * libm: their largest errors over a million arguments each, the edges
+ * (axes, signed zeros, +-1, quadrant boundaries) within the same bounds, and
+ * a direction's map coordinates through them within two millionths of a
+ * 1024-texel map's texel of glint_latlong_dir_to_uv()'s.
+ */
+#include "test.h"
+
+#include "core/fastmath.h"
+#include "core/vec.h"
+
+/* A reproducible uniform draw in [0, 1) (xorshift64*). */
+static double draw(unsigned long long *st)
+{
+	*st ^= *st >> 12;
+	*st ^= *st << 25;
+	*st ^= *st >> 27;
+	return (double)((*st * 2685821657736338717ULL) >> 11) * 0x1p-53;
+}
+
+static void test_atan2(void)
+{
+	unsigned long long st = 1;
+	double worst = 0;
+	for (int i = 0; i < 1000000; i++) {
+		double y = 2 * draw(&st) - 1, x = 2 * draw(&st) - 1;
+		double e = fabs(glint_fast_atan2(y, x) - atan2(y, x));
+		worst = e > worst ? e : worst;
+	}
+	printf("atan2: largest error %.3g rad\n", worst);
+	CHECK(worst < 1e-8, "atan2 off by %g", worst);
+	static const double edge[][2] = { { 0, 1 },  { 1, 0 },	   { 0, -1 },
+					  { -1, 0 }, { 1, 1 },	   { -1, -1 },
+					  { 1, -1 }, { -0.0, -1 }, { 0, 0 } };
+	for (size_t k = 0; k < sizeof(edge) / sizeof(edge[0]); k++) {
+		double y = edge[k][0], x = edge[k][1];
+		CHECK_NEAR(glint_fast_atan2(y, x), atan2(y, x), 1e-8,
+			   "atan2 at an edge");
+	}
+	CHECK(glint_fast_atan2(-0.0, -1) < 0 && glint_fast_atan2(0.0, -1) > 0,
+	      "the sign of zero picks -pi or pi");
+}
+
+static void test_acos(void)
+{
+	unsigned long long st = 2;
+	double worst = 0;
+	for (int i = 0; i < 1000000; i++) {
+		double t = 2 * draw(&st) - 1;
+		double e = fabs(glint_fast_acos(t) - acos(t));
+		worst = e > worst ? e : worst;
+	}
+	printf("acos: largest error %.3g rad\n", worst);
+	CHECK(worst < 5e-9, "acos off by %g", worst);
+	CHECK(glint_fast_acos(1) == 0, "acos(1) %g", glint_fast_acos(1));
+	CHECK_NEAR(glint_fast_acos(-1), M_PI, 1e-8, "acos(-1)");
+	CHECK_NEAR(glint_fast_acos(0), M_PI / 2, 1e-8, "acos(0)");
+	CHECK(glint_fast_acos(1.0000001) == 0, "clamped above 1");
+}
+
+static void test_sincos(void)
+{
+	unsigned long long st = 3;
+	double worst = 0, far = 0;
+	for (int i = 0; i < 1000000; i++) {
+		double u = i < 999000 ? draw(&st) : (i - 999000) / 8.0 - 60;
+		double s, c;
+		glint_fast_sincos_2pi(u, &s, &c);
+		double e = fmax(fabs(s - sin(2 * M_PI * u)),
+				fabs(c - cos(2 * M_PI * u)));
+		if (i < 999000)
+			worst = e > worst ? e : worst;
+		else
+			far = e > far ? e : far;
+	}
+	printf("sincos: largest error %.3g in [0, 1), %.3g out to 64 turns\n",
+	       worst, far);
+	CHECK(worst < 1e-15, "sincos off by %g", worst);
+	/* out there libm's own sin(2 pi u) rounds 2 pi u (6e-14 at 400) */
+	CHECK(far < 1e-13, "sincos off by %g far from 0", far);
+}
+
+/* Directions to the map's (u, v) as envmap.c computes them. */
+static void test_map_coordinates(void)
+{
+	unsigned long long st = 4;
+	double worst = 0;
+	for (int i = 0; i < 200000; i++) {
+		struct vec3 d = v3_norm(v3(2 * draw(&st) - 1, 2 * draw(&st) - 1,
+					   2 * draw(&st) - 1));
+		double u, v;
+		glint_latlong_dir_to_uv(d, &u, &v);
+		double fu = 0.5 + glint_fast_atan2(d.x, -d.z) / (2 * M_PI);
+		double fv = glint_fast_acos(d.y) / M_PI;
+		double e = fmax(fabs(fu - u) * 1024, fabs(fv - v) * 512);
+		worst = e > worst ? e : worst;
+	}
+	printf("map coordinates: largest error %.3g texel of a 1024 x 512 "
+	       "map\n",
+	       worst);
+	CHECK(worst < 2e-6, "%g of a texel", worst);
+}
+
+int main(void)
+{
+	RUN(test_atan2);
+	RUN(test_acos);
+	RUN(test_sincos);
+	RUN(test_map_coordinates);
+	return test_result();
+}

@@ -40,6 +40,85 @@ static inline double glint_horner(double x, const double *c, int n)
 	return p;
 }
 
+/* x clamped to [lo, hi], without fmin()'s and fmax()'s calls (whose NaN
+ * rules need them on x86-64); a NaN x stays NaN. */
+static inline double glint_clamp(double x, double lo, double hi)
+{
+	return x < lo ? lo : x > hi ? hi : x;
+}
+
+/* floor(x) for |x| < 2^62, without a call (x86-64's baseline has no
+ * rounding instruction). */
+static inline double glint_floor(double x)
+{
+	long long i = (long long)x;
+	return (double)(i - (x < (double)i));
+}
+
+/* exp(x), within 3 ulp of libm's (libm's own beyond |x| = 700). */
+static inline double glint_fast_exp(double x)
+{
+	if (!(x > -700 && x < 700))
+		return exp(x);
+	double k = glint_floor(x * 1.4426950408889634 + 0.5);
+	/* r = x - k ln 2 in two parts, |r| <= ln 2 / 2 */
+	double r = (x - k * 6.93147180369123816490e-01) -
+		   k * 1.90821492927058770002e-10;
+	/* Taylor to r^13: 4e-18 at |r| = ln 2 / 2 */
+	static const double c[] = {
+		1.0 / 6227020800,
+		1.0 / 479001600,
+		1.0 / 39916800,
+		1.0 / 3628800,
+		1.0 / 362880,
+		1.0 / 40320,
+		1.0 / 5040,
+		1.0 / 720,
+		1.0 / 120,
+		1.0 / 24,
+		1.0 / 6,
+		0.5,
+		1,
+		1,
+	};
+	double e = glint_horner(r, c, sizeof(c) / sizeof(c[0]));
+	/* times 2^k, |k| <= 1010 here */
+	union {
+		double d;
+		unsigned long long u;
+	} b = { .u = (unsigned long long)((long long)k + 1023) << 52 };
+	return e * b.d;
+}
+
+/* log(x), within 3 ulp of libm's (libm's own for x not a positive normal
+ * number). */
+static inline double glint_fast_log(double x)
+{
+	union {
+		double d;
+		unsigned long long u;
+	} b = { .d = x };
+	long long e = (long long)((b.u >> 52) & 0x7ff) - 1023;
+	if (!(x > 0) || e == -1023 || e == 1024)
+		return log(x);
+	/* the mantissa in [sqrt(1/2), sqrt(2)) */
+	b.u = (b.u & 0x000fffffffffffffULL) | 0x3ff0000000000000ULL;
+	if (b.d > 1.4142135623730951) {
+		b.d *= 0.5;
+		e++;
+	}
+	/* log m = 2 atanh(s), s = (m - 1) / (m + 1), |s| <= 0.172: the
+	 * series to s^21, 3e-18 */
+	double s = (b.d - 1) / (b.d + 1), s2 = s * s;
+	static const double c[] = {
+		2.0 / 21, 2.0 / 19, 2.0 / 17, 2.0 / 15, 2.0 / 13, 2.0 / 11,
+		2.0 / 9,  2.0 / 7,  2.0 / 5,  2.0 / 3,	2,
+	};
+	double l = s * glint_horner(s2, c, sizeof(c) / sizeof(c[0]));
+	return (double)e * 6.93147180369123816490e-01 +
+	       ((double)e * 1.90821492927058770002e-10 + l);
+}
+
 /* atan2(y, x) in [-pi, pi]. */
 static inline double glint_fast_atan2(double y, double x)
 {
@@ -81,11 +160,8 @@ static inline double glint_fast_acos(double t)
 /* sin and cos of 2 pi u, |u| < 2^60. */
 static inline void glint_fast_sincos_2pi(double u, double *s, double *c)
 {
-	/* the nearest quarter turn (floor() without a libm call: x86-64's
-	 * baseline has no rounding instruction) */
-	double t = 4 * u + 0.5;
-	long long qi = (long long)t;
-	qi -= t < (double)qi;
+	/* the nearest quarter turn */
+	long long qi = (long long)glint_floor(4 * u + 0.5);
 	double x = (u - 0.25 * (double)qi) * (2 * M_PI), x2 = x * x;
 	/* Taylor to x^15 and x^16 on |x| <= pi / 4: within 7e-16, so that
 	 * sin^2 + cos^2 = 1 as closely as libm's */

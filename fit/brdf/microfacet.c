@@ -14,14 +14,14 @@ double glint_beckmann_d(double cos_h, double m)
 		return 0;
 	double c2 = cos_h * cos_h;
 	double tan2 = (1 - c2) / c2;
-	return exp(-tan2 / (m * m)) / (M_PI * m * m * c2 * c2);
+	return glint_fast_exp(-tan2 / (m * m)) / (M_PI * m * m * c2 * c2);
 }
 
 double glint_vcavity_g(double nh, double no, double ni, double oh)
 {
 	if (!(oh > 0))
 		return 0;
-	double g = fmin(2 * nh * no / oh, 2 * nh * ni / oh);
+	double g = 2 * nh * (no < ni ? no : ni) / oh;
 	return g < 1 ? (g > 0 ? g : 0) : 1;
 }
 
@@ -119,7 +119,7 @@ static void reflect_about(double tan2, double u, struct vec3 wo,
 void glint_beckmann_sample(double m, struct vec3 wo, const double u[2],
 			   struct vec3 *wi)
 {
-	reflect_about(-m * m * log(1 - u[0]), u[1], wo, wi);
+	reflect_about(-m * m * glint_fast_log(1 - u[0]), u[1], wo, wi);
 }
 
 /* D G F / (4 (n.i)(n.o)) and D (n.h) / (4 (o.h)) from D and h. */
@@ -187,7 +187,7 @@ double glint_beckmann_from_geometry(double m, double ior, const float g[4],
 				    double *pdf)
 {
 	double m2 = m * m;
-	double d = g[2] > 0 || g[3] > 0 ? exp(-g[0] / m2) / m2 : 0;
+	double d = g[2] > 0 || g[3] > 0 ? glint_fast_exp(-g[0] / m2) / m2 : 0;
 
 	if (pdf)
 		*pdf = d * g[3];

@@ -795,16 +795,16 @@ void glint_env_query_start(const struct glint_env_hot *hot, struct vec3 d,
 	struct vec3 dm = m3_tmul(&env->rot, d);
 	double u, v;
 
-	q->cy = fmin(fmax(dm.y, -1), 1);
+	q->cy = glint_clamp(dm.y, -1, 1);
 	/* glint_latlong_dir_to_uv()'s map, by polynomials: this runs for
 	 * every lobe sample (core/fastmath.h) */
 	u = 0.5 + glint_fast_atan2(dm.x, -dm.z) / (2 * M_PI);
 	v = glint_fast_acos(q->cy) / M_PI;
 	/* u, v in [0, 1]: x, y within half a texel of the map, whose
 	 * border in the table holds what wrapping and clamping would read. */
-	double x = fmin(fmax(u * w - 0.5, -0.5), w - 0.5);
-	double y = fmin(fmax(v * h - 0.5, -0.5), h - 0.5);
-	double fx = floor(x), fy = floor(y);
+	double x = glint_clamp(u * w - 0.5, -0.5, w - 0.5);
+	double y = glint_clamp(v * h - 0.5, -0.5, h - 0.5);
+	double fx = glint_floor(x), fy = glint_floor(y);
 	q->tx = x - fx;
 	q->ty = y - fy;
 	q->stride = (size_t)w + 2;

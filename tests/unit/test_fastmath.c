@@ -1,7 +1,8 @@
 /* SPDX-License-Identifier: MIT */
 /*
- * The fit's polynomial atan2, acos and sincos (core/fastmath.h) against
- * libm: their largest errors over a million arguments each, the edges
+ * The fit's polynomial atan2, acos, sincos, exp and log (core/fastmath.h)
+ * against libm: their largest errors over a million arguments each (exp
+ * and log relative, within 3 ulp), floor and clamp exact, the edges
  * (axes, signed zeros, +-1, quadrant boundaries) within the same bounds, and
  * a direction's map coordinates through them within two millionths of a
  * 1024-texel map's texel of glint_latlong_dir_to_uv()'s.
@@ -82,6 +83,43 @@ static void test_sincos(void)
 	CHECK(far < 1e-13, "sincos off by %g far from 0", far);
 }
 
+static void test_exp_log(void)
+{
+	unsigned long long st = 5;
+	double we = 0, wl = 0;
+	for (int i = 0; i < 1000000; i++) {
+		/* exp over [-750, 750] (libm's own past 700), most of the draws
+		 * where the fit calls it: -tan^2 / m^2 in [-50, 0] */
+		double x = i % 4 ? -50 * draw(&st) : 1500 * draw(&st) - 750;
+		double e = glint_fast_exp(x), r = exp(x);
+		if (r > 0 && isfinite(r))
+			we = fmax(we, fabs(e - r) / r);
+		else
+			CHECK(e == r, "exp(%g) %g for %g", x, e, r);
+		/* log over (0, 1] (1 - u) and 30 orders of magnitude */
+		double y = i % 2 ? 1 - draw(&st) : pow(10, 30 * draw(&st) - 15);
+		double l = glint_fast_log(y), lr = log(y);
+		wl = fmax(wl, fabs(l - lr) / fmax(fabs(lr), 1e-300));
+	}
+	printf("exp: largest relative error %.3g; log %.3g\n", we, wl);
+	CHECK(we < 6.7e-16, "exp off by %g", we);
+	CHECK(wl < 6.7e-16, "log off by %g", wl);
+	CHECK(glint_fast_exp(0) == 1 && glint_fast_log(1) == 0,
+	      "exp(0) %g, log(1) %g", glint_fast_exp(0), glint_fast_log(1));
+	CHECK(glint_fast_log(0) == -INFINITY && isnan(glint_fast_log(-1)) &&
+		      glint_fast_log(0x1p-1060) == log(0x1p-1060),
+	      "log at 0, below and subnormal");
+	static const double fl[] = { -2.5, -2, -0.5, -0.0,	0,
+				     0.5,  2,  2.5,  1e15 + 0.5 };
+	for (size_t k = 0; k < sizeof(fl) / sizeof(fl[0]); k++)
+		CHECK(glint_floor(fl[k]) == floor(fl[k]), "floor(%g) %g", fl[k],
+		      glint_floor(fl[k]));
+	CHECK(glint_clamp(-2, -1, 1) == -1 && glint_clamp(2, -1, 1) == 1 &&
+		      glint_clamp(0.25, -1, 1) == 0.25 &&
+		      isnan(glint_clamp(NAN, -1, 1)),
+	      "clamp");
+}
+
 /* Directions to the map's (u, v) as envmap.c computes them. */
 static void test_map_coordinates(void)
 {
@@ -108,6 +146,7 @@ int main(void)
 	RUN(test_atan2);
 	RUN(test_acos);
 	RUN(test_sincos);
+	RUN(test_exp_log);
 	RUN(test_map_coordinates);
 	return test_result();
 }

@@ -29,15 +29,26 @@
 #define M_PI 3.14159265358979323846
 #endif
 
-/* c[0] x^(n-1) + ... + c[n-1], by Horner's rule (unrolled: as a loop
- * it adds 5 % to the default fit's instructions). */
-static inline double glint_horner(double x, const double *c, int n)
+/* c[0] x^(n-1) + ... + c[n-1] (n <= 16) by Estrin's scheme: pairs of
+ * terms, then pairs of pairs in x^2, x^4, ..., so that the additions of
+ * a level are independent and the chain of dependent operations is
+ * log2(n) long instead of Horner's n (unrolled: n is a constant). */
+static inline double glint_poly(double x, const double *c, int n)
 {
-	double p = c[0];
+	double a[16];
 #pragma GCC unroll 16
-	for (int i = 1; i < n; i++)
-		p = p * x + c[i];
-	return p;
+	for (int i = 0; i < n; i++)
+		a[i] = c[n - 1 - i];
+#pragma GCC unroll 4
+	for (int m = n; m > 1; m = (m + 1) / 2) {
+#pragma GCC unroll 8
+		for (int j = 0; j < m / 2; j++)
+			a[j] = a[2 * j] + a[2 * j + 1] * x;
+		if (m % 2)
+			a[m / 2] = a[m - 1];
+		x *= x;
+	}
+	return a[0];
 }
 
 /* x clamped to [lo, hi], without fmin()'s and fmax()'s calls (whose NaN
@@ -64,24 +75,15 @@ static inline double glint_fast_exp(double x)
 	/* r = x - k ln 2 in two parts, |r| <= ln 2 / 2 */
 	double r = (x - k * 6.93147180369123816490e-01) -
 		   k * 1.90821492927058770002e-10;
-	/* Taylor to r^13: 4e-18 at |r| = ln 2 / 2 */
+	/* Taylor to r^13: 4e-18 at |r| = ln 2 / 2 (from r^2 on here) */
 	static const double c[] = {
-		1.0 / 6227020800,
-		1.0 / 479001600,
-		1.0 / 39916800,
-		1.0 / 3628800,
-		1.0 / 362880,
-		1.0 / 40320,
-		1.0 / 5040,
-		1.0 / 720,
-		1.0 / 120,
-		1.0 / 24,
-		1.0 / 6,
-		0.5,
-		1,
-		1,
+		1.0 / 6227020800, 1.0 / 479001600, 1.0 / 39916800,
+		1.0 / 3628800,	  1.0 / 362880,	   1.0 / 40320,
+		1.0 / 5040,	  1.0 / 720,	   1.0 / 120,
+		1.0 / 24,	  1.0 / 6,	   0.5,
 	};
-	double e = glint_horner(r, c, sizeof(c) / sizeof(c[0]));
+	/* 1 + r apart: the polynomial's rounding scaled by r^2 */
+	double e = 1 + (r + r * r * glint_poly(r, c, sizeof(c) / sizeof(c[0])));
 	/* times 2^k, |k| <= 1010 here */
 	union {
 		double d;
@@ -111,10 +113,11 @@ static inline double glint_fast_log(double x)
 	 * series to s^21, 3e-18 */
 	double s = (b.d - 1) / (b.d + 1), s2 = s * s;
 	static const double c[] = {
-		2.0 / 21, 2.0 / 19, 2.0 / 17, 2.0 / 15, 2.0 / 13, 2.0 / 11,
-		2.0 / 9,  2.0 / 7,  2.0 / 5,  2.0 / 3,	2,
+		2.0 / 21, 2.0 / 19, 2.0 / 17, 2.0 / 15, 2.0 / 13,
+		2.0 / 11, 2.0 / 9,  2.0 / 7,  2.0 / 5,	2.0 / 3,
 	};
-	double l = s * glint_horner(s2, c, sizeof(c) / sizeof(c[0]));
+	/* 2 s apart: the polynomial's rounding scaled by s^2 */
+	double l = 2 * s + s * s2 * glint_poly(s2, c, sizeof(c) / sizeof(c[0]));
 	return (double)e * 6.93147180369123816490e-01 +
 	       ((double)e * 1.90821492927058770002e-10 + l);
 }
@@ -132,7 +135,7 @@ static inline double glint_fast_atan2(double y, double x)
 		0.19985906743738605,   -0.33332597025554167,
 		0.99999988638221204,
 	};
-	double p = glint_horner(s, c, sizeof(c) / sizeof(c[0]));
+	double p = glint_poly(s, c, sizeof(c) / sizeof(c[0]));
 	double r = a * p;
 	if (ay > ax)
 		r = M_PI / 2 - r;
@@ -152,7 +155,7 @@ static inline double glint_fast_acos(double t)
 		0.089037549586408596,	-0.21460148676792273,
 		1.5707963249873267,
 	};
-	double q = glint_horner(a, c, sizeof(c) / sizeof(c[0]));
+	double q = glint_poly(a, c, sizeof(c) / sizeof(c[0]));
 	double r = sqrt(1 - a) * q;
 	return t < 0 ? M_PI - r : r;
 }
@@ -186,8 +189,8 @@ static inline void glint_fast_sincos_2pi(double u, double *s, double *c)
 		-0.5,
 		1,
 	};
-	double sn = x * glint_horner(x2, sc, sizeof(sc) / sizeof(sc[0]));
-	double cs = glint_horner(x2, cc, sizeof(cc) / sizeof(cc[0]));
+	double sn = x * glint_poly(x2, sc, sizeof(sc) / sizeof(sc[0]));
+	double cs = glint_poly(x2, cc, sizeof(cc) / sizeof(cc[0]));
 	switch (qi & 3) {
 	case 0:
 		*s = sn;

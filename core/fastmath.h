@@ -3,22 +3,24 @@
 #define GLINT_CORE_FASTMATH_H
 
 /*
- * The few transcendental functions the fit's inner loop calls per lobe
- * sample, as polynomials: the map's (u, v) of a direction (atan2, acos)
- * and a microfacet normal's azimuth (sin and cos of 2 pi u).  glibc's
- * versions are correctly rounded and take 70-140 instructions a call
- * with their special cases; at 13 million calls each in the default fit
- * they were an eighth of its instructions.  These are accurate to
- * 6e-9 rad (atan2), 2e-9 rad (acos) and 7e-16 (sin, cos): a map's texel
- * is 6e-3 rad, so a lookup moves by a millionth of a texel.  Finite
- * arguments only (a NaN gives an unspecified finite value).
- * tests/unit/test_fastmath.c measures the errors against libm.
+ * The transcendental functions the fit's inner loop calls per lobe
+ * sample, as polynomials: the map's (u, v) of a direction (atan2, acos),
+ * a microfacet normal's azimuth (sin and cos of 2 pi u) and radius (log),
+ * and the Beckmann distribution (exp); floor and a clamp without libm's
+ * calls.  glibc's versions are correctly rounded and take 45-140
+ * instructions a call with their special cases; at 13-20 million calls
+ * each in the default fit they were a sixth of its instructions.  These
+ * are accurate to 6e-9 rad (atan2), 2e-9 rad (acos), 8e-16 (sin, cos)
+ * and 3 ulp (exp, log): a map's texel is 6e-3 rad, so a lookup moves by
+ * a millionth of a texel.  atan2 and acos take finite arguments (a NaN
+ * gives an unspecified value); exp and log hand libm what they do not
+ * cover.  tests/unit/test_fastmath.c measures the errors against libm.
  *
- * The coefficients are minimax fits on [0, 1] (relative-error weighted
- * iterative least squares): atan(a) = a P(a^2), acos(t) = sqrt(1 - t) Q(t)
- * (the form of Abramowitz and Stegun 4.4.45, to degree 8), and Taylor
- * series for sin and cos on [-pi/4, pi/4] after the quadrant's
- * reduction.
+ * The coefficients of atan and acos are minimax fits on [0, 1]
+ * (relative-error weighted iterative least squares): atan(a) = a P(a^2),
+ * acos(t) = sqrt(1 - t) Q(t) (the form of Abramowitz and Stegun 4.4.45,
+ * to degree 8); sin, cos and exp are Taylor series after reduction to a
+ * quarter turn and to |r| <= ln 2 / 2, log the series of 2 atanh(s).
  *
  * Errors: none.  Threads: re-entrant.  Who frees: nothing.
  */
@@ -166,7 +168,7 @@ static inline void glint_fast_sincos_2pi(double u, double *s, double *c)
 	/* the nearest quarter turn */
 	long long qi = (long long)glint_floor(4 * u + 0.5);
 	double x = (u - 0.25 * (double)qi) * (2 * M_PI), x2 = x * x;
-	/* Taylor to x^15 and x^16 on |x| <= pi / 4: within 7e-16, so that
+	/* Taylor to x^15 and x^16 on |x| <= pi / 4: within 8e-16, so that
 	 * sin^2 + cos^2 = 1 as closely as libm's */
 	static const double sc[] = {
 		-1.0 / 1307674368000,

@@ -16,6 +16,8 @@ import subprocess
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "bench"))
+from page import bench_args  # noqa: E402
 WALL = re.compile(r"^  wall\s+([\d.]+)$", re.M)
 
 
@@ -31,15 +33,7 @@ def wall(build):
 
 def main():
     args = sys.argv[1:]
-    usage = __doc__.splitlines()[-1]
-    if "-h" in args or "--help" in args:
-        print(usage)
-        return
-    bad = [a for a in args if a.startswith("-")]
-    if bad:
-        print(f"{bad[0]}: not an argument of this benchmark\n{usage}",
-              file=sys.stderr)
-        sys.exit(2)
+    usage = bench_args(__doc__, args)
     if len(args) not in (2, 3) or not all(
             os.path.isfile(os.path.join(b, "bench", "fit")) for b in args[:2]):
         print(f"expected two build folders holding bench/fit\n{usage}",

@@ -27,7 +27,7 @@ from datetime import datetime, timezone
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
-from page import machine, write_atomic  # noqa: E402
+from page import bench_args, machine, write_atomic  # noqa: E402
 
 # The stage rows of bench/fit --default-only's table (seconds).  Under
 # callgrind the threads run one at a time at a near-constant rate, so each
@@ -142,14 +142,7 @@ def pi_estimate(n_arm, s2):
 
 def main():
     args = sys.argv[1:]
-    usage = __doc__.splitlines()[-1]
-    if "-h" in args or "--help" in args:
-        print(usage)
-        return
-    unknown = [a for a in args if a.startswith("-") and a not in ("--write", "--arm64")]
-    if unknown:
-        print(f"{unknown[0]}: not an argument of this benchmark\n{usage}", file=sys.stderr)
-        sys.exit(2)
+    bench_args(__doc__, args, ("--write", "--arm64"))
     arm_build = None
     if "--arm64" in args:
         i = args.index("--arm64")

@@ -25,6 +25,22 @@ def refuse(what):
     sys.exit(2)
 
 
+def bench_args(doc, args, takes=()):
+    """A benchmark's usage (its docstring's last line): printed with exit 0
+    for -h or --help, and with exit 2 after naming the first option in
+    args that is not in takes."""
+    usage = doc.splitlines()[-1]
+    if "-h" in args or "--help" in args:
+        print(usage)
+        sys.exit(0)
+    unknown = [a for a in args if a.startswith("-") and a not in takes]
+    if unknown:
+        print(f"{unknown[0]}: not an argument of this benchmark\n{usage}",
+              file=sys.stderr)
+        sys.exit(2)
+    return usage
+
+
 def write_atomic(path, data):
     """path holds data whole or keeps what it held: written beside it,
     then renamed over it."""

@@ -34,6 +34,8 @@ import time
 from datetime import datetime, timezone
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "bench"))
+from page import bench_args  # noqa: E402
 
 
 def tolerance(name, truth):
@@ -83,17 +85,9 @@ def run(glint, material, tmp, cache, config, size):
 
 def main():
     args = sys.argv[1:]
-    usage = __doc__.splitlines()[-1]
-    if "-h" in args or "--help" in args:
-        print(usage)
-        return
-    unknown = [a for a in args if a.startswith("-")
-               and a not in ("--only", "--write", "--check", "--config",
-                             "--size", "--check-covered")]
-    if unknown:
-        print(f"{unknown[0]}: not an argument of this benchmark\n{usage}",
-              file=sys.stderr)
-        sys.exit(2)
+    usage = bench_args(__doc__, args, ("--only", "--write", "--check",
+                                       "--config", "--size",
+                                       "--check-covered"))
     config = default = os.path.join(ROOT, "data", "rig-sim.json")
     page = "rig-materials"
     if "--config" in args:

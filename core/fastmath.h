@@ -54,10 +54,11 @@ static inline double glint_poly(double x, const double *c, int n)
 }
 
 /* x clamped to [lo, hi], without fmin()'s and fmax()'s calls (whose NaN
- * rules need them on x86-64); a NaN x stays NaN. */
+ * rules need them on x86-64); a NaN x gives lo, as fmin(fmax(x, lo), hi)
+ * does, so that an index made from it stays in range. */
 static inline double glint_clamp(double x, double lo, double hi)
 {
-	return x < lo ? lo : x > hi ? hi : x;
+	return x > lo ? (x < hi ? x : hi) : lo;
 }
 
 /* floor(x) for |x| < 2^62, without a call (x86-64's baseline has no

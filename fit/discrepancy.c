@@ -85,8 +85,9 @@
  * 3.6 % at 50 and 5 % at 39: it switches on steeply below 60 px, and
  * FIT_SYS_SMALL / R^4 (3.6 % at 50 px, 9.6 % at 39, 0.5 % at 81) follows
  * it with margin at the smallest; ior takes FIT_SYS_SMALL_IOR of it (0.5 %
- * needed at 39 and 50 px).  Below 39 px nothing was measured and the
- * terms are extrapolated (the fit says so: fit.c).
+ * needed at 39 and 50 px).  Below 38 px (FIT_SYS_SMALLEST_PX; the smallest
+ * measured is 38.9) the terms are extrapolated, and the fit says so
+ * (fit.c).
  *
  * Under a probe's light the diffuse albedos also take up part of what the
  * map gets wrong about the specular lobe's light: on the simulated rig,
@@ -132,7 +133,8 @@ void fit_systematic(const struct glint_model *m, const double *p,
 			}
 		if (k == m->lobes->roughness_param)
 			rel = probe ? hypot(0.013, blur) : 0.013;
-		else if (!(floor > 0)) /* neither albedo nor roughness: ior */
+		else if (!(floor > 0)) /* not an albedo: ior (and any other
+					* shape parameter, like its 0.2 %) */
 			rel = hypot(rel, FIT_SYS_SMALL_IOR * small);
 		sys[k] = hypot(hypot(rel * fabs(p[k]), floor), cross);
 		/* the light's structure below the probe's pixel: m^2 known to

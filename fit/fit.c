@@ -203,7 +203,7 @@ static int fit_or_eval(const struct glint_fit_view *in, int nviews,
 	ret = fit_objective_init(&ob, views, nviews, model, &d, o);
 	if (ret < 0)
 		goto out;
-	if (fit_sphere_px(&ob) < FIT_SYS_SMALLEST_PX)
+	if (!eval_p && fit_sphere_px(&ob) < FIT_SYS_SMALLEST_PX)
 		glint_log_warn(
 			"the sphere is %.0f px in radius: the intervals' "
 			"systematic terms were measured down to %.0f "

@@ -84,8 +84,10 @@
  * comma-separated list: those alone; bracket: the sensor seed draws its
  * frames),
  * ACCURACY_NO_BIAS=1 (no bias ratio: no second photo), ACCURACY_SE=1 (each
- * fit's structure share and standard errors: reported, the noise part, the
- * sample sets' part, the systematic).
+ * fit's structure share, its sampling checks (fit/intervals.c,
+ * more_samples()) and standard errors: reported, the noise part, the
+ * sample sets' part, the systematic; the sampling lean, its standard
+ * error and what was taken off the answer).
  */
 #define _DEFAULT_SOURCE
 #include "bench.h"
@@ -961,8 +963,12 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 			 * sets' and the systematic one; what a study over
 			 * photo seeds compares with the answers' spread. */
 			if (getenv("ACCURACY_SE") && out != REFUSED)
-				printf("\n    structure's share %.4f",
-				       res.misfit_share);
+				printf("\n    structure's share %.4f; the "
+				       "fit's "
+				       "sampling against the noise %.3f per "
+				       "parameter, %.3f per value",
+				       res.misfit_share, res.mc_over_noise,
+				       res.model_noise);
 			if (getenv("ACCURACY_SE") && out != REFUSED)
 				for (int k = 0; k < res.unc.n; k++) {
 					const struct glint_uncertainty *u =
@@ -970,12 +976,15 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 					double mc = u->cov_mc[k * u->n + k],
 					       sys = u->sys[k] * u->sys[k];
 					printf("\n    %-11s se %.5f  noise %.5f"
-					       "  sets %.5f  sys %.5f",
+					       "  sets %.5f  sys %.5f  lean "
+					       "%+.5f +- %.5f (removed %+.5f)",
 					       m->params[k].name, u->se[k],
 					       sqrt(fmax(0,
 							 u->se[k] * u->se[k] -
 								 mc - sys)),
-					       sqrt(mc), u->sys[k]);
+					       sqrt(mc), u->sys[k], u->lean[k],
+					       u->lean_se[k],
+					       res.lean_removed[k]);
 				}
 			if (lv == NOISY)
 				printf("  sphere at %.2f %% of the ADC range",

@@ -84,10 +84,20 @@
  * the rest of it, is 0.7 % at 81 px (the shipped rig), about 1 % at 60,
  * 3.6 % at 50 and 5 % at 39: it switches on steeply below 60 px, and
  * FIT_SYS_SMALL / R^4 (3.6 % at 50 px, 9.6 % at 39, 0.5 % at 81) follows
- * it with margin at the smallest; ior takes FIT_SYS_SMALL_IOR of it (0.5 %
- * needed at 39 and 50 px).  Below 38 px (FIT_SYS_SMALLEST_PX; the smallest
- * measured is 38.9) the terms are extrapolated, and the fit says so
- * (fit.c).
+ * it with margin at the smallest.  The bias runs along the specular/ior
+ * ridge: 12 % more specular and 0.035 less ior leave specular x F0(ior)
+ * where it was (F0 at 1.5 falls by 11 % for that ior), so the sphere pins
+ * the highlight's brightness and its small rim, where the Fresnel rise
+ * tells the two apart, misplaces the split.  So the term is one error
+ * source shared by the specular albedos (that relative amount each) and
+ * ior (the amount that keeps F0 x specular: -(n^2 - 1) / 4 times it), not
+ * independent terms, which would hide the ridge from the correlations
+ * (a front-lit sphere 52 px in radius would read corr(specular, ior)
+ * -0.90 where the photo says -1).  The other shape parameters (a second
+ * lobe's width, Oren-Nayar's diffuse roughness), not measured on small
+ * spheres, take FIT_SYS_SMALL_SHAPE of it, on their own.  Below 38 px
+ * (FIT_SYS_SMALLEST_PX; the smallest measured is 38.9) the terms are
+ * extrapolated, and the fit says so (fit.c).
  *
  * Under a probe's light the diffuse albedos also take up part of what the
  * map gets wrong about the specular lobe's light: on the simulated rig,
@@ -99,7 +109,8 @@
  * mean of the varying lobes' albedos, the largest of those ratios.
  */
 void fit_systematic(const struct glint_model *m, const double *p,
-		    double map_pixel_deg, double sphere_px, double *sys)
+		    double map_pixel_deg, double sphere_px, double *sys,
+		    double *shared)
 {
 	int probe = map_pixel_deg != 0;
 	double blur = map_pixel_deg > 0 ? 0.024 * pow(map_pixel_deg / 1.69, 2)
@@ -107,6 +118,7 @@ void fit_systematic(const struct glint_model *m, const double *p,
 	double pix = map_pixel_deg > 0 ? map_pixel_deg * M_PI / 180 : 0;
 	double floor_m = FIT_SYS_LIGHT_FLOOR * pix * pix;
 	double small = sphere_px > 0 ? FIT_SYS_SMALL / pow(sphere_px, 4) : 0;
+	double ridge[GLINT_MAX_PARAMS] = { 0 };
 	double lobe_mean = 0;
 	int nvary = 0;
 	for (int j = 0; j < m->bxdf->nlobes; j++) {
@@ -126,22 +138,28 @@ void fit_systematic(const struct glint_model *m, const double *p,
 				      : probe		   ? 0.007
 							   : 0.005;
 				if (m->lobes->varies[j])
-					rel = hypot(rel, small);
+					ridge[k] = small * p[k];
 				floor = 0.0002;
 				if (probe && !m->lobes->varies[j])
 					cross = 0.0025 * lobe_mean;
 			}
 		if (k == m->lobes->roughness_param)
 			rel = probe ? hypot(0.013, blur) : 0.013;
-		else if (!(floor > 0)) /* not an albedo: ior (and any other
-					* shape parameter, like its 0.2 %) */
-			rel = hypot(rel, FIT_SYS_SMALL_IOR * small);
+		else if (!(floor > 0) && !strcmp(m->params[k].name, "ior"))
+			ridge[k] =
+				p[k] > 1 ? -small * (p[k] * p[k] - 1) / 4 : 0;
+		else if (!(floor > 0)) /* another shape parameter */
+			rel = hypot(rel, FIT_SYS_SMALL_SHAPE * small);
 		sys[k] = hypot(hypot(rel * fabs(p[k]), floor), cross);
 		/* the light's structure below the probe's pixel: m^2 known to
 		 * floor_m^2 (see above) */
 		if (k == m->lobes->roughness_param)
 			sys[k] =
 				fmax(sys[k], hypot(p[k], floor_m) - fabs(p[k]));
+		if (shared)
+			shared[k] = ridge[k];
+		else
+			sys[k] = hypot(sys[k], ridge[k]);
 	}
 }
 

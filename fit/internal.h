@@ -141,11 +141,12 @@ int fit_render_gain(struct objective *ob, const double *jac, const double *r,
  * fit/discrepancy.c says how they were measured): roughness's floor in
  * m^2, FIT_SYS_LIGHT_FLOOR times the square of the probe's pixel angle
  * (radians), squared; the varying lobes' albedos' relative term
- * FIT_SYS_SMALL / R^4 on a sphere R pixels in radius, ior's that times
- * FIT_SYS_SMALL_IOR. */
+ * FIT_SYS_SMALL / R^4 on a sphere R pixels in radius, shared with ior
+ * along the specular/ior ridge; the other shape parameters' that times
+ * FIT_SYS_SMALL_SHAPE. */
 #define FIT_SYS_LIGHT_FLOOR 8.0
 #define FIT_SYS_SMALL	    2.2e5
-#define FIT_SYS_SMALL_IOR   0.15
+#define FIT_SYS_SMALL_SHAPE 0.15
 /* the smallest sphere (pixels of radius) those were measured on */
 #define FIT_SYS_SMALLEST_PX 38.0
 
@@ -239,8 +240,15 @@ int fit_reweight(struct objective *ob, struct fit_data *d, double *r);
 int fit_reweight_all(struct objective *ob, struct fit_data *d,
 		     const struct selections *sl);
 
+/* The fast render's and the photos' systematic standard uncertainties of
+ * the parameters p of m (fit/discrepancy.c says how each was measured):
+ * into sys the independent ones, and into shared (nparams, signed) the
+ * one error source that moves several together (the small sphere's,
+ * along the specular/ior ridge); with shared NULL, sys holds the two
+ * together, per parameter. */
 void fit_systematic(const struct glint_model *m, const double *p,
-		    double map_pixel_deg, double sphere_px, double *sys);
+		    double map_pixel_deg, double sphere_px, double *sys,
+		    double *shared);
 
 /* The radius in pixels of the smallest sphere the objective's photos show
  * (from each view's interior pixels). */

@@ -75,13 +75,13 @@ static int covariance(struct objective *ob, const struct selections *sl,
 		      struct glint_fit_result *res)
 {
 	const struct glint_model *m = ob->m;
-	double sys[GLINT_MAX_PARAMS];
+	double sys[GLINT_MAX_PARAMS], shared[GLINT_MAX_PARAMS] = { 0 };
 
 	if (ob->o->no_systematic)
 		memset(sys, 0, sizeof(sys));
 	else
 		fit_systematic(m, ob->p, ob->o->map_pixel_deg,
-			       fit_sphere_px(ob), sys);
+			       fit_sphere_px(ob), sys, shared);
 	memset(res->discrepancy, 0, sizeof(res->discrepancy));
 	if (!ob->o->no_discrepancy)
 		fit_discrepancy(m, ob->p, share, res->discrepancy);
@@ -131,6 +131,7 @@ static int covariance(struct objective *ob, const struct selections *sl,
 		.level = ob->o->level,
 		.region = nregions ? region : NULL,
 		.nregions = nregions,
+		.sys_shared = shared,
 	};
 	return glint_uncertainty_compute(&pr, &res->unc);
 }

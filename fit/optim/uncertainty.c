@@ -359,7 +359,13 @@ int glint_uncertainty_compute(const struct glint_unc_problem *pr,
 				u->cov_mc[i * n + j];
 	for (int k = 0; k < n; k++) {
 		u->sys[k] = pr->sys && pr->sys[k] > 0 ? pr->sys[k] : 0;
+		if (pr->sys_shared)
+			u->sys[k] = hypot(u->sys[k], pr->sys_shared[k]);
 		u->cov[k * n + k] += u->sys[k] * u->sys[k];
+		for (int j = 0; j < n && pr->sys_shared; j++)
+			if (j != k)
+				u->cov[k * n + j] +=
+					pr->sys_shared[k] * pr->sys_shared[j];
 	}
 	for (int k = 0; k < n; k++) {
 		double vb = sc[k] * sc[k] * u->cov_blocks[k * n + k],

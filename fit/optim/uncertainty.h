@@ -39,7 +39,9 @@
  *   systematic (optional): a standard uncertainty per parameter that the
  *     fit's residuals and sample sets cannot show, known from validation
  *     (the fast render against an independent renderer), added to the
- *     diagonal with infinite degrees of freedom.
+ *     diagonal with infinite degrees of freedom; and one error source
+ *     that moves several parameters together (s, signed), whose s s^T is
+ *     added whole, so the correlations keep a ridge it runs along.
  *
  * Intervals are p +- t se, clipped to the bounds, with t Student's
  * quantile at the Welch-Satterthwaite degrees of freedom of the two parts
@@ -80,6 +82,9 @@ struct glint_unc_problem {
 	 * model-error jackknife; NULL or nregions < 3: no such part */
 	const int *region;
 	int nregions;
+	/* n, or NULL: one systematic error source's signed standard
+	 * uncertainty in each parameter (s s^T is added) */
+	const double *sys_shared;
 };
 
 struct glint_uncertainty {
@@ -91,7 +96,9 @@ struct glint_uncertainty {
 	double cov_mc[GLINT_UNC_MAX_N * GLINT_UNC_MAX_N]; /* sample sets */
 	/* the regions' jackknife (0 without regions) */
 	double cov_regions[GLINT_UNC_MAX_N * GLINT_UNC_MAX_N];
-	double sys[GLINT_UNC_MAX_N]; /* systematic standard uncertainties */
+	/* the systematic standard uncertainties, the shared source's part
+	 * with the rest */
+	double sys[GLINT_UNC_MAX_N];
 	/* The sampling lean (with draws_jr): the expected offset of the
 	 * optimum of the sets' mean from the optimum of the exact render,
 	 * and its standard error (over the blocks); 0 for a parameter at

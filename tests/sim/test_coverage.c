@@ -148,7 +148,7 @@ static void dump(const char *material, const char *map, const char *rot, int lv,
 		return;
 	}
 	fit_systematic(m, res->p, o->map_pixel_deg, sqrt(res->interior / M_PI),
-		       fixed);
+		       fixed, NULL);
 	for (int k = 0; k < m->nparams; k++) {
 		double render = hypot(fixed[k], res->render_gain_stderr[k]);
 		double bound = k == m->lobes->roughness_param

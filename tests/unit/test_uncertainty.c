@@ -248,10 +248,10 @@ static void coverage(double sigma, double shared, double *glint,
 		double p[2];
 		struct glint_uncertainty u;
 		line(sigma, shared, jac, r, block, p);
-		struct glint_unc_problem pr = { 2,     M,    jac,  r,
-						block, NB,   p,	   lo,
-						hi,    NULL, 0,	   NULL,
-						NULL,  0.95, NULL, 0 };
+		struct glint_unc_problem pr = { 2,  M,	  jac,	r,    block,
+						NB, p,	  lo,	hi,   NULL,
+						0,  NULL, NULL, 0.95, NULL,
+						0,  NULL };
 		if (glint_uncertainty_compute(&pr, &u) < 0) {
 			CHECK(0, "compute failed");
 			return;
@@ -302,7 +302,7 @@ static void regions(void)
 						(q[g][b] - mean[b]);
 	struct glint_unc_problem pr = { 2,    M,    jac,    r,	  block, NB,
 					p,    lo,   hi,	    NULL, 0,	 NULL,
-					NULL, 0.95, region, G };
+					NULL, 0.95, region, G,	  NULL };
 	CHECK(glint_uncertainty_compute(&pr, &u) == 0, "compute");
 	CHECK(u.nregions == G, "%d regions", u.nregions);
 	for (int k = 0; k < 4; k++)
@@ -497,10 +497,10 @@ static void systematic_by_map(void)
 	};
 	const struct glint_model *m = glint_model_find("torrance-sparrow");
 	double given[8], rig[8], coarse[8], unknown[8];
-	fit_systematic(m, p, 0, 0, given);
-	fit_systematic(m, p, 1.69, 0, rig);
-	fit_systematic(m, p, 2.70, 0, coarse);
-	fit_systematic(m, p, -1, 0, unknown);
+	fit_systematic(m, p, 0, 0, given, NULL);
+	fit_systematic(m, p, 1.69, 0, rig, NULL);
+	fit_systematic(m, p, 2.70, 0, coarse, NULL);
+	fit_systematic(m, p, -1, 0, unknown, NULL);
 	CHECK(fabs(given[6] / p[6] - 0.013) < 1e-9,
 	      "roughness under the true map: %g %%", 100 * given[6] / p[6]);
 	CHECK(fabs(rig[6] / p[6] - 0.0273) < 0.0005,
@@ -534,8 +534,8 @@ static void systematic_by_map(void)
 /* fit_systematic() on coarse photos: a roughness that collapsed under a
  * probe 48 px in radius (3.37 degrees a pixel) keeps an absolute floor,
  * m^2 known to (8 p^2)^2; the specular albedos and ior grow as R^-4 on a
- * sphere 39 px in radius, and a sphere 81 px in radius (the shipped rig's)
- * is all but untouched. */
+ * sphere 39 px in radius, together along the specular/ior ridge, and a
+ * sphere 81 px in radius (the shipped rig's) is all but untouched. */
 static void systematic_coarse(void)
 {
 	double p[8] = { 0.3, 0.1, 0.03, 0.3, 0.27, 0.24, 0.001, 1.43 };
@@ -543,21 +543,21 @@ static void systematic_coarse(void)
 	double fine[8], coarse[8], small[8], rig[8], big[8];
 	double pix = 3.37 * M_PI / 180;
 
-	fit_systematic(m, p, 1.69, 0, fine);
-	fit_systematic(m, p, 3.37, 0, coarse);
+	fit_systematic(m, p, 1.69, 0, fine, NULL);
+	fit_systematic(m, p, 3.37, 0, coarse, NULL);
 	CHECK(fabs(coarse[6] - (hypot(p[6], 8 * pix * pix) - p[6])) < 1e-12 &&
 		      coarse[6] > 0.025 && fine[6] < 0.4 * coarse[6],
 	      "collapsed roughness %g: %g at 3.37 degrees a pixel, %g at "
 	      "1.69",
 	      p[6], coarse[6], fine[6]);
 	p[6] = 0.2; /* a broad lobe keeps its relative term */
-	fit_systematic(m, p, 3.37, 0, coarse);
+	fit_systematic(m, p, 3.37, 0, coarse, NULL);
 	CHECK(fabs(coarse[6] / p[6] - hypot(0.013, 0.024 * 4)) < 0.002,
 	      "roughness 0.2 at 3.37 degrees a pixel: %g %%",
 	      100 * coarse[6] / p[6]);
-	fit_systematic(m, p, 1.69, 39, small);
-	fit_systematic(m, p, 1.69, 81, rig);
-	fit_systematic(m, p, 1.69, 0, big);
+	fit_systematic(m, p, 1.69, 39, small, NULL);
+	fit_systematic(m, p, 1.69, 81, rig, NULL);
+	fit_systematic(m, p, 1.69, 0, big, NULL);
 	double rel = 2.2e5 / pow(39, 4);
 	CHECK(fabs(small[3] - hypot(hypot(0.007, rel) * p[3], 0.0002)) <
 			      1e-12 &&
@@ -565,10 +565,29 @@ static void systematic_coarse(void)
 	      "specular: %g on a sphere 39 px in radius, %g at 81 px, %g "
 	      "large",
 	      small[3], rig[3], big[3]);
-	CHECK(fabs(small[7] - hypot(0.002, 0.15 * rel) * p[7]) < 1e-12 &&
+	CHECK(fabs(small[7] -
+		   hypot(0.002 * p[7], rel * (p[7] * p[7] - 1) / 4)) < 1e-12 &&
 		      rig[7] < 1.3 * big[7] && small[0] == big[0],
 	      "ior %g at 39 px, %g at 81 px; diffuse %g, %g", small[7], rig[7],
 	      small[0], big[0]);
+
+	/* Split, the small sphere's term is one source along the ridge:
+	 * specular x F0(ior) stays where it was, to first order. */
+	double own[8], shared[8];
+	fit_systematic(m, p, 1.69, 39, own, shared);
+	double f0 = glint_fresnel_dielectric(1, p[7]),
+	       moved = (p[3] + shared[3]) *
+		       glint_fresnel_dielectric(1, p[7] + shared[7]);
+	CHECK(fabs(shared[3] - rel * p[3]) < 1e-12 && shared[7] < 0 &&
+		      fabs(own[3] - big[3]) < 1e-12 &&
+		      fabs(own[7] - big[7]) < 1e-12 && shared[0] == 0 &&
+		      shared[6] == 0,
+	      "shared: specular %g, ior %g; own specular %g, ior %g", shared[3],
+	      shared[7], own[3], own[7]);
+	CHECK(fabs(moved / (p[3] * f0) - 1) < 0.1 * rel,
+	      "specular x F0 along the shared source: %+.4f %% (the source "
+	      "%.2f %%)",
+	      100 * (moved / (p[3] * f0) - 1), 100 * rel);
 }
 
 int main(void)
@@ -586,7 +605,7 @@ int main(void)
 	line(0.1, 0, jac, r, block, p);
 	struct glint_unc_problem pr = { 2,    M,    jac,  r,	block, NB,
 					p,    lo,   hi,	  NULL, 0,     NULL,
-					NULL, 0.95, NULL, 0 };
+					NULL, 0.95, NULL, 0,	NULL };
 	CHECK(glint_uncertainty_compute(&pr, &u) == 0, "compute");
 	double sx = 0, sxx = 0, s2 = 0;
 	for (int i = 0; i < M; i++) {
@@ -621,7 +640,7 @@ int main(void)
 			draws[k * M + i] = r[i] + sign[k] * d * jac[2 * i + 1];
 	struct glint_unc_problem pm = { 2,    M,    jac,  r,	 block, NB,
 					p,    lo,   hi,	  draws, 4,	NULL,
-					NULL, 0.95, NULL, 0 };
+					NULL, 0.95, NULL, 0,	 NULL };
 	CHECK(glint_uncertainty_compute(&pm, &u) == 0, "compute");
 	/* steps -+d: sample variance 4/3 d^2, over K = 4 */
 	double vmc = 4.0 / 3 * d * d / 4;
@@ -639,6 +658,24 @@ int main(void)
 		      1e-12,
 	      "systematic: se %g from %g", u.se[1], se_before);
 	pm.sys = NULL;
+
+	/* A shared source adds its whole outer product: the variances as a
+	 * systematic term does, and the covariance a ridge needs. */
+	double cov0[4], shared[2] = { 0.02, -0.03 };
+	CHECK(glint_uncertainty_compute(&pm, &u) == 0, "compute");
+	memcpy(cov0, u.cov, sizeof(cov0));
+	pm.sys_shared = shared;
+	CHECK(glint_uncertainty_compute(&pm, &u) == 0, "compute");
+	CHECK(fabs(u.cov[0] - cov0[0] - 0.02 * 0.02) < 1e-12 &&
+		      fabs(u.cov[3] - cov0[3] - 0.03 * 0.03) < 1e-12 &&
+		      fabs(u.cov[1] - cov0[1] + 0.02 * 0.03) < 1e-12 &&
+		      u.cov[1] == u.cov[2] && fabs(u.sys[1] - 0.03) < 1e-12,
+	      "shared: cov %g %g %g from %g %g %g", u.cov[0], u.cov[1],
+	      u.cov[3], cov0[0], cov0[1], cov0[3]);
+	CHECK(u.corr[1] < 0 &&
+		      fabs(u.corr[1] - u.cov[1] / (u.se[0] * u.se[1])) < 1e-12,
+	      "shared: corr %g", u.corr[1]);
+	pm.sys_shared = NULL;
 
 	/* A parameter the data cannot see. */
 	for (int i = 0; i < M; i++)

@@ -226,6 +226,9 @@ struct glint_fit_result {
 	double mc_over_noise;
 	/* ... and per value: the sets' variance over the residual's */
 	double model_noise;
+	/* ... and the largest measured sampling lean over the noise's
+	 * standard error */
+	double lean_over_noise;
 	/* The sampling lean taken off each parameter (p is the fit's
 	 * optimum minus its estimated lean; fit.c, remove_lean()) */
 	double lean_removed[GLINT_MAX_PARAMS];

@@ -75,7 +75,10 @@ struct objective {
 	 * regions are known */
 	double gain_sys[GLINT_MAX_PARAMS];
 	double mc_over_noise; /* the largest such ratio at the last check */
-	double model_noise;   /* the sets' variance over the residual's */
+	/* the largest measured sampling lean over the noise's standard
+	 * error at the last check */
+	double lean_over_noise;
+	double model_noise; /* the sets' variance over the residual's */
 };
 
 struct progress_ctx {
@@ -136,6 +139,11 @@ int fit_render_gain(struct objective *ob, const double *jac, const double *r,
 /* What the intervals take of fit_render_gain()'s term on the albedos and
  * ior: this many times it (fit/render_gain.c says how it was measured). */
 #define FIT_GAIN_COVER 3.0
+
+/* The largest sampling lean, in standard errors of the noise, that the
+ * fit takes off to first order rather than raise its samples
+ * (fit/intervals.c, more_samples()). */
+#define FIT_LEAN_OVER_NOISE 0.5
 
 /* The systematic terms that grow as the photos get coarse (fit_systematic(),
  * fit/discrepancy.c says how they were measured): roughness's floor in

@@ -246,14 +246,17 @@ static json_t *params_doc(const struct glint_fit_job *job,
 	json_object_set_new(doc, "uncertainty",
 			    glint_fit_uncertainty_json(res));
 	/* The fitter's own Monte Carlo noise against the photo's, per
-	 * parameter and per value (variance ratios at the last check; the
-	 * samples are raised above 1 and 0.25: docs/fitting.md). */
+	 * parameter and per value (variance ratios at the last check), and
+	 * its sampling lean over the noise's standard error (the samples
+	 * are raised above 1, 0.25 and 0.5: docs/fitting.md). */
 	if (res->light_samples) {
 		json_t *meth = json_object_get(doc, "method");
 		json_object_set_new(meth, "sampling_over_noise",
 				    json_real(res->mc_over_noise));
 		json_object_set_new(meth, "model_noise_over_residual",
 				    json_real(res->model_noise));
+		json_object_set_new(meth, "lean_over_noise",
+				    json_real(res->lean_over_noise));
 	}
 	return doc;
 }

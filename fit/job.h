@@ -215,8 +215,9 @@ json_t *glint_fit_verdict_json(const struct glint_fit_result *r,
 			       const struct glint_fit_verdict *v);
 
 /* Does the photo leave a parameter of r undetermined, or specular and ior
- * trading off (|correlation| >= 0.95)?  Then glint_fit_job_run() chooses
- * the model by BIC as --select-model does. */
+ * trading off (|correlation| >= 0.95 without the shared systematic
+ * source: glint_uncertainty_corr_without_shared())?  Then
+ * glint_fit_job_run() chooses the model by BIC as --select-model does. */
 int glint_fit_needs_selection(const struct glint_fit_result *r);
 
 /* Specular x F0(ior) of r per channel (NAN where the model has no such

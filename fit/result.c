@@ -204,9 +204,12 @@ int glint_fit_needs_selection(const struct glint_fit_result *r)
 	for (int k = 0; k < n; k++)
 		if (glint_fit_undetermined(r, k))
 			return 1;
+	/* whether the photos tell the two apart, not the small sphere's
+	 * term along their ridge (fit/discrepancy.c) */
 	for (int k = 0; k < n && ki >= 0; k++)
 		if (!strncmp(m->params[k].name, "specular", 8) &&
-		    fabs(r->unc.corr[k * n + ki]) >= 0.95)
+		    fabs(glint_uncertainty_corr_without_shared(&r->unc, k,
+							       ki)) >= 0.95)
 			return 1;
 	return 0;
 }

@@ -359,8 +359,8 @@ int glint_uncertainty_compute(const struct glint_unc_problem *pr,
 				u->cov_mc[i * n + j];
 	for (int k = 0; k < n; k++) {
 		u->sys[k] = pr->sys && pr->sys[k] > 0 ? pr->sys[k] : 0;
-		if (pr->sys_shared)
-			u->sys[k] = hypot(u->sys[k], pr->sys_shared[k]);
+		u->sys_shared[k] = pr->sys_shared ? pr->sys_shared[k] : 0;
+		u->sys[k] = hypot(u->sys[k], u->sys_shared[k]);
 		u->cov[k * n + k] += u->sys[k] * u->sys[k];
 		for (int j = 0; j < n && pr->sys_shared; j++)
 			if (j != k)
@@ -403,6 +403,21 @@ int glint_uncertainty_compute(const struct glint_unc_problem *pr,
 				u->cov[i * n + j] = i == j ? INFINITY : 0;
 		}
 	return 0;
+}
+
+double glint_uncertainty_corr_without_shared(const struct glint_uncertainty *u,
+					     int i, int j)
+{
+	int n = u->n;
+	const double *s = u->sys_shared;
+
+	if (i == j)
+		return 1;
+	if (!isfinite(u->se[i]) || !isfinite(u->se[j]))
+		return 0;
+	double d = (u->cov[i * n + i] - s[i] * s[i]) *
+		   (u->cov[j * n + j] - s[j] * s[j]);
+	return d > 0 ? (u->cov[i * n + j] - s[i] * s[j]) / sqrt(d) : 0;
 }
 
 double glint_uncertainty_delta(const struct glint_uncertainty *u,

@@ -97,8 +97,8 @@ struct glint_uncertainty {
 	/* the regions' jackknife (0 without regions) */
 	double cov_regions[GLINT_UNC_MAX_N * GLINT_UNC_MAX_N];
 	/* the systematic standard uncertainties, the shared source's part
-	 * with the rest */
-	double sys[GLINT_UNC_MAX_N];
+	 * with the rest, and the shared source's (0 without one) */
+	double sys[GLINT_UNC_MAX_N], sys_shared[GLINT_UNC_MAX_N];
 	/* The sampling lean (with draws_jr): the expected offset of the
 	 * optimum of the sets' mean from the optimum of the exact render,
 	 * and its standard error (over the blocks); 0 for a parameter at
@@ -139,6 +139,14 @@ int glint_uncertainty_compute(const struct glint_unc_problem *pr,
  * standard error from the spread over the blocks.  Over the parameters
  * not at a bound.
  */
+
+/* The correlation of parameters i and j without the shared systematic
+ * source's part (pr.sys_shared): what the photos and the independent
+ * terms say of the two, for a choice the photos must make (a reduced
+ * model), where the shared source would decide it.  0 for an unseen
+ * parameter. */
+double glint_uncertainty_corr_without_shared(const struct glint_uncertainty *u,
+					     int i, int j);
 
 /* Standard error of a function f of the parameters, from its gradient
  * grad (n) by the delta method: sqrt(grad^T cov grad). */

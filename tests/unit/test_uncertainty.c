@@ -664,6 +664,7 @@ int main(void)
 	double cov0[4], shared[2] = { 0.02, -0.03 };
 	CHECK(glint_uncertainty_compute(&pm, &u) == 0, "compute");
 	memcpy(cov0, u.cov, sizeof(cov0));
+	double corr0 = u.corr[1];
 	pm.sys_shared = shared;
 	CHECK(glint_uncertainty_compute(&pm, &u) == 0, "compute");
 	CHECK(fabs(u.cov[0] - cov0[0] - 0.02 * 0.02) < 1e-12 &&
@@ -675,6 +676,12 @@ int main(void)
 	CHECK(u.corr[1] < 0 &&
 		      fabs(u.corr[1] - u.cov[1] / (u.se[0] * u.se[1])) < 1e-12,
 	      "shared: corr %g", u.corr[1]);
+	CHECK(fabs(glint_uncertainty_corr_without_shared(&u, 0, 1) - corr0) <
+			      1e-9 &&
+		      fabs(u.corr[1] - corr0) > 0.05,
+	      "without the shared source: corr %g, %g without it, %g with",
+	      glint_uncertainty_corr_without_shared(&u, 0, 1), corr0,
+	      u.corr[1]);
 	pm.sys_shared = NULL;
 
 	/* A parameter the data cannot see. */

@@ -145,6 +145,15 @@ int fit_render_gain(struct objective *ob, const double *jac, const double *r,
  * (fit/intervals.c, more_samples()). */
 #define FIT_LEAN_OVER_NOISE 0.5
 
+/* The factor (a power of two, 1: none) to raise samples (light samples
+ * per hit now) by, from the sets' Monte Carlo variance over the noise's
+ * per parameter, their variance over the residual's per value and the
+ * measured lean over the noise's standard error, so that all three fall
+ * under their limits (1, 0.25, FIT_LEAN_OVER_NOISE), as far as cap
+ * allows (fit/intervals.c, more_samples()). */
+int fit_samples_factor(double mc_over_noise, double model_noise,
+		       double lean_over_noise, int samples, int cap);
+
 /* The systematic terms that grow as the photos get coarse (fit_systematic(),
  * fit/discrepancy.c says how they were measured): roughness's floor in
  * m^2, FIT_SYS_LIGHT_FLOOR times the square of the probe's pixel angle

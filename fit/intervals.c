@@ -170,6 +170,23 @@ static int estimate_on_sets(struct objective *ob, struct fit_data *d,
 			  ob->cache && nsets > 1 ? jr : NULL, NULL, 0, 0, res);
 }
 
+int fit_samples_factor(double mc_over_noise, double model_noise,
+		       double lean_over_noise, int samples, int cap)
+{
+	if (!(mc_over_noise > 1 || model_noise > 0.25 ||
+	      lean_over_noise > FIT_LEAN_OVER_NOISE) ||
+	    samples * 2 > cap)
+		return 1;
+	/* The ratios fall as 1 / samples: one step to the power of two
+	 * that brings them under their limits, or to the cap. */
+	double need = fmax(fmax(mc_over_noise, model_noise / 0.25),
+			   lean_over_noise / FIT_LEAN_OVER_NOISE);
+	int f = 2;
+	while (f < need && samples * f * 2 <= cap)
+		f *= 2;
+	return f;
+}
+
 /*
  * Is the fitter's own sampling, not the photo, what limits the answer?
  * Two measures from the sample sets: per parameter, the Monte Carlo
@@ -232,16 +249,10 @@ static int more_samples(struct objective *ob, const struct glint_uncertainty *u,
 	ob->mc_over_noise = worst;
 	ob->model_noise = vals;
 	ob->lean_over_noise = lean;
-	if (!(worst > 1 || vals > 0.25 || lean > FIT_LEAN_OVER_NOISE) ||
-	    base * ob->sample_scale * 2 > cap)
+	int f = fit_samples_factor(worst, vals, lean, base * ob->sample_scale,
+				   cap);
+	if (f == 1)
 		return 0;
-	/* The ratios fall as 1 / samples: one step to the power of two
-	 * that brings them under their limits, or to the cap. */
-	double need =
-		fmax(fmax(worst, vals / 0.25), lean / FIT_LEAN_OVER_NOISE);
-	int f = 2;
-	while (f < need && base * ob->sample_scale * f * 2 <= cap)
-		f *= 2;
 	glint_log_info(
 		"the fit's own sampling noise is %.2f of the residual "
 		"per value and %.2f of the noise per parameter "

@@ -590,12 +590,42 @@ static void systematic_coarse(void)
 	      100 * (moved / (p[3] * f0) - 1), 100 * rel);
 }
 
+/* fit_samples_factor(): when the fit raises its samples and by how much.
+ * Each measure alone raises them; the lean's (aluminium bronze under the
+ * overcast class: 1.12 of the noise at 8 + 8) to the power of two that
+ * brings it under 0.5; the cap holds. */
+static void samples_factor(void)
+{
+	CHECK(fit_samples_factor(0.9, 0.2, 0.4, 8, 64) == 1,
+	      "every measure under its limit: %d",
+	      fit_samples_factor(0.9, 0.2, 0.4, 8, 64));
+	CHECK(fit_samples_factor(0.97, 0.05, 1.12, 8, 64) == 4,
+	      "bronze's lean 1.12: %d",
+	      fit_samples_factor(0.97, 0.05, 1.12, 8, 64));
+	CHECK(fit_samples_factor(0.1, 0.01, 0.6, 8, 64) == 2,
+	      "a lean of 0.6 alone: %d",
+	      fit_samples_factor(0.1, 0.01, 0.6, 8, 64));
+	CHECK(fit_samples_factor(3.0, 0.01, 0.1, 8, 64) == 4 &&
+		      fit_samples_factor(0.1, 1.5, 0.1, 8, 64) == 8,
+	      "per parameter 3: %d; per value 1.5: %d",
+	      fit_samples_factor(3.0, 0.01, 0.1, 8, 64),
+	      fit_samples_factor(0.1, 1.5, 0.1, 8, 64));
+	CHECK(fit_samples_factor(0.1, 0.01, 40, 8, 64) == 8 &&
+		      fit_samples_factor(0.1, 0.01, 40, 64, 64) == 1 &&
+		      fit_samples_factor(NAN, NAN, NAN, 8, 64) == 1,
+	      "cap: %d from 8, %d from 64; NaN: %d",
+	      fit_samples_factor(0.1, 0.01, 40, 8, 64),
+	      fit_samples_factor(0.1, 0.01, 40, 64, 64),
+	      fit_samples_factor(NAN, NAN, NAN, 8, 64));
+}
+
 int main(void)
 {
 	RUN(acceptance);
 	RUN(systematic_by_map);
 	RUN(systematic_coarse);
 	RUN(lean);
+	RUN(samples_factor);
 	static double jac[2 * M], r[M], draws[4 * M];
 	static int block[M];
 	double p[2], c, ctb;

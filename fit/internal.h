@@ -271,6 +271,10 @@ void fit_systematic(const struct glint_model *m, const double *p,
  * (from each view's interior pixels). */
 double fit_sphere_px(const struct objective *ob);
 
+/* ... of those whose camera blurs (a PSF, an OLPF or a colour filter
+ * array: where the small sphere's term was measured), 0 when none. */
+double fit_blurred_sphere_px(const struct objective *ob);
+
 void fit_discrepancy(const struct glint_model *m, const double *p, double share,
 		     double *u);
 

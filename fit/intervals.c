@@ -81,7 +81,7 @@ static int covariance(struct objective *ob, const struct selections *sl,
 		memset(sys, 0, sizeof(sys));
 	else
 		fit_systematic(m, ob->p, ob->o->map_pixel_deg,
-			       fit_sphere_px(ob), sys, shared);
+			       fit_blurred_sphere_px(ob), sys, shared);
 	memset(res->discrepancy, 0, sizeof(res->discrepancy));
 	if (!ob->o->no_discrepancy)
 		fit_discrepancy(m, ob->p, share, res->discrepancy);

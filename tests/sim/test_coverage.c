@@ -147,8 +147,9 @@ static void dump(const char *material, const char *map, const char *rot, int lv,
 				strerror(errno));
 		return;
 	}
-	fit_systematic(m, res->p, o->map_pixel_deg, sqrt(res->interior / M_PI),
-		       fixed, NULL);
+	/* the study's camera does not blur: no small sphere's term
+	 * (fit_blurred_sphere_px()) */
+	fit_systematic(m, res->p, o->map_pixel_deg, 0, fixed, NULL);
 	for (int k = 0; k < m->nparams; k++) {
 		double render = hypot(fixed[k], res->render_gain_stderr[k]);
 		double bound = k == m->lobes->roughness_param

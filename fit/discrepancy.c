@@ -170,13 +170,15 @@ void fit_systematic(const struct glint_model *m, const double *p,
 	}
 }
 
-double fit_blurred_sphere_px(const struct objective *ob)
+/* The smallest sphere's radius over the views (blurred: those whose
+ * camera blurs alone), 0 when none. */
+static double smallest_sphere_px(const struct objective *ob, int blurred)
 {
 	double r = 0;
 	for (int v = 0; v < ob->nviews; v++) {
 		const struct glint_pinhole *cam = &ob->views[v].r->scene.cam;
 		double rv = sqrt(ob->views[v].interior / M_PI);
-		if (!glint_pixel_filter_on(cam) && cam->cfa[0] < 0)
+		if (blurred && !glint_pixel_filter_on(cam) && cam->cfa[0] < 0)
 			continue;
 		if (rv > 0 && (r == 0 || rv < r))
 			r = rv;
@@ -184,15 +186,14 @@ double fit_blurred_sphere_px(const struct objective *ob)
 	return r;
 }
 
+double fit_blurred_sphere_px(const struct objective *ob)
+{
+	return smallest_sphere_px(ob, 1);
+}
+
 double fit_sphere_px(const struct objective *ob)
 {
-	double r = 0;
-	for (int v = 0; v < ob->nviews; v++) {
-		double rv = sqrt(ob->views[v].interior / M_PI);
-		if (rv > 0 && (r == 0 || rv < r))
-			r = rv;
-	}
-	return r;
+	return smallest_sphere_px(ob, 0);
 }
 
 double glint_fit_discrepancy_scale(const struct glint_model *m, const double *p,

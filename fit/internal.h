@@ -42,10 +42,12 @@ struct objective {
 	double rough_lo; /* lower bound on the roughness parameter (coarse) */
 	/* which parameters are lobe albedos: lobe and channel, else -1 */
 	int lobe_of[GLINT_MAX_PARAMS], chan_of[GLINT_MAX_PARAMS];
-	/* memo of lobe integrals at the nonlinear parameters memo_p */
-	double *lobes, *lobes2;
+	/* memo of lobe integrals at the nonlinear parameters memo_p, and
+	 * (memo_d) their derivatives by the model's factor parameter in
+	 * dlobes (fit_wants_dlobes()) */
+	double *lobes, *lobes2, *dlobes;
 	double memo_p[GLINT_MAX_PARAMS];
-	int memo_valid;
+	int memo_valid, memo_d;
 	/* faithful path */
 	const struct glint_fit_opts *o;
 	struct glint_image *img;
@@ -56,8 +58,9 @@ struct objective {
 	int nsets;
 	/* each set's lobes at its last evaluation (sets_residuals()), at
 	 * the nonlinear parameters set_lobes_p, for the sets' Jacobians */
-	double *set_lobes[MAX_SETS];
+	double *set_lobes[MAX_SETS], *set_dlobes[MAX_SETS];
 	double set_lobes_p[MAX_SETS][GLINT_MAX_PARAMS];
+	int set_has_d[MAX_SETS];
 	struct view views[GLINT_FIT_MAX_VIEWS];
 	int nviews;
 	/* The sets' mean weighted residuals at the final p over every
@@ -177,6 +180,12 @@ int fit_view_of(const struct objective *ob, int s);
 
 int fit_nonlinear_same(const struct objective *ob, const double *a,
 		       const double *b);
+
+/* Whether ob's evaluations shade the derivatives by the model's factor
+ * parameter (an ior) with the lobes, so that its Jacobian column needs
+ * no evaluation of its own: a shade cache, the parameter free, no
+ * variable projection (which needs no Jacobian). */
+int fit_wants_dlobes(const struct objective *ob);
 
 double fit_pixel_value(const struct objective *ob, const double *p,
 		       const double *lobes, int s, int c);

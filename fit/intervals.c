@@ -42,9 +42,14 @@ static int sets_jr(struct objective *ob, int nsets, const double *each,
 			/* its lobes at p from the polish's last evaluation */
 			if (ob->set_lobes[s] &&
 			    fit_nonlinear_same(ob, ob->p, ob->set_lobes_p[s])) {
-				memcpy(ob->lobes, ob->set_lobes[s],
-				       (size_t)ob->nsel * ob->m->bxdf->nlobes *
-					       3 * sizeof(double));
+				size_t nl = (size_t)ob->nsel *
+					    ob->m->bxdf->nlobes * 3 *
+					    sizeof(double);
+				memcpy(ob->lobes, ob->set_lobes[s], nl);
+				ob->memo_d = ob->set_has_d[s];
+				if (ob->memo_d)
+					memcpy(ob->dlobes, ob->set_dlobes[s],
+					       nl);
 				memcpy(ob->memo_p, ob->p, sizeof(ob->memo_p));
 				ob->memo_valid = 1;
 			}

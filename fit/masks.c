@@ -50,7 +50,7 @@ static int white_render(struct objective *ob, const int *all, double *white)
 	double *wl = malloc((size_t)d->n * nj * 3 * sizeof(double));
 	if (!wl)
 		return glint_error_set(ENOMEM, "out of memory");
-	glint_shade_cache_lobes_sel(ob->cache, ob->p, all, d->n, wl);
+	glint_shade_cache_constant_lobes_sel(ob->cache, all, d->n, wl);
 	for (int s = 0; s < d->n; s++)
 		for (int c = 0; c < 3; c++) {
 			double w = 0;

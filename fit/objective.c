@@ -38,17 +38,41 @@ int fit_nonlinear_same(const struct objective *ob, const double *a,
 	return 1;
 }
 
+int fit_wants_dlobes(const struct objective *ob)
+{
+	const struct glint_fit_lobes *l = ob->m->lobes;
+
+	if (!ob->cache || ob->varpro || !l || !l->factor_dlog)
+		return 0;
+	for (int k = 0; k < ob->nfree; k++)
+		if (ob->free_idx[k] == l->factor_param)
+			return 1;
+	return 0;
+}
+
 static void lobes_at(struct objective *ob, const double *p, double *dst)
 {
 	glint_shade_cache_lobes_sel(ob->cache, p, ob->sel, ob->nsel, dst);
 }
 
+/* The lobes at p (and their derivatives in ob->dlobes where
+ * fit_wants_dlobes()), memoised: LM asks for the Jacobian where it last
+ * evaluated the residuals. */
 static const double *memo_lobes(struct objective *ob, const double *p)
 {
-	if (!ob->memo_valid || !fit_nonlinear_same(ob, p, ob->memo_p)) {
-		lobes_at(ob, p, ob->lobes);
+	int want = fit_wants_dlobes(ob);
+
+	if (!ob->memo_valid || !fit_nonlinear_same(ob, p, ob->memo_p) ||
+	    (want && !ob->memo_d)) {
+		if (want)
+			glint_shade_cache_lobes_d(ob->cache, p, ob->sel,
+						  ob->nsel, ob->lobes,
+						  ob->dlobes);
+		else
+			lobes_at(ob, p, ob->lobes);
 		memcpy(ob->memo_p, p, sizeof(ob->memo_p));
 		ob->memo_valid = 1;
+		ob->memo_d = want;
 	}
 	return ob->lobes;
 }
@@ -238,7 +262,9 @@ int fit_obj_residuals(void *ctx, const double *q, double *res)
  */
 #define FD_REL_STEP 1e-2
 
-/* Analytic columns for albedos, forward differences for the rest. */
+/* Analytic columns for albedos and the factor parameter (an ior: its
+ * derivative shaded with the lobes, memo_lobes()), forward differences
+ * for the rest. */
 int fit_obj_jacobian(void *ctx, const double *q, const double *r, double *jac)
 {
 	struct objective *ob = ctx;
@@ -264,6 +290,18 @@ int fit_obj_jacobian(void *ctx, const double *q, const double *r, double *jac)
 										 nj +
 									 j) * 3 +
 									c];
+			}
+			continue;
+		}
+		if (ob->memo_d && pk == ob->m->lobes->factor_param) {
+			for (int t = 0; t < ob->nsel; t++) {
+				int s = ob->sel[t];
+				for (int c = 0; c < 3; c++)
+					jac[(size_t)(3 * t + c) * nf + k] =
+						ob->d->sw[3 * s + c] *
+						fit_pixel_value(ob, p,
+								ob->dlobes, t,
+								c);
 			}
 			continue;
 		}
@@ -301,8 +339,11 @@ void fit_objective_free(struct objective *ob)
 	glint_image_free(ob->img);
 	free(ob->lobes);
 	free(ob->lobes2);
-	for (int k = 0; k < MAX_SETS; k++)
+	free(ob->dlobes);
+	for (int k = 0; k < MAX_SETS; k++) {
 		free(ob->set_lobes[k]);
+		free(ob->set_dlobes[k]);
+	}
 }
 
 /* A shade cache over every fitted pixel at the objective's sample counts
@@ -360,7 +401,8 @@ int fit_objective_init(struct objective *ob, const struct view *views,
 	size_t nl = (size_t)d->n * model->bxdf->nlobes * 3;
 	ob->lobes = malloc(nl * sizeof(double));
 	ob->lobes2 = malloc(nl * sizeof(double));
-	if (!ob->lobes || !ob->lobes2)
+	ob->dlobes = malloc(nl * sizeof(double));
+	if (!ob->lobes || !ob->lobes2 || !ob->dlobes)
 		return glint_error_set(ENOMEM, "out of memory");
 	if (o->faithful) {
 		ob->img = glint_image_new(ob->r->gb.width, ob->r->gb.height);

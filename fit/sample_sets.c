@@ -114,14 +114,19 @@ int fit_sets_residuals(void *ctx, const double *q, double *r)
 		ob->cache = so->sets[k];
 		ob->memo_valid = 0;
 		ret = fit_obj_residuals(ob, q, so->each + (size_t)k * rows);
+		size_t all = (size_t)ob->d->n * ob->m->bxdf->nlobes * 3 *
+			     sizeof(double);
 		if (!ob->set_lobes[k])
-			ob->set_lobes[k] =
-				malloc((size_t)ob->d->n * ob->m->bxdf->nlobes *
-				       3 * sizeof(double));
+			ob->set_lobes[k] = malloc(all);
+		if (!ob->set_dlobes[k] && ob->memo_d)
+			ob->set_dlobes[k] = malloc(all);
 		if (ret == 0 && ob->set_lobes[k] && ob->memo_valid) {
 			memcpy(ob->set_lobes[k], ob->lobes, nl);
 			memcpy(ob->set_lobes_p[k], ob->memo_p,
 			       sizeof(ob->memo_p));
+			ob->set_has_d[k] = ob->memo_d && ob->set_dlobes[k];
+			if (ob->set_has_d[k])
+				memcpy(ob->set_dlobes[k], ob->dlobes, nl);
 		}
 	}
 	ob->cache = fitted;

@@ -109,9 +109,19 @@ static const struct glint_bxdf_ops ggx_bxdf = {
 
 static const int ggx_width_param[] = { -1, ROUGH };
 
+/* Every varying lobe carries F(o.h, ior): d log b_j / d ior. */
+static double ggx_factor_dlog(const double *p, int j, struct vec3 wo,
+			      struct vec3 wi)
+{
+	(void)j;
+	return glint_fresnel_half_dlog(p[IOR], wo, wi);
+}
+
 static const struct glint_fit_lobes ggx_fit = {
 	.param = ggx_lobe_param,
 	.varies = ggx_lobe_varies,
+	.factor_param = IOR,
+	.factor_dlog = ggx_factor_dlog,
 	.roughness_param = ROUGH,
 	.microfacet = &glint_microfacet_ggx,
 	.width_param = ggx_width_param,

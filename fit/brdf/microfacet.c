@@ -80,6 +80,16 @@ double glint_fresnel_or_one(double c, double ior)
 	return ior > 0 ? glint_fresnel_dielectric(c, ior) : 1;
 }
 
+double glint_fresnel_half_dlog(double ior, struct vec3 wo, struct vec3 wi)
+{
+	struct vec3 h = v3_add(wo, wi);
+	double l = v3_len(h);
+
+	if (!(ior > 0) || !(l > 0))
+		return 0;
+	return glint_fresnel_dielectric_dlog_dn(v3_dot(wo, h) / l, ior);
+}
+
 double glint_beckmann_lobe(double m, double ior, struct vec3 wo, struct vec3 wi)
 {
 	if (!(wo.z > 0 && wi.z > 0))

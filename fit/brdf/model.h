@@ -64,6 +64,17 @@ struct glint_fit_lobes {
 	void (*geometry)(struct vec3 wo, struct vec3 wi, float g[4]);
 	double (*from_geometry)(const double *p, int j, const float g[4],
 				double *pdf);
+	/* Optional: a parameter that enters the varying lobes only as a
+	 * factor of their value at each pair of directions (an ior,
+	 * through Fresnel at o.h), leaving their sampling and pdf as they
+	 * are; factor_dlog gives d log b_j / d p[factor_param] at wo, wi.
+	 * The fitter then shades lobe j's derivative by it on the same
+	 * samples as its value (glint_shade_cache_lobes_d()).  Unset
+	 * (factor_dlog NULL): that parameter's derivative is a finite
+	 * difference. */
+	int factor_param;
+	double (*factor_dlog)(const double *p, int j, struct vec3 wo,
+			      struct vec3 wi);
 	/* Index of the parameter that sets the lobe's angular width (a
 	 * roughness), or -1: coarse fitting levels bound it from below by
 	 * what they can resolve. */

@@ -185,6 +185,14 @@ static const struct glint_bxdf_ops ts_bxdf = {
 
 static const int ts_width_param[2] = { -1, ROUGH };
 
+/* Every varying lobe carries F(o.h, ior): d log b_j / d ior. */
+static double ts_factor_dlog(const double *p, int j, struct vec3 wo,
+			     struct vec3 wi)
+{
+	(void)j;
+	return glint_fresnel_half_dlog(p[IOR], wo, wi);
+}
+
 static const struct glint_fit_lobes ts_fit = {
 	.param = ts_lobe_param,
 	.varies = ts_lobe_varies,
@@ -192,6 +200,8 @@ static const struct glint_fit_lobes ts_fit = {
 	.sample_value = ts_sample_lobe_value,
 	.geometry = glint_beckmann_geometry,
 	.from_geometry = ts_lobe_from_geometry,
+	.factor_param = IOR,
+	.factor_dlog = ts_factor_dlog,
 	.roughness_param = ROUGH,
 	.microfacet = &glint_microfacet_beckmann,
 	.width_param = ts_width_param,

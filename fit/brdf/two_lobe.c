@@ -112,9 +112,19 @@ static const struct glint_bxdf_ops two_bxdf = {
 
 static const int two_width_param[] = { -1, ROUGH, ROUGH2 };
 
+/* Every varying lobe carries F(o.h, ior): d log b_j / d ior. */
+static double two_factor_dlog(const double *p, int j, struct vec3 wo,
+			      struct vec3 wi)
+{
+	(void)j;
+	return glint_fresnel_half_dlog(p[IOR], wo, wi);
+}
+
 static const struct glint_fit_lobes two_fit = {
 	.param = two_lobe_param,
 	.varies = two_lobe_varies,
+	.factor_param = IOR,
+	.factor_dlog = two_factor_dlog,
 	.roughness_param = ROUGH,
 	.microfacet = &glint_microfacet_beckmann,
 	.width_param = two_width_param,

@@ -112,7 +112,7 @@ static void setup_pixels(void *ctx, int i0, int i1, int thread)
 				if (c->lambert[j]) {
 					/* Exact: hot texels + irradiance. */
 					shade_hot_quadrature(c, h, job->p0, j,
-							     1, a);
+							     1, a, NULL);
 					glint_irradiance_lookup(&c->light->irr,
 								fv(h->n), e);
 					for (int ch = 0; ch < 3; ch++)
@@ -126,7 +126,7 @@ static void setup_pixels(void *ctx, int i0, int i1, int thread)
 					drawn = 1;
 					shade_lobe_at_hit(c, h, tmp, ns, ns, u,
 							  job->p0, j, 1, NULL,
-							  -1, 0, a);
+							  -1, 0, a, NULL);
 				}
 				double *dst =
 					c->static_lobes +
@@ -364,6 +364,8 @@ struct lobes_job {
 	const double *p;
 	const int *sel; /* NULL: all pixels */
 	double *lobes;
+	double *dlobes;	   /* NULL, or the lobes' derivatives by factor_param */
+	int constant_only; /* the varying lobes 0, not shaded */
 };
 
 static void lobes_pixels(void *ctx, int i0, int i1, int thread)
@@ -383,16 +385,28 @@ static void lobes_pixels(void *ctx, int i0, int i1, int thread)
 			c = c->parts[part];
 		}
 		double *dst = job->lobes + (size_t)k * nj * 3;
+		double *dd =
+			job->dlobes ? job->dlobes + (size_t)k * nj * 3 : NULL;
 		memcpy(dst, c->static_lobes + (size_t)i * nj * 3,
 		       (size_t)nj * 3 * sizeof(double));
+		if (dd) /* the constant lobes depend on no parameter */
+			memset(dd, 0, (size_t)nj * 3 * sizeof(double));
 		for (int j = 0; j < nj; j++) {
 			if (!m->lobes->varies[j])
 				continue;
-			double hot[3];
-			int foot = shade_hot_footprint(c, i, job->p, j, hot);
-			if (foot)
-				for (int ch = 0; ch < 3; ch++)
-					dst[j * 3 + ch] += hot[ch];
+			if (job->constant_only) {
+				dst[j * 3] = dst[j * 3 + 1] = dst[j * 3 + 2] =
+					0;
+				continue;
+			}
+			double hot[3], dhot[3];
+			int foot = shade_hot_footprint(c, i, job->p, j, hot,
+						       dd ? dhot : NULL);
+			for (int ch = 0; ch < 3 && foot; ch++) {
+				dst[j * 3 + ch] += hot[ch];
+				if (dd)
+					dd[j * 3 + ch] += dhot[ch];
+			}
 			struct spread sp = { &c->feet[i], 0, { 0, 0 }, 0, 0 };
 			sp.w = fmin(1,
 				    fmax(0, shade_foot_level(c, i, job->p, j) +
@@ -407,15 +421,20 @@ static void lobes_pixels(void *ctx, int i0, int i1, int thread)
 			}
 			for (int s = 0; s < c->spp; s++) {
 				size_t hi = (size_t)i * c->spp + s;
-				double a[3];
+				double a[3], da[3];
 				sp.s = s;
 				shade_lobe_at_hit(
 					c, &c->hits[hi], c->envs + hi * c->nl,
 					c->nl, c->nb, NULL, job->p, j, !foot,
 					sp.w > 0 ? &sp : NULL, s,
-					c->hits[(size_t)i * c->spp].seed, a);
-				for (int ch = 0; ch < 3; ch++)
+					c->hits[(size_t)i * c->spp].seed, a,
+					dd ? da : NULL);
+				for (int ch = 0; ch < 3; ch++) {
 					dst[j * 3 + ch] += a[ch] / c->spp;
+					if (dd)
+						dd[j * 3 + ch] +=
+							da[ch] / c->spp;
+				}
 			}
 		}
 	}
@@ -424,7 +443,7 @@ static void lobes_pixels(void *ctx, int i0, int i1, int thread)
 void glint_shade_cache_lobes(struct glint_shade_cache *c, const double *p,
 			     double *lobes)
 {
-	struct lobes_job job = { c, p, NULL, lobes };
+	struct lobes_job job = { c, p, NULL, lobes, NULL, 0 };
 
 	glint_parallel_for(c->n, 32, c->nthreads, lobes_pixels, &job);
 }
@@ -432,7 +451,28 @@ void glint_shade_cache_lobes(struct glint_shade_cache *c, const double *p,
 void glint_shade_cache_lobes_sel(struct glint_shade_cache *c, const double *p,
 				 const int *sel, int nsel, double *lobes)
 {
-	struct lobes_job job = { c, p, sel, lobes };
+	struct lobes_job job = { c, p, sel, lobes, NULL, 0 };
 
 	glint_parallel_for(nsel, 32, c->nthreads, lobes_pixels, &job);
+}
+
+void glint_shade_cache_lobes_d(struct glint_shade_cache *c, const double *p,
+			       const int *sel, int nsel, double *lobes,
+			       double *dlobes)
+{
+	struct lobes_job job = {
+		c, p, sel, lobes, c->model->lobes->factor_dlog ? dlobes : NULL,
+		0
+	};
+
+	glint_parallel_for(nsel, 32, c->nthreads, lobes_pixels, &job);
+}
+
+void glint_shade_cache_constant_lobes_sel(struct glint_shade_cache *c,
+					  const int *sel, int nsel,
+					  double *lobes)
+{
+	struct lobes_job job = { c, NULL, sel, lobes, NULL, 1 };
+
+	glint_parallel_for(nsel, 256, c->nthreads, lobes_pixels, &job);
 }

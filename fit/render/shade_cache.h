@@ -111,4 +111,18 @@ void glint_shade_cache_lobes(struct glint_shade_cache *c, const double *p,
 void glint_shade_cache_lobes_sel(struct glint_shade_cache *c, const double *p,
 				 const int *sel, int nsel, double *lobes);
 
+/* The same with each lobe's derivative by the model's factor parameter
+ * (struct glint_fit_lobes' factor_param, an ior), shaded on the same
+ * samples, in dlobes (laid out as lobes; constant lobes 0).  Only for a
+ * model with factor_dlog: dlobes is left untouched otherwise. */
+void glint_shade_cache_lobes_d(struct glint_shade_cache *c, const double *p,
+			       const int *sel, int nsel, double *lobes,
+			       double *dlobes);
+
+/* The constant lobes alone (the varying ones 0), which depend on no
+ * parameter: integrated once when the cache was built. */
+void glint_shade_cache_constant_lobes_sel(struct glint_shade_cache *c,
+					  const int *sel, int nsel,
+					  double *lobes);
+
 #endif

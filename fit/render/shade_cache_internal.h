@@ -103,13 +103,19 @@ static inline double angle(struct vec3 a, struct vec3 b)
 	return acos(fmin(1, fmax(-1, v3_dot(a, b) / (v3_len(a) * v3_len(b)))));
 }
 
+/*
+ * The functions below add lobe j's estimate to out and, where dout is not
+ * NULL, its derivative by the model's factor parameter (struct
+ * glint_fit_lobes' factor_param, an ior) on the same samples to dout.
+ */
+
 /* Lobe j over the hot texels, on their fixed points: the map's
  * radiance on the hot texels' area (by_area: with the irradiance of the
  * other texels) or the hot texels' part of the radiance wherever it
  * reaches (with lobe and env samples of the rest: envmap.h). */
 void shade_hot_quadrature(const struct glint_shade_cache *c,
 			  const struct cache_hit *h, const double *p, int j,
-			  int by_area, double out[3]);
+			  int by_area, double out[3], double *dout);
 
 /*
  * Estimate lobe j's integral at one hit: nl env samples, nb lobe samples,
@@ -123,7 +129,7 @@ void shade_lobe_at_hit(const struct glint_shade_cache *c,
 		       const struct cache_hit *h, const struct env_sample *es,
 		       int nl, int nb, const double (*u)[2], const double *p,
 		       int j, int with_hot, const struct spread *sp, int hs,
-		       uint32_t pseed, double out[3]);
+		       uint32_t pseed, double out[3], double *dout);
 
 /*
  * Fit pixel pix's footprint to its spp hits g (least squares over their
@@ -145,7 +151,7 @@ void shade_foot_fit(const struct glint_gbuffer *gb, int32_t pix,
  * (shade_hot_quadrature()).
  */
 int shade_hot_footprint(const struct glint_shade_cache *c, int i,
-			const double *p, int j, double out[3]);
+			const double *p, int j, double out[3], double *dout);
 
 /* How many times (log2) pixel i's mirror direction turns across it by
  * lobe j's width at p; -1 without a footprint. */

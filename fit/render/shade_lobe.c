@@ -12,13 +12,24 @@
 #include <math.h>
 #include <string.h>
 
+/* d log b_j / d p[factor_param] at wo, wi (the model's factor parameter,
+ * struct glint_fit_lobes), or 0 when no derivative is wanted (dout NULL). */
+static inline double factor_dlog(const struct glint_model *m, const double *p,
+				 int j, struct vec3 wo, struct vec3 wi,
+				 const double *dout)
+{
+	return dout ? m->lobes->factor_dlog(p, j, wo, wi) : 0;
+}
+
 /* Lobe j at one point (frame t, b, n; view wo, local) over the hot
- * points pts[k0 .. k1), each radiance x solid angle, added to out; only
- * the points whose cosine to r is at least cos_ext count. */
+ * points pts[k0 .. k1), each radiance x solid angle, added to out (and
+ * its derivative by the model's factor parameter to dout, unless NULL);
+ * only the points whose cosine to r is at least cos_ext count. */
 static void hot_points(const struct glint_model *m, const double *p, int j,
 		       const float *pts, int k0, int k1, double cos_ext,
 		       struct vec3 r, struct vec3 t, struct vec3 b,
-		       struct vec3 n, struct vec3 wo, double out[3])
+		       struct vec3 n, struct vec3 wo, double out[3],
+		       double *dout)
 {
 	for (int k = k0; k < k1; k++) {
 		const float *pt = pts + 6 * (size_t)k;
@@ -33,6 +44,11 @@ static void hot_points(const struct glint_model *m, const double *p, int j,
 			continue;
 		for (int ch = 0; ch < 3; ch++)
 			out[ch] += bj * wi.z * pt[3 + ch];
+		if (dout) {
+			double d = bj * factor_dlog(m, p, j, wo, wi, dout);
+			for (int ch = 0; ch < 3; ch++)
+				dout[ch] += d * wi.z * pt[3 + ch];
+		}
 	}
 }
 
@@ -42,7 +58,7 @@ static void hot_points(const struct glint_model *m, const double *p, int j,
  * reaches (with lobe and env samples of the rest: envmap.h). */
 void shade_hot_quadrature(const struct glint_shade_cache *c,
 			  const struct cache_hit *h, const double *p, int j,
-			  int by_area, double out[3])
+			  int by_area, double out[3], double *dout)
 {
 	const struct glint_env_hot *hot = c->hot;
 	const struct glint_model *m = c->model;
@@ -65,7 +81,7 @@ void shade_hot_quadrature(const struct glint_shade_cache *c,
 			continue; /* the lobe is below 1e-12 of it */
 		hot_points(m, p, j, pts, by_area ? cl->pts0 : cl->part0,
 			   by_area ? cl->pts1 : cl->part1, -2, r, fv(h->t),
-			   fv(h->b), fv(h->n), wo, out);
+			   fv(h->b), fv(h->n), wo, out, dout);
 	}
 }
 
@@ -105,13 +121,14 @@ static int hit_at(const struct cache_foot *f, const double at[2],
 struct lobe_pending {
 	struct glint_env_query q;
 	double bjz, pb, w;
+	double dlog; /* d log b_j / d the factor parameter */
 };
 
 /* One lobe sample (uniforms uu) at hit h: its direction, and its texels
  * prefetched; 0 where the lobe gives it no weight. */
 static int lobe_sample_start(const struct glint_shade_cache *c,
 			     const struct cache_hit *h, const double *p, int j,
-			     const double uu[2], double w,
+			     const double uu[2], double w, const double *dout,
 			     struct lobe_pending *lp)
 {
 	struct vec3 wi;
@@ -127,14 +144,16 @@ static int lobe_sample_start(const struct glint_shade_cache *c,
 	lp->bjz = bj * wi.z;
 	lp->pb = pb;
 	lp->w = w;
+	lp->dlog = factor_dlog(c->model, p, j, fv(h->wo), wi, dout);
 	return 1;
 }
 
 /* The sample's light, weighted by the balance heuristic against nl env
- * samples and by its w, added to out. */
+ * samples and by its w, added to out (its derivative to dout, unless
+ * NULL). */
 static void lobe_sample_finish(const struct glint_shade_cache *c, int nl,
 			       int nb, const struct lobe_pending *lp,
-			       double out[3])
+			       double out[3], double *dout)
 {
 	double l[3], ps = 0;
 
@@ -144,6 +163,9 @@ static void lobe_sample_finish(const struct glint_shade_cache *c, int nl,
 	double w = lp->w * (lp->bjz / (nl * ps + nb * lp->pb));
 	for (int ch = 0; ch < 3; ch++)
 		out[ch] += w * l[ch];
+	if (dout)
+		for (int ch = 0; ch < 3; ch++)
+			dout[ch] += w * lp->dlog * l[ch];
 }
 
 /* One lobe sample (uniforms uu) at hit h, weighted by the balance
@@ -151,12 +173,12 @@ static void lobe_sample_finish(const struct glint_shade_cache *c, int nl,
 static void lobe_sample(const struct glint_shade_cache *c,
 			const struct cache_hit *h, const double *p, int j,
 			int nl, int nb, const double uu[2], double w,
-			double out[3])
+			double out[3], double *dout)
 {
 	struct lobe_pending lp;
 
-	if (lobe_sample_start(c, h, p, j, uu, w, &lp))
-		lobe_sample_finish(c, nl, nb, &lp, out);
+	if (lobe_sample_start(c, h, p, j, uu, w, dout, &lp))
+		lobe_sample_finish(c, nl, nb, &lp, out, dout);
 }
 
 /*
@@ -171,7 +193,7 @@ void shade_lobe_at_hit(const struct glint_shade_cache *c,
 		       const struct cache_hit *h, const struct env_sample *es,
 		       int nl, int nb, const double (*u)[2], const double *p,
 		       int j, int with_hot, const struct spread *sp, int hs,
-		       uint32_t pseed, double out[3])
+		       uint32_t pseed, double out[3], double *dout)
 {
 	const struct glint_model *m = c->model;
 	struct vec3 wo = fv(h->wo);
@@ -188,8 +210,10 @@ void shade_lobe_at_hit(const struct glint_shade_cache *c,
 	int geom = m->lobes->from_geometry && m->lobes->varies[j];
 
 	out[0] = out[1] = out[2] = 0;
+	if (dout)
+		dout[0] = dout[1] = dout[2] = 0;
 	if (with_hot)
-		shade_hot_quadrature(c, h, p, j, 0, out);
+		shade_hot_quadrature(c, h, p, j, 0, out, dout);
 	for (int k = 0; k < nl; k++) {
 		const struct env_sample *e = &es[k];
 		struct vec3 wi = fv(e->wi);
@@ -204,6 +228,11 @@ void shade_lobe_at_hit(const struct glint_shade_cache *c,
 			   (e->pdf * (nl * e->pdf_smooth + nb * pb));
 		for (int ch = 0; ch < 3; ch++)
 			out[ch] += w * e->l[ch];
+		if (dout) {
+			double dw = w * factor_dlog(m, p, j, wo, wi, dout);
+			for (int ch = 0; ch < 3; ch++)
+				dout[ch] += dw * e->l[ch];
+		}
 	}
 	double w_hit = sp ? 1 - sp->w : 1;
 	int spread = sp && sp->w > 0;
@@ -226,18 +255,19 @@ void shade_lobe_at_hit(const struct glint_shade_cache *c,
 			 * first, then their light, so that their table reads
 			 * overlap (the same sums in the same order). */
 			if (w_hit > 0)
-				npend += lobe_sample_start(c, h, p, j, uu,
-							   w_hit, &pend[npend]);
+				npend +=
+					lobe_sample_start(c, h, p, j, uu, w_hit,
+							  dout, &pend[npend]);
 			if (npend == 8 || (k == nb - 1 && npend)) {
 				for (int e = 0; e < npend; e++)
 					lobe_sample_finish(c, nl, nb, &pend[e],
-							   out);
+							   out, dout);
 				npend = 0;
 			}
 			continue;
 		}
 		if (w_hit > 0)
-			lobe_sample(c, h, p, j, nl, nb, uu, w_hit, out);
+			lobe_sample(c, h, p, j, nl, nb, uu, w_hit, out, dout);
 		if (spread) {
 			/* Point q of a (0, 2)-set over the pixel, shifted;
 			 * the points shuffled among the samples (by index,
@@ -253,7 +283,7 @@ void shade_lobe_at_hit(const struct glint_shade_cache *c,
 			struct cache_hit hq;
 			if (hit_at(sp->f, at, &hq))
 				lobe_sample(c, &hq, p, j, nl, nb, uu, sp->w,
-					    out);
+					    out, dout);
 		}
 	}
 }
@@ -335,13 +365,16 @@ void shade_foot_fit(const struct glint_gbuffer *gb, int32_t pix,
  * mirror directions; near NULL: all of them). */
 static void hot_grid(const struct glint_shade_cache *c,
 		     const struct cache_foot *f, const double *p, int j, int k,
-		     double ext, const int *near, int ncl, double out[3])
+		     double ext, const int *near, int ncl, double out[3],
+		     double *dout)
 {
 	const struct glint_env_hot *hot = c->hot;
 	const struct glint_model *m = c->model;
 	double cos_ext = cos(fmin(ext, M_PI));
 
 	out[0] = out[1] = out[2] = 0;
+	if (dout)
+		dout[0] = dout[1] = dout[2] = 0;
 	for (int a = 0; a < k; a++)
 		for (int e = 0; e < k; e++) {
 			struct vec3 n, d, r, t, b;
@@ -358,24 +391,32 @@ static void hot_grid(const struct glint_shade_cache *c,
 					&hot->clusters[near ? near[g] : g];
 				hot_points(m, p, j, hot->part, cl->part0,
 					   cl->part1, cos_ext, r, t, b, n, wo,
-					   out);
+					   out, dout);
 			}
 		}
-	for (int ch = 0; ch < 3; ch++)
+	for (int ch = 0; ch < 3; ch++) {
 		out[ch] /= (double)k * k;
+		if (dout)
+			dout[ch] /= (double)k * k;
+	}
 }
 
 /* Lobe j's hot part, the mean over pixel i's hits. */
 static void hot_hits(const struct glint_shade_cache *c, int i, const double *p,
-		     int j, double out[3])
+		     int j, double out[3], double *dout)
 {
 	out[0] = out[1] = out[2] = 0;
+	if (dout)
+		dout[0] = dout[1] = dout[2] = 0;
 	for (int s = 0; s < c->spp; s++) {
-		double a[3] = { 0, 0, 0 };
+		double a[3] = { 0, 0, 0 }, da[3] = { 0, 0, 0 };
 		shade_hot_quadrature(c, &c->hits[(size_t)i * c->spp + s], p, j,
-				     0, a);
-		for (int ch = 0; ch < 3; ch++)
+				     0, a, dout ? da : NULL);
+		for (int ch = 0; ch < 3; ch++) {
 			out[ch] += a[ch] / c->spp;
+			if (dout)
+				dout[ch] += da[ch] / c->spp;
+		}
 	}
 }
 
@@ -404,7 +445,7 @@ double shade_foot_level(const struct glint_shade_cache *c, int i,
  * (shade_hot_quadrature()).
  */
 int shade_hot_footprint(const struct glint_shade_cache *c, int i,
-			const double *p, int j, double out[3])
+			const double *p, int j, double out[3], double *dout)
 {
 	const struct cache_foot *f = &c->feet[i];
 	const struct glint_model *m = c->model;
@@ -425,6 +466,8 @@ int shade_hot_footprint(const struct glint_shade_cache *c, int i,
 	if (!(ext > 0))
 		ext = 40 * sd;
 	out[0] = out[1] = out[2] = 0;
+	if (dout)
+		dout[0] = dout[1] = dout[2] = 0;
 	const struct glint_env_hot *hot = c->hot;
 	if (angle(fv(f->r), hot->axis) - hot->radius > ext + f->turn)
 		return 1;
@@ -445,13 +488,19 @@ int shade_hot_footprint(const struct glint_shade_cache *c, int i,
 	lv = fmin(lv, 3);
 	int lo = (int)lv;
 	double w = lv - lo, a[3], b[3] = { 0, 0, 0 };
+	double da[3] = { 0, 0, 0 }, db[3] = { 0, 0, 0 };
 	if (lo)
-		hot_grid(c, f, pw, j, 2 << lo, ext, near, ncl, a);
+		hot_grid(c, f, pw, j, 2 << lo, ext, near, ncl, a,
+			 dout ? da : NULL);
 	else
-		hot_hits(c, i, p, j, a);
+		hot_hits(c, i, p, j, a, dout ? da : NULL);
 	if (w > 0)
-		hot_grid(c, f, pw, j, 4 << lo, ext, near, ncl, b);
-	for (int ch = 0; ch < 3; ch++)
+		hot_grid(c, f, pw, j, 4 << lo, ext, near, ncl, b,
+			 dout ? db : NULL);
+	for (int ch = 0; ch < 3; ch++) {
 		out[ch] = (1 - w) * a[ch] + w * b[ch];
+		if (dout)
+			dout[ch] = (1 - w) * da[ch] + w * db[ch];
+	}
 	return 1;
 }

@@ -61,6 +61,27 @@ static void test_fresnel(void)
 	CHECK_NEAR(glint_fresnel_dielectric(cos(atan(1.5)), 1.5), 0.0740, 1e-4,
 		   "glass at Brewster's angle");
 	CHECK_NEAR(glint_fresnel_dielectric(1, 1.0), 0, 1e-15, "n = 1");
+
+	/* d log F / d n against a central difference of F */
+	double worst = 0;
+	for (int k = 0; k < 4; k++)
+		for (int a = 0; a < 90; a += 3) {
+			double c = cos(a * M_PI / 180), n = ns[k], h = 1e-6;
+			double fd = (glint_fresnel_dielectric(c, n + h) -
+				     glint_fresnel_dielectric(c, n - h)) /
+				    (2 * h);
+			double d = glint_fresnel_dielectric_dlog_dn(c, n) *
+				   glint_fresnel_dielectric(c, n);
+			worst = fmax(worst,
+				     fabs(d - fd) / fmax(fabs(fd), 1e-3));
+		}
+	CHECK(worst < 1e-6, "d F / d n off by %g (relative)", worst);
+	CHECK_NEAR(glint_fresnel_dielectric_dlog_dn(0.7, 1.0), 0, 0,
+		   "n = 1: F = 0, no scale");
+	/* normal incidence: F = ((n-1)/(n+1))^2, d log F / dn =
+	 * 4 / ((n - 1)(n + 1)) */
+	CHECK_NEAR(glint_fresnel_dielectric_dlog_dn(1, 1.5), 4 / (0.5 * 2.5),
+		   1e-9, "normal incidence");
 }
 
 static void test_vcavity(void)

@@ -650,6 +650,97 @@ static int sphere_interior(int32_t *pix)
  * over a few): the highlight's pixels within 10 % of their total, and
  * the integral continuous in roughness across its grid levels.
  */
+/*
+ * The lobes' derivatives by ior (glint_shade_cache_lobes_d()) against a
+ * central difference of the lobes on the same samples, for each model
+ * with a factor parameter: under a sun and under a softbox, from a
+ * near-mirror (the footprint's grid and spread samples) to a rough lobe.
+ */
+static void test_factor_derivative(void)
+{
+	static const struct glint_model *const models[] = {
+		&glint_model_torrance_sparrow,
+		&glint_model_ggx,
+		&glint_model_two_lobe,
+	};
+	static const double rough[] = { 0.004, 0.05, 0.3 };
+	int32_t pix[48 * 48];
+	int n = sphere_interior(pix);
+
+	for (int box = 0; box < 2; box++) {
+		struct glint_envmap *env = sun_env(box);
+		struct setup s;
+		make_camera(&s.cam, 48, 48, 60, 0, 0);
+		setup_sphere(&s, v3(0, 0, -3), 1, 4);
+		for (int k = 0; k < 3; k++) {
+			const struct glint_model *m = models[k];
+			int nj = m->bxdf->nlobes, ior = m->lobes->factor_param;
+			struct glint_shade_cache_opts o = { .static_samples = 4,
+							    .light_samples = 8,
+							    .lobe_samples = 8,
+							    .nthreads = 2 };
+			struct glint_shade_cache *c = NULL;
+			size_t nl = (size_t)n * nj * 3;
+			double *l0 = calloc(nl, sizeof(double));
+			double *d = calloc(nl, sizeof(double));
+			double *lp = calloc(nl, sizeof(double));
+			double *lm = calloc(nl, sizeof(double));
+			CHECK(m->lobes->factor_dlog && l0 && d && lp && lm,
+			      "%s: a factor parameter", m->name);
+			CHECK(glint_shade_cache_new(&s.gb, pix, n, env, m, &o,
+						    &c) == 0,
+			      "%s", glint_error_msg());
+			for (int r = 0; c && r < 3; r++) {
+				double p[GLINT_MAX_PARAMS], q[GLINT_MAX_PARAMS];
+				for (int a = 0; a < m->nparams; a++)
+					p[a] = m->params[a].def;
+				p[m->lobes->roughness_param] = rough[r];
+				if (nj > 2) /* two-lobe: the second wider */
+					p[11] = 2 * rough[r];
+				p[ior] = 1.6;
+				int *sel = malloc((size_t)n * sizeof(int));
+				for (int i = 0; i < n; i++)
+					sel[i] = i;
+				glint_shade_cache_lobes_d(c, p, sel, n, l0, d);
+				memcpy(q, p, sizeof(q));
+				double h = 1e-4;
+				q[ior] = p[ior] + h;
+				glint_shade_cache_lobes_sel(c, q, sel, n, lp);
+				q[ior] = p[ior] - h;
+				glint_shade_cache_lobes_sel(c, q, sel, n, lm);
+				double scale = 0, err = 0, same = 0;
+				for (size_t i = 0; i < nl; i++) {
+					double fd = (lp[i] - lm[i]) / (2 * h);
+					scale = fmax(scale, fabs(fd));
+					err = fmax(err, fabs(d[i] - fd));
+				}
+				/* the value itself as without derivatives */
+				glint_shade_cache_lobes_sel(c, p, sel, n, lp);
+				for (size_t i = 0; i < nl; i++)
+					same = fmax(same, fabs(lp[i] - l0[i]));
+				printf("  %s, %s, roughness %.3f: d/d ior "
+				       "within %.2g of %.3g\n",
+				       m->name, box ? "softbox" : "sun",
+				       rough[r], err, scale);
+				CHECK(scale > 0 && err < 1e-6 * scale,
+				      "%s roughness %g: derivative off by %g "
+				      "of %g",
+				      m->name, rough[r], err, scale);
+				CHECK(same == 0, "%s: the value moved by %g",
+				      m->name, same);
+				free(sel);
+			}
+			glint_shade_cache_free(c);
+			free(l0);
+			free(d);
+			free(lp);
+			free(lm);
+		}
+		teardown(&s);
+		glint_envmap_free(env);
+	}
+}
+
 static void test_footprint(void)
 {
 	struct glint_envmap *env = sun_env(0);
@@ -824,6 +915,7 @@ int main(void)
 {
 	RUN(test_render_factor);
 	RUN(test_footprint);
+	RUN(test_factor_derivative);
 	RUN(test_footprint_rest);
 	RUN(test_sample_pattern);
 	RUN(test_permute);

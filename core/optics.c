@@ -22,23 +22,19 @@ double glint_fresnel_dielectric_dlog_dn(double c, double n)
 	c = fabs(c);
 	if (c > 1)
 		c = 1;
-	double g2 = n * n - 1 + c * c;
-	if (!(g2 > 0))
+	double n2m1 = n * n - 1, g2 = n2m1 + c * c;
+	if (!(n2m1 > 0) || !(c > 0))
 		return 0;
+	/* F = a^2 (1 + b^2) / 2 with g = sqrt(n^2 - 1 + c^2),
+	 * a = (g - c) / (g + c), b = nb / db, nb = c (g + c) - 1,
+	 * db = c (g - c) + 1: d log a / dg = 2c / (g^2 - c^2) =
+	 * 2c / (n^2 - 1), db/dg = 2c (1 - c^2) / db^2, dg/dn = n / g, so
+	 * d log F / dn = (n / g) 4c [1 / (n^2 - 1) +
+	 *                (1 - c^2) nb / (db (db^2 + nb^2))]. */
 	double g = sqrt(g2);
-	double a = (g - c) / (g + c);
 	double nb = c * (g + c) - 1, db = c * (g - c) + 1;
-	double b = nb / db;
-	double f = 0.5 * a * a * (1 + b * b);
-	if (!(f > 0))
-		return 0;
-	/* F = a^2 (1 + b^2) / 2 as a function of g = sqrt(n^2 - 1 + c^2):
-	 * da/dg = 2c / (g + c)^2, db/dg = 2c (1 - c^2) / db^2,
-	 * dg/dn = n / g. */
-	double da = 2 * c / ((g + c) * (g + c));
-	double dbg = 2 * c * (1 - c * c) / (db * db);
-	double df = a * (1 + b * b) * da + a * a * b * dbg;
-	return df * n / g / f;
+	double t = 1 / n2m1 + (1 - c * c) * nb / (db * (db * db + nb * nb));
+	return 4 * c * n * t / g;
 }
 
 double glint_fresnel_interface(double cos_i, double eta, double *cos_t)

@@ -653,8 +653,9 @@ static int sphere_interior(int32_t *pix)
 /*
  * The lobes' derivatives by ior (glint_shade_cache_lobes_d()) against a
  * central difference of the lobes on the same samples, for each model
- * with a factor parameter: under a sun and under a softbox, from a
- * near-mirror (the footprint's grid and spread samples) to a rough lobe.
+ * with a factor parameter, under a sun (hot texels) or a softbox (env
+ * and lobe samples), from a near-mirror (the footprint's grid and spread
+ * samples) to a rough lobe.
  */
 static void test_factor_derivative(void)
 {
@@ -673,6 +674,10 @@ static void test_factor_derivative(void)
 		make_camera(&s.cam, 48, 48, 60, 0, 0);
 		setup_sphere(&s, v3(0, 0, -3), 1, 4);
 		for (int k = 0; k < 3; k++) {
+			/* Torrance-Sparrow under both; GGX under the sun,
+			 * two lobes under the softbox */
+			if ((k == 1 && box) || (k == 2 && !box))
+				continue;
 			const struct glint_model *m = models[k];
 			int nj = m->bxdf->nlobes, ior = m->lobes->factor_param;
 			struct glint_shade_cache_opts o = { .static_samples = 4,

@@ -107,7 +107,7 @@ struct glint_fit_opts {
 	 * (the intervals then ignore it). */
 	int mc_draws;
 	/* LM iterations of the polish on the sample sets' mean (default
-	 * 4; docs/fitting.md, "Uncertainty") */
+	 * 2; docs/fitting.md, "Uncertainty") */
 	int polish_iter;
 	double level; /* of the reported intervals (0.95) */
 	/* leave out the systematic term (the fast render's accuracy against

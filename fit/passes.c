@@ -367,6 +367,43 @@ static int leave_plateau(struct objective *ob, const struct selections *sl,
 }
 
 /*
+ * The pixels a full-resolution roughness scan compares its lobes on:
+ * every specular pixel (where a sharper lobe's highlight shows) and
+ * about 512 of each photo's others, evenly spaced (they pin the
+ * albedos the scan solves for); the scan's best point is polished on
+ * every pixel after.  *sub is the caller's to free.
+ */
+static int scan_pixels(const struct objective *ob, const struct selections *sl,
+		       int **sub, int *nsub)
+{
+	int count[GLINT_FIT_MAX_VIEWS] = { 0 },
+	    seen[GLINT_FIT_MAX_VIEWS] = { 0 };
+	unsigned char *spec = calloc((size_t)sl->nall + 1, 1);
+
+	*nsub = 0;
+	*sub = malloc(((size_t)sl->nall + 1) * sizeof(int));
+	if (!spec || !*sub) {
+		free(spec);
+		free(*sub);
+		*sub = NULL;
+		return glint_error_set(ENOMEM, "out of memory");
+	}
+	for (int t = 0; t < sl->nspec; t++)
+		spec[sl->spec[t]] = 1;
+	for (int t = 0; t < sl->nall; t++)
+		if (!spec[sl->all[t]])
+			count[fit_view_of(ob, sl->all[t])]++;
+	for (int t = 0; t < sl->nall; t++) {
+		int s = sl->all[t], v = fit_view_of(ob, s);
+		int step = count[v] > 512 ? count[v] / 512 : 1;
+		if (spec[s] || seen[v]++ % step == 0)
+			(*sub)[(*nsub)++] = s;
+	}
+	free(spec);
+	return 0;
+}
+
+/*
  * Coarse to fine: the coarse level could not see lobes below its spacing,
  * so before polishing, compare the coarse result with sharper lobes at
  * full resolution (log-spaced down to the model's bound, albedos solved
@@ -396,9 +433,13 @@ int fit_fine_pass(struct objective *ob, const struct selections *sl,
 			      ? scan_range(ob, sl->all, sl->nall, lo,
 					   coarse_rough_lo)
 			      : 0;
+		int *sub = NULL, nsub = 0;
 		if (ret == 0)
-			ret = rescan_roughness(ob, sl->all, sl->nall, lo,
+			ret = scan_pixels(ob, sl, &sub, &nsub);
+		if (ret == 0)
+			ret = rescan_roughness(ob, sub, nsub, lo,
 					       coarse_rough_lo, 6);
+		free(sub);
 		if (ret < 0)
 			return ret;
 	}

@@ -17,24 +17,37 @@ double glint_fresnel_dielectric(double c, double n)
 	return 0.5 * a * a * (1 + b * b);
 }
 
-double glint_fresnel_dielectric_dlog_dn(double c, double n)
+double glint_fresnel_dielectric_dlog(double c, double n, double *dlog)
 {
 	c = fabs(c);
 	if (c > 1)
 		c = 1;
 	double n2m1 = n * n - 1, g2 = n2m1 + c * c;
-	if (!(n2m1 > 0) || !(c > 0))
-		return 0;
-	/* F = a^2 (1 + b^2) / 2 with g = sqrt(n^2 - 1 + c^2),
-	 * a = (g - c) / (g + c), b = nb / db, nb = c (g + c) - 1,
-	 * db = c (g - c) + 1: d log a / dg = 2c / (g^2 - c^2) =
-	 * 2c / (n^2 - 1), db/dg = 2c (1 - c^2) / db^2, dg/dn = n / g, so
+	*dlog = 0;
+	if (g2 < 0)
+		return 1; /* total internal reflection (n < 1) */
+	double g = sqrt(g2);
+	double a = (g - c) / (g + c);
+	double nb = c * (g + c) - 1, db = c * (g - c) + 1;
+	double b = nb / db;
+	/* F = a^2 (1 + b^2) / 2 as a function of g = sqrt(n^2 - 1 + c^2):
+	 * d log a / dg = 2c / (g^2 - c^2) = 2c / (n^2 - 1),
+	 * db/dg = 2c (1 - c^2) / db^2, dg/dn = n / g, so
 	 * d log F / dn = (n / g) 4c [1 / (n^2 - 1) +
 	 *                (1 - c^2) nb / (db (db^2 + nb^2))]. */
-	double g = sqrt(g2);
-	double nb = c * (g + c) - 1, db = c * (g - c) + 1;
-	double t = 1 / n2m1 + (1 - c * c) * nb / (db * (db * db + nb * nb));
-	return 4 * c * n * t / g;
+	if (n2m1 > 0 && c > 0)
+		*dlog = 4 * c * n / g *
+			(1 / n2m1 +
+			 (1 - c * c) * nb / (db * (db * db + nb * nb)));
+	return 0.5 * a * a * (1 + b * b);
+}
+
+double glint_fresnel_dielectric_dlog_dn(double c, double n)
+{
+	double dlog;
+
+	glint_fresnel_dielectric_dlog(c, n, &dlog);
+	return dlog;
 }
 
 double glint_fresnel_interface(double cos_i, double eta, double *cos_t)

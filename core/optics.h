@@ -25,8 +25,10 @@
  */
 double glint_fresnel_dielectric(double c, double n);
 /* d F / d n of the same reflectance over F: how a change of index scales
- * it (0 where F is 0: at n = 1, or beyond the critical angle). */
+ * it (0 where F is 0: at n = 1, or beyond the critical angle); and F
+ * with it in *dlog, sharing their square root. */
 double glint_fresnel_dielectric_dlog_dn(double c, double n);
+double glint_fresnel_dielectric_dlog(double c, double n, double *dlog);
 
 /* The same reflectance from the incident side of either orientation:
  * cos_i > 0 the cosine of incidence, eta = n_transmitted / n_incident.

@@ -109,12 +109,12 @@ static const struct glint_bxdf_ops ggx_bxdf = {
 
 static const int ggx_width_param[] = { -1, ROUGH };
 
-/* Every varying lobe carries F(o.h, ior): d log b_j / d ior. */
+/* Every lobe but the diffuse one (0) carries F(o.h, ior): d log b_j /
+ * d ior. */
 static double ggx_factor_dlog(const double *p, int j, struct vec3 wo,
 			      struct vec3 wi)
 {
-	(void)j;
-	return glint_fresnel_half_dlog(p[IOR], wo, wi);
+	return j ? glint_fresnel_half_dlog(p[IOR], wo, wi) : 0;
 }
 
 static const struct glint_fit_lobes ggx_fit = {

@@ -113,9 +113,10 @@ double glint_beckmann_pdf(double m, struct vec3 wo, struct vec3 wi)
 	return reflected_pdf(glint_beckmann_d(h.z, m), h, wo);
 }
 
-/* wo reflected about the normal at polar tan^2 tan2 and azimuth 2 pi u. */
-static void reflect_about(double tan2, double u, struct vec3 wo,
-			  struct vec3 *wi)
+/* wo reflected about the normal h (unit) at polar tan^2 tan2 and azimuth
+ * 2 pi u; returns h. */
+static struct vec3 reflect_about(double tan2, double u, struct vec3 wo,
+				 struct vec3 *wi)
 {
 	double ch = 1 / sqrt(1 + tan2), sh = sqrt(fmax(0, 1 - ch * ch));
 	double sp, cp;
@@ -124,6 +125,7 @@ static void reflect_about(double tan2, double u, struct vec3 wo,
 	double oh = v3_dot(wo, h);
 
 	*wi = v3_sub(v3_scale(h, 2 * oh), wo);
+	return h;
 }
 
 void glint_beckmann_sample(double m, struct vec3 wo, const double u[2],
@@ -132,47 +134,64 @@ void glint_beckmann_sample(double m, struct vec3 wo, const double u[2],
 	reflect_about(-m * m * glint_fast_log(1 - u[0]), u[1], wo, wi);
 }
 
+/* F at cosine c for index ior (1 when ior <= 0) and, where dlog is not
+ * NULL, d log F / d ior (0 for a constant F). */
+static double fresnel_dlog(double c, double ior, double *dlog)
+{
+	if (!dlog)
+		return glint_fresnel_or_one(c, ior);
+	*dlog = 0;
+	return ior > 0 ? glint_fresnel_dielectric_dlog(c, ior, dlog) : 1;
+}
+
 /* D G F / (4 (n.i)(n.o)) and D (n.h) / (4 (o.h)) from D and h. */
 static double lobe_and_pdf(double d, struct vec3 h, double ior, struct vec3 wo,
-			   struct vec3 wi, double *pdf)
+			   struct vec3 wi, double *pdf, double *dlog)
 {
 	double oh = v3_dot(wo, h);
 
 	if (pdf)
 		*pdf = oh > 0 ? d * h.z / (4 * oh) : 0;
 	return d * glint_vcavity_g(h.z, wo.z, wi.z, oh) *
-	       glint_fresnel_or_one(oh, ior) / (4 * wi.z * wo.z);
+	       fresnel_dlog(oh, ior, dlog) / (4 * wi.z * wo.z);
 }
 
 double glint_beckmann_lobe_pdf(double m, double ior, struct vec3 wo,
-			       struct vec3 wi, double *pdf)
+			       struct vec3 wi, double *pdf, double *dlog)
 {
 	if (!(wo.z > 0 && wi.z > 0)) {
 		if (pdf)
 			*pdf = 0;
+		if (dlog)
+			*dlog = 0;
 		return 0;
 	}
 	struct vec3 h = v3_norm(v3_add(wo, wi));
-	return lobe_and_pdf(glint_beckmann_d(h.z, m), h, ior, wo, wi, pdf);
+	return lobe_and_pdf(glint_beckmann_d(h.z, m), h, ior, wo, wi, pdf,
+			    dlog);
 }
 
 double glint_beckmann_sample_lobe(double m, double ior, struct vec3 wo,
 				  const double u[2], struct vec3 *wi,
-				  double *lobe)
+				  double *lobe, double *dlog)
 {
 	double pdf;
 
 	*lobe = 0;
+	if (dlog)
+		*dlog = 0;
 	if (!(wo.z > 0))
 		return 0;
-	glint_beckmann_sample(m, wo, u, wi);
+	/* the half vector of wo and wi is the normal drawn (where o.h <= 0
+	 * the lobe and pdf are 0 either way) */
+	struct vec3 h =
+		reflect_about(-m * m * glint_fast_log(1 - u[0]), u[1], wo, wi);
 	if (!(wi->z > 0))
 		return 0;
 	/* exp(-tan^2 / m^2) = 1 - u[0] at the normal drawn. */
-	struct vec3 h = v3_norm(v3_add(wo, *wi));
 	double c2 = h.z * h.z;
 	double d = h.z > 0 ? (1 - u[0]) / (M_PI * m * m * c2 * c2) : 0;
-	*lobe = lobe_and_pdf(d, h, ior, wo, *wi, &pdf);
+	*lobe = lobe_and_pdf(d, h, ior, wo, *wi, &pdf, dlog);
 	return pdf;
 }
 
@@ -194,14 +213,16 @@ void glint_beckmann_geometry(struct vec3 wo, struct vec3 wi, float g[4])
 }
 
 double glint_beckmann_from_geometry(double m, double ior, const float g[4],
-				    double *pdf)
+				    double *pdf, double *dlog)
 {
 	double m2 = m * m;
 	double d = g[2] > 0 || g[3] > 0 ? glint_fast_exp(-g[0] / m2) / m2 : 0;
 
 	if (pdf)
 		*pdf = d * g[3];
-	return d > 0 ? d * g[2] * glint_fresnel_or_one(g[1], ior) : 0;
+	if (dlog)
+		*dlog = 0;
+	return d > 0 ? d * g[2] * fresnel_dlog(g[1], ior, dlog) : 0;
 }
 
 double glint_ggx_lobe(double a, double ior, struct vec3 wo, struct vec3 wi)

@@ -61,12 +61,13 @@ double glint_ggx_pdf(double a, struct vec3 wo, struct vec3 wi);
  * below the surface; pdf may be NULL), _sample_lobe draws wi as
  * glint_beckmann_sample() does and returns its pdf, D from the uniform
  * without an exp (0 and *lobe = 0 when wi falls below the surface).
+ * dlog (may be NULL) gets d log lobe / d ior (glint_fresnel_half_dlog()).
  */
 double glint_beckmann_lobe_pdf(double m, double ior, struct vec3 wo,
-			       struct vec3 wi, double *pdf);
+			       struct vec3 wi, double *pdf, double *dlog);
 double glint_beckmann_sample_lobe(double m, double ior, struct vec3 wo,
 				  const double u[2], struct vec3 *wi,
-				  double *lobe);
+				  double *lobe, double *dlog);
 /*
  * The same at a fixed wo, wi, in two steps: what depends on neither m nor
  * ior (tan^2 of the half vector, o.h, G / (4 (n.i)(n.o) pi cos^4) and
@@ -75,7 +76,7 @@ double glint_beckmann_sample_lobe(double m, double ior, struct vec3 wo,
  */
 void glint_beckmann_geometry(struct vec3 wo, struct vec3 wi, float g[4]);
 double glint_beckmann_from_geometry(double m, double ior, const float g[4],
-				    double *pdf);
+				    double *pdf, double *dlog);
 
 /*
  * A microfacet distribution as data: the lobe without its albedo and its

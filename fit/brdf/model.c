@@ -216,31 +216,42 @@ void glint_lobes_eval(const struct glint_model *m, const double *p,
 }
 
 double glint_lobe_value_pdf(const struct glint_model *m, const double *p, int j,
-			    struct vec3 wo, struct vec3 wi, double *pdf)
+			    struct vec3 wo, struct vec3 wi, double *pdf,
+			    double *dlog)
 {
 	double b[GLINT_MAX_PARAMS];
 
 	if (m->lobes->value_pdf)
-		return m->lobes->value_pdf(p, j, wo, wi, pdf);
+		return m->lobes->value_pdf(p, j, wo, wi, pdf, dlog);
 	m->bxdf->eval_lobes(p, wo, wi, b);
 	if (pdf)
 		*pdf = m->bxdf->pdf_lobe(p, j, wo, wi);
+	if (dlog)
+		*dlog = m->lobes->factor_dlog
+				? m->lobes->factor_dlog(p, j, wo, wi)
+				: 0;
 	return b[j];
 }
 
 double glint_lobe_sample_value(const struct glint_model *m, const double *p,
 			       int j, struct vec3 wo, const double u[2],
-			       struct vec3 *wi, double *bj)
+			       struct vec3 *wi, double *bj, double *dlog)
 {
 	double b[GLINT_MAX_PARAMS];
 
 	if (m->lobes->sample_value)
-		return m->lobes->sample_value(p, j, wo, u, wi, bj);
+		return m->lobes->sample_value(p, j, wo, u, wi, bj, dlog);
 	*bj = 0;
+	if (dlog)
+		*dlog = 0;
 	double pdf = m->bxdf->sample_lobe(p, j, wo, u, wi);
 	if (pdf > 0) {
 		m->bxdf->eval_lobes(p, wo, *wi, b);
 		*bj = b[j];
+		if (dlog)
+			*dlog = m->lobes->factor_dlog
+					? m->lobes->factor_dlog(p, j, wo, *wi)
+					: 0;
 	}
 	return pdf;
 }

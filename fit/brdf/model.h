@@ -52,18 +52,21 @@ struct glint_fit_lobes {
 	/* Optional, the same as the BxDF's lobe functions sharing work
 	 * (glint_lobe_value_pdf(), glint_lobe_sample_value() fall back on
 	 * them): b_j at wi and pdf_lobe (pdf may be NULL); sample_lobe, b_j
-	 * at the direction drawn in *bj. */
+	 * at the direction drawn in *bj.  dlog (may be NULL, here and in
+	 * from_geometry) gets factor_dlog's value at those directions,
+	 * sharing the lobe's work. */
 	double (*value_pdf)(const double *p, int j, struct vec3 wo,
-			    struct vec3 wi, double *pdf);
+			    struct vec3 wi, double *pdf, double *dlog);
 	double (*sample_value)(const double *p, int j, struct vec3 wo,
-			       const double u[2], struct vec3 *wi, double *bj);
+			       const double u[2], struct vec3 *wi, double *bj,
+			       double *dlog);
 	/* Optional, for directions fixed across evaluations (the fitter's
 	 * env samples): what of the varying lobes' value and pdf at wo, wi
 	 * depends on no parameter, in g[4] (all 0 where the lobes are), and
 	 * lobe j's value and pdf_lobe (pdf may be NULL) from it. */
 	void (*geometry)(struct vec3 wo, struct vec3 wi, float g[4]);
 	double (*from_geometry)(const double *p, int j, const float g[4],
-				double *pdf);
+				double *pdf, double *dlog);
 	/* Optional: a parameter that enters the varying lobes only as a
 	 * factor of their value at each pair of directions (an ior,
 	 * through Fresnel at o.h), leaving their sampling and pdf as they
@@ -169,12 +172,15 @@ double glint_lobes_sample(const struct glint_model *m, const double *p,
 			  struct vec3 *wi);
 
 /* Lobe j of a linear model: b_j at wi and pdf_lobe there (pdf may be
- * NULL); sample_lobe with b_j at the direction drawn (0 when none). */
+ * NULL); sample_lobe with b_j at the direction drawn (0 when none).
+ * dlog (may be NULL; only for a model with factor_dlog) gets d log b_j /
+ * d p[factor_param] there. */
 double glint_lobe_value_pdf(const struct glint_model *m, const double *p, int j,
-			    struct vec3 wo, struct vec3 wi, double *pdf);
+			    struct vec3 wo, struct vec3 wi, double *pdf,
+			    double *dlog);
 double glint_lobe_sample_value(const struct glint_model *m, const double *p,
 			       int j, struct vec3 wo, const double u[2],
-			       struct vec3 *wi, double *bj);
+			       struct vec3 *wi, double *bj, double *dlog);
 
 /* Model by name (a static table entry, never freed), or NULL. */
 const struct glint_model *glint_model_find(const char *name);

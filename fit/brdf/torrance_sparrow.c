@@ -128,40 +128,45 @@ static double ts_sample_lobe(const void *self, int j, struct vec3 wo,
 }
 
 static double ts_lobe_value_pdf(const double *p, int j, struct vec3 wo,
-				struct vec3 wi, double *pdf)
+				struct vec3 wi, double *pdf, double *dlog)
 {
 	if (j)
-		return glint_beckmann_lobe_pdf(p[ROUGH], p[IOR], wo, wi, pdf);
+		return glint_beckmann_lobe_pdf(p[ROUGH], p[IOR], wo, wi, pdf,
+					       dlog);
 	double b = wo.z > 0 && wi.z > 0 ? 1 / M_PI : 0;
 	if (pdf)
 		*pdf = b * wi.z;
+	if (dlog)
+		*dlog = 0;
 	return b;
 }
 
 static double ts_sample_lobe_value(const double *p, int j, struct vec3 wo,
 				   const double u[2], struct vec3 *wi,
-				   double *bj)
+				   double *bj, double *dlog)
 {
 	if (j)
 		return glint_beckmann_sample_lobe(p[ROUGH], p[IOR], wo, u, wi,
-						  bj);
+						  bj, dlog);
 	double pdf = ts_sample_lobe(p, j, wo, u, wi);
 	*bj = pdf > 0 ? 1 / M_PI : 0;
+	if (dlog)
+		*dlog = 0;
 	return pdf;
 }
 
 static double ts_lobe_from_geometry(const double *p, int j, const float g[4],
-				    double *pdf)
+				    double *pdf, double *dlog)
 {
 	(void)j; /* only the specular lobe varies */
-	return glint_beckmann_from_geometry(p[ROUGH], p[IOR], g, pdf);
+	return glint_beckmann_from_geometry(p[ROUGH], p[IOR], g, pdf, dlog);
 }
 
 static double nf_lobe_from_geometry(const double *p, int j, const float g[4],
-				    double *pdf)
+				    double *pdf, double *dlog)
 {
 	(void)j;
-	return glint_beckmann_from_geometry(p[ROUGH], 0, g, pdf);
+	return glint_beckmann_from_geometry(p[ROUGH], 0, g, pdf, dlog);
 }
 
 static const double *ts_albedo(const void *self, int j)
@@ -185,12 +190,12 @@ static const struct glint_bxdf_ops ts_bxdf = {
 
 static const int ts_width_param[2] = { -1, ROUGH };
 
-/* Every varying lobe carries F(o.h, ior): d log b_j / d ior. */
+/* Every lobe but the diffuse one (0) carries F(o.h, ior): d log b_j /
+ * d ior. */
 static double ts_factor_dlog(const double *p, int j, struct vec3 wo,
 			     struct vec3 wi)
 {
-	(void)j;
-	return glint_fresnel_half_dlog(p[IOR], wo, wi);
+	return j ? glint_fresnel_half_dlog(p[IOR], wo, wi) : 0;
 }
 
 static const struct glint_fit_lobes ts_fit = {
@@ -275,18 +280,18 @@ static double nf_lobe(const void *self, int j, struct vec3 wo, struct vec3 wi)
 }
 
 static double nf_lobe_value_pdf(const double *p, int j, struct vec3 wo,
-				struct vec3 wi, double *pdf)
+				struct vec3 wi, double *pdf, double *dlog)
 {
 	NF_P(q, p);
-	return ts_lobe_value_pdf(q, j, wo, wi, pdf);
+	return ts_lobe_value_pdf(q, j, wo, wi, pdf, dlog);
 }
 
 static double nf_sample_lobe_value(const double *p, int j, struct vec3 wo,
 				   const double u[2], struct vec3 *wi,
-				   double *bj)
+				   double *bj, double *dlog)
 {
 	NF_P(q, p);
-	return ts_sample_lobe_value(q, j, wo, u, wi, bj);
+	return ts_sample_lobe_value(q, j, wo, u, wi, bj, dlog);
 }
 
 static const struct glint_bxdf_ops nf_bxdf = {

@@ -112,12 +112,12 @@ static const struct glint_bxdf_ops two_bxdf = {
 
 static const int two_width_param[] = { -1, ROUGH, ROUGH2 };
 
-/* Every varying lobe carries F(o.h, ior): d log b_j / d ior. */
+/* Every lobe but the diffuse one (0) carries F(o.h, ior): d log b_j /
+ * d ior. */
 static double two_factor_dlog(const double *p, int j, struct vec3 wo,
 			      struct vec3 wi)
 {
-	(void)j;
-	return glint_fresnel_half_dlog(p[IOR], wo, wi);
+	return j ? glint_fresnel_half_dlog(p[IOR], wo, wi) : 0;
 }
 
 static const struct glint_fit_lobes two_fit = {

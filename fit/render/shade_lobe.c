@@ -12,15 +12,6 @@
 #include <math.h>
 #include <string.h>
 
-/* d log b_j / d p[factor_param] at wo, wi (the model's factor parameter,
- * struct glint_fit_lobes), or 0 when no derivative is wanted (dout NULL). */
-static inline double factor_dlog(const struct glint_model *m, const double *p,
-				 int j, struct vec3 wo, struct vec3 wi,
-				 const double *dout)
-{
-	return dout ? m->lobes->factor_dlog(p, j, wo, wi) : 0;
-}
-
 /* Lobe j at one point (frame t, b, n; view wo, local) over the hot
  * points pts[k0 .. k1), each radiance x solid angle, added to out (and
  * its derivative by the model's factor parameter to dout, unless NULL);
@@ -39,16 +30,16 @@ static void hot_points(const struct glint_model *m, const double *p, int j,
 		struct vec3 wi = v3(v3_dot(l, t), v3_dot(l, b), v3_dot(l, n));
 		if (!(wi.z > 0))
 			continue;
-		double bj = glint_lobe_value_pdf(m, p, j, wo, wi, NULL);
+		double dlog = 0;
+		double bj = glint_lobe_value_pdf(m, p, j, wo, wi, NULL,
+						 dout ? &dlog : NULL);
 		if (bj <= 0)
 			continue;
 		for (int ch = 0; ch < 3; ch++)
 			out[ch] += bj * wi.z * pt[3 + ch];
-		if (dout) {
-			double d = bj * factor_dlog(m, p, j, wo, wi, dout);
+		if (dout)
 			for (int ch = 0; ch < 3; ch++)
-				dout[ch] += d * wi.z * pt[3 + ch];
-		}
+				dout[ch] += bj * dlog * wi.z * pt[3 + ch];
 	}
 }
 
@@ -134,8 +125,9 @@ static int lobe_sample_start(const struct glint_shade_cache *c,
 	struct vec3 wi;
 	double bj;
 
+	lp->dlog = 0;
 	double pb = glint_lobe_sample_value(c->model, p, j, fv(h->wo), uu, &wi,
-					    &bj);
+					    &bj, dout ? &lp->dlog : NULL);
 	if (!(pb > 0) || bj <= 0)
 		return 0;
 	/* The rest's radiance, continuous across the hot texels' edges
@@ -144,7 +136,6 @@ static int lobe_sample_start(const struct glint_shade_cache *c,
 	lp->bjz = bj * wi.z;
 	lp->pb = pb;
 	lp->w = w;
-	lp->dlog = factor_dlog(c->model, p, j, fv(h->wo), wi, dout);
 	return 1;
 }
 
@@ -217,22 +208,21 @@ void shade_lobe_at_hit(const struct glint_shade_cache *c,
 	for (int k = 0; k < nl; k++) {
 		const struct env_sample *e = &es[k];
 		struct vec3 wi = fv(e->wi);
-		double pb = 0;
+		double pb = 0, dlog = 0;
+		double *dl = dout ? &dlog : NULL;
 		double bj = geom ? m->lobes->from_geometry(p, j, e->g,
-							   nb ? &pb : NULL)
+							   nb ? &pb : NULL, dl)
 				 : glint_lobe_value_pdf(m, p, j, wo, wi,
-							nb ? &pb : NULL);
+							nb ? &pb : NULL, dl);
 		if (bj <= 0)
 			continue;
 		double w = bj * wi.z * e->pdf_smooth /
 			   (e->pdf * (nl * e->pdf_smooth + nb * pb));
 		for (int ch = 0; ch < 3; ch++)
 			out[ch] += w * e->l[ch];
-		if (dout) {
-			double dw = w * factor_dlog(m, p, j, wo, wi, dout);
+		if (dout)
 			for (int ch = 0; ch < 3; ch++)
-				dout[ch] += dw * e->l[ch];
-		}
+				dout[ch] += w * dlog * e->l[ch];
 	}
 	double w_hit = sp ? 1 - sp->w : 1;
 	int spread = sp && sp->w > 0;

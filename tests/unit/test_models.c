@@ -363,16 +363,31 @@ static void test_lobe_value_ops(void)
 					alone++;
 				}
 				wpdf = m->bxdf->pdf_lobe(p, j, o, i);
-				bj = glint_lobe_value_pdf(m, p, j, o, i, &pdf);
+				/* the ior's d log b_j shared with the value:
+				 * factor_dlog's */
+				double dl = 0, fdl = 0, *dlp = NULL;
+				if (m->lobes->factor_dlog) {
+					dlp = &dl;
+					fdl = m->lobes->factor_dlog(p, j, o, i);
+				}
+				bj = glint_lobe_value_pdf(m, p, j, o, i, &pdf,
+							  dlp);
 				bad += fabs(bj - b[j]) > 1e-9 * fabs(b[j]) ||
 				       fabs(pdf - wpdf) > 1e-9 * wpdf;
+				bad += bj > 0 &&
+				       fabs(dl - fdl) >
+					       1e-9 * fabs(fdl) + 1e-12;
 				if (m->lobes->geometry && m->lobes->varies[j]) {
 					/* Kept in floats: tan^2 to 2^-24,
 					 * so D to (tan^2 / m^2) 2^-24. */
 					float g[4];
 					m->lobes->geometry(o, i, g);
 					bj = m->lobes->from_geometry(p, j, g,
-								     &pdf);
+								     &pdf, dlp);
+					/* o.h kept in a float */
+					bad += bj > 0 &&
+					       fabs(dl - fdl) >
+						       1e-6 * fabs(fdl) + 1e-9;
 					double mm =
 						p[m->lobes->roughness_param];
 					double tol = 1e-6 +
@@ -393,10 +408,16 @@ static void test_lobe_value_ops(void)
 					wb = b[j];
 				}
 				double pf = glint_lobe_sample_value(
-					m, p, j, o, u, &wj, &bj);
+					m, p, j, o, u, &wj, &bj, dlp);
 				bad += fabs(pf - ps) > 1e-8 * ps ||
 				       fabs(bj - wb) > 1e-8 * wb ||
 				       (ps > 0 && v3_dot(wi, wj) < 1 - 1e-12);
+				if (dlp && bj > 0 && m->lobes->varies[j]) {
+					fdl = m->lobes->factor_dlog(p, j, o,
+								    wj);
+					bad += fabs(dl - fdl) >
+					       1e-8 * fabs(fdl) + 1e-12;
+				}
 				checked += ps > 0 && wb > 0;
 			}
 		}

@@ -306,6 +306,9 @@ int fit_run_pass(struct objective *ob, const char *name, const int *sel,
 				      ? 20
 				      : ob->o->max_iter,
 			      &pc);
+	/* the pass hands on its point alone (the uncertainty stage
+	 * linearises on the sample sets) */
+	lo_opts.no_final_jacobian = 1;
 	int ret = glint_lm_solve(&pr, &lo_opts, q, lr);
 	if (ret < 0)
 		return ret;

@@ -170,6 +170,7 @@ struct lm_state {
 	int freev[GLINT_LM_MAX_N];
 	double lambda, nu, cost;
 	int small_drops, rejects;
+	int stale; /* a, g are not at the final p (no_final_jacobian) */
 };
 
 /* The Jacobian at p and the normal equations (a = JtJ, g = Jt r). */
@@ -325,6 +326,10 @@ static int lm_iterate(struct lm_state *s, double *p)
 			o->progress(o->progress_ctx, it + 1, s->cost, p);
 	}
 	/* Standard errors need a Jacobian at the final point. */
+	if (need_jac && o->no_final_jacobian) {
+		s->stale = 1;
+		return 0;
+	}
 	return need_jac ? lm_linearise(s, p) : 0;
 }
 
@@ -374,6 +379,8 @@ int glint_lm_solve(const struct glint_lm_problem *pr,
 		s.freev[j] = !res->at_bound[j];
 	}
 	standard_errors(s.a, n, m, s.cost, s.freev, res);
+	for (int j = 0; j < n && s.stale; j++)
+		res->se[j] = NAN;
 out:
 	free(s.r);
 	free(s.rn);

@@ -46,6 +46,10 @@ struct glint_lm_opts {
 	/* Stop when every accepted step is below se_tol standard errors
 	 * (statistically meaningless moves); 0 disables. */
 	double se_tol;
+	/* No Jacobian at the final point when the last step moved there
+	 * (the caller wants the point alone): se is then NaN, at_bound
+	 * from the last one's gradient. */
+	int no_final_jacobian;
 	/* Called after every iteration (may be NULL). */
 	void (*progress)(void *ctx, int iter, double cost, const double *p);
 	void *progress_ctx;

@@ -36,6 +36,30 @@ static void test_rosenbrock(void)
 	      res.at_bound[0], res.at_bound[1]);
 }
 
+/* no_final_jacobian: the same point, one Jacobian fewer (the last step
+ * moved, so the full run linearises once more there), no standard
+ * errors. */
+static void test_no_final_jacobian(void)
+{
+	double lo[2] = { -5, -5 }, hi[2] = { 5, 5 };
+	double p[2] = { -1.2, 1 }, q[2] = { -1.2, 1 };
+	struct glint_lm_problem pr = { 2, 2, lo, hi, rosenbrock, NULL, NULL };
+	struct glint_lm_opts o;
+	struct glint_lm_result full, brief;
+	glint_lm_default_opts(&o);
+	o.max_iter = 8; /* stops mid-way, after a step */
+	CHECK(glint_lm_solve(&pr, &o, p, &full) == 0, "%s", glint_error_msg());
+	o.no_final_jacobian = 1;
+	CHECK(glint_lm_solve(&pr, &o, q, &brief) == 0, "%s", glint_error_msg());
+	CHECK(p[0] == q[0] && p[1] == q[1], "(%g, %g) against (%g, %g)", q[0],
+	      q[1], p[0], p[1]);
+	CHECK(brief.jacobians == full.jacobians - 1, "%d Jacobians against %d",
+	      brief.jacobians, full.jacobians);
+	CHECK(isnan(brief.se[0]) && isnan(brief.se[1]) && isfinite(full.se[0]),
+	      "standard errors %g %g (full %g)", brief.se[0], brief.se[1],
+	      full.se[0]);
+}
+
 /* y = a exp(-b x) + c, data made with c slightly negative: with c >= 0
  * the optimum is exactly on the bound. */
 struct expdata {
@@ -132,6 +156,7 @@ static void test_errors(void)
 int main(void)
 {
 	RUN(test_rosenbrock);
+	RUN(test_no_final_jacobian);
 	RUN(test_optimum_on_bound);
 	RUN(test_standard_errors);
 	RUN(test_errors);

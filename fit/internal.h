@@ -48,6 +48,11 @@ struct objective {
 	double *lobes, *lobes2, *dlobes;
 	double memo_p[GLINT_MAX_PARAMS];
 	int memo_valid, memo_d;
+	/* the cache and selection the memo was shaded on (a cache or a
+	 * selection freed and made anew clears memo_valid) */
+	const struct glint_shade_cache *memo_cache;
+	const int *memo_sel;
+	int memo_nsel;
 	/* faithful path */
 	const struct glint_fit_opts *o;
 	struct glint_image *img;

@@ -52,6 +52,9 @@ static int sets_jr(struct objective *ob, int nsets, const double *each,
 					       nl);
 				memcpy(ob->memo_p, ob->p, sizeof(ob->memo_p));
 				ob->memo_valid = 1;
+				ob->memo_cache = ob->cache;
+				ob->memo_sel = ob->sel;
+				ob->memo_nsel = ob->nsel;
 			}
 			ret = fit_obj_jacobian(ob, ob->p, NULL, js);
 			j = js;

@@ -167,7 +167,6 @@ void fit_select_all(struct objective *ob, const struct selections *sl)
 	ob->sel = sl->all;
 	ob->nsel = sl->nall;
 	ob->varpro = 0;
-	ob->memo_valid = 0;
 	ob->nfree = ob->m->nparams;
 	for (int k = 0; k < ob->m->nparams; k++)
 		ob->free_idx[k] = k;

@@ -62,8 +62,9 @@ static const double *memo_lobes(struct objective *ob, const double *p)
 {
 	int want = fit_wants_dlobes(ob);
 
-	if (!ob->memo_valid || !fit_nonlinear_same(ob, p, ob->memo_p) ||
-	    (want && !ob->memo_d)) {
+	if (!ob->memo_valid || ob->memo_cache != ob->cache ||
+	    ob->memo_sel != ob->sel || ob->memo_nsel != ob->nsel ||
+	    !fit_nonlinear_same(ob, p, ob->memo_p) || (want && !ob->memo_d)) {
 		if (want)
 			glint_shade_cache_lobes_d(ob->cache, p, ob->sel,
 						  ob->nsel, ob->lobes,
@@ -73,6 +74,9 @@ static const double *memo_lobes(struct objective *ob, const double *p)
 		memcpy(ob->memo_p, p, sizeof(ob->memo_p));
 		ob->memo_valid = 1;
 		ob->memo_d = want;
+		ob->memo_cache = ob->cache;
+		ob->memo_sel = ob->sel;
+		ob->memo_nsel = ob->nsel;
 	}
 	return ob->lobes;
 }

@@ -111,8 +111,9 @@ int fit_sets_residuals(void *ctx, const double *q, double *r)
 	/* The fitted set last: its lobes stay memoised for the Jacobian. */
 	size_t nl = (size_t)ob->nsel * ob->m->bxdf->nlobes * 3 * sizeof(double);
 	for (int k = so->nsets - 1; k >= 0 && !ret; k--) {
+		/* the memo holds one set's lobes (memo_cache): the fitted
+		 * set's from the pass before is used where it is at q */
 		ob->cache = so->sets[k];
-		ob->memo_valid = 0;
 		ret = fit_obj_residuals(ob, q, so->each + (size_t)k * rows);
 		size_t all = (size_t)ob->d->n * ob->m->bxdf->nlobes * 3 *
 			     sizeof(double);

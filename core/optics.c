@@ -42,14 +42,6 @@ double glint_fresnel_dielectric_dlog(double c, double n, double *dlog)
 	return 0.5 * a * a * (1 + b * b);
 }
 
-double glint_fresnel_dielectric_dlog_dn(double c, double n)
-{
-	double dlog;
-
-	glint_fresnel_dielectric_dlog(c, n, &dlog);
-	return dlog;
-}
-
 double glint_fresnel_interface(double cos_i, double eta, double *cos_t)
 {
 	double sin2_t = (1 - cos_i * cos_i) / (eta * eta);

@@ -24,10 +24,9 @@
  * with cosine c (Cook & Torrance 1982, eq. 8; equals (Rs + Rp) / 2).
  */
 double glint_fresnel_dielectric(double c, double n);
-/* d F / d n of the same reflectance over F: how a change of index scales
- * it (0 where F is 0: at n = 1, or beyond the critical angle); and F
- * with it in *dlog, sharing their square root. */
-double glint_fresnel_dielectric_dlog_dn(double c, double n);
+/* The same reflectance, and in *dlog d F / d n over F: how a change of
+ * index scales it (0 where F is 0: at n = 1, or beyond the critical
+ * angle), sharing their square root. */
 double glint_fresnel_dielectric_dlog(double c, double n, double *dlog);
 
 /* The same reflectance from the incident side of either orientation:

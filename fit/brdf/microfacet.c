@@ -87,7 +87,9 @@ double glint_fresnel_half_dlog(double ior, struct vec3 wo, struct vec3 wi)
 
 	if (!(ior > 0) || !(l > 0))
 		return 0;
-	return glint_fresnel_dielectric_dlog_dn(v3_dot(wo, h) / l, ior);
+	double dlog;
+	glint_fresnel_dielectric_dlog(v3_dot(wo, h) / l, ior, &dlog);
+	return dlog;
 }
 
 double glint_beckmann_lobe(double m, double ior, struct vec3 wo, struct vec3 wi)

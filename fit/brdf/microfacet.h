@@ -28,7 +28,7 @@ double glint_vcavity_g(double nh, double no, double ni, double oh);
 /* F at cosine c for index ior, or 1 when ior <= 0 (constant Fresnel). */
 double glint_fresnel_or_one(double c, double ior);
 /* d log F / d ior for the lobes' Fresnel factor at cos = o.h, h the half
- * vector of wo and wi (glint_fresnel_dielectric_dlog_dn()): how the
+ * vector of wo and wi (glint_fresnel_dielectric_dlog()): how the
  * lobe's value scales with ior at those directions. */
 double glint_fresnel_half_dlog(double ior, struct vec3 wo, struct vec3 wi);
 

@@ -95,6 +95,36 @@ static inline double glint_fast_exp(double x)
 	return e * b.d;
 }
 
+/* exp(x) for x <= 0, as glint_fast_exp() to 3 ulp (0 below -708, where
+ * libm's result is subnormal or 0), without a branch or a call, so that a
+ * loop of it vectorises: k = round(x / ln 2) by the 1.5 x 2^52 shift,
+ * whose low bits then hold k for the exponent. */
+static inline double glint_fast_exp_neg(double x)
+{
+	double xc = x > -708 ? x : -708;
+	double t = xc * 1.4426950408889634 + 6755399441055744.0;
+	double k = t - 6755399441055744.0;
+	double r = (xc - k * 6.93147180369123816490e-01) -
+		   k * 1.90821492927058770002e-10;
+	/* glint_poly()'s Estrin scheme for glint_fast_exp()'s polynomial,
+	 * written out (its loops would keep a loop of this from
+	 * vectorising) */
+	double r2 = r * r, r4 = r2 * r2;
+	double p0 = (0.5 + r * (1.0 / 6)) + r2 * (1.0 / 24 + r * (1.0 / 120));
+	double p1 = (1.0 / 720 + r * (1.0 / 5040)) +
+		    r2 * (1.0 / 40320 + r * (1.0 / 362880));
+	double p2 = (1.0 / 3628800 + r * (1.0 / 39916800)) +
+		    r2 * (1.0 / 479001600 + r * (1.0 / 6227020800));
+	double e = 1 + (r + r2 * ((p0 + r4 * p1) + (r4 * r4) * p2));
+	union {
+		double d;
+		unsigned long long u;
+	} b = { .d = t };
+	/* t's bits are 0x4338000000000000 + k: 2^k's exponent is k + 1023 */
+	b.u = (b.u - 0x4338000000000000ULL + 1023) << 52;
+	return x > -708 ? e * b.d : 0;
+}
+
 /* log(x), within 3 ulp of libm's (libm's own for x not a positive normal
  * number). */
 static inline double glint_fast_log(double x)

@@ -197,6 +197,66 @@ double glint_beckmann_sample_lobe(double m, double ior, struct vec3 wo,
 	return pdf;
 }
 
+/* A lane of glint_beckmann_lobe_n(): every step computed, the lanes
+ * below the surface or facing away chosen out at the end, never a branch
+ * (a division under a condition could trap, which keeps the compiler
+ * from vectorising; those lanes' infinities and NaNs are not chosen). */
+static inline double beckmann_lane(double m, double ior, struct vec3 wo,
+				   double x, double y, double z, double *dl)
+{
+	double hx = wo.x + x, hy = wo.y + y, hz = wo.z + z;
+	double il = 1.0 / sqrt(hx * hx + hy * hy + hz * hz);
+	double c = hz * il, oh = (wo.x * hx + wo.y * hy + wo.z * hz) * il;
+	double c2 = c * c;
+	double d = glint_fast_exp_neg(-((1 - c2) / c2) / (m * m)) /
+		   (M_PI * m * m * c2 * c2);
+	double g = 2 * c * (wo.z < z ? wo.z : z) / oh;
+	g = g < 1 ? (g > 0 ? g : 0) : 1;
+	/* glint_fresnel_dielectric_dlog() at o.h; 1 for ior <= 0 */
+	double cf = oh < 1 ? oh : 1;
+	double n2m1 = ior * ior - 1, g2 = n2m1 + cf * cf;
+	double gg = sqrt(g2 > 0 ? g2 : 0);
+	double a = (gg - cf) / (gg + cf);
+	double nb = cf * (gg + cf) - 1, db = cf * (gg - cf) + 1;
+	double bb = nb / db;
+	double f = ior > 0 && g2 >= 0 ? 0.5 * a * a * (1 + bb * bb) : 1;
+	double dlog =
+		4 * cf * ior / gg *
+		(1 / n2m1 + (1 - cf * cf) * nb / (db * (db * db + nb * nb)));
+	int on = z > 0 && c > 0 && oh > 0;
+	*dl = on && n2m1 > 0 && g2 >= 0 ? dlog : 0;
+	return on ? d * g * f / (4 * z * wo.z) : 0;
+}
+
+void glint_beckmann_lobe_n(double m, double ior, struct vec3 wo, int n,
+			   const double *restrict x, const double *restrict y,
+			   const double *restrict z, double *restrict b,
+			   double *restrict dlog)
+{
+	if (!(wo.z > 0)) {
+		for (int k = 0; k < n; k++)
+			b[k] = 0;
+		if (dlog)
+			for (int k = 0; k < n; k++)
+				dlog[k] = 0;
+		return;
+	}
+	/* one loop per case, each without a branch in its body */
+	if (dlog && ior > 0)
+		for (int k = 0; k < n; k++)
+			b[k] = beckmann_lane(m, ior, wo, x[k], y[k], z[k],
+					     &dlog[k]);
+	else
+		for (int k = 0; k < n; k++) {
+			double dl;
+			b[k] = beckmann_lane(m, ior > 0 ? ior : 0, wo, x[k],
+					     y[k], z[k], &dl);
+		}
+	if (dlog && !(ior > 0))
+		for (int k = 0; k < n; k++)
+			dlog[k] = 0;
+}
+
 void glint_beckmann_geometry(struct vec3 wo, struct vec3 wi, float g[4])
 {
 	g[0] = g[1] = g[2] = g[3] = 0;

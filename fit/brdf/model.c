@@ -233,6 +233,19 @@ double glint_lobe_value_pdf(const struct glint_model *m, const double *p, int j,
 	return b[j];
 }
 
+void glint_lobe_values(const struct glint_model *m, const double *p, int j,
+		       struct vec3 wo, int n, const double *x, const double *y,
+		       const double *z, double *b, double *dlog)
+{
+	if (m->lobes->values) {
+		m->lobes->values(p, j, wo, n, x, y, z, b, dlog);
+		return;
+	}
+	for (int k = 0; k < n; k++)
+		b[k] = glint_lobe_value_pdf(m, p, j, wo, v3(x[k], y[k], z[k]),
+					    NULL, dlog ? &dlog[k] : NULL);
+}
+
 double glint_lobe_sample_value(const struct glint_model *m, const double *p,
 			       int j, struct vec3 wo, const double u[2],
 			       struct vec3 *wi, double *bj, double *dlog)

@@ -60,6 +60,12 @@ struct glint_fit_lobes {
 	double (*sample_value)(const double *p, int j, struct vec3 wo,
 			       const double u[2], struct vec3 *wi, double *bj,
 			       double *dlog);
+	/* Optional: value_pdf's b_j (and dlog) at n directions wi given
+	 * as x[], y[], z[], without the pdf, in one loop that vectorises
+	 * (glint_lobe_values() falls back on value_pdf). */
+	void (*values)(const double *p, int j, struct vec3 wo, int n,
+		       const double *x, const double *y, const double *z,
+		       double *b, double *dlog);
 	/* Optional, for directions fixed across evaluations (the fitter's
 	 * env samples): what of the varying lobes' value and pdf at wo, wi
 	 * depends on no parameter, in g[4] (all 0 where the lobes are), and
@@ -178,6 +184,11 @@ double glint_lobes_sample(const struct glint_model *m, const double *p,
 double glint_lobe_value_pdf(const struct glint_model *m, const double *p, int j,
 			    struct vec3 wo, struct vec3 wi, double *pdf,
 			    double *dlog);
+/* glint_lobe_value_pdf()'s b_j (into b[k]) and dlog (into dlog[k], unless
+ * NULL) at n directions (x[k], y[k], z[k]), without the pdf. */
+void glint_lobe_values(const struct glint_model *m, const double *p, int j,
+		       struct vec3 wo, int n, const double *x, const double *y,
+		       const double *z, double *b, double *dlog);
 double glint_lobe_sample_value(const struct glint_model *m, const double *p,
 			       int j, struct vec3 wo, const double u[2],
 			       struct vec3 *wi, double *bj, double *dlog);

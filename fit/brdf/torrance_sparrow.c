@@ -141,6 +141,28 @@ static double ts_lobe_value_pdf(const double *p, int j, struct vec3 wo,
 	return b;
 }
 
+/* The diffuse lobe's 1 / pi above the surface at n directions. */
+static void diffuse_values(struct vec3 wo, int n, const double *z, double *b,
+			   double *dlog)
+{
+	for (int k = 0; k < n; k++)
+		b[k] = wo.z > 0 && z[k] > 0 ? 1 / M_PI : 0;
+	if (dlog)
+		for (int k = 0; k < n; k++)
+			dlog[k] = 0;
+}
+
+static void ts_lobe_values(const double *p, int j, struct vec3 wo, int n,
+			   const double *x, const double *y, const double *z,
+			   double *b, double *dlog)
+{
+	if (j)
+		glint_beckmann_lobe_n(p[ROUGH], p[IOR], wo, n, x, y, z, b,
+				      dlog);
+	else
+		diffuse_values(wo, n, z, b, dlog);
+}
+
 static double ts_sample_lobe_value(const double *p, int j, struct vec3 wo,
 				   const double u[2], struct vec3 *wi,
 				   double *bj, double *dlog)
@@ -203,6 +225,7 @@ static const struct glint_fit_lobes ts_fit = {
 	.varies = ts_lobe_varies,
 	.value_pdf = ts_lobe_value_pdf,
 	.sample_value = ts_sample_lobe_value,
+	.values = ts_lobe_values,
 	.geometry = glint_beckmann_geometry,
 	.from_geometry = ts_lobe_from_geometry,
 	.factor_param = IOR,
@@ -286,6 +309,16 @@ static double nf_lobe_value_pdf(const double *p, int j, struct vec3 wo,
 	return ts_lobe_value_pdf(q, j, wo, wi, pdf, dlog);
 }
 
+static void nf_lobe_values(const double *p, int j, struct vec3 wo, int n,
+			   const double *x, const double *y, const double *z,
+			   double *b, double *dlog)
+{
+	if (j)
+		glint_beckmann_lobe_n(p[ROUGH], 0, wo, n, x, y, z, b, dlog);
+	else
+		diffuse_values(wo, n, z, b, dlog);
+}
+
 static double nf_sample_lobe_value(const double *p, int j, struct vec3 wo,
 				   const double u[2], struct vec3 *wi,
 				   double *bj, double *dlog)
@@ -313,6 +346,7 @@ static const struct glint_fit_lobes nf_fit = {
 	.varies = ts_lobe_varies,
 	.value_pdf = nf_lobe_value_pdf,
 	.sample_value = nf_sample_lobe_value,
+	.values = nf_lobe_values,
 	.geometry = glint_beckmann_geometry,
 	.from_geometry = nf_lobe_from_geometry,
 	.roughness_param = ROUGH,

@@ -15,31 +15,44 @@
 /* Lobe j at one point (frame t, b, n; view wo, local) over the hot
  * points pts[k0 .. k1), each radiance x solid angle, added to out (and
  * its derivative by the model's factor parameter to dout, unless NULL);
- * only the points whose cosine to r is at least cos_ext count. */
+ * only the points whose cosine to r is at least cos_ext count.  The
+ * points go in blocks: their lobe values in one call a block
+ * (glint_lobe_values(), a loop that vectorises), then summed in order. */
 static void hot_points(const struct glint_model *m, const double *p, int j,
 		       const float *pts, int k0, int k1, double cos_ext,
 		       struct vec3 r, struct vec3 t, struct vec3 b,
 		       struct vec3 n, struct vec3 wo, double out[3],
 		       double *dout)
 {
-	for (int k = k0; k < k1; k++) {
-		const float *pt = pts + 6 * (size_t)k;
-		struct vec3 l = v3(pt[0], pt[1], pt[2]);
-		if (v3_dot(l, r) < cos_ext)
-			continue;
-		struct vec3 wi = v3(v3_dot(l, t), v3_dot(l, b), v3_dot(l, n));
-		if (!(wi.z > 0))
-			continue;
-		double dlog = 0;
-		double bj = glint_lobe_value_pdf(m, p, j, wo, wi, NULL,
-						 dout ? &dlog : NULL);
-		if (bj <= 0)
-			continue;
-		for (int ch = 0; ch < 3; ch++)
-			out[ch] += bj * wi.z * pt[3 + ch];
-		if (dout)
+	enum { BLOCK = 64 };
+	double x[BLOCK], y[BLOCK], z[BLOCK], bj[BLOCK], dl[BLOCK];
+	int idx[BLOCK];
+
+	for (int k = k0; k < k1;) {
+		int nk = 0;
+		for (; k < k1 && nk < BLOCK; k++) {
+			const float *pt = pts + 6 * (size_t)k;
+			struct vec3 l = v3(pt[0], pt[1], pt[2]);
+			if (cos_ext > -1 && v3_dot(l, r) < cos_ext)
+				continue;
+			x[nk] = v3_dot(l, t);
+			y[nk] = v3_dot(l, b);
+			z[nk] = v3_dot(l, n);
+			idx[nk++] = k;
+		}
+		glint_lobe_values(m, p, j, wo, nk, x, y, z, bj,
+				  dout ? dl : NULL);
+		for (int i = 0; i < nk; i++) {
+			if (!(z[i] > 0) || bj[i] <= 0)
+				continue;
+			const float *rad = pts + 6 * (size_t)idx[i] + 3;
 			for (int ch = 0; ch < 3; ch++)
-				dout[ch] += bj * dlog * wi.z * pt[3 + ch];
+				out[ch] += bj[i] * z[i] * rad[ch];
+			if (dout)
+				for (int ch = 0; ch < 3; ch++)
+					dout[ch] +=
+						bj[i] * dl[i] * z[i] * rad[ch];
+		}
 	}
 }
 

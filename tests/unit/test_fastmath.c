@@ -86,7 +86,7 @@ static void test_sincos(void)
 static void test_exp_log(void)
 {
 	unsigned long long st = 5;
-	double we = 0, wl = 0;
+	double we = 0, wl = 0, wn = 0;
 	for (int i = 0; i < 1000000; i++) {
 		/* exp over [-750, 750] (libm's own past 700), most of the draws
 		 * where the fit calls it: -tan^2 / m^2 in [-50, 0] */
@@ -96,6 +96,13 @@ static void test_exp_log(void)
 			we = fmax(we, fabs(e - r) / r);
 		else
 			CHECK(e == r, "exp(%g) %g for %g", x, e, r);
+		/* the branch-free one on x <= 0: libm's where that is a
+		 * normal number, 0 below -708 */
+		double xn = -fabs(x), en = glint_fast_exp_neg(xn);
+		if (xn > -708)
+			wn = fmax(wn, fabs(en - exp(xn)) / exp(xn));
+		else
+			CHECK(en == 0, "exp_neg(%g) %g", xn, en);
 		/* log over (0, 1] (1 - u) and 30 orders of magnitude */
 		double y = i % 2 ? 1 - draw(&st) : pow(10, 30 * draw(&st) - 15);
 		double l = glint_fast_log(y), lr = log(y);
@@ -103,6 +110,14 @@ static void test_exp_log(void)
 	}
 	printf("exp: largest relative error %.3g; log %.3g\n", we, wl);
 	CHECK(we < 6.7e-16, "exp off by %g", we);
+	printf("exp of x <= 0 without a branch: largest relative error %.3g\n",
+	       wn);
+	CHECK(wn < 6.7e-16, "exp_neg off by %g", wn);
+	CHECK(glint_fast_exp_neg(0) == 1 && glint_fast_exp_neg(-0.0) == 1 &&
+		      glint_fast_exp_neg(-708) == 0 &&
+		      glint_fast_exp_neg(-INFINITY) == 0 &&
+		      glint_fast_exp_neg(-707.9) > 0,
+	      "exp_neg at 0 and -708");
 	CHECK(wl < 6.7e-16, "log off by %g", wl);
 	CHECK(glint_fast_exp(0) == 1 && glint_fast_log(1) == 0,
 	      "exp(0) %g, log(1) %g", glint_fast_exp(0), glint_fast_log(1));

@@ -440,6 +440,91 @@ static void test_lobe_value_ops(void)
 	CHECK(alone >= 3 * 2 * 6000, "%d lobes alone checked", alone);
 }
 
+/* The lobes at many directions in one call (glint_lobe_values(): the
+ * vectorised loops of models that have them, else value_pdf per
+ * direction) against value_pdf one at a time; and the Beckmann loop
+ * beyond the models' bounds (ior 1, below 1, none) and with wo below the
+ * surface. */
+static void test_lobe_values_batch(void)
+{
+	enum { N = 257 }; /* odd: the vector loops' remainder too */
+	double x[N], y[N], z[N], b[N], dl[N];
+	int bad = 0, nonzero = 0;
+
+	for (int k = 0; k < NSAMPLED; k++) {
+		const struct glint_model *m = sampled[k].m;
+		double p[GLINT_MAX_PARAMS];
+		if (!m->bxdf->nlobes)
+			continue;
+		memcpy(p, sampled[k].p, sizeof(double) * (size_t)m->nparams);
+		for (int s = 0; s < 30; s++) {
+			if (m->lobes->roughness_param >= 0)
+				p[m->lobes->roughness_param] =
+					(s % 3 == 0)   ? 0.004
+					: (s % 3 == 1) ? 0.05
+						       : 0.4;
+			struct vec3 o = random_dir(s, 17);
+			for (int i = 0; i < N; i++) {
+				struct vec3 w = random_dir(s * N + i, 18);
+				if (i % 7 == 0)
+					w.z = -w.z;
+				if (i % 5 == 0) /* near the mirror direction */
+					w = v3_norm(v3_add(v3(-o.x, -o.y, o.z),
+							   v3_scale(w, 0.02)));
+				x[i] = w.x, y[i] = w.y, z[i] = w.z;
+			}
+			for (int j = 0; j < m->bxdf->nlobes; j++) {
+				int d = m->lobes->factor_dlog != NULL;
+				glint_lobe_values(m, p, j, o, N, x, y, z, b,
+						  d ? dl : NULL);
+				for (int i = 0; i < N; i++) {
+					double rd = 0;
+					double r = glint_lobe_value_pdf(
+						m, p, j, o,
+						v3(x[i], y[i], z[i]), NULL,
+						d ? &rd : NULL);
+					bad += !(fabs(b[i] - r) <=
+						 1e-12 * fabs(r) + 1e-300);
+					bad += d && !(fabs(dl[i] - rd) <=
+						      1e-10 * fabs(rd) + 1e-12);
+					nonzero += r > 0;
+				}
+			}
+		}
+	}
+	CHECK(bad == 0, "%d batched lobe values differ", bad);
+	CHECK(nonzero > 10000, "%d nonzero lobe values checked", nonzero);
+
+	/* glint_beckmann_lobe_n() itself: ior 1, 0.8 (total internal
+	 * reflection) and 0 (no Fresnel), wo below the surface */
+	static const double iors[] = { 1, 0.8, 0, 1.5 };
+	bad = 0;
+	for (size_t q = 0; q < sizeof(iors) / sizeof(iors[0]); q++)
+		for (int s = 0; s < 20; s++) {
+			struct vec3 o = random_dir(s, 19);
+			if (s == 19)
+				o.z = -o.z;
+			for (int i = 0; i < N; i++) {
+				struct vec3 w = random_dir(s * N + i, 20);
+				x[i] = w.x, y[i] = w.y, z[i] = w.z;
+			}
+			glint_beckmann_lobe_n(0.2, iors[q], o, N, x, y, z, b,
+					      dl);
+			for (int i = 0; i < N; i++) {
+				double rd = 0,
+				       r = glint_beckmann_lobe_pdf(
+					       0.2, iors[q], o,
+					       v3(x[i], y[i], z[i]), NULL, &rd);
+				bad += !(fabs(b[i] - r) <=
+					 1e-12 * fabs(r) + 1e-300) ||
+				       !(fabs(dl[i] - rd) <=
+					 1e-10 * fabs(rd) + 1e-12);
+				bad += s == 19 && (b[i] != 0 || dl[i] != 0);
+			}
+		}
+	CHECK(bad == 0, "%d Beckmann batch values differ at the edges", bad);
+}
+
 /* Without Fresnel variation: the full model's specular divided by F. */
 static void test_constant_fresnel(void)
 {
@@ -886,6 +971,7 @@ int main(void)
 	RUN(test_pdf_and_sampling);
 	RUN(test_reciprocity_and_lobes);
 	RUN(test_lobe_value_ops);
+	RUN(test_lobe_values_batch);
 	RUN(test_lobe_width);
 	RUN(test_lambert);
 	RUN(test_constant_fresnel);

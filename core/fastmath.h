@@ -41,13 +41,17 @@ static inline double glint_poly(double x, const double *c, int n)
 #pragma GCC unroll 16
 	for (int i = 0; i < n; i++)
 		a[i] = c[n - 1 - i];
+	/* four levels hold n <= 16; a fixed count, so that the loops unroll
+	 * completely before the vectoriser sees a loop that calls this */
+	int m = n;
 #pragma GCC unroll 4
-	for (int m = n; m > 1; m = (m + 1) / 2) {
+	for (int level = 0; level < 4; level++) {
 #pragma GCC unroll 8
 		for (int j = 0; j < m / 2; j++)
 			a[j] = a[2 * j] + a[2 * j + 1] * x;
 		if (m % 2)
 			a[m / 2] = a[m - 1];
+		m = (m + 1) / 2;
 		x *= x;
 	}
 	return a[0];
@@ -69,24 +73,39 @@ static inline double glint_floor(double x)
 	return (double)(i - (x < (double)i));
 }
 
-/* exp(x), within 3 ulp of libm's (libm's own beyond |x| = 700). */
-static inline double glint_fast_exp(double x)
+/* floor(x) for |x| < 2^51 in doubles alone (round to even by the
+ * 1.5 x 2^52 shift, less 1 where that rounded up): a loop of it
+ * vectorises, where glint_floor()'s 64-bit conversion does not. */
+static inline double glint_floor_nb(double x)
 {
-	if (!(x > -700 && x < 700))
-		return exp(x);
-	double k = glint_floor(x * 1.4426950408889634 + 0.5);
-	/* r = x - k ln 2 in two parts, |r| <= ln 2 / 2 */
+	double r = (x + 6755399441055744.0) - 6755399441055744.0;
+	return r > x ? r - 1 : r;
+}
+
+/* exp(x - k ln 2) for the integer k nearest x / ln 2: r = x - k ln 2 in
+ * two parts, |r| <= ln 2 / 2, and Taylor to r^13 (4e-18 at |r| = ln 2 /
+ * 2, from r^2 on here), 1 + r apart: the polynomial's rounding scaled by
+ * r^2. */
+static inline double glint_exp_reduced(double x, double k)
+{
 	double r = (x - k * 6.93147180369123816490e-01) -
 		   k * 1.90821492927058770002e-10;
-	/* Taylor to r^13: 4e-18 at |r| = ln 2 / 2 (from r^2 on here) */
 	static const double c[] = {
 		1.0 / 6227020800, 1.0 / 479001600, 1.0 / 39916800,
 		1.0 / 3628800,	  1.0 / 362880,	   1.0 / 40320,
 		1.0 / 5040,	  1.0 / 720,	   1.0 / 120,
 		1.0 / 24,	  1.0 / 6,	   0.5,
 	};
-	/* 1 + r apart: the polynomial's rounding scaled by r^2 */
-	double e = 1 + (r + r * r * glint_poly(r, c, sizeof(c) / sizeof(c[0])));
+	return 1 + (r + r * r * glint_poly(r, c, sizeof(c) / sizeof(c[0])));
+}
+
+/* exp(x), within 3 ulp of libm's (libm's own beyond |x| = 700). */
+static inline double glint_fast_exp(double x)
+{
+	if (!(x > -700 && x < 700))
+		return exp(x);
+	double k = glint_floor(x * 1.4426950408889634 + 0.5);
+	double e = glint_exp_reduced(x, k);
 	/* times 2^k, |k| <= 1010 here */
 	union {
 		double d;
@@ -103,19 +122,7 @@ static inline double glint_fast_exp_neg(double x)
 {
 	double xc = x > -708 ? x : -708;
 	double t = xc * 1.4426950408889634 + 6755399441055744.0;
-	double k = t - 6755399441055744.0;
-	double r = (xc - k * 6.93147180369123816490e-01) -
-		   k * 1.90821492927058770002e-10;
-	/* glint_poly()'s Estrin scheme for glint_fast_exp()'s polynomial,
-	 * written out (its loops would keep a loop of this from
-	 * vectorising) */
-	double r2 = r * r, r4 = r2 * r2;
-	double p0 = (0.5 + r * (1.0 / 6)) + r2 * (1.0 / 24 + r * (1.0 / 120));
-	double p1 = (1.0 / 720 + r * (1.0 / 5040)) +
-		    r2 * (1.0 / 40320 + r * (1.0 / 362880));
-	double p2 = (1.0 / 3628800 + r * (1.0 / 39916800)) +
-		    r2 * (1.0 / 479001600 + r * (1.0 / 6227020800));
-	double e = 1 + (r + r2 * ((p0 + r4 * p1) + (r4 * r4) * p2));
+	double e = glint_exp_reduced(xc, t - 6755399441055744.0);
 	union {
 		double d;
 		unsigned long long u;
@@ -123,6 +130,21 @@ static inline double glint_fast_exp_neg(double x)
 	/* t's bits are 0x4338000000000000 + k: 2^k's exponent is k + 1023 */
 	b.u = (b.u - 0x4338000000000000ULL + 1023) << 52;
 	return x > -708 ? e * b.d : 0;
+}
+
+/* e ln 2 + log m for m in [sqrt(1/2), sqrt(2)): log m = 2 atanh(s),
+ * s = (m - 1) / (m + 1), |s| <= 0.172, the series to s^21 (3e-18). */
+static inline double glint_log_reduced(double e, double m)
+{
+	double s = (m - 1) / (m + 1), s2 = s * s;
+	static const double c[] = {
+		2.0 / 21, 2.0 / 19, 2.0 / 17, 2.0 / 15, 2.0 / 13,
+		2.0 / 11, 2.0 / 9,  2.0 / 7,  2.0 / 5,	2.0 / 3,
+	};
+	/* 2 s apart: the polynomial's rounding scaled by s^2 */
+	double l = 2 * s + s * s2 * glint_poly(s2, c, sizeof(c) / sizeof(c[0]));
+	return e * 6.93147180369123816490e-01 +
+	       (e * 1.90821492927058770002e-10 + l);
 }
 
 /* log(x), within 3 ulp of libm's (libm's own for x not a positive normal
@@ -142,17 +164,26 @@ static inline double glint_fast_log(double x)
 		b.d *= 0.5;
 		e++;
 	}
-	/* log m = 2 atanh(s), s = (m - 1) / (m + 1), |s| <= 0.172: the
-	 * series to s^21, 3e-18 */
-	double s = (b.d - 1) / (b.d + 1), s2 = s * s;
-	static const double c[] = {
-		2.0 / 21, 2.0 / 19, 2.0 / 17, 2.0 / 15, 2.0 / 13,
-		2.0 / 11, 2.0 / 9,  2.0 / 7,  2.0 / 5,	2.0 / 3,
-	};
-	/* 2 s apart: the polynomial's rounding scaled by s^2 */
-	double l = 2 * s + s * s2 * glint_poly(s2, c, sizeof(c) / sizeof(c[0]));
-	return (double)e * 6.93147180369123816490e-01 +
-	       ((double)e * 1.90821492927058770002e-10 + l);
+	return glint_log_reduced((double)e, b.d);
+}
+
+/* glint_fast_log() for x a positive normal number (1 - u of a uniform
+ * u in [0, 1)), the same arithmetic without a branch or a call, so that
+ * a loop of it vectorises: the exponent read as a double by the 2^52
+ * shift (SSE2 has no int64 conversion), the mantissa's halving chosen. */
+static inline double glint_fast_log_normal(double x)
+{
+	union {
+		double d;
+		unsigned long long u;
+	} b = { .d = x }, e;
+	e.u = (b.u >> 52) | 0x4330000000000000ULL;
+	double ex = e.d - (4503599627370496.0 + 1023);
+	b.u = (b.u & 0x000fffffffffffffULL) | 0x3ff0000000000000ULL;
+	int big = b.d > 1.4142135623730951;
+	double mm = big ? b.d * 0.5 : b.d;
+	ex = big ? ex + 1 : ex;
+	return glint_log_reduced(ex, mm);
 }
 
 /* atan2(y, x) in [-pi, pi]. */
@@ -193,14 +224,11 @@ static inline double glint_fast_acos(double t)
 	return t < 0 ? M_PI - r : r;
 }
 
-/* sin and cos of 2 pi u, |u| < 2^60. */
-static inline void glint_fast_sincos_2pi(double u, double *s, double *c)
+/* sin x and cos x on |x| <= pi / 4 (x2 = x^2): Taylor to x^15 and x^16,
+ * within 8e-16, so that sin^2 + cos^2 = 1 as closely as libm's. */
+static inline void glint_sincos_series(double x, double x2, double *sn,
+				       double *cs)
 {
-	/* the nearest quarter turn */
-	long long qi = (long long)glint_floor(4 * u + 0.5);
-	double x = (u - 0.25 * (double)qi) * (2 * M_PI), x2 = x * x;
-	/* Taylor to x^15 and x^16 on |x| <= pi / 4: within 8e-16, so that
-	 * sin^2 + cos^2 = 1 as closely as libm's */
 	static const double sc[] = {
 		-1.0 / 1307674368000,
 		1.0 / 6227020800,
@@ -222,8 +250,18 @@ static inline void glint_fast_sincos_2pi(double u, double *s, double *c)
 		-0.5,
 		1,
 	};
-	double sn = x * glint_poly(x2, sc, sizeof(sc) / sizeof(sc[0]));
-	double cs = glint_poly(x2, cc, sizeof(cc) / sizeof(cc[0]));
+	*sn = x * glint_poly(x2, sc, sizeof(sc) / sizeof(sc[0]));
+	*cs = glint_poly(x2, cc, sizeof(cc) / sizeof(cc[0]));
+}
+
+/* sin and cos of 2 pi u, |u| < 2^60. */
+static inline void glint_fast_sincos_2pi(double u, double *s, double *c)
+{
+	/* the nearest quarter turn */
+	long long qi = (long long)glint_floor(4 * u + 0.5);
+	double x = (u - 0.25 * (double)qi) * (2 * M_PI), x2 = x * x;
+	double sn, cs;
+	glint_sincos_series(x, x2, &sn, &cs);
 	switch (qi & 3) {
 	case 0:
 		*s = sn;
@@ -242,6 +280,26 @@ static inline void glint_fast_sincos_2pi(double u, double *s, double *c)
 		*c = sn;
 		break;
 	}
+}
+
+/* glint_fast_sincos_2pi() without a branch, for loops that vectorise: the
+ * quarter turn rounded to even by the 1.5 x 2^52 shift (ties, u an odd
+ * eighth, go the other way: both reductions are within the series' range)
+ * and the quadrant's signs and swap chosen, all in doubles (a 64-bit
+ * integer's test keeps GCC from vectorising on SSE2). */
+static inline void glint_fast_sincos_2pi_nb(double u, double *s, double *c)
+{
+	const double shift = 6755399441055744.0; /* 1.5 x 2^52 */
+	double qi = (4 * u + shift) - shift;
+	double x = (u - 0.25 * qi) * (2 * M_PI), x2 = x * x, sn, cs;
+	glint_sincos_series(x, x2, &sn, &cs);
+	/* the quadrant qi mod 4 as q in {-2, ..., 2}; (sin, cos) = (sn, cs),
+	 * (cs, -sn), (-sn, -cs), (-cs, sn) in quadrants 0, 1, 2, 3 (-1) */
+	double q = qi - 4 * ((0.25 * qi + shift) - shift);
+	int odd = q == 1 || q == -1;
+	double s0 = odd ? cs : sn, c0 = odd ? sn : cs;
+	*s = q < 0 || q > 1 ? -s0 : s0;
+	*c = q > 0 || q < -1 ? -c0 : c0;
 }
 
 #endif

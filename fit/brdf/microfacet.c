@@ -120,7 +120,8 @@ double glint_beckmann_pdf(double m, struct vec3 wo, struct vec3 wi)
 static struct vec3 reflect_about(double tan2, double u, struct vec3 wo,
 				 struct vec3 *wi)
 {
-	double ch = 1 / sqrt(1 + tan2), sh = sqrt(fmax(0, 1 - ch * ch));
+	double ch = 1 / sqrt(1 + tan2), s2 = 1 - ch * ch;
+	double sh = sqrt(s2 > 0 ? s2 : 0); /* (fmax() is a call) */
 	double sp, cp;
 	glint_fast_sincos_2pi(u, &sp, &cp);
 	struct vec3 h = v3(sh * cp, sh * sp, ch);
@@ -197,12 +198,37 @@ double glint_beckmann_sample_lobe(double m, double ior, struct vec3 wo,
 	return pdf;
 }
 
+/* glint_fresnel_dielectric_dlog() at o.h in a vector lane, 1 (and dlog
+ * 0) for ior <= 0: every step computed, the cases chosen at the end. */
+static inline double fresnel_lane(double oh, double ior, double *dl)
+{
+	double cf = oh < 1 ? oh : 1;
+	double n2m1 = ior * ior - 1, g2 = n2m1 + cf * cf;
+	double gg = sqrt(g2 > 0 ? g2 : 0);
+	double a = (gg - cf) / (gg + cf);
+	double nb = cf * (gg + cf) - 1, db = cf * (gg - cf) + 1;
+	double bb = nb / db;
+	double dlog =
+		4 * cf * ior / gg *
+		(1 / n2m1 + (1 - cf * cf) * nb / (db * (db * db + nb * nb)));
+	*dl = ior > 0 && n2m1 > 0 && cf > 0 && g2 >= 0 ? dlog : 0;
+	return ior > 0 && g2 >= 0 ? 0.5 * a * a * (1 + bb * bb) : 1;
+}
+
+/* The V-cavity G in a vector lane (glint_vcavity_g() for o.h > 0). */
+static inline double vcavity_lane(double nh, double no, double ni, double oh)
+{
+	double g = 2 * nh * (no < ni ? no : ni) / oh;
+	return g < 1 ? (g > 0 ? g : 0) : 1;
+}
+
 /* A lane of glint_beckmann_lobe_n(): every step computed, the lanes
  * below the surface or facing away chosen out at the end, never a branch
  * (a division under a condition could trap, which keeps the compiler
  * from vectorising; those lanes' infinities and NaNs are not chosen). */
-static inline double beckmann_lane(double m, double ior, struct vec3 wo,
-				   double x, double y, double z, double *dl)
+__attribute__((always_inline)) static inline double
+beckmann_lane(double m, double ior, struct vec3 wo, double x, double y,
+	      double z, double *dl)
 {
 	double hx = wo.x + x, hy = wo.y + y, hz = wo.z + z;
 	double il = 1.0 / sqrt(hx * hx + hy * hy + hz * hz);
@@ -210,21 +236,10 @@ static inline double beckmann_lane(double m, double ior, struct vec3 wo,
 	double c2 = c * c;
 	double d = glint_fast_exp_neg(-((1 - c2) / c2) / (m * m)) /
 		   (M_PI * m * m * c2 * c2);
-	double g = 2 * c * (wo.z < z ? wo.z : z) / oh;
-	g = g < 1 ? (g > 0 ? g : 0) : 1;
-	/* glint_fresnel_dielectric_dlog() at o.h; 1 for ior <= 0 */
-	double cf = oh < 1 ? oh : 1;
-	double n2m1 = ior * ior - 1, g2 = n2m1 + cf * cf;
-	double gg = sqrt(g2 > 0 ? g2 : 0);
-	double a = (gg - cf) / (gg + cf);
-	double nb = cf * (gg + cf) - 1, db = cf * (gg - cf) + 1;
-	double bb = nb / db;
-	double f = ior > 0 && g2 >= 0 ? 0.5 * a * a * (1 + bb * bb) : 1;
-	double dlog =
-		4 * cf * ior / gg *
-		(1 / n2m1 + (1 - cf * cf) * nb / (db * (db * db + nb * nb)));
+	double g = vcavity_lane(c, wo.z, z, oh), dlog;
+	double f = fresnel_lane(oh, ior, &dlog);
 	int on = z > 0 && c > 0 && oh > 0;
-	*dl = on && n2m1 > 0 && g2 >= 0 ? dlog : 0;
+	*dl = on ? dlog : 0;
 	return on ? d * g * f / (4 * z * wo.z) : 0;
 }
 
@@ -255,6 +270,61 @@ void glint_beckmann_lobe_n(double m, double ior, struct vec3 wo, int n,
 	if (dlog && !(ior > 0))
 		for (int k = 0; k < n; k++)
 			dlog[k] = 0;
+}
+
+/* A lane of glint_beckmann_sample_lobe_n(): glint_beckmann_sample_lobe()'s
+ * steps without a branch. */
+__attribute__((always_inline)) static inline double
+beckmann_sample_lane(double m, double ior, struct vec3 wo, double u0, double u1,
+		     double *x, double *y, double *z, double *lobe, double *dl)
+{
+	double tan2 = -m * m * glint_fast_log_normal(1 - u0);
+	double ch = 1 / sqrt(1 + tan2), s2 = 1 - ch * ch;
+	double sh = sqrt(s2 > 0 ? s2 : 0), sp, cp;
+	glint_fast_sincos_2pi_nb(u1, &sp, &cp);
+	double hx = sh * cp, hy = sh * sp, hz = ch;
+	double oh = wo.x * hx + wo.y * hy + wo.z * hz;
+	double wx = hx * (2 * oh) - wo.x, wy = hy * (2 * oh) - wo.y;
+	double wz = hz * (2 * oh) - wo.z;
+	/* exp(-tan^2 / m^2) = 1 - u0 at the normal drawn */
+	double c2 = hz * hz;
+	double d = (1 - u0) / (M_PI * m * m * c2 * c2), dlog;
+	double f = fresnel_lane(oh, ior, &dlog);
+	double v = d * vcavity_lane(hz, wo.z, wz, oh) * f / (4 * wz * wo.z);
+	int on = wz > 0 && oh > 0;
+	*x = wx, *y = wy, *z = wz;
+	*lobe = on ? v : 0;
+	*dl = on ? dlog : 0;
+	return on ? d * hz / (4 * oh) : 0;
+}
+
+void glint_beckmann_sample_lobe_n(double m, double ior, struct vec3 wo, int n,
+				  const double *restrict u0,
+				  const double *restrict u1, double *restrict x,
+				  double *restrict y, double *restrict z,
+				  double *restrict pdf, double *restrict lobe,
+				  double *restrict dlog)
+{
+	if (!(wo.z > 0)) {
+		for (int k = 0; k < n; k++)
+			x[k] = y[k] = z[k] = pdf[k] = lobe[k] = 0;
+		if (dlog)
+			for (int k = 0; k < n; k++)
+				dlog[k] = 0;
+		return;
+	}
+	if (dlog)
+		for (int k = 0; k < n; k++)
+			pdf[k] = beckmann_sample_lane(m, ior, wo, u0[k], u1[k],
+						      &x[k], &y[k], &z[k],
+						      &lobe[k], &dlog[k]);
+	else
+		for (int k = 0; k < n; k++) {
+			double dl;
+			pdf[k] = beckmann_sample_lane(m, ior, wo, u0[k], u1[k],
+						      &x[k], &y[k], &z[k],
+						      &lobe[k], &dl);
+		}
 }
 
 void glint_beckmann_geometry(struct vec3 wo, struct vec3 wi, float g[4])

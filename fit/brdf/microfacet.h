@@ -80,6 +80,19 @@ void glint_beckmann_lobe_n(double m, double ior, struct vec3 wo, int n,
 			   const double *restrict z, double *restrict b,
 			   double *restrict dlog);
 /*
+ * _sample_lobe at n uniform pairs (u0[k], u1[k]) for one wo: the
+ * directions into x, y, z, the lobe into lobe[], d log lobe / d ior into
+ * dlog[] (unless NULL), the pdfs into pdf[] (pdf and lobe 0 where the
+ * direction falls below the surface); one loop without branches that
+ * the compiler vectorises (the lobe samples, 8 at a time).
+ */
+void glint_beckmann_sample_lobe_n(double m, double ior, struct vec3 wo, int n,
+				  const double *restrict u0,
+				  const double *restrict u1, double *restrict x,
+				  double *restrict y, double *restrict z,
+				  double *restrict pdf, double *restrict lobe,
+				  double *restrict dlog);
+/*
  * The same at a fixed wo, wi, in two steps: what depends on neither m nor
  * ior (tan^2 of the half vector, o.h, G / (4 (n.i)(n.o) pi cos^4) and
  * (n.h) / (4 (o.h) pi cos^4); all 0 below the surface), then the lobe and

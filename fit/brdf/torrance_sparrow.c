@@ -196,6 +196,19 @@ static const double *ts_albedo(const void *self, int j)
 	return (const double *)self + ts_lobe_param[j];
 }
 
+/* The specular lobe's samples at once (the diffuse lobe's: one by one,
+ * glint_lobe_sample_values()). */
+static int ts_sample_values(const double *p, int j, struct vec3 wo, int n,
+			    const double *u0, const double *u1, double *x,
+			    double *y, double *z, double *pdf, double *b,
+			    double *dlog)
+{
+	if (j)
+		glint_beckmann_sample_lobe_n(p[ROUGH], p[IOR], wo, n, u0, u1, x,
+					     y, z, pdf, b, dlog);
+	return j != 0;
+}
+
 static const struct glint_bxdf_ops ts_bxdf = {
 	.flags = GLINT_BXDF_REFLECTION | GLINT_BXDF_DIFFUSE |
 		 GLINT_BXDF_GLOSSY | GLINT_BXDF_LOBES,
@@ -226,6 +239,7 @@ static const struct glint_fit_lobes ts_fit = {
 	.value_pdf = ts_lobe_value_pdf,
 	.sample_value = ts_sample_lobe_value,
 	.values = ts_lobe_values,
+	.sample_values = ts_sample_values,
 	.geometry = glint_beckmann_geometry,
 	.from_geometry = ts_lobe_from_geometry,
 	.factor_param = IOR,
@@ -327,6 +341,15 @@ static double nf_sample_lobe_value(const double *p, int j, struct vec3 wo,
 	return ts_sample_lobe_value(q, j, wo, u, wi, bj, dlog);
 }
 
+static int nf_sample_values(const double *p, int j, struct vec3 wo, int n,
+			    const double *u0, const double *u1, double *x,
+			    double *y, double *z, double *pdf, double *b,
+			    double *dlog)
+{
+	NF_P(q, p);
+	return ts_sample_values(q, j, wo, n, u0, u1, x, y, z, pdf, b, dlog);
+}
+
 static const struct glint_bxdf_ops nf_bxdf = {
 	.flags = GLINT_BXDF_REFLECTION | GLINT_BXDF_DIFFUSE |
 		 GLINT_BXDF_GLOSSY | GLINT_BXDF_LOBES,
@@ -347,6 +370,7 @@ static const struct glint_fit_lobes nf_fit = {
 	.value_pdf = nf_lobe_value_pdf,
 	.sample_value = nf_sample_lobe_value,
 	.values = nf_lobe_values,
+	.sample_values = nf_sample_values,
 	.geometry = glint_beckmann_geometry,
 	.from_geometry = nf_lobe_from_geometry,
 	.roughness_param = ROUGH,

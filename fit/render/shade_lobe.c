@@ -120,56 +120,28 @@ static int hit_at(const struct cache_foot *f, const double at[2],
 	return 1;
 }
 
-/* One lobe sample between choosing its direction and reading its light
- * (lobe_sample_start(), lobe_sample_finish()). */
-struct lobe_pending {
-	struct glint_env_query q;
-	double bjz, pb, w;
-	double dlog; /* d log b_j / d the factor parameter */
-};
-
-/* One lobe sample (uniforms uu) at hit h: its direction, and its texels
- * prefetched; 0 where the lobe gives it no weight. */
-static int lobe_sample_start(const struct glint_shade_cache *c,
-			     const struct cache_hit *h, const double *p, int j,
-			     const double uu[2], double w, const double *dout,
-			     struct lobe_pending *lp)
-{
-	struct vec3 wi;
-	double bj;
-
-	lp->dlog = 0;
-	double pb = glint_lobe_sample_value(c->model, p, j, fv(h->wo), uu, &wi,
-					    &bj, dout ? &lp->dlog : NULL);
-	if (!(pb > 0) || bj <= 0)
-		return 0;
-	/* The rest's radiance, continuous across the hot texels' edges
-	 * (their part is shade_hot_quadrature()'s). */
-	glint_env_query_start(c->hot, local_to_world(h, wi), &lp->q);
-	lp->bjz = bj * wi.z;
-	lp->pb = pb;
-	lp->w = w;
-	return 1;
-}
-
-/* The sample's light, weighted by the balance heuristic against nl env
- * samples and by its w, added to out (its derivative to dout, unless
- * NULL). */
-static void lobe_sample_finish(const struct glint_shade_cache *c, int nl,
-			       int nb, const struct lobe_pending *lp,
-			       double out[3], double *dout)
+/* A lobe sample's light, read from its query q, weighted by the balance
+ * heuristic against nl env samples (lobe value x cosine bjz, pdf pb) and
+ * by w, added to out (its derivative by the factor parameter, dlog
+ * times it, to dout unless NULL). */
+static void lobe_sample_light(const struct glint_shade_cache *c, int nl, int nb,
+			      const struct glint_env_query *q, double bjz,
+			      double pb, double w, double dlog, double out[3],
+			      double *dout)
 {
 	double l[3], ps = 0;
 
-	glint_env_query_finish(c->hot, &lp->q, l, &ps);
+	/* the rest's radiance, continuous across the hot texels' edges
+	 * (their part is shade_hot_quadrature()'s) */
+	glint_env_query_finish(c->hot, q, l, &ps);
 	if (!nl)
 		ps = 0;
-	double w = lp->w * (lp->bjz / (nl * ps + nb * lp->pb));
+	double wt = w * (bjz / (nl * ps + nb * pb));
 	for (int ch = 0; ch < 3; ch++)
-		out[ch] += w * l[ch];
+		out[ch] += wt * l[ch];
 	if (dout)
 		for (int ch = 0; ch < 3; ch++)
-			dout[ch] += w * lp->dlog * l[ch];
+			dout[ch] += wt * dlog * l[ch];
 }
 
 /* One lobe sample (uniforms uu) at hit h, weighted by the balance
@@ -179,10 +151,45 @@ static void lobe_sample(const struct glint_shade_cache *c,
 			int nl, int nb, const double uu[2], double w,
 			double out[3], double *dout)
 {
-	struct lobe_pending lp;
+	struct vec3 wi;
+	struct glint_env_query q;
+	double bj, dlog = 0;
+	double pb = glint_lobe_sample_value(c->model, p, j, fv(h->wo), uu, &wi,
+					    &bj, dout ? &dlog : NULL);
 
-	if (lobe_sample_start(c, h, p, j, uu, w, dout, &lp))
-		lobe_sample_finish(c, nl, nb, &lp, out, dout);
+	if (!(pb > 0) || bj <= 0)
+		return;
+	glint_env_query_start(c->hot, local_to_world(h, wi), &q);
+	lobe_sample_light(c, nl, nb, &q, bj * wi.z, pb, w, dlog, out, dout);
+}
+
+/* The lobe samples u0[k], u1[k] (k < n <= LOBE_BLOCK) at hit h, each as
+ * lobe_sample(): their directions in one call, their map coordinates in
+ * another (loops that vectorise), their table reads overlapping; the
+ * same sums in the same order. */
+enum { LOBE_BLOCK = 8 };
+static void lobe_sample_block(const struct glint_shade_cache *c,
+			      const struct cache_hit *h, const double *p, int j,
+			      int nl, int nb, int n, const double *u0,
+			      const double *u1, double w, double out[3],
+			      double *dout)
+{
+	double x[LOBE_BLOCK], y[LOBE_BLOCK], z[LOBE_BLOCK], pb[LOBE_BLOCK];
+	double bj[LOBE_BLOCK], dl[LOBE_BLOCK];
+	double dx[LOBE_BLOCK], dy[LOBE_BLOCK], dz[LOBE_BLOCK];
+	struct glint_env_query q[LOBE_BLOCK];
+
+	glint_lobe_sample_values(c->model, p, j, fv(h->wo), n, u0, u1, x, y, z,
+				 pb, bj, dout ? dl : NULL);
+	for (int k = 0; k < n; k++) {
+		struct vec3 d = local_to_world(h, v3(x[k], y[k], z[k]));
+		dx[k] = d.x, dy[k] = d.y, dz[k] = d.z;
+	}
+	glint_env_query_start_n(c->hot, n, dx, dy, dz, q);
+	for (int k = 0; k < n; k++)
+		if (pb[k] > 0 && bj[k] > 0)
+			lobe_sample_light(c, nl, nb, &q[k], bj[k] * z[k], pb[k],
+					  w, dout ? dl[k] : 0, out, dout);
 }
 
 /*
@@ -239,8 +246,8 @@ void shade_lobe_at_hit(const struct glint_shade_cache *c,
 	}
 	double w_hit = sp ? 1 - sp->w : 1;
 	int spread = sp && sp->w > 0;
-	struct lobe_pending pend[8];
-	int npend = 0;
+	double u0[LOBE_BLOCK], u1[LOBE_BLOCK];
+	int nu = 0;
 	for (int k = 0; k < nb; k++) {
 		double uu[2];
 		if (hs >= 0) {
@@ -254,40 +261,30 @@ void shade_lobe_at_hit(const struct glint_shade_cache *c,
 			uu[1] -= uu[1] >= 1;
 		}
 		if (!spread) {
-			/* The hit's samples alone: up to 8 directions
-			 * first, then their light, so that their table reads
-			 * overlap (the same sums in the same order). */
-			if (w_hit > 0)
-				npend +=
-					lobe_sample_start(c, h, p, j, uu, w_hit,
-							  dout, &pend[npend]);
-			if (npend == 8 || (k == nb - 1 && npend)) {
-				for (int e = 0; e < npend; e++)
-					lobe_sample_finish(c, nl, nb, &pend[e],
-							   out, dout);
-				npend = 0;
-			}
+			/* The hit's samples alone: LOBE_BLOCK at a time. */
+			u0[nu] = uu[0];
+			u1[nu++] = uu[1];
+			if ((nu == LOBE_BLOCK || k == nb - 1) && w_hit > 0)
+				lobe_sample_block(c, h, p, j, nl, nb, nu, u0,
+						  u1, w_hit, out, dout);
+			if (nu == LOBE_BLOCK || k == nb - 1)
+				nu = 0;
 			continue;
 		}
 		if (w_hit > 0)
 			lobe_sample(c, h, p, j, nl, nb, uu, w_hit, out, dout);
-		if (spread) {
-			/* Point q of a (0, 2)-set over the pixel, shifted;
-			 * the points shuffled among the samples (by index,
-			 * x would follow the lobe sample's own first
-			 * uniform: one slice of the pixel x lobe domain). */
-			uint32_t q = glint_permute(
-				(uint32_t)(k * c->spp + sp->s),
-				(uint32_t)(nb * c->spp), sp->perm);
-			double x = (q + 0.5) / (nb * c->spp) + sp->shift[0];
-			double y = glint_radical2(q) + sp->shift[1];
-			double at[2] = { x - (x >= 1) - 0.5,
-					 y - (y >= 1) - 0.5 };
-			struct cache_hit hq;
-			if (hit_at(sp->f, at, &hq))
-				lobe_sample(c, &hq, p, j, nl, nb, uu, sp->w,
-					    out, dout);
-		}
+		/* Point q of a (0, 2)-set over the pixel, shifted; the points
+		 * shuffled among the samples (by index, x would follow the
+		 * lobe sample's own first uniform: one slice of the pixel x
+		 * lobe domain). */
+		uint32_t q = glint_permute((uint32_t)(k * c->spp + sp->s),
+					   (uint32_t)(nb * c->spp), sp->perm);
+		double x = (q + 0.5) / (nb * c->spp) + sp->shift[0];
+		double y = glint_radical2(q) + sp->shift[1];
+		double at[2] = { x - (x >= 1) - 0.5, y - (y >= 1) - 0.5 };
+		struct cache_hit hq;
+		if (hit_at(sp->f, at, &hq))
+			lobe_sample(c, &hq, p, j, nl, nb, uu, sp->w, out, dout);
 	}
 }
 

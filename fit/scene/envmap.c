@@ -787,31 +787,69 @@ static void rest_uv(const struct glint_envmap *env,
 		lookup_uv(env, u, v, rgb);
 }
 
-void glint_env_query_start(const struct glint_env_hot *hot, struct vec3 d,
-			   struct glint_env_query *q)
+/* Direction d's place in hot->tab (in floats, as a double: exact) and
+ * its bilinear weights tx, ty, with cy its map-frame y (the pdf's
+ * sin(pi v)); no branch, so that a loop of it vectorises. */
+static inline double query_place(const struct glint_env_hot *hot, int w, int h,
+				 struct vec3 d, double *tx, double *ty,
+				 double *cy)
 {
-	const struct glint_envmap *env = hot->env;
-	int w = env->img->width, h = env->img->height;
-	struct vec3 dm = m3_tmul(&env->rot, d);
-	double u, v;
+	struct vec3 dm = m3_tmul(&hot->env->rot, d);
 
-	q->cy = glint_clamp(dm.y, -1, 1);
+	*cy = glint_clamp(dm.y, -1, 1);
 	/* glint_latlong_dir_to_uv()'s map, by polynomials: this runs for
 	 * every lobe sample (core/fastmath.h) */
-	u = 0.5 + glint_fast_atan2(dm.x, -dm.z) / (2 * M_PI);
-	v = glint_fast_acos(q->cy) / M_PI;
+	double u = 0.5 + glint_fast_atan2(dm.x, -dm.z) / (2 * M_PI);
+	double v = glint_fast_acos(*cy) / M_PI;
 	/* u, v in [0, 1]: x, y within half a texel of the map, whose
 	 * border in the table holds what wrapping and clamping would read. */
 	double x = glint_clamp(u * w - 0.5, -0.5, w - 0.5);
 	double y = glint_clamp(v * h - 0.5, -0.5, h - 0.5);
-	double fx = glint_floor(x), fy = glint_floor(y);
-	q->tx = x - fx;
-	q->ty = y - fy;
+	double fx = glint_floor_nb(x), fy = glint_floor_nb(y);
+	*tx = x - fx;
+	*ty = y - fy;
+	return 4 * ((fy + 1) * (w + 2) + (fx + 1));
+}
+
+void glint_env_query_start(const struct glint_env_hot *hot, struct vec3 d,
+			   struct glint_env_query *q)
+{
+	int w = hot->env->img->width, h = hot->env->img->height;
+	double at = query_place(hot, w, h, d, &q->tx, &q->ty, &q->cy);
+
 	q->stride = (size_t)w + 2;
-	q->t = hot->tab +
-	       4 * ((size_t)((int)fy + 1) * q->stride + (size_t)((int)fx + 1));
+	q->t = hot->tab + (size_t)at;
 	__builtin_prefetch(q->t);
 	__builtin_prefetch(q->t + 4 * q->stride);
+}
+
+void glint_env_query_start_n(const struct glint_env_hot *hot, int n,
+			     const double *dx, const double *dy,
+			     const double *dz, struct glint_env_query *q)
+{
+	enum { BLOCK = 16 };
+	double at[BLOCK], tx[BLOCK], ty[BLOCK], cy[BLOCK];
+	int w = hot->env->img->width, h = hot->env->img->height;
+	size_t stride = (size_t)w + 2;
+
+	for (int k0 = 0; k0 < n; k0 += BLOCK) {
+		int nk = n - k0 < BLOCK ? n - k0 : BLOCK;
+		for (int k = 0; k < nk; k++)
+			at[k] = query_place(
+				hot, w, h,
+				v3(dx[k0 + k], dy[k0 + k], dz[k0 + k]), &tx[k],
+				&ty[k], &cy[k]);
+		for (int k = 0; k < nk; k++) {
+			struct glint_env_query *qk = &q[k0 + k];
+			qk->t = hot->tab + (size_t)at[k];
+			qk->stride = stride;
+			qk->tx = tx[k];
+			qk->ty = ty[k];
+			qk->cy = cy[k];
+			__builtin_prefetch(qk->t);
+			__builtin_prefetch(qk->t + 4 * stride);
+		}
+	}
 }
 
 void glint_env_query_finish(const struct glint_env_hot *hot,

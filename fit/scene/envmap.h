@@ -182,6 +182,11 @@ struct glint_env_query {
 };
 void glint_env_query_start(const struct glint_env_hot *hot, struct vec3 d,
 			   struct glint_env_query *q);
+/* _start for n directions (dx[k], dy[k], dz[k]) into q[k], the
+ * conversions in one loop that vectorises. */
+void glint_env_query_start_n(const struct glint_env_hot *hot, int n,
+			     const double *dx, const double *dy,
+			     const double *dz, struct glint_env_query *q);
 void glint_env_query_finish(const struct glint_env_hot *hot,
 			    const struct glint_env_query *q, double rgb[3],
 			    double *pdf_smooth);

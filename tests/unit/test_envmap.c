@@ -539,6 +539,48 @@ static void test_hot_split(void)
 	glint_envmap_free(env);
 }
 
+/* Queries in a batch (glint_env_query_start_n(), the lobe samples') read
+ * what one query at a time reads, bit for bit: everywhere, at the poles
+ * and across the seam. */
+static void test_query_batch(void)
+{
+	double rot[3] = { 10, 25, -5 };
+	struct glint_envmap *env = make_env(64, 32, rot);
+	struct glint_env_hot *hot = NULL;
+	enum { N = 1001 };
+	static double dx[N], dy[N], dz[N];
+	static struct glint_env_query q[N];
+	int bad = 0;
+
+	CHECK(env && glint_env_hot_new(env, 0.01, 64, 2, &hot) == 0, "%s",
+	      glint_error_msg());
+	if (test_failures)
+		return;
+	for (int k = 0; k < N; k++) {
+		double u = (k * 0.6180339887498949) -
+			   (int)(k * 0.6180339887498949);
+		double v = (k + 0.5) / N;
+		if (k % 10 == 0) /* the seam, the poles */
+			u = k % 20 ? 1e-12 : 1 - 1e-12;
+		if (k % 25 == 0)
+			v = k % 50 ? 1e-13 : 1 - 1e-13;
+		struct vec3 d =
+			m3_mul(&env->rot, glint_latlong_uv_to_dir(u, v));
+		dx[k] = d.x, dy[k] = d.y, dz[k] = d.z;
+	}
+	glint_env_query_start_n(hot, N, dx, dy, dz, q);
+	for (int k = 0; k < N; k++) {
+		double a[3], b[3], pa, pb;
+		glint_env_query(hot, v3(dx[k], dy[k], dz[k]), a, &pa);
+		glint_env_query_finish(hot, &q[k], b, &pb);
+		bad += memcmp(a, b, sizeof(a)) != 0 ||
+		       memcmp(&pa, &pb, sizeof(pa)) != 0;
+	}
+	CHECK(bad == 0, "%d of %d batched queries differ", bad, N);
+	glint_env_hot_free(hot);
+	glint_envmap_free(env);
+}
+
 /*
  * Several lamps (glint_env_hot_new's clusters): a cluster or two per
  * lamp and none holding two, their ranges partition both point sets,
@@ -615,6 +657,7 @@ int main(void)
 	RUN(test_irradiance_odd_sizes);
 	RUN(test_irradiance_softboxes);
 	RUN(test_hot_split);
+	RUN(test_query_batch);
 	RUN(test_hot_clusters);
 	return test_result();
 }

@@ -52,15 +52,18 @@ static void draw_env_samples(const struct glint_envmap *env,
 		memset(es_k, 0, sizeof(*es_k));
 		if (!(pdf > 0) || !(wi.z > 0))
 			continue; /* contributes nothing: b = 0 below */
-		glint_env_rest_lookup(env, hot, d, l);
+		/* the rest's radiance and smooth pdf from one read of the
+		 * table (glint_env_query(): the same values as
+		 * glint_env_rest_lookup() and glint_env_dist_pdf_smooth()) */
+		double ps;
+		glint_env_query(hot, d, l, &ps);
 		es_k->wi[0] = (float)wi.x;
 		es_k->wi[1] = (float)wi.y;
 		es_k->wi[2] = (float)wi.z;
 		for (int ch = 0; ch < 3; ch++)
 			es_k->l[ch] = (float)l[ch];
 		es_k->pdf = (float)pdf;
-		es_k->pdf_smooth =
-			(float)glint_env_dist_pdf_smooth(env, &hot->rest, d);
+		es_k->pdf_smooth = (float)ps;
 		/* A sample whose smooth pdf vanishes must keep its weight
 		 * finite: fall back to the sampling pdf. */
 		if (!(es_k->pdf_smooth > 0))

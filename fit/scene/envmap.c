@@ -856,24 +856,22 @@ void glint_env_query_finish(const struct glint_env_hot *hot,
 			    const struct glint_env_query *qs, double rgb[3],
 			    double *pdf_smooth)
 {
-	const struct glint_envmap *env = hot->env;
 	const float *t = qs->t;
 	size_t stride = qs->stride;
 	double tx = qs->tx, ty = qs->ty, cy = qs->cy;
 	const float *q[4] = { t, t + 4, t + 4 * stride, t + 4 * stride + 4 };
 	double wt[4] = { (1 - ty) * (1 - tx), (1 - ty) * tx, ty * (1 - tx),
 			 ty * tx };
+	double a[4] = { 0, 0, 0, 0 }; /* RGB and the density, side by side */
 
-	rgb[0] = rgb[1] = rgb[2] = 0;
-	double p = 0;
-	for (int k = 0; k < 4; k++) {
-		for (int c = 0; c < 3; c++)
-			rgb[c] += env->scale * wt[k] * q[k][c];
-		p += wt[k] * q[k][3];
-	}
+	for (int k = 0; k < 4; k++)
+		for (int c = 0; c < 4; c++)
+			a[c] += wt[k] * q[k][c];
+	for (int c = 0; c < 3; c++)
+		rgb[c] = hot->env->scale * a[c];
 	double s = sqrt(1 - cy * cy); /* sin(pi v) */
 	*pdf_smooth =
-		s > 0 && hot->rest.total > 0 ? p / (2 * M_PI * M_PI * s) : 0;
+		s > 0 && hot->rest.total > 0 ? a[3] / (2 * M_PI * M_PI * s) : 0;
 }
 
 void glint_env_query(const struct glint_env_hot *hot, struct vec3 d,

@@ -211,8 +211,8 @@ def main():
             md += ["", "The code that executes the most instructions itself, as "
                    "callgrind attributes it (`file: function`; code inlined from "
                    "a file counts under the function it was inlined into, so "
-                   "`envmap.c: lobe_sample` is the map lookup inside a lobe "
-                   "sample):", "",
+                   "`fastmath.h: lobe_sample_block` is the polynomials "
+                   "inlined into a hit's block of lobe samples):", "",
                    "| function | G instructions | share |", "|---|---:|---:|"]
             md += [f"| {s} | {v / 1e9:.2f} | {100 * v / n:.1f} % |" for s, v in top]
         if n_arm:

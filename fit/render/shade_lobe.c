@@ -67,8 +67,18 @@ void shade_hot_quadrature(const struct glint_shade_cache *c,
 	const struct glint_env_hot *hot = c->hot;
 	const struct glint_model *m = c->model;
 	struct vec3 wo = fv(h->wo);
-	int npts = by_area ? hot->npts : hot->npart;
-	const float *pts = by_area ? hot->pts : hot->part;
+	/* A lobe at least HOT_COARSE_TEXELS texels wide takes the hot part
+	 * on one point a texel (a quarter of the points), widened by the
+	 * spread those points leave out (the cluster's coarse_s): the same
+	 * flux and second moment, the error of fourth order in texel /
+	 * width (unit test hot_coarse) */
+	int coarse = !by_area && hot->ncoarse &&
+		     glint_lobe_width(m, p, j) >=
+			     HOT_COARSE_TEXELS * M_PI / hot->env->img->height;
+	int npts = by_area ? hot->npts : coarse ? hot->ncoarse : hot->npart;
+	const float *pts = by_area  ? hot->pts
+			   : coarse ? hot->coarse
+				    : hot->part;
 	struct vec3 r = v3(0, 0, 0);
 
 	if (!npts)
@@ -81,11 +91,21 @@ void shade_hot_quadrature(const struct glint_shade_cache *c,
 	}
 	for (int g = 0; g < hot->nclusters; g++) {
 		const struct glint_env_hot_cluster *cl = &hot->clusters[g];
+		double pw[GLINT_MAX_PARAMS];
 		if (ext > 0 && angle(r, cl->axis) - cl->radius > ext)
 			continue; /* the lobe is below 1e-12 of it */
-		hot_points(m, p, j, pts, by_area ? cl->pts0 : cl->part0,
-			   by_area ? cl->pts1 : cl->part1, -2, r, fv(h->t),
-			   fv(h->b), fv(h->n), wo, out, dout);
+		if (coarse) {
+			memcpy(pw, p, sizeof(double) * (size_t)m->nparams);
+			glint_lobe_widen(m, pw, j, cl->coarse_s);
+		}
+		hot_points(m, coarse ? pw : p, j, pts,
+			   by_area  ? cl->pts0
+			   : coarse ? cl->coarse0
+				    : cl->part0,
+			   by_area  ? cl->pts1
+			   : coarse ? cl->coarse1
+				    : cl->part1,
+			   -2, r, fv(h->t), fv(h->b), fv(h->n), wo, out, dout);
 	}
 }
 

@@ -475,21 +475,47 @@ static int near_hot(const struct glint_env_hot *hot, int w, int h, int i, int j)
 	return 0;
 }
 
-/* hot->part: q x q points on every texel where the hot part's radiance
- * (lookup_uv_part(), part 1) is not zero, carrying it x solid angle. */
+/* Point k of pts: direction d, radiance l times dom. */
+static void hot_point_set(float *pts, int k, struct vec3 d, const double l[3],
+			  double dom)
+{
+	float *pt = pts + 6 * (size_t)k;
+
+	pt[0] = (float)d.x;
+	pt[1] = (float)d.y;
+	pt[2] = (float)d.z;
+	for (int c = 0; c < 3; c++)
+		pt[3 + c] = (float)(l[c] * dom);
+}
+
+/* The hot part's points (*part, *npart): q x q points on every texel
+ * where the hot part's radiance (lookup_uv_part(), part 1) is not zero,
+ * carrying it x solid angle; with var, one point a texel instead, at
+ * the flux-weighted mean direction of its q x q (the texel's own
+ * centroid: its solid angle grows toward the equator, so its centre is
+ * not), and in (*var)[k] the spread about it that the point leaves out
+ * (the variance of the texel's flux over directions, both axes, rad^2). */
 static int hot_part_points(const struct glint_envmap *env,
-			   struct glint_env_hot *hot, int q)
+			   struct glint_env_hot *hot, int q, float **part,
+			   int *npart, float **var)
 {
 	int w = env->img->width, h = env->img->height, n = 0;
 
 	for (int j = 0; j < h && hot->ntexels; j++)
 		for (int i = 0; i < w; i++)
 			n += near_hot(hot, w, h, i, j);
-	hot->part = malloc((size_t)(n ? n * q * q : 1) * 6 * sizeof(float));
-	if (!hot->part)
+	int merge = var != NULL;
+	*npart = 0;
+	*part = malloc((size_t)(n ? (merge ? n : n * q * q) : 1) * 6 *
+		       sizeof(float));
+	if (merge)
+		*var = malloc((size_t)(n ? n : 1) * sizeof(float));
+	if (!*part || (merge && !*var))
 		return glint_error_set(ENOMEM, "out of memory");
 	for (int j = 0; j < h && n; j++)
 		for (int i = 0; i < w; i++) {
+			double flux[3] = { 0, 0, 0 };
+			struct vec3 mean = v3(0, 0, 0);
 			if (!near_hot(hot, w, h, i, j))
 				continue;
 			for (int b = 0; b < q; b++)
@@ -507,14 +533,24 @@ static int hot_part_points(const struct glint_envmap *env,
 					struct vec3 d = m3_mul(
 						&env->rot,
 						glint_latlong_uv_to_dir(u, v));
-					float *pt = hot->part +
-						    6 * (size_t)hot->npart++;
-					pt[0] = (float)d.x;
-					pt[1] = (float)d.y;
-					pt[2] = (float)d.z;
 					for (int c = 0; c < 3; c++)
-						pt[3 + c] = (float)(l[c] * dom);
+						flux[c] += l[c] * dom;
+					mean = v3_add(
+						mean,
+						v3_scale(d, (l[0] + l[1] +
+							     l[2]) * dom));
+					if (!merge)
+						hot_point_set(*part, (*npart)++,
+							      d, l, dom);
 				}
+			double wsum = flux[0] + flux[1] + flux[2];
+			if (!merge || !(wsum > 0))
+				continue;
+			/* the unit directions' variance: 1 - |their mean|^2 */
+			struct vec3 mu = v3_scale(mean, 1 / wsum);
+			(*var)[*npart] = (float)fmax(0, 1 - v3_dot(mu, mu));
+			hot_point_set(*part, (*npart)++, v3_norm(mean), flux,
+				      1);
 		}
 	return 0;
 }
@@ -550,18 +586,23 @@ static int rest_table(const struct glint_envmap *env, struct glint_env_hot *hot)
 	return 0;
 }
 
-/* Point k of the points of the hot split (pts, then part). */
+/* Point k of the points of the hot split (pts, then part, then
+ * coarse). */
 static float *hot_point(struct glint_env_hot *hot, int k)
 {
-	return k < hot->npts ? hot->pts + 6 * (size_t)k
-			     : hot->part + 6 * ((size_t)k - hot->npts);
+	if (k < hot->npts)
+		return hot->pts + 6 * (size_t)k;
+	k -= hot->npts;
+	return k < hot->npart ? hot->part + 6 * (size_t)k
+			      : hot->coarse + 6 * ((size_t)k - hot->npart);
 }
 
 /* The points in cluster order, each array on its own (counting sort,
  * stable). */
-static int hot_reorder(float *pts, int n, const int *id, int nc, int *first)
+static int hot_reorder(float *pts, int stride, int n, const int *id, int nc,
+		       int *first)
 {
-	float *tmp = malloc((size_t)(n ? n : 1) * 6 * sizeof(float));
+	float *tmp = malloc((size_t)(n ? n : 1) * stride * sizeof(float));
 	int *at = calloc((size_t)nc + 1, sizeof(int));
 
 	if (!tmp || !at) {
@@ -575,9 +616,9 @@ static int hot_reorder(float *pts, int n, const int *id, int nc, int *first)
 		at[c + 1] += at[c];
 	memcpy(first, at, (size_t)(nc + 1) * sizeof(int));
 	for (int k = 0; k < n; k++)
-		memcpy(tmp + 6 * (size_t)at[id[k]]++, pts + 6 * (size_t)k,
-		       6 * sizeof(float));
-	memcpy(pts, tmp, (size_t)n * 6 * sizeof(float));
+		memcpy(tmp + stride * (size_t)at[id[k]]++,
+		       pts + stride * (size_t)k, stride * sizeof(float));
+	memcpy(pts, tmp, (size_t)n * stride * sizeof(float));
 	free(tmp);
 	free(at);
 	return 0;
@@ -593,10 +634,10 @@ static int hot_reorder(float *pts, int n, const int *id, int nc, int *first)
  */
 static int hot_clusters(struct glint_env_hot *hot, double seed, double margin)
 {
-	int np = hot->npts + hot->npart, nc = 0, ret = 0;
+	int np = hot->npts + hot->npart + hot->ncoarse, nc = 0, ret = 0;
 	int *id = malloc((size_t)(np ? np : 1) * sizeof(int));
 	int *lead = malloc((size_t)(np ? np : 1) * sizeof(int));
-	int *first_pts = NULL, *first_part = NULL;
+	int *first_pts = NULL, *first_part = NULL, *first_coarse = NULL;
 	double cos_seed = cos(seed);
 
 	if (!id || !lead) {
@@ -619,7 +660,8 @@ static int hot_clusters(struct glint_env_hot *hot, double seed, double margin)
 	hot->clusters = calloc((size_t)(nc ? nc : 1), sizeof(*hot->clusters));
 	first_pts = malloc(((size_t)nc + 1) * sizeof(int));
 	first_part = malloc(((size_t)nc + 1) * sizeof(int));
-	if (!hot->clusters || !first_pts || !first_part) {
+	first_coarse = malloc(((size_t)nc + 1) * sizeof(int));
+	if (!hot->clusters || !first_pts || !first_part || !first_coarse) {
 		ret = glint_error_set(ENOMEM, "out of memory");
 		goto out;
 	}
@@ -637,10 +679,18 @@ static int hot_clusters(struct glint_env_hot *hot, double seed, double margin)
 		double d = v3_dot(cl->axis, v3(pt[0], pt[1], pt[2]));
 		cl->radius = fmax(cl->radius, acos(fmin(1, fmax(-1, d))));
 	}
-	ret = hot_reorder(hot->pts, hot->npts, id, nc, first_pts);
+	ret = hot_reorder(hot->pts, 6, hot->npts, id, nc, first_pts);
 	if (ret == 0)
-		ret = hot_reorder(hot->part, hot->npart, id + hot->npts, nc,
+		ret = hot_reorder(hot->part, 6, hot->npart, id + hot->npts, nc,
 				  first_part);
+	if (ret == 0)
+		ret = hot_reorder(hot->coarse, 6, hot->ncoarse,
+				  id + hot->npts + hot->npart, nc,
+				  first_coarse);
+	if (ret == 0 && hot->coarse_var)
+		ret = hot_reorder(hot->coarse_var, 1, hot->ncoarse,
+				  id + hot->npts + hot->npart, nc,
+				  first_coarse);
 	for (int c = 0; c < nc && ret == 0; c++) {
 		struct glint_env_hot_cluster *cl = &hot->clusters[c];
 		cl->radius += margin;
@@ -648,12 +698,15 @@ static int hot_clusters(struct glint_env_hot *hot, double seed, double margin)
 		cl->pts1 = first_pts[c + 1];
 		cl->part0 = first_part[c];
 		cl->part1 = first_part[c + 1];
+		cl->coarse0 = first_coarse[c];
+		cl->coarse1 = first_coarse[c + 1];
 	}
 out:
 	free(id);
 	free(lead);
 	free(first_pts);
 	free(first_part);
+	free(first_coarse);
 	return ret;
 }
 
@@ -731,7 +784,11 @@ int glint_env_hot_new(const struct glint_envmap *env, double tau,
 				}
 		}
 	hot->axis = v3_norm(axis);
-	ret = hot_part_points(env, hot, q);
+	ret = hot_part_points(env, hot, q, &hot->part, &hot->npart, NULL);
+	/* and one point a texel, for lobes many texels wide */
+	if (ret == 0 && q > 1)
+		ret = hot_part_points(env, hot, 8, &hot->coarse, &hot->ncoarse,
+				      &hot->coarse_var);
 	if (ret < 0) {
 		glint_env_hot_free(hot);
 		return ret;
@@ -751,6 +808,21 @@ int glint_env_hot_new(const struct glint_envmap *env, double tau,
 	/* A lamp's points within a few degrees (8 texels at least: the
 	 * hot texels of a lamp a texel across span 4 or 5) of its first. */
 	ret = hot_clusters(hot, fmax(2 * M_PI / 180, 16 * M_PI / w), margin);
+	for (int c = 0; c < hot->nclusters && ret == 0; c++) {
+		/* the flux-weighted mean of the spread each coarse point
+		 * leaves out, per axis */
+		struct glint_env_hot_cluster *cl = &hot->clusters[c];
+		double sw = 0, sv = 0;
+		for (int t = cl->coarse0; t < cl->coarse1; t++) {
+			const float *pt = hot->coarse + 6 * (size_t)t;
+			double f = (double)pt[3] + pt[4] + pt[5];
+			sw += f;
+			sv += f * hot->coarse_var[t];
+		}
+		cl->coarse_s = sw > 0 ? sqrt(sv / sw / 2) : 0;
+	}
+	free(hot->coarse_var);
+	hot->coarse_var = NULL;
 	if (ret == 0)
 		ret = dist_build(env->img, hot->is_hot, &hot->rest);
 	if (ret == 0)
@@ -769,6 +841,8 @@ void glint_env_hot_free(struct glint_env_hot *hot)
 		return;
 	free(hot->pts);
 	free(hot->part);
+	free(hot->coarse);
+	free(hot->coarse_var);
 	free(hot->clusters);
 	free(hot->is_hot);
 	free(hot->tab);

@@ -122,7 +122,12 @@ double glint_env_dist_pdf_smooth(const struct glint_envmap *env,
 struct glint_env_hot_cluster {
 	struct vec3 axis;
 	double radius;
-	int pts0, pts1, part0, part1;
+	int pts0, pts1, part0, part1, coarse0, coarse1;
+	/* The spread the coarse points leave out (radians, a Gaussian's
+	 * standard deviation per axis): each texel's flux spreads over
+	 * the texel, its point (at the flux's centroid) over none; the
+	 * flux-weighted mean of those variances. */
+	double coarse_s;
 };
 
 /*
@@ -136,8 +141,10 @@ struct glint_env_hot_cluster {
  *   irradiance of the diffuse lobe);
  * - by value (`part`): the map's bilinear radiance made from the hot
  *   texels' values alone, on q x q points of every texel it reaches (the
- *   hot ones and their neighbours); the rest is the radiance made from the
- *   other texels' values (glint_env_query(), glint_env_rest_lookup()).
+ *   hot ones and their neighbours), and again on one point a texel
+ *   (`coarse`: the same flux, each texel's at its centre); the rest is
+ *   the radiance made from the other texels' values (glint_env_query(),
+ *   glint_env_rest_lookup()).
  *   Both parts are continuous, so a lobe sample that moves with the
  *   parameters never jumps at a hot texel's edge: the fitter's objective
  *   stays smooth in roughness (shade_cache.c).
@@ -148,6 +155,11 @@ struct glint_env_hot {
 	float *pts; /* npts x 6: world direction, radiance x solid angle */
 	int npart;
 	float *part; /* npart x 6: the same for the hot part's radiance */
+	/* The hot part on one point a texel (none when q is 1: part is
+	 * that), for a lobe many texels wide (shade_lobe.c). */
+	int ncoarse;
+	float *coarse;
+	float *coarse_var;     /* while it is built: each point's spread */
 	unsigned char *is_hot; /* W x H */
 	struct glint_env_dist rest;
 	struct vec3 axis; /* a cone holding every hot texel: */

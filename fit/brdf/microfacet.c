@@ -291,39 +291,32 @@ beckmann_sample_lane(double m, double ior, struct vec3 wo, double u0, double u1,
 	double d = (1 - u0) / (M_PI * m * m * c2 * c2), dlog;
 	double f = fresnel_lane(oh, ior, &dlog);
 	double v = d * vcavity_lane(hz, wo.z, wz, oh) * f / (4 * wz * wo.z);
-	int on = wz > 0 && oh > 0;
+	int on = wz > 0 && oh > 0 && wo.z > 0;
 	*x = wx, *y = wy, *z = wz;
 	*lobe = on ? v : 0;
 	*dl = on ? dlog : 0;
 	return on ? d * hz / (4 * oh) : 0;
 }
 
-void glint_beckmann_sample_lobe_n(double m, double ior, struct vec3 wo, int n,
+void glint_beckmann_sample_lobe_n(double m, double ior, int n,
+				  const struct vec3 *restrict wo,
 				  const double *restrict u0,
 				  const double *restrict u1, double *restrict x,
 				  double *restrict y, double *restrict z,
 				  double *restrict pdf, double *restrict lobe,
 				  double *restrict dlog)
 {
-	if (!(wo.z > 0)) {
-		for (int k = 0; k < n; k++)
-			x[k] = y[k] = z[k] = pdf[k] = lobe[k] = 0;
-		if (dlog)
-			for (int k = 0; k < n; k++)
-				dlog[k] = 0;
-		return;
-	}
 	if (dlog)
 		for (int k = 0; k < n; k++)
-			pdf[k] = beckmann_sample_lane(m, ior, wo, u0[k], u1[k],
-						      &x[k], &y[k], &z[k],
-						      &lobe[k], &dlog[k]);
+			pdf[k] = beckmann_sample_lane(
+				m, ior, wo[k], u0[k], u1[k], &x[k], &y[k],
+				&z[k], &lobe[k], &dlog[k]);
 	else
 		for (int k = 0; k < n; k++) {
 			double dl;
-			pdf[k] = beckmann_sample_lane(m, ior, wo, u0[k], u1[k],
-						      &x[k], &y[k], &z[k],
-						      &lobe[k], &dl);
+			pdf[k] = beckmann_sample_lane(m, ior, wo[k], u0[k],
+						      u1[k], &x[k], &y[k],
+						      &z[k], &lobe[k], &dl);
 		}
 }
 

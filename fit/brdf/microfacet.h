@@ -80,13 +80,15 @@ void glint_beckmann_lobe_n(double m, double ior, struct vec3 wo, int n,
 			   const double *restrict z, double *restrict b,
 			   double *restrict dlog);
 /*
- * _sample_lobe at n uniform pairs (u0[k], u1[k]) for one wo: the
- * directions into x, y, z, the lobe into lobe[], d log lobe / d ior into
- * dlog[] (unless NULL), the pdfs into pdf[] (pdf and lobe 0 where the
- * direction falls below the surface); one loop without branches that
- * the compiler vectorises (the lobe samples, 8 at a time).
+ * _sample_lobe at n uniform pairs (u0[k], u1[k]), each for its own wo[k]
+ * (the hits of a pixel's footprint differ): the directions into x, y, z,
+ * the lobe into lobe[], d log lobe / d ior into dlog[] (unless NULL), the
+ * pdfs into pdf[] (pdf and lobe 0 where wo or the direction is below the
+ * surface); one loop without branches that the compiler vectorises (the
+ * lobe samples, 8 at a time).
  */
-void glint_beckmann_sample_lobe_n(double m, double ior, struct vec3 wo, int n,
+void glint_beckmann_sample_lobe_n(double m, double ior, int n,
+				  const struct vec3 *restrict wo,
 				  const double *restrict u0,
 				  const double *restrict u1, double *restrict x,
 				  double *restrict y, double *restrict z,

@@ -247,17 +247,18 @@ void glint_lobe_values(const struct glint_model *m, const double *p, int j,
 }
 
 void glint_lobe_sample_values(const struct glint_model *m, const double *p,
-			      int j, struct vec3 wo, int n, const double *u0,
-			      const double *u1, double *x, double *y, double *z,
-			      double *pdf, double *b, double *dlog)
+			      int j, int n, const struct vec3 *wo,
+			      const double *u0, const double *u1, double *x,
+			      double *y, double *z, double *pdf, double *b,
+			      double *dlog)
 {
 	if (m->lobes->sample_values &&
-	    m->lobes->sample_values(p, j, wo, n, u0, u1, x, y, z, pdf, b, dlog))
+	    m->lobes->sample_values(p, j, n, wo, u0, u1, x, y, z, pdf, b, dlog))
 		return;
 	for (int k = 0; k < n; k++) {
 		double u[2] = { u0[k], u1[k] };
 		struct vec3 wi = v3(0, 0, 0);
-		pdf[k] = glint_lobe_sample_value(m, p, j, wo, u, &wi, &b[k],
+		pdf[k] = glint_lobe_sample_value(m, p, j, wo[k], u, &wi, &b[k],
 						 dlog ? &dlog[k] : NULL);
 		x[k] = wi.x, y[k] = wi.y, z[k] = wi.z;
 	}

@@ -66,14 +66,15 @@ struct glint_fit_lobes {
 	void (*values)(const double *p, int j, struct vec3 wo, int n,
 		       const double *x, const double *y, const double *z,
 		       double *b, double *dlog);
-	/* Optional: sample_value at n uniform pairs (u0[k], u1[k]) in one
-	 * loop that vectorises: the directions into x, y, z, b_j into b,
-	 * dlog (may be NULL), the pdf into pdf; 0 for a lobe it does not
-	 * cover (glint_lobe_sample_values() falls back on sample_value). */
-	int (*sample_values)(const double *p, int j, struct vec3 wo, int n,
-			     const double *u0, const double *u1, double *x,
-			     double *y, double *z, double *pdf, double *b,
-			     double *dlog);
+	/* Optional: sample_value at n uniform pairs (u0[k], u1[k]), each
+	 * for its own wo[k], in one loop that vectorises: the directions
+	 * into x, y, z, b_j into b, dlog (may be NULL), the pdf into pdf; 0
+	 * for a lobe it does not cover (glint_lobe_sample_values() falls
+	 * back on sample_value). */
+	int (*sample_values)(const double *p, int j, int n,
+			     const struct vec3 *wo, const double *u0,
+			     const double *u1, double *x, double *y, double *z,
+			     double *pdf, double *b, double *dlog);
 	/* Optional, for directions fixed across evaluations (the fitter's
 	 * env samples): what of the varying lobes' value and pdf at wo, wi
 	 * depends on no parameter, in g[4] (all 0 where the lobes are), and
@@ -192,13 +193,15 @@ double glint_lobes_sample(const struct glint_model *m, const double *p,
 double glint_lobe_value_pdf(const struct glint_model *m, const double *p, int j,
 			    struct vec3 wo, struct vec3 wi, double *pdf,
 			    double *dlog);
-/* glint_lobe_sample_value() at n uniform pairs (u0[k], u1[k]): the
- * directions drawn into (x[k], y[k], z[k]), b_j there into b[k], dlog
- * into dlog[k] (unless NULL), the pdf into pdf[k] (0 where none). */
+/* glint_lobe_sample_value() at n uniform pairs (u0[k], u1[k]), each for
+ * its own wo[k]: the directions drawn into (x[k], y[k], z[k]), b_j there
+ * into b[k], dlog into dlog[k] (unless NULL), the pdf into pdf[k] (0
+ * where none). */
 void glint_lobe_sample_values(const struct glint_model *m, const double *p,
-			      int j, struct vec3 wo, int n, const double *u0,
-			      const double *u1, double *x, double *y, double *z,
-			      double *pdf, double *b, double *dlog);
+			      int j, int n, const struct vec3 *wo,
+			      const double *u0, const double *u1, double *x,
+			      double *y, double *z, double *pdf, double *b,
+			      double *dlog);
 /* glint_lobe_value_pdf()'s b_j (into b[k]) and dlog (into dlog[k], unless
  * NULL) at n directions (x[k], y[k], z[k]), without the pdf. */
 void glint_lobe_values(const struct glint_model *m, const double *p, int j,

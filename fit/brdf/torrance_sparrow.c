@@ -198,13 +198,13 @@ static const double *ts_albedo(const void *self, int j)
 
 /* The specular lobe's samples at once (the diffuse lobe's: one by one,
  * glint_lobe_sample_values()). */
-static int ts_sample_values(const double *p, int j, struct vec3 wo, int n,
-			    const double *u0, const double *u1, double *x,
-			    double *y, double *z, double *pdf, double *b,
-			    double *dlog)
+static int ts_sample_values(const double *p, int j, int n,
+			    const struct vec3 *wo, const double *u0,
+			    const double *u1, double *x, double *y, double *z,
+			    double *pdf, double *b, double *dlog)
 {
 	if (j)
-		glint_beckmann_sample_lobe_n(p[ROUGH], p[IOR], wo, n, u0, u1, x,
+		glint_beckmann_sample_lobe_n(p[ROUGH], p[IOR], n, wo, u0, u1, x,
 					     y, z, pdf, b, dlog);
 	return j != 0;
 }
@@ -341,13 +341,13 @@ static double nf_sample_lobe_value(const double *p, int j, struct vec3 wo,
 	return ts_sample_lobe_value(q, j, wo, u, wi, bj, dlog);
 }
 
-static int nf_sample_values(const double *p, int j, struct vec3 wo, int n,
-			    const double *u0, const double *u1, double *x,
-			    double *y, double *z, double *pdf, double *b,
-			    double *dlog)
+static int nf_sample_values(const double *p, int j, int n,
+			    const struct vec3 *wo, const double *u0,
+			    const double *u1, double *x, double *y, double *z,
+			    double *pdf, double *b, double *dlog)
 {
 	NF_P(q, p);
-	return ts_sample_values(q, j, wo, n, u0, u1, x, y, z, pdf, b, dlog);
+	return ts_sample_values(q, j, n, wo, u0, u1, x, y, z, pdf, b, dlog);
 }
 
 static const struct glint_bxdf_ops nf_bxdf = {

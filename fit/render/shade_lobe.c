@@ -164,52 +164,64 @@ static void lobe_sample_light(const struct glint_shade_cache *c, int nl, int nb,
 			dout[ch] += wt * dlog * l[ch];
 }
 
-/* One lobe sample (uniforms uu) at hit h, weighted by the balance
- * heuristic against nl env samples and by w, added to out. */
-static void lobe_sample(const struct glint_shade_cache *c,
-			const struct cache_hit *h, const double *p, int j,
-			int nl, int nb, const double uu[2], double w,
-			double out[3], double *dout)
-{
-	struct vec3 wi;
-	struct glint_env_query q;
-	double bj, dlog = 0;
-	double pb = glint_lobe_sample_value(c->model, p, j, fv(h->wo), uu, &wi,
-					    &bj, dout ? &dlog : NULL);
-
-	if (!(pb > 0) || bj <= 0)
-		return;
-	glint_env_query_start(c->hot, local_to_world(h, wi), &q);
-	lobe_sample_light(c, nl, nb, &q, bj * wi.z, pb, w, dlog, out, dout);
-}
-
-/* The lobe samples u0[k], u1[k] (k < n <= LOBE_BLOCK) at hit h, each as
- * lobe_sample(): their directions in one call, their map coordinates in
- * another (loops that vectorise), their table reads overlapping; the
- * same sums in the same order. */
+/* Lobe samples waiting to be taken together: sample k's uniforms (u0,
+ * u1), its hit and its weight; a spread sample's hit kept in own[]. */
 enum { LOBE_BLOCK = 8 };
-static void lobe_sample_block(const struct glint_shade_cache *c,
-			      const struct cache_hit *h, const double *p, int j,
-			      int nl, int nb, int n, const double *u0,
-			      const double *u1, double w, double out[3],
-			      double *dout)
+struct lobe_block {
+	int n;
+	double u0[LOBE_BLOCK], u1[LOBE_BLOCK], w[LOBE_BLOCK];
+	const struct cache_hit *hit[LOBE_BLOCK];
+	struct cache_hit own[LOBE_BLOCK];
+};
+
+/* The block's samples, each weighted by the balance heuristic against nl
+ * env samples and by its w, added to out: their directions in one call,
+ * their map coordinates in another (loops that vectorise), their table
+ * reads overlapping; summed in the order they joined. */
+static void lobe_block_run(const struct glint_shade_cache *c,
+			   struct lobe_block *lb, const double *p, int j,
+			   int nl, int nb, double out[3], double *dout)
 {
 	double x[LOBE_BLOCK], y[LOBE_BLOCK], z[LOBE_BLOCK], pb[LOBE_BLOCK];
 	double bj[LOBE_BLOCK], dl[LOBE_BLOCK];
 	double dx[LOBE_BLOCK], dy[LOBE_BLOCK], dz[LOBE_BLOCK];
+	struct vec3 wo[LOBE_BLOCK];
 	struct glint_env_query q[LOBE_BLOCK];
+	int n = lb->n;
 
-	glint_lobe_sample_values(c->model, p, j, fv(h->wo), n, u0, u1, x, y, z,
+	for (int k = 0; k < n; k++)
+		wo[k] = fv(lb->hit[k]->wo);
+	glint_lobe_sample_values(c->model, p, j, n, wo, lb->u0, lb->u1, x, y, z,
 				 pb, bj, dout ? dl : NULL);
 	for (int k = 0; k < n; k++) {
-		struct vec3 d = local_to_world(h, v3(x[k], y[k], z[k]));
+		struct vec3 d =
+			local_to_world(lb->hit[k], v3(x[k], y[k], z[k]));
 		dx[k] = d.x, dy[k] = d.y, dz[k] = d.z;
 	}
 	glint_env_query_start_n(c->hot, n, dx, dy, dz, q);
 	for (int k = 0; k < n; k++)
 		if (pb[k] > 0 && bj[k] > 0)
 			lobe_sample_light(c, nl, nb, &q[k], bj[k] * z[k], pb[k],
-					  w, dout ? dl[k] : 0, out, dout);
+					  lb->w[k], dout ? dl[k] : 0, out,
+					  dout);
+	lb->n = 0;
+}
+
+/* Sample uu at hit h (NULL: the one just made in lb->own[lb->n]) with
+ * weight w joins the block, which runs once full. */
+static void lobe_block_add(const struct glint_shade_cache *c,
+			   struct lobe_block *lb, const struct cache_hit *h,
+			   const double uu[2], double w, const double *p, int j,
+			   int nl, int nb, double out[3], double *dout)
+{
+	int k = lb->n++;
+
+	lb->u0[k] = uu[0];
+	lb->u1[k] = uu[1];
+	lb->w[k] = w;
+	lb->hit[k] = h ? h : &lb->own[k];
+	if (lb->n == LOBE_BLOCK)
+		lobe_block_run(c, lb, p, j, nl, nb, out, dout);
 }
 
 /*
@@ -266,8 +278,8 @@ void shade_lobe_at_hit(const struct glint_shade_cache *c,
 	}
 	double w_hit = sp ? 1 - sp->w : 1;
 	int spread = sp && sp->w > 0;
-	double u0[LOBE_BLOCK], u1[LOBE_BLOCK];
-	int nu = 0;
+	struct lobe_block lb;
+	lb.n = 0;
 	for (int k = 0; k < nb; k++) {
 		double uu[2];
 		if (hs >= 0) {
@@ -280,32 +292,27 @@ void shade_lobe_at_hit(const struct glint_shade_cache *c,
 			uu[0] -= uu[0] >= 1;
 			uu[1] -= uu[1] >= 1;
 		}
-		if (!spread) {
-			/* The hit's samples alone: LOBE_BLOCK at a time. */
-			u0[nu] = uu[0];
-			u1[nu++] = uu[1];
-			if ((nu == LOBE_BLOCK || k == nb - 1) && w_hit > 0)
-				lobe_sample_block(c, h, p, j, nl, nb, nu, u0,
-						  u1, w_hit, out, dout);
-			if (nu == LOBE_BLOCK || k == nb - 1)
-				nu = 0;
-			continue;
-		}
+		/* the hit's own sample, then (spread) one at point q of a
+		 * (0, 2)-set over the pixel, shifted; the points shuffled
+		 * among the samples (by index, x would follow the lobe
+		 * sample's own first uniform: one slice of the pixel x lobe
+		 * domain) */
 		if (w_hit > 0)
-			lobe_sample(c, h, p, j, nl, nb, uu, w_hit, out, dout);
-		/* Point q of a (0, 2)-set over the pixel, shifted; the points
-		 * shuffled among the samples (by index, x would follow the
-		 * lobe sample's own first uniform: one slice of the pixel x
-		 * lobe domain). */
+			lobe_block_add(c, &lb, h, uu, w_hit, p, j, nl, nb, out,
+				       dout);
+		if (!spread)
+			continue;
 		uint32_t q = glint_permute((uint32_t)(k * c->spp + sp->s),
 					   (uint32_t)(nb * c->spp), sp->perm);
 		double x = (q + 0.5) / (nb * c->spp) + sp->shift[0];
 		double y = glint_radical2(q) + sp->shift[1];
 		double at[2] = { x - (x >= 1) - 0.5, y - (y >= 1) - 0.5 };
-		struct cache_hit hq;
-		if (hit_at(sp->f, at, &hq))
-			lobe_sample(c, &hq, p, j, nl, nb, uu, sp->w, out, dout);
+		if (hit_at(sp->f, at, &lb.own[lb.n]))
+			lobe_block_add(c, &lb, NULL, uu, sp->w, p, j, nl, nb,
+				       out, dout);
 	}
+	if (lb.n)
+		lobe_block_run(c, &lb, p, j, nl, nb, out, dout);
 }
 
 /*

@@ -496,11 +496,13 @@ static void test_lobe_values_batch(void)
 	CHECK(bad == 0, "%d batched lobe values differ", bad);
 	CHECK(nonzero > 10000, "%d nonzero lobe values checked", nonzero);
 
-	/* Sampling in a batch (glint_lobe_sample_values()) against one
-	 * sample at a time: the same directions, values, pdfs and dlog
-	 * (the batch's sin and cos round a quarter-turn tie the other way:
+	/* Sampling in a batch (glint_lobe_sample_values()), each sample
+	 * for its own wo (one in 9 below the surface), against one sample
+	 * at a time: the same directions, values, pdfs and dlog (the
+	 * batch's sin and cos round a quarter-turn tie the other way:
 	 * within 1e-15). */
 	double u0[N], u1[N], pdf[N];
+	struct vec3 wos[N];
 	bad = nonzero = 0;
 	for (int k = 0; k < NSAMPLED; k++) {
 		const struct glint_model *m = sampled[k].m;
@@ -510,8 +512,10 @@ static void test_lobe_values_batch(void)
 		memcpy(p, sampled[k].p, sizeof(double) * (size_t)m->nparams);
 		for (int s = 0; s < 30; s++) {
 			set_roughness(m, p, s);
-			struct vec3 o = random_dir(s, 21);
 			for (int i = 0; i < N; i++) {
+				wos[i] = random_dir((uint64_t)s * N + i, 21);
+				if (i % 9 == 4)
+					wos[i].z = -wos[i].z;
 				u0[i] = glint_u01(glint_hash3(s, i, 1));
 				u1[i] = i % 16 == 0 ? (i / 16 % 8) / 8.0
 						    : glint_u01(glint_hash3(
@@ -520,15 +524,15 @@ static void test_lobe_values_batch(void)
 			u0[0] = 0;
 			for (int j = 0; j < m->bxdf->nlobes; j++) {
 				int d = m->lobes->factor_dlog != NULL;
-				glint_lobe_sample_values(m, p, j, o, N, u0, u1,
-							 x, y, z, pdf, b,
+				glint_lobe_sample_values(m, p, j, N, wos, u0,
+							 u1, x, y, z, pdf, b,
 							 d ? dl : NULL);
 				for (int i = 0; i < N; i++) {
 					double u[2] = { u0[i], u1[i] }, rb,
 					       rd = 0;
 					struct vec3 wi;
 					double rp = glint_lobe_sample_value(
-						m, p, j, o, u, &wi, &rb,
+						m, p, j, wos[i], u, &wi, &rb,
 						d ? &rd : NULL);
 					bad += !(fabs(pdf[i] - rp) <=
 						 1e-12 * rp + 1e-300) ||

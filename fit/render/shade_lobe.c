@@ -86,13 +86,13 @@ void shade_hot_quadrature(const struct glint_shade_cache *c,
 	double ext = glint_lobe_extent(m, p, j);
 	if (ext > 0) {
 		r = local_to_world(h, v3(-wo.x, -wo.y, wo.z));
-		if (angle(r, hot->axis) - hot->radius > ext)
+		if (angle_fast(r, hot->axis) - hot->radius > ext)
 			return;
 	}
 	for (int g = 0; g < hot->nclusters; g++) {
 		const struct glint_env_hot_cluster *cl = &hot->clusters[g];
 		double pw[GLINT_MAX_PARAMS];
-		if (ext > 0 && angle(r, cl->axis) - cl->radius > ext)
+		if (ext > 0 && angle_fast(r, cl->axis) - cl->radius > ext)
 			continue; /* the lobe is below 1e-12 of it */
 		if (coarse) {
 			memcpy(pw, p, sizeof(double) * (size_t)m->nparams);
@@ -496,14 +496,14 @@ int shade_hot_footprint(const struct glint_shade_cache *c, int i,
 	if (dout)
 		dout[0] = dout[1] = dout[2] = 0;
 	const struct glint_env_hot *hot = c->hot;
-	if (angle(fv(f->r), hot->axis) - hot->radius > ext + f->turn)
+	if (angle_fast(fv(f->r), hot->axis) - hot->radius > ext + f->turn)
 		return 1;
 	/* The clusters within reach of any of the footprint's mirror
 	 * directions (each within f->turn of the centre's). */
 	int near_buf[64], *near = near_buf, ncl = 0;
 	for (int g = 0; g < hot->nclusters && near; g++) {
 		const struct glint_env_hot_cluster *cl = &hot->clusters[g];
-		if (angle(fv(f->r), cl->axis) - cl->radius > ext + f->turn)
+		if (angle_fast(fv(f->r), cl->axis) - cl->radius > ext + f->turn)
 			continue;
 		if (ncl == 64) /* many within reach: visit them all */
 			near = NULL;

@@ -462,16 +462,42 @@ double glint_env_dist_pdf_smooth(const struct glint_envmap *env,
 	return pdf_smooth_uv(env, dd, u, v);
 }
 
-/* Is texel (i, j) hot or next to one (the support of the hot part's
- * bilinear radiance)? */
-static int near_hot(const struct glint_env_hot *hot, int w, int h, int i, int j)
+/* The texels hot or next to one (the support of the hot part's bilinear
+ * radiance), as indices j w + i in the map's row order, into *list (the
+ * caller frees it) and their count *n: each hot texel's 3 x 3 marked
+ * (wrapped in azimuth, clamped at the poles), then the marks read. */
+static int near_hot_list(const struct glint_env_hot *hot, int w, int h,
+			 int **list, int *n)
 {
-	for (int b = -1; b <= 1; b++)
-		for (int a = -1; a <= 1; a++) {
-			int y = j + b, x = ((i + a) % w + w) % w;
-			if (y >= 0 && y < h && hot->is_hot[(size_t)y * w + x])
-				return 1;
+	unsigned char *mark = calloc((size_t)w * h, 1);
+
+	*list = NULL;
+	*n = 0;
+	if (!mark)
+		return glint_error_set(ENOMEM, "out of memory");
+	for (int j = 0; j < h && hot->ntexels; j++)
+		for (int i = 0; i < w; i++) {
+			if (!hot->is_hot[(size_t)j * w + i])
+				continue;
+			for (int y = j - 1; y <= j + 1; y++)
+				for (int x = i - 1; x <= i + 1; x++)
+					if (y >= 0 && y < h)
+						mark[(size_t)y * w +
+						     (x < 0    ? x + w
+						      : x >= w ? x - w
+							       : x)] = 1;
 		}
+	for (size_t t = 0; t < (size_t)w * h; t++)
+		*n += mark[t];
+	*list = malloc((size_t)(*n ? *n : 1) * sizeof(int));
+	if (!*list) {
+		free(mark);
+		return glint_error_set(ENOMEM, "out of memory");
+	}
+	for (size_t t = 0, k = 0; t < (size_t)w * h; t++)
+		if (mark[t])
+			(*list)[k++] = (int)t;
+	free(mark);
 	return 0;
 }
 
@@ -496,14 +522,10 @@ static void hot_point_set(float *pts, int k, struct vec3 d, const double l[3],
  * not), and in (*var)[k] the spread about it that the point leaves out
  * (the variance of the texel's flux over directions, both axes, rad^2). */
 static int hot_part_points(const struct glint_envmap *env,
-			   struct glint_env_hot *hot, int q, float **part,
-			   int *npart, float **var)
+			   struct glint_env_hot *hot, const int *near, int n,
+			   int q, float **part, int *npart, float **var)
 {
-	int w = env->img->width, h = env->img->height, n = 0;
-
-	for (int j = 0; j < h && hot->ntexels; j++)
-		for (int i = 0; i < w; i++)
-			n += near_hot(hot, w, h, i, j);
+	int w = env->img->width, h = env->img->height;
 	int merge = var != NULL;
 	*npart = 0;
 	*part = malloc((size_t)(n ? (merge ? n : n * q * q) : 1) * 6 *
@@ -512,46 +534,39 @@ static int hot_part_points(const struct glint_envmap *env,
 		*var = malloc((size_t)(n ? n : 1) * sizeof(float));
 	if (!*part || (merge && !*var))
 		return glint_error_set(ENOMEM, "out of memory");
-	for (int j = 0; j < h && n; j++)
-		for (int i = 0; i < w; i++) {
-			double flux[3] = { 0, 0, 0 };
-			struct vec3 mean = v3(0, 0, 0);
-			if (!near_hot(hot, w, h, i, j))
-				continue;
-			for (int b = 0; b < q; b++)
-				for (int a = 0; a < q; a++) {
-					double u = (i + (a + 0.5) / q) / w;
-					double v = (j + (b + 0.5) / q) / h;
-					double l[3];
-					lookup_uv_part(env, hot->is_hot, 1, u,
-						       v, l);
-					if (!(l[0] + l[1] + l[2] > 0))
-						continue;
-					double dom = (2 * M_PI / w) *
-						     (M_PI / h) *
-						     sin(M_PI * v) / (q * q);
-					struct vec3 d = m3_mul(
-						&env->rot,
-						glint_latlong_uv_to_dir(u, v));
-					for (int c = 0; c < 3; c++)
-						flux[c] += l[c] * dom;
-					mean = v3_add(
-						mean,
-						v3_scale(d, (l[0] + l[1] +
-							     l[2]) * dom));
-					if (!merge)
-						hot_point_set(*part, (*npart)++,
-							      d, l, dom);
-				}
-			double wsum = flux[0] + flux[1] + flux[2];
-			if (!merge || !(wsum > 0))
-				continue;
-			/* the unit directions' variance: 1 - |their mean|^2 */
-			struct vec3 mu = v3_scale(mean, 1 / wsum);
-			(*var)[*npart] = (float)fmax(0, 1 - v3_dot(mu, mu));
-			hot_point_set(*part, (*npart)++, v3_norm(mean), flux,
-				      1);
-		}
+	for (int t = 0; t < n; t++) {
+		int i = near[t] % w, j = near[t] / w;
+		double flux[3] = { 0, 0, 0 };
+		struct vec3 mean = v3(0, 0, 0);
+		for (int b = 0; b < q; b++)
+			for (int a = 0; a < q; a++) {
+				double u = (i + (a + 0.5) / q) / w;
+				double v = (j + (b + 0.5) / q) / h;
+				double l[3];
+				lookup_uv_part(env, hot->is_hot, 1, u, v, l);
+				if (!(l[0] + l[1] + l[2] > 0))
+					continue;
+				double dom = (2 * M_PI / w) * (M_PI / h) *
+					     sin(M_PI * v) / (q * q);
+				struct vec3 d =
+					m3_mul(&env->rot,
+					       glint_latlong_uv_to_dir(u, v));
+				for (int c = 0; c < 3; c++)
+					flux[c] += l[c] * dom;
+				mean = v3_add(mean, v3_scale(d, (l[0] + l[1] +
+								 l[2]) * dom));
+				if (!merge)
+					hot_point_set(*part, (*npart)++, d, l,
+						      dom);
+			}
+		double wsum = flux[0] + flux[1] + flux[2];
+		if (!merge || !(wsum > 0))
+			continue;
+		/* the unit directions' variance: 1 - |their mean|^2 */
+		struct vec3 mu = v3_scale(mean, 1 / wsum);
+		(*var)[*npart] = (float)fmax(0, 1 - v3_dot(mu, mu));
+		hot_point_set(*part, (*npart)++, v3_norm(mean), flux, 1);
+	}
 	return 0;
 }
 
@@ -784,11 +799,16 @@ int glint_env_hot_new(const struct glint_envmap *env, double tau,
 				}
 		}
 	hot->axis = v3_norm(axis);
-	ret = hot_part_points(env, hot, q, &hot->part, &hot->npart, NULL);
+	int *near = NULL, nnear = 0;
+	ret = near_hot_list(hot, w, h, &near, &nnear);
+	if (ret == 0)
+		ret = hot_part_points(env, hot, near, nnear, q, &hot->part,
+				      &hot->npart, NULL);
 	/* and one point a texel, for lobes many texels wide */
 	if (ret == 0 && q > 1)
-		ret = hot_part_points(env, hot, 8, &hot->coarse, &hot->ncoarse,
-				      &hot->coarse_var);
+		ret = hot_part_points(env, hot, near, nnear, 8, &hot->coarse,
+				      &hot->ncoarse, &hot->coarse_var);
+	free(near);
 	if (ret < 0) {
 		glint_env_hot_free(hot);
 		return ret;

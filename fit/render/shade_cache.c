@@ -28,7 +28,9 @@ static void draw_env_samples(const struct glint_envmap *env,
 {
 	enum { BATCH = 16 }; /* drawn side by side (glint_env_dist_sample_n) */
 	double u1[BATCH], u2[BATCH], pdfs[BATCH];
+	double dx[BATCH], dy[BATCH], dz[BATCH];
 	struct vec3 ds[BATCH];
+	struct glint_env_query q[BATCH];
 
 	for (int k = 0; k < nl; k++) {
 		int e = k % BATCH;
@@ -43,6 +45,12 @@ static void draw_env_samples(const struct glint_envmap *env,
 			}
 			glint_env_dist_sample_n(env, &hot->rest, cnt, u1, u2,
 						ds, pdfs);
+			/* and their places in the rest's table (the queries'
+			 * conversions vectorised) */
+			for (int a = 0; a < cnt; a++)
+				dx[a] = ds[a].x, dy[a] = ds[a].y,
+				dz[a] = ds[a].z;
+			glint_env_query_start_n(hot, cnt, dx, dy, dz, q);
 		}
 		double l[3], pdf = pdfs[e];
 		struct vec3 d = ds[e];
@@ -56,7 +64,7 @@ static void draw_env_samples(const struct glint_envmap *env,
 		 * table (glint_env_query(): the same values as
 		 * glint_env_rest_lookup() and glint_env_dist_pdf_smooth()) */
 		double ps;
-		glint_env_query(hot, d, l, &ps);
+		glint_env_query_finish(hot, &q[e], l, &ps);
 		es_k->wi[0] = (float)wi.x;
 		es_k->wi[1] = (float)wi.y;
 		es_k->wi[2] = (float)wi.z;

@@ -333,10 +333,12 @@ void glint_env_dist_sample_n(const struct glint_envmap *env,
 			double cell = c[i + 1] - c[i];
 			double fu = cell > 0 ? (y[k] - c[i]) / cell : 0.5;
 			double u = (i + fu) / w, v = (j + fv) / h;
-			double s = sin(M_PI * v);
-
-			dir[k] = m3_mul(&env->rot,
-					glint_latlong_uv_to_dir(u, v));
+			/* glint_latlong_uv_to_dir() by polynomials (to
+			 * 8e-16): theta = pi v, phi = 2 pi (u - 1/2) */
+			double s, ct, sp, cp;
+			glint_fast_sincos_2pi(0.5 * v, &s, &ct);
+			glint_fast_sincos_2pi(u - 0.5, &sp, &cp);
+			dir[k] = m3_mul(&env->rot, v3(s * sp, ct, -s * cp));
 			/* Density over (u, v) is cell * W * H / total;
 			 * dA = 2 pi^2 sin. */
 			pdf[k] = !(s > 0) || !(cell > 0)

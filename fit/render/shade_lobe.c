@@ -185,7 +185,8 @@ static void lobe_block_run(const struct glint_shade_cache *c,
 	double x[LOBE_BLOCK], y[LOBE_BLOCK], z[LOBE_BLOCK], pb[LOBE_BLOCK];
 	double bj[LOBE_BLOCK], dl[LOBE_BLOCK];
 	double dx[LOBE_BLOCK], dy[LOBE_BLOCK], dz[LOBE_BLOCK];
-	struct vec3 wo[LOBE_BLOCK];
+	struct vec3 wo[LOBE_BLOCK] = { { 0, 0,
+					 0 } }; /* (GCC cannot see n >= 1) */
 	struct glint_env_query q[LOBE_BLOCK];
 	int n = lb->n;
 

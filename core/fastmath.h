@@ -114,8 +114,8 @@ static inline double glint_fast_exp(double x)
 	return e * b.d;
 }
 
-/* exp(x) for x <= 0, as glint_fast_exp() to 3 ulp (0 below -708, where
- * libm's result is subnormal or 0), without a branch or a call, so that a
+/* exp(x) for x <= 0, as glint_fast_exp() to 3 ulp (0 from -708 down,
+ * where libm's is 3e-308 or less), without a branch or a call, so that a
  * loop of it vectorises: k = round(x / ln 2) by the 1.5 x 2^52 shift,
  * whose low bits then hold k for the exponent. */
 static inline double glint_fast_exp_neg(double x)

@@ -238,7 +238,7 @@ beckmann_lane(double m, double ior, struct vec3 wo, double x, double y,
 		   (M_PI * m * m * c2 * c2);
 	double g = vcavity_lane(c, wo.z, z, oh), dlog;
 	double f = fresnel_lane(oh, ior, &dlog);
-	int on = z > 0 && c > 0 && oh > 0;
+	int on = z > 0 && c > 0 && oh > 0 && wo.z > 0;
 	*dl = on ? dlog : 0;
 	return on ? d * g * f / (4 * z * wo.z) : 0;
 }
@@ -248,28 +248,16 @@ void glint_beckmann_lobe_n(double m, double ior, struct vec3 wo, int n,
 			   const double *restrict z, double *restrict b,
 			   double *restrict dlog)
 {
-	if (!(wo.z > 0)) {
-		for (int k = 0; k < n; k++)
-			b[k] = 0;
-		if (dlog)
-			for (int k = 0; k < n; k++)
-				dlog[k] = 0;
-		return;
-	}
 	/* one loop per case, each without a branch in its body */
-	if (dlog && ior > 0)
+	if (dlog)
 		for (int k = 0; k < n; k++)
 			b[k] = beckmann_lane(m, ior, wo, x[k], y[k], z[k],
 					     &dlog[k]);
 	else
 		for (int k = 0; k < n; k++) {
 			double dl;
-			b[k] = beckmann_lane(m, ior > 0 ? ior : 0, wo, x[k],
-					     y[k], z[k], &dl);
+			b[k] = beckmann_lane(m, ior, wo, x[k], y[k], z[k], &dl);
 		}
-	if (dlog && !(ior > 0))
-		for (int k = 0; k < n; k++)
-			dlog[k] = 0;
 }
 
 /* A lane of glint_beckmann_sample_lobe_n(): glint_beckmann_sample_lobe()'s

@@ -72,8 +72,9 @@ double glint_beckmann_sample_lobe(double m, double ior, struct vec3 wo,
  * _lobe_pdf's lobe (and d log lobe / d ior into dlog[], unless NULL) at n
  * directions wi = (x[k], y[k], z[k]) for one wo, without the pdf: a loop
  * without branches, that the compiler vectorises (the hot texels'
- * quadrature, ~100 fixed directions a hit).  Within 1e-13 of _lobe_pdf's
- * values (its exp is glint_fast_exp_neg()).
+ * quadrature, ~100 fixed directions a hit).  Within 1e-12 of _lobe_pdf's
+ * values (its exp is glint_fast_exp_neg()); 0 where wo or wi is below
+ * the surface.
  */
 void glint_beckmann_lobe_n(double m, double ior, struct vec3 wo, int n,
 			   const double *restrict x, const double *restrict y,

@@ -68,7 +68,7 @@ void shade_hot_quadrature(const struct glint_shade_cache *c,
 	const struct glint_model *m = c->model;
 	struct vec3 wo = fv(h->wo);
 	/* A lobe at least HOT_COARSE_TEXELS texels wide takes the hot part
-	 * on one point a texel (a quarter of the points), widened by the
+	 * on one point a texel (fewer points), widened by the
 	 * spread those points leave out (the cluster's coarse_s): the same
 	 * flux and second moment, the error of fourth order in texel /
 	 * width (unit test hot_coarse) */
@@ -185,8 +185,8 @@ static void lobe_block_run(const struct glint_shade_cache *c,
 	double x[LOBE_BLOCK], y[LOBE_BLOCK], z[LOBE_BLOCK], pb[LOBE_BLOCK];
 	double bj[LOBE_BLOCK], dl[LOBE_BLOCK];
 	double dx[LOBE_BLOCK], dy[LOBE_BLOCK], dz[LOBE_BLOCK];
-	struct vec3 wo[LOBE_BLOCK] = { { 0, 0,
-					 0 } }; /* (GCC cannot see n >= 1) */
+	/* initialised: the sanitizer build's GCC cannot see that n >= 1 */
+	struct vec3 wo[LOBE_BLOCK] = { { 0, 0, 0 } };
 	struct glint_env_query q[LOBE_BLOCK];
 	int n = lb->n;
 

@@ -649,7 +649,8 @@ static int hot_reorder(float *pts, int stride, int n, const int *id, int nc,
  * beyond its extent (below 1e-12 of its peak: shade_lobe.c), so the
  * grouping changes how many points a lobe visits, not what it sums.
  */
-static int hot_clusters(struct glint_env_hot *hot, double seed, double margin)
+static int hot_clusters(struct glint_env_hot *hot, float *coarse_var,
+			double seed, double margin)
 {
 	int np = hot->npts + hot->npart + hot->ncoarse, nc = 0, ret = 0;
 	int *id = malloc((size_t)(np ? np : 1) * sizeof(int));
@@ -704,8 +705,8 @@ static int hot_clusters(struct glint_env_hot *hot, double seed, double margin)
 		ret = hot_reorder(hot->coarse, 6, hot->ncoarse,
 				  id + hot->npts + hot->npart, nc,
 				  first_coarse);
-	if (ret == 0 && hot->coarse_var)
-		ret = hot_reorder(hot->coarse_var, 1, hot->ncoarse,
+	if (ret == 0 && coarse_var)
+		ret = hot_reorder(coarse_var, 1, hot->ncoarse,
 				  id + hot->npts + hot->npart, nc,
 				  first_coarse);
 	for (int c = 0; c < nc && ret == 0; c++) {
@@ -717,6 +718,16 @@ static int hot_clusters(struct glint_env_hot *hot, double seed, double margin)
 		cl->part1 = first_part[c + 1];
 		cl->coarse0 = first_coarse[c];
 		cl->coarse1 = first_coarse[c + 1];
+		/* the flux-weighted mean of the spread each coarse point
+		 * leaves out, per axis */
+		double sw = 0, sv = 0;
+		for (int t = cl->coarse0; t < cl->coarse1 && coarse_var; t++) {
+			const float *pt = hot->coarse + 6 * (size_t)t;
+			double f = (double)pt[3] + pt[4] + pt[5];
+			sw += f;
+			sv += f * coarse_var[t];
+		}
+		cl->coarse_s = sw > 0 ? sqrt(sv / sw / 2) : 0;
 	}
 out:
 	free(id);
@@ -802,6 +813,7 @@ int glint_env_hot_new(const struct glint_envmap *env, double tau,
 		}
 	hot->axis = v3_norm(axis);
 	int *near = NULL, nnear = 0;
+	float *coarse_var = NULL; /* each coarse point's spread */
 	ret = near_hot_list(hot, w, h, &near, &nnear);
 	if (ret == 0)
 		ret = hot_part_points(env, hot, near, nnear, q, &hot->part,
@@ -809,9 +821,10 @@ int glint_env_hot_new(const struct glint_envmap *env, double tau,
 	/* and one point a texel, for lobes many texels wide */
 	if (ret == 0 && q > 1)
 		ret = hot_part_points(env, hot, near, nnear, 8, &hot->coarse,
-				      &hot->ncoarse, &hot->coarse_var);
+				      &hot->ncoarse, &coarse_var);
 	free(near);
 	if (ret < 0) {
+		free(coarse_var);
 		glint_env_hot_free(hot);
 		return ret;
 	}
@@ -829,22 +842,9 @@ int glint_env_hot_new(const struct glint_envmap *env, double tau,
 	hot->radius = radius + margin;
 	/* A lamp's points within a few degrees (8 texels at least: the
 	 * hot texels of a lamp a texel across span 4 or 5) of its first. */
-	ret = hot_clusters(hot, fmax(2 * M_PI / 180, 16 * M_PI / w), margin);
-	for (int c = 0; c < hot->nclusters && ret == 0; c++) {
-		/* the flux-weighted mean of the spread each coarse point
-		 * leaves out, per axis */
-		struct glint_env_hot_cluster *cl = &hot->clusters[c];
-		double sw = 0, sv = 0;
-		for (int t = cl->coarse0; t < cl->coarse1; t++) {
-			const float *pt = hot->coarse + 6 * (size_t)t;
-			double f = (double)pt[3] + pt[4] + pt[5];
-			sw += f;
-			sv += f * hot->coarse_var[t];
-		}
-		cl->coarse_s = sw > 0 ? sqrt(sv / sw / 2) : 0;
-	}
-	free(hot->coarse_var);
-	hot->coarse_var = NULL;
+	ret = hot_clusters(hot, coarse_var, fmax(2 * M_PI / 180, 16 * M_PI / w),
+			   margin);
+	free(coarse_var);
 	if (ret == 0)
 		ret = dist_build(env->img, hot->is_hot, &hot->rest);
 	if (ret == 0)
@@ -864,7 +864,6 @@ void glint_env_hot_free(struct glint_env_hot *hot)
 	free(hot->pts);
 	free(hot->part);
 	free(hot->coarse);
-	free(hot->coarse_var);
 	free(hot->clusters);
 	free(hot->is_hot);
 	free(hot->tab);

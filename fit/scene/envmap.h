@@ -159,7 +159,6 @@ struct glint_env_hot {
 	 * that), for a lobe many texels wide (shade_lobe.c). */
 	int ncoarse;
 	float *coarse;
-	float *coarse_var;     /* while it is built: each point's spread */
 	unsigned char *is_hot; /* W x H */
 	struct glint_env_dist rest;
 	struct vec3 axis; /* a cone holding every hot texel: */

@@ -43,7 +43,7 @@
  *   bench/accuracy [quick|slice] [classes] [--check|--no-refusals|--within]
  *                  [MAP...]
  * No maps: every map in ../shared/data/probes and data/env (the angular
- * campus probe converted to lat-long: load_map()).  classes: the six
+ * campus probe converted to lat-long: fixture_load_map()).  classes: the six
  * procedural lighting classes of sim/light_class.h instead (a map named
  * class:NAME is one of them, 1024 px, unrotated).
  * quick: four materials (yellow plastic, nylon, silver, copper); slice:
@@ -691,36 +691,6 @@ static int judge(const struct glint_model *m, const double *truth,
 	return FLAGGED;
 }
 
-/*
- * The scene's map: a lat-long one as it is; a square one is an angular
- * light probe (Debevec's format, as the shared campus probe), converted
- * to lat-long at its angular resolution (capture/probe/probe.h) as
- * `glint probe convert` would, in memory.
- */
-static int load_map(const char *map, const struct glint_scene *sc,
-		    struct glint_envmap **env)
-{
-	struct glint_image *img = NULL, *ll = NULL;
-
-	if (!strncmp(map, "class:", 6)) {
-		if (glint_sim_light_class(map + 6, 1024, &img) < 0)
-			return -1;
-		return glint_envmap_new(img, sc->env_rotation, sc->env_scale,
-					map, env);
-	}
-	if (glint_image_read(map, &img) < 0)
-		return -1;
-	if (img->width == img->height) {
-		int ret = glint_probe_convert(img, GLINT_PROBE_ANGULAR,
-					      GLINT_PROBE_LATLONG, 0, 0, &ll);
-		glint_image_free(img);
-		if (ret < 0)
-			return ret;
-		img = ll;
-	}
-	return glint_envmap_new(img, sc->env_rotation, sc->env_scale, map, env);
-}
-
 /* The fit's objective (weighted cost) at parameters p with roughness
  * set to rough: ACCURACY_PROFILE's points; NAN where it fails. */
 static double cost_at(struct glint_renderer *r, const struct glint_model *m,
@@ -789,11 +759,9 @@ static void one_map(const char *map, const char *const *mats, int nmats,
 		with_bias = 0;
 	memset(t, 0, sizeof(*t));
 	fixture_scene(&sc, 256, map);
-	if (!strncmp(map, "class:", 6)) /* they face the camera unrotated */
-		memset(sc.env_rotation, 0, sizeof(sc.env_rotation));
 	if (getenv("ACCURACY_SPP"))
 		sc.spp = atoi(getenv("ACCURACY_SPP"));
-	if (load_map(map, &sc, &env) < 0 ||
+	if (fixture_load_map(map, &sc, &env) < 0 ||
 	    glint_renderer_init_env(&r, &sc, env, 0, NULL) < 0) {
 		fprintf(stderr, "%s: %s\n", map, glint_error_msg());
 		return;

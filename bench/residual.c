@@ -7,8 +7,9 @@
  *
  *   bench/residual MAP MATERIAL PHOTO.exr [ROUGHNESS...]
  *
- * PHOTO is fixture_scene's 256 px view of MATERIAL under MAP (as
- * bench/accuracy's ACCURACY_DUMP or ACCURACY_CACHE writes it).  For the
+ * PHOTO is fixture_scene's 256 px view of MATERIAL under MAP (a map file
+ * or class:NAME, as bench/accuracy takes them), as bench/accuracy's
+ * ACCURACY_DUMP or ACCURACY_CACHE writes it.  For the
  * truth's roughness and each ROUGHNESS given (the truth's other
  * parameters), prints the sum of squared differences over the interior,
  * split between the highlight (photo above 4x the interior's median) and
@@ -79,10 +80,12 @@ int main(int argc, char **argv)
 	}
 	struct glint_scene sc;
 	struct glint_renderer r;
+	struct glint_envmap *env = NULL;
 	fixture_scene(&sc, 256, argv[1]);
 	if (getenv("RESIDUAL_SPP"))
 		sc.spp = atoi(getenv("RESIDUAL_SPP"));
-	if (glint_renderer_init(&r, &sc, 0, NULL) < 0) {
+	if (fixture_load_map(argv[1], &sc, &env) < 0 ||
+	    glint_renderer_init_env(&r, &sc, env, 0, NULL) < 0) {
 		fprintf(stderr, "residual: %s\n", glint_error_msg());
 		return 1;
 	}

@@ -16,12 +16,15 @@
 
 #include "core/error.h"
 #include "fit/render/render.h"
+#include "capture/probe/probe.h"
 #include "fit/scene/envmap.h"
+#include "sim/light_class.h"
 #include "sim/reference.h"
 #include "sim/sensor.h"
 
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 
 /* A w x w photo, the sphere 180 / 512 of the width in radius; env NULL:
  * the Venice map; a 100 mm lens at f_number (0: a pinhole) focused on the
@@ -170,6 +173,40 @@ static inline double fixture_tolerance_error(const double *p, const double *q)
 		e = fmax(e, fabs(p[k] - q[k]) / 0.01);
 	e = fmax(e, fabs(p[6] / q[6] - 1) / 0.05);
 	return fmax(e, fabs(p[7] - q[7]) / 0.05);
+}
+
+/*
+ * The scene's map: class:NAME one of sim/light_class.h's lighting
+ * classes at 1024 px, unrotated (sc's rotation set to none); a lat-long
+ * one as it is; a square one an angular light probe (Debevec's format, as
+ * the shared campus probe), converted to lat-long at its angular
+ * resolution (capture/probe/probe.h) as `glint probe convert` would, in
+ * memory.
+ */
+static inline int fixture_load_map(const char *map, struct glint_scene *sc,
+				   struct glint_envmap **env)
+{
+	struct glint_image *img = NULL, *ll = NULL;
+
+	if (!strncmp(map, "class:", 6)) {
+		/* they face the camera unrotated */
+		memset(sc->env_rotation, 0, sizeof(sc->env_rotation));
+		if (glint_sim_light_class(map + 6, 1024, &img) < 0)
+			return -1;
+		return glint_envmap_new(img, sc->env_rotation, sc->env_scale,
+					map, env);
+	}
+	if (glint_image_read(map, &img) < 0)
+		return -1;
+	if (img->width == img->height) {
+		int ret = glint_probe_convert(img, GLINT_PROBE_ANGULAR,
+					      GLINT_PROBE_LATLONG, 0, 0, &ll);
+		glint_image_free(img);
+		if (ret < 0)
+			return ret;
+		img = ll;
+	}
+	return glint_envmap_new(img, sc->env_rotation, sc->env_scale, map, env);
 }
 
 #endif

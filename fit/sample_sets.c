@@ -197,6 +197,11 @@ int fit_refine_on_sets(struct objective *ob,
 		};
 		so.jac_last = malloc(sizeof(double) * (size_t)rows * n);
 		fit_objective_lm_opts(&lo_opts, ob->o->polish_iter, &pc);
+		/* every set's footprint blend at the polish's start: one
+		 * form of the estimate for the solve and what follows
+		 * (glint_shade_cache_fix_footprint()) */
+		for (int k = 0; k < nsets; k++)
+			glint_shade_cache_fix_footprint(sets[k], ob->p);
 		ret = glint_lm_solve(&pr, &lo_opts, q, &lr);
 		if (ret < 0)
 			goto out;

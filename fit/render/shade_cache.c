@@ -351,6 +351,17 @@ int glint_shade_cache_join(struct glint_shade_cache **parts, int nparts,
 	return 0;
 }
 
+void glint_shade_cache_fix_footprint(struct glint_shade_cache *c,
+				     const double *p)
+{
+	for (int k = 0; k < c->nparts; k++)
+		glint_shade_cache_fix_footprint(c->parts[k], p);
+	c->foot_fixed = p != NULL;
+	if (p)
+		memcpy(c->foot_p, p,
+		       (size_t)c->model->nparams * sizeof(*c->foot_p));
+}
+
 void glint_shade_cache_free(struct glint_shade_cache *c)
 {
 	if (!c)
@@ -411,7 +422,8 @@ static void lobes_pixels(void *ctx, int i0, int i1, int thread)
 				continue;
 			}
 			double hot[3], dhot[3];
-			int foot = shade_hot_footprint(c, i, job->p, j, hot,
+			const double *pf = c->foot_fixed ? c->foot_p : job->p;
+			int foot = shade_hot_footprint(c, i, job->p, pf, j, hot,
 						       dd ? dhot : NULL);
 			for (int ch = 0; ch < 3 && foot; ch++) {
 				dst[j * 3 + ch] += hot[ch];
@@ -419,9 +431,8 @@ static void lobes_pixels(void *ctx, int i0, int i1, int thread)
 					dd[j * 3 + ch] += dhot[ch];
 			}
 			struct spread sp = { &c->feet[i], 0, { 0, 0 }, 0, 0 };
-			sp.w = fmin(1,
-				    fmax(0, shade_foot_level(c, i, job->p, j) +
-						    SPREAD_FROM));
+			sp.w = fmin(1, fmax(0, shade_foot_level(c, i, pf, j) +
+						       SPREAD_FROM));
 			if (sp.w > 0) {
 				uint32_t sd = c->hits[(size_t)i * c->spp].seed;
 				sp.shift[0] = glint_u01(

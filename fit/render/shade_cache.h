@@ -119,6 +119,20 @@ void glint_shade_cache_lobes_d(struct glint_shade_cache *c, const double *p,
 			       const int *sel, int nsel, double *lobes,
 			       double *dlobes);
 
+/*
+ * The footprint's blends (the share of a near-mirror's lobe samples
+ * spread over the pixel, and the hot texels' grid levels, both following
+ * the lobe's width against the pixel's turn of mirror direction) taken
+ * at parameters p from now on, rather than at each shading's own; NULL:
+ * at each shading's own again.  A blend that follows the roughness gives
+ * the objective a slope of its own (the blend's rate times the
+ * difference of the estimates it blends), which a solve follows: the
+ * sample sets' polish fixes them at its start (docs/fitting.md).  A
+ * joint cache fixes its parts'.
+ */
+void glint_shade_cache_fix_footprint(struct glint_shade_cache *c,
+				     const double *p);
+
 /* The constant lobes alone (the varying ones 0), which depend on no
  * parameter: integrated once when the cache was built. */
 void glint_shade_cache_constant_lobes_sel(struct glint_shade_cache *c,

@@ -60,6 +60,10 @@ struct glint_shade_cache {
 	struct glint_shade_light *own_light; /* when not shared */
 	int lambert[GLINT_MAX_PARAMS];	     /* lobe j is the constant 1/pi */
 	int n, spp, nl, nb, nthreads, no_footprint;
+	/* The parameters the footprint's blend is taken at when fixed
+	 * (glint_shade_cache_fix_footprint()), else each shading's own. */
+	int foot_fixed;
+	double foot_p[GLINT_MAX_PARAMS];
 	int32_t *pix;
 	struct cache_hit *hits;	   /* n * spp */
 	struct cache_foot *feet;   /* n */
@@ -161,7 +165,8 @@ void shade_foot_fit(const struct glint_gbuffer *gb, int32_t pix,
  * (shade_hot_quadrature()).
  */
 int shade_hot_footprint(const struct glint_shade_cache *c, int i,
-			const double *p, int j, double out[3], double *dout);
+			const double *p, const double *pf, int j, double out[3],
+			double *dout);
 
 /* How many times (log2) pixel i's mirror direction turns across it by
  * lobe j's width at p; -1 without a footprint. */

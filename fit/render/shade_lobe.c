@@ -473,18 +473,21 @@ double shade_foot_level(const struct glint_shade_cache *c, int i,
  * (shade_hot_quadrature()).
  */
 int shade_hot_footprint(const struct glint_shade_cache *c, int i,
-			const double *p, int j, double out[3], double *dout)
+			const double *p, const double *pf, int j, double out[3],
+			double *dout)
 {
 	const struct cache_foot *f = &c->feet[i];
 	const struct glint_model *m = c->model;
-	double pw[GLINT_MAX_PARAMS];
+	double pw[GLINT_MAX_PARAMS], pwf[GLINT_MAX_PARAMS];
 
 	if (c->no_footprint || !m->lobes->microfacet || !(f->turn > 0) ||
 	    !c->hot->npart)
 		return 0;
 	memcpy(pw, p, (size_t)m->nparams * sizeof(*p));
 	glint_lobe_widen(m, pw, j, c->light->spread);
-	double sd = glint_lobe_width(m, pw, j);
+	memcpy(pwf, pf, (size_t)m->nparams * sizeof(*pf));
+	glint_lobe_widen(m, pwf, j, c->light->spread);
+	double sd = glint_lobe_width(m, pwf, j);
 	double lv = sd > 0 ? log2(f->turn / sd) : 0;
 	if (!(lv > 0))
 		return 0;

@@ -864,6 +864,108 @@ static void test_footprint_rest(void)
 	glint_envmap_free(env);
 }
 
+/* The specular lobe (red) of cache c's n pixels at roughness m (the
+ * rest of the parameters as near_mirror_lobe's) into out. */
+static void spread_lobes(struct glint_shade_cache *c, double m, int n,
+			 double *out)
+{
+	double p[8] = { 0.1, 0.1, 0.1, 1, 1, 1, m, 1.5 };
+	double *lobes = calloc((size_t)n * 2 * 3, sizeof(double));
+
+	glint_shade_cache_lobes(c, p, lobes);
+	for (int i = 0; i < n; i++)
+		out[i] = lobes[(i * 2 + 1) * 3];
+	free(lobes);
+}
+
+/* The largest |a - b| over n values. */
+static double max_diff(const double *a, const double *b, int n)
+{
+	double d = 0;
+	for (int i = 0; i < n; i++)
+		d = fmax(d, fabs(a[i] - b[i]));
+	return d;
+}
+
+/*
+ * The footprint's blend fixed (glint_shade_cache_fix_footprint()): where
+ * a lobe is about as wide as a pixel's turn of mirror direction, a share
+ * of its samples, growing as it narrows, is spread over the pixel.  Fixed
+ * at one roughness, the lobe there is the same bit for bit; at another
+ * roughness it is shaded with the fixed share (not the one that follows:
+ * the values differ where the share does), and NULL follows the
+ * roughness again.  A joint cache fixes its parts': its values are those
+ * of a part fixed alone.
+ */
+static void test_footprint_fixed(void)
+{
+	struct glint_envmap *env = sun_env(1);
+	int32_t pix[48 * 48];
+	int n = sphere_interior(pix);
+	double m0 = 0.08, m1 = 0.12,
+	       p0[8] = { 0.1, 0.1, 0.1, 1, 1, 1, m0, 1.5 };
+	double *a = calloc((size_t)n, sizeof(double));
+	double *b = calloc((size_t)n, sizeof(double));
+	double *j = calloc((size_t)n * 2, sizeof(double));
+	struct setup s;
+	struct glint_shade_cache *c = NULL, *parts[2] = { NULL, NULL }, *joint;
+	struct glint_shade_cache_opts o = { .static_samples = 4,
+					    .light_samples = 8,
+					    .lobe_samples = 8,
+					    .nthreads = 2 };
+
+	make_camera(&s.cam, 48, 48, 60, 0, 0);
+	setup_sphere(&s, v3(0, 0, -3), 1, 4);
+	/* c, and two caches made alike: one never fixed, one a part */
+	struct glint_shade_cache **mk[3] = { &c, &parts[0], &parts[1] };
+	for (int k = 0; k < 3; k++)
+		CHECK(glint_shade_cache_new(&s.gb, pix, n, env,
+					    &glint_model_torrance_sparrow, &o,
+					    mk[k]) == 0,
+		      "%s", glint_error_msg());
+	spread_lobes(c, m0, n, a);
+	glint_shade_cache_fix_footprint(c, p0);
+	spread_lobes(c, m0, n, b);
+	CHECK(max_diff(a, b, n) == 0, "at the fixed roughness: off by %g",
+	      max_diff(a, b, n));
+	spread_lobes(c, m1, n, b);
+	glint_shade_cache_fix_footprint(c, NULL);
+	spread_lobes(c, m1, n, a);
+	double top = 0;
+	for (int i = 0; i < n; i++)
+		top = fmax(top, a[i]);
+	printf("  at roughness %.2f, the blend fixed at %.2f: pixels differ "
+	       "by up to %.3g of %.3g\n",
+	       m1, m0, max_diff(a, b, n), top);
+	CHECK(max_diff(a, b, n) > 1e-3 * top, "the fixed blend had no effect");
+	/* NULL: the blend follows again, the same as a cache never fixed */
+	spread_lobes(parts[0], m1, n, b);
+	CHECK(max_diff(a, b, n) == 0, "unfixed: off by %g", max_diff(a, b, n));
+
+	/* a joint cache of two parts, the second made as c */
+	glint_shade_cache_fix_footprint(c, p0);
+	spread_lobes(c, m1, n, a);
+	CHECK(glint_shade_cache_join(parts, 2, &joint) == 0, "%s",
+	      glint_error_msg());
+	glint_shade_cache_fix_footprint(joint, p0);
+	double p1[8] = { 0.1, 0.1, 0.1, 1, 1, 1, m1, 1.5 };
+	double *lobes = calloc((size_t)n * 2 * 2 * 3, sizeof(double));
+	glint_shade_cache_lobes(joint, p1, lobes);
+	for (int i = 0; i < 2 * n; i++)
+		j[i] = lobes[(i * 2 + 1) * 3];
+	CHECK(max_diff(j + n, a, n) == 0,
+	      "the joint cache's second part: off by %g",
+	      max_diff(j + n, a, n));
+	free(lobes);
+	glint_shade_cache_free(joint);
+	glint_shade_cache_free(c);
+	teardown(&s);
+	free(a);
+	free(b);
+	free(j);
+	glint_envmap_free(env);
+}
+
 /* glint_permute(): a bijection of [0, n) for every n and seed, and
  * different seeds give different orders. */
 static void test_permute(void)
@@ -922,6 +1024,7 @@ int main(void)
 	RUN(test_footprint);
 	RUN(test_factor_derivative);
 	RUN(test_footprint_rest);
+	RUN(test_footprint_fixed);
 	RUN(test_sample_pattern);
 	RUN(test_permute);
 	RUN(test_sobol_blocks);

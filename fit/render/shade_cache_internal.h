@@ -160,9 +160,11 @@ void shade_foot_fit(const struct glint_gbuffer *gb, int32_t pix,
  * spread of the hot texels' quadrature points (so that they integrate
  * the texels' area, not points of light) and integrated on a grid whose
  * cells turn by at most its width, blending two levels so that the
- * result stays continuous in the parameters.  Returns 0 (out untouched)
- * when the lobe is wide enough for the hits' own points
- * (shade_hot_quadrature()).
+ * result stays continuous in the parameters.  The levels (and whether
+ * the lobe is narrow enough for the grid) are taken at pf, p itself or
+ * the blend's fixed parameters (glint_shade_cache_fix_footprint()); the
+ * lobe is shaded at p.  Returns 0 (out untouched) when the lobe is wide
+ * enough for the hits' own points (shade_hot_quadrature()).
  */
 int shade_hot_footprint(const struct glint_shade_cache *c, int i,
 			const double *p, const double *pf, int j, double out[3],

@@ -485,9 +485,11 @@ int shade_hot_footprint(const struct glint_shade_cache *c, int i,
 		return 0;
 	memcpy(pw, p, (size_t)m->nparams * sizeof(*p));
 	glint_lobe_widen(m, pw, j, c->light->spread);
-	memcpy(pwf, pf, (size_t)m->nparams * sizeof(*pf));
-	glint_lobe_widen(m, pwf, j, c->light->spread);
-	double sd = glint_lobe_width(m, pwf, j);
+	if (pf != p) { /* the blend fixed elsewhere */
+		memcpy(pwf, pf, (size_t)m->nparams * sizeof(*pf));
+		glint_lobe_widen(m, pwf, j, c->light->spread);
+	}
+	double sd = glint_lobe_width(m, pf != p ? pwf : pw, j);
 	double lv = sd > 0 ? log2(f->turn / sd) : 0;
 	if (!(lv > 0))
 		return 0;

@@ -63,7 +63,7 @@ void glint_fit_default_opts(struct glint_fit_opts *o)
 	o->seed = 1;
 	o->anneal_evals = 150;
 	o->mc_draws = 2;
-	o->polish_iter = 2;
+	o->polish_iter = 8;
 	o->level = 0.95;
 }
 

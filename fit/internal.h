@@ -66,6 +66,14 @@ struct objective {
 	double *set_lobes[MAX_SETS], *set_dlobes[MAX_SETS];
 	double set_lobes_p[MAX_SETS][GLINT_MAX_PARAMS];
 	int set_has_d[MAX_SETS];
+	/* each set's own Jacobian (rows x nfree, one set after another) at
+	 * the parameters set_jac_p, from the sets' polish's last
+	 * linearisation (fit_refine_on_sets()); set_jac_n sets of it hold,
+	 * 0 when none */
+	double *set_jac;
+	size_t set_jac_size;
+	double set_jac_p[GLINT_MAX_PARAMS];
+	int set_jac_n;
 	struct view views[GLINT_FIT_MAX_VIEWS];
 	int nviews;
 	/* The sets' mean weighted residuals at the final p over every
@@ -258,6 +266,12 @@ int fit_sample_sets(struct objective *ob, int more,
 		    struct glint_shade_cache **sets, int *nsets);
 
 int fit_sets_residuals(void *ctx, const double *q, double *r);
+
+/* Set k's lobes at p (the nonlinear parameters as at its last evaluation
+ * by fit_sets_residuals()) into the objective's memo, with set k as its
+ * cache: its Jacobian then shades only the columns that are not
+ * albedos.  Without them the memo is cleared, and shaded anew. */
+void fit_set_memo(struct objective *ob, int k, const double *p);
 
 int fit_refine_on_sets(struct objective *ob,
 		       struct glint_shade_cache *const *sets, int nsets,

@@ -21,43 +21,26 @@
 
 /* Per block of residuals, the sum over its residuals i and the sample
  * sets s of (r_s,i - r_i) J_s,ik (uncertainty.h's draws_jr), with J_s
- * set s's own Jacobian at ob->p (jac: the fitted set's), into jr
- * (nblocks x n). */
+ * set s's own Jacobian at ob->p: the polish's (ob->set_jac) where it
+ * linearised there last, else shaded here, into jr (nblocks x n). */
 static int sets_jr(struct objective *ob, int nsets, const double *each,
-		   const double *r, const double *jac, const int *block,
-		   int nblocks, double *jr)
+		   const double *r, const int *block, int nblocks, double *jr)
 {
 	struct glint_shade_cache *fitted = ob->cache;
 	int n = ob->nfree, rows = 3 * ob->nsel, ret = 0;
-	double *js = malloc(sizeof(double) * (size_t)rows * n);
+	size_t nj = (size_t)rows * n;
+	int kept = ob->set_jac_n == nsets &&
+		   !memcmp(ob->set_jac_p, ob->p, sizeof(ob->p));
+	double *js = kept ? NULL : malloc(sizeof(double) * nj);
 
-	if (!js)
+	if (!kept && !js)
 		return glint_error_set(ENOMEM, "out of memory");
 	memset(jr, 0, sizeof(double) * (size_t)nblocks * n);
 	for (int s = 0; s < nsets && ret == 0; s++) {
-		const double *j = jac;
-		if (s > 0) {
-			ob->cache = ob->sets[s];
-			ob->memo_valid = 0;
-			/* its lobes at p from the polish's last evaluation */
-			if (ob->set_lobes[s] &&
-			    fit_nonlinear_same(ob, ob->p, ob->set_lobes_p[s])) {
-				size_t nl = (size_t)ob->nsel *
-					    ob->m->bxdf->nlobes * 3 *
-					    sizeof(double);
-				memcpy(ob->lobes, ob->set_lobes[s], nl);
-				ob->memo_d = ob->set_has_d[s];
-				if (ob->memo_d)
-					memcpy(ob->dlobes, ob->set_dlobes[s],
-					       nl);
-				memcpy(ob->memo_p, ob->p, sizeof(ob->memo_p));
-				ob->memo_valid = 1;
-				ob->memo_cache = ob->cache;
-				ob->memo_sel = ob->sel;
-				ob->memo_nsel = ob->nsel;
-			}
+		const double *j = kept ? ob->set_jac + nj * s : js;
+		if (!kept) {
+			fit_set_memo(ob, s, ob->p);
 			ret = fit_obj_jacobian(ob, ob->p, NULL, js);
-			j = js;
 		}
 		for (int i = 0; i < rows && ret == 0; i++) {
 			double d = each[(size_t)s * rows + i] - r[i];
@@ -67,7 +50,6 @@ static int sets_jr(struct objective *ob, int nsets, const double *each,
 		}
 	}
 	ob->cache = fitted;
-	ob->memo_valid = 0;
 	free(js);
 	return ret;
 }
@@ -171,7 +153,7 @@ static int estimate_on_sets(struct objective *ob, struct fit_data *d,
 		return ret;
 	int nblocks = fit_pixel_blocks(ob, sl->all, sl->nall, block);
 	if (ob->cache && nsets > 1)
-		ret = sets_jr(ob, nsets, each, r, jac, block, nblocks, jr);
+		ret = sets_jr(ob, nsets, each, r, block, nblocks, jr);
 	if (ret < 0)
 		return ret;
 	return covariance(ob, sl, nsets, lo, hi, each, r, jac, block, nblocks,

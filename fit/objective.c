@@ -344,6 +344,7 @@ void fit_objective_free(struct objective *ob)
 	free(ob->lobes);
 	free(ob->lobes2);
 	free(ob->dlobes);
+	free(ob->set_jac);
 	for (int k = 0; k < MAX_SETS; k++) {
 		free(ob->set_lobes[k]);
 		free(ob->set_dlobes[k]);

@@ -310,6 +310,17 @@ static int lm_iterate(struct lm_state *s, double *p)
 			res->reason = "step ~ 0";
 			break;
 		}
+		/* A lightly damped step below se_tol standard errors: the
+		 * minimum is within them, and the step is not worth its
+		 * evaluation (at the minimum of a Monte Carlo objective it is
+		 * rejected as often as not, and each rejection costs one). */
+		if (o->se_tol > 0 && s->lambda <= 1 &&
+		    step_insignificant(s->a, s->freev, n, s->m, s->cost, p,
+				       s->q, o->se_tol)) {
+			res->converged = 1;
+			res->reason = "steps below the standard errors";
+			break;
+		}
 		ret = pr->residuals(pr->ctx, s->q, s->rn);
 		res->evaluations++;
 		if (ret < 0)

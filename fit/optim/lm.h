@@ -44,7 +44,9 @@ struct glint_lm_opts {
 	double gtol;	/* stop when the projected gradient is below */
 	double fd_step; /* relative forward-difference step */
 	/* Stop when every accepted step is below se_tol standard errors
-	 * (statistically meaningless moves); 0 disables. */
+	 * (statistically meaningless moves), and before evaluating a
+	 * lightly damped step (damping at most 1) that is below them;
+	 * 0 disables. */
 	double se_tol;
 	/* No Jacobian at the final point when the last step moved there
 	 * (the caller wants the point alone): se is then NaN, at_bound

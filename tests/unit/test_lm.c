@@ -132,6 +132,49 @@ static void test_standard_errors(void)
 		   "intercept standard error");
 }
 
+/* se_tol: a lightly damped step below se_tol standard errors is not
+ * evaluated; the solve ends where it stands.  From 10 standard errors
+ * off, the solve still reaches the optimum. */
+static void test_se_tol_unevaluated(void)
+{
+	struct line l;
+	for (int i = 0; i < 20; i++) {
+		l.x[i] = i;
+		l.y[i] = 2 + 0.5 * i + 0.1 * sin(7.3 * i);
+	}
+	double lo[2] = { -100, -100 }, hi[2] = { 100, 100 }, p[2] = { 0, 0 };
+	struct glint_lm_problem pr = { 2, 20, lo, hi, linefit, NULL, &l };
+	struct glint_lm_opts o;
+	struct glint_lm_result best, near, far;
+	glint_lm_default_opts(&o);
+	glint_lm_solve(&pr, &o, p, &best);
+	double opt[2] = { p[0], p[1] };
+
+	o.se_tol = 0.1;
+	p[0] = opt[0] + 0.05 * best.se[0];
+	p[1] = opt[1];
+	double start0 = p[0];
+	CHECK(glint_lm_solve(&pr, &o, p, &near) == 0, "%s", glint_error_msg());
+	CHECK(p[0] == start0 && p[1] == opt[1],
+	      "moved from (%.9g, %.9g) to (%.9g, %.9g)", start0, opt[1], p[0],
+	      p[1]);
+	/* the start's residuals and its forward-difference Jacobian's two */
+	CHECK(near.evaluations == 3 && near.converged &&
+		      !strcmp(near.reason, "steps below the standard errors"),
+	      "%d evaluations (%s): the step below 0.1 standard errors "
+	      "was evaluated",
+	      near.evaluations, near.reason);
+
+	p[0] = opt[0] + 10 * best.se[0];
+	p[1] = opt[1] - 10 * best.se[1];
+	CHECK(glint_lm_solve(&pr, &o, p, &far) == 0, "%s", glint_error_msg());
+	CHECK(fabs(p[0] - opt[0]) < 0.1 * best.se[0] &&
+		      fabs(p[1] - opt[1]) < 0.1 * best.se[1],
+	      "from 10 standard errors off: (%.9g, %.9g), the optimum "
+	      "(%.9g, %.9g)",
+	      p[0], p[1], opt[0], opt[1]);
+}
+
 static int failing(void *ctx, const double *p, double *r)
 {
 	(void)ctx;
@@ -159,6 +202,7 @@ int main(void)
 	RUN(test_no_final_jacobian);
 	RUN(test_optimum_on_bound);
 	RUN(test_standard_errors);
+	RUN(test_se_tol_unevaluated);
 	RUN(test_errors);
 	return test_result();
 }

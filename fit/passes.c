@@ -50,19 +50,8 @@ static double projected_cost(struct objective *ob, const int *sel, int nsel,
 /* Start from the best of ob->p and roughness at n log-spaced values in
  * [lo, hi] (the other nonlinear parameters held), albedos solved exactly
  * for each. */
-static int rescan_roughness2(struct objective *ob, const int *sel, int nsel,
-			     double lo, double hi, int n, double *second);
-
 static int rescan_roughness(struct objective *ob, const int *sel, int nsel,
 			    double lo, double hi, int n)
-{
-	return rescan_roughness2(ob, sel, nsel, lo, hi, n, NULL);
-}
-
-/* As rescan_roughness(), and where second is not NULL the runner-up's
- * parameters in it (ob->p's where there is none). */
-static int rescan_roughness2(struct objective *ob, const int *sel, int nsel,
-			     double lo, double hi, int n, double *second)
 {
 	const struct glint_model *m = ob->m;
 	int rk = m->lobes->roughness_param;
@@ -73,24 +62,15 @@ static int rescan_roughness2(struct objective *ob, const int *sel, int nsel,
 		return glint_error_set(ENOMEM, "out of memory");
 	memcpy(best_p, ob->p, sizeof(best_p));
 	memcpy(p, ob->p, sizeof(p));
-	double best = projected_cost(ob, sel, nsel, p, scratch),
-	       next = INFINITY;
+	double best = projected_cost(ob, sel, nsel, p, scratch);
 	memcpy(best_p, p, sizeof(best_p));
-	if (second)
-		memcpy(second, p, sizeof(best_p));
 	for (int i = 0; i < n && hi > lo; i++) {
 		memcpy(p, best_p, sizeof(p));
 		p[rk] = lo * pow(hi / lo, i / (n - 1.0));
 		double c = projected_cost(ob, sel, nsel, p, scratch);
 		if (c < best) {
-			if (second)
-				memcpy(second, best_p, sizeof(best_p));
-			next = best;
 			best = c;
 			memcpy(best_p, p, sizeof(best_p));
-		} else if (second && c < next) {
-			next = c;
-			memcpy(second, p, sizeof(best_p));
 		}
 	}
 	memcpy(ob->p, best_p, sizeof(ob->p));
@@ -433,39 +413,6 @@ static int scan_pixels(const struct objective *ob, const struct selections *sl,
 }
 
 /*
- * The scan's subset can prefer a lobe that every pixel does not: nylon
- * on the simulated rig, whose low ior shows its highlight at the rim
- * among few of the subset's pixels, scanned to roughness 0.0025 for
- * 0.067 (its runner-up 0.040 within 2 % of that cost on the subset), and
- * the polish stayed near there, its truth outside the interval
- * (bench/rig_materials.py --only nylon).  So where the scan
- * moved the start, the start and the scan's two best points are compared
- * on every pixel (albedos solved for each) and the cheapest kept.
- */
-static int keep_best(struct objective *ob, const struct selections *sl,
-		     double cand[][GLINT_MAX_PARAMS], int ncand)
-{
-	double *scratch = malloc((size_t)3 * sl->nall * sizeof(double));
-	double best = INFINITY, keep[GLINT_MAX_PARAMS];
-
-	if (!scratch)
-		return glint_error_set(ENOMEM, "out of memory");
-	memcpy(keep, ob->p, sizeof(keep));
-	for (int i = 0; i < ncand; i++) {
-		double c =
-			projected_cost(ob, sl->all, sl->nall, cand[i], scratch);
-		if (c < best) {
-			best = c;
-			memcpy(keep, cand[i], sizeof(keep));
-		}
-	}
-	memcpy(ob->p, keep, sizeof(ob->p));
-	ob->memo_valid = 0;
-	free(scratch);
-	return 0;
-}
-
-/*
  * Coarse to fine: the coarse level could not see lobes below its spacing,
  * so before polishing, compare the coarse result with sharper lobes at
  * full resolution (log-spaced down to the model's bound, albedos solved
@@ -496,23 +443,12 @@ int fit_fine_pass(struct objective *ob, const struct selections *sl,
 					   coarse_rough_lo)
 			      : 0;
 		int *sub = NULL, nsub = 0;
-		int rk = model->lobes->roughness_param;
-		double cand[3][GLINT_MAX_PARAMS];
-		memcpy(cand[0], ob->p, sizeof(cand[0]));
 		if (ret == 0)
 			ret = scan_pixels(ob, sl, &sub, &nsub);
 		if (ret == 0)
-			ret = rescan_roughness2(ob, sub, nsub, lo,
-						coarse_rough_lo, 6, cand[2]);
+			ret = rescan_roughness(ob, sub, nsub, lo,
+					       coarse_rough_lo, 6);
 		free(sub);
-		memcpy(cand[1], ob->p, sizeof(cand[1]));
-		if (ret == 0 && cand[1][rk] != cand[0][rk])
-			ret = keep_best(ob, sl, cand,
-					cand[2][rk] != cand[0][rk] &&
-							cand[2][rk] !=
-								cand[1][rk]
-						? 3
-						: 2);
 		if (ret < 0)
 			return ret;
 	}

@@ -170,8 +170,8 @@ void fit_set_memo(struct objective *ob, int k, const double *p)
  * columns of the parameters that are neither albedos nor the factor
  * parameter (roughness).  One set's Jacobian does not stand for the
  * mean's: at 8 + 8 samples its roughness column carries that set's
- * Monte Carlo error, LM then crept toward the mean's optimum in small
- * steps and stopped short of it (nylon's dim one-frame photo under the
+ * Monte Carlo error, and LM creeps toward the mean's optimum in small
+ * steps and stops short of it (nylon's dim one-frame photo under the
  * overcast class, sim/light_class.c: roughness 0.0566 for 0.067 with
  * the fitted set's Jacobian after 2 iterations and 0.0606 after 6,
  * where the mean's optimum, which costs less, is at 0.0635).
